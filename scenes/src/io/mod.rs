@@ -1,0 +1,1 @@
+//! Mesh loaders: OBJ, OFF and PLY. (Being written.)
