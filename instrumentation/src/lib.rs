@@ -1,1 +1,200 @@
-//! placeholder
+//! Instrumentation: work counters, stage timers and the run record (`run.json`).
+//!
+//! [`Counters`] is a plain struct of `u64`: methods keep one copy per thread (or per rayon
+//! task) and sum them with [`Counters::merge`]; no string map is touched in a hot loop. A
+//! counter a method does not use stays 0. [`Stages`] times each pipeline stage under its own
+//! name and lists the stages a scene did not call for as skipped.
+
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+macro_rules! counters {
+    ($($(#[doc = $doc:literal])* $name:ident),* $(,)?) => {
+        /// Work counted by a run. Every field is a count of real work done.
+        #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+        #[serde(deny_unknown_fields)]
+        pub struct Counters {
+            $($(#[doc = $doc])* pub $name: u64,)*
+        }
+
+        impl Counters {
+            /// Names of all counters, in declaration order.
+            pub const NAMES: &'static [&'static str] = &[$(stringify!($name)),*];
+
+            /// Adds every counter of `other` into `self`.
+            pub fn merge(&mut self, other: &Counters) {
+                $(self.$name += other.$name;)*
+            }
+
+            /// `(name, value)` for every counter, in declaration order.
+            pub fn entries(&self) -> Vec<(&'static str, u64)> {
+                vec![$((stringify!($name), self.$name)),*]
+            }
+        }
+    };
+}
+
+counters! {
+    /// Shadow-map texels marked as holding a silhouette edge.
+    silhouette_texels,
+    /// Pixels whose facet touches a silhouette texel.
+    silhouette_pixels,
+    /// Pixel-texel pairs emitted.
+    pt_pairs,
+    /// Triangle-texel pairs emitted.
+    tt_pairs,
+    /// Triangle-against-pixel visibility evaluations.
+    visibility_evaluations,
+    /// Pixels classified as uncertain.
+    uncertain_pixels,
+    /// Sub-samples found valid by a validity mask.
+    valid_samples,
+    /// Pixels on a shadow boundary (value strictly between 0 and 1).
+    boundary_pixels,
+    /// Nodes of a 2D BSP.
+    bsp_nodes,
+    /// BSP nodes visited during rasterization.
+    bsp_nodes_visited,
+    /// BSP nodes skipped because all their samples were already shadowed.
+    nodes_occlusion_culled,
+    /// BSP nodes skipped because the triangle lies beyond their farthest sample.
+    nodes_depth_culled,
+    /// Sampling points tested against a triangle.
+    sampling_points_tested,
+    /// Depth comparisons against a shadow map.
+    shadow_map_lookups,
+    /// Rays traced (camera and shadow rays).
+    rays_traced,
+    /// Triangles sent to a rasterizer (camera G-buffer and light maps).
+    triangles_rasterized,
+    /// Sample points (pixel or texel centres) tested for coverage by a rasterizer.
+    raster_samples_tested,
+}
+
+impl std::ops::AddAssign<&Counters> for Counters {
+    fn add_assign(&mut self, rhs: &Counters) {
+        self.merge(rhs);
+    }
+}
+
+impl std::iter::Sum for Counters {
+    fn sum<I: Iterator<Item = Counters>>(iter: I) -> Self {
+        iter.fold(Counters::default(), |mut a, b| {
+            a.merge(&b);
+            a
+        })
+    }
+}
+
+/// One timed stage.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Stage {
+    /// The stage's name.
+    pub name: String,
+    /// Wall-clock time in milliseconds.
+    pub ms: f64,
+}
+
+/// Stage times and skipped stages of one run.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Stages {
+    /// Stages in the order they ran.
+    pub stages: Vec<Stage>,
+    /// Stages the scene did not call for, in the order they were skipped.
+    pub skipped: Vec<String>,
+}
+
+impl Stages {
+    /// Runs `f` as the stage `name`, recording its wall-clock time.
+    pub fn time<T>(&mut self, name: &str, f: impl FnOnce() -> T) -> T {
+        let start = Instant::now();
+        let out = f();
+        self.stages.push(Stage { name: name.to_owned(), ms: start.elapsed().as_secs_f64() * 1e3 });
+        out
+    }
+
+    /// Records that the stage `name` was not run because the scene does not call for it.
+    pub fn skip(&mut self, name: &str) {
+        self.skipped.push(name.to_owned());
+    }
+
+    /// Sum of all stage times in milliseconds.
+    pub fn total_ms(&self) -> f64 {
+        self.stages.iter().map(|s| s.ms).sum()
+    }
+}
+
+/// Counters and stages gathered while a method runs.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Recorder {
+    /// Work counters.
+    pub counters: Counters,
+    /// Stage times.
+    pub stages: Stages,
+    /// Remarks a method makes about the run (e.g. "casters treated as opaque").
+    pub notes: Vec<String>,
+}
+
+/// The run record written as `run.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunRecord {
+    /// Scene name.
+    pub scene: String,
+    /// Method name.
+    pub method: String,
+    /// Method parameters as given (rate, pattern, map resolution, biases, ...).
+    pub params: serde_json::Map<String, serde_json::Value>,
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Effects the scene calls for.
+    pub effects: Vec<String>,
+    /// Work counters.
+    pub counters: Counters,
+    /// Stages in the order they ran.
+    pub stages: Vec<Stage>,
+    /// Stages not run because the scene does not call for them.
+    pub skipped_stages: Vec<String>,
+    /// Remarks about the run.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
+    /// Sum of the stage times, milliseconds.
+    pub total_ms: f64,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn merge_adds_every_field() {
+        let mut a = Counters { pt_pairs: 2, rays_traced: 5, ..Default::default() };
+        let b = Counters { pt_pairs: 3, shadow_map_lookups: 7, ..Default::default() };
+        a.merge(&b);
+        assert_eq!((a.pt_pairs, a.rays_traced, a.shadow_map_lookups), (5, 5, 7));
+        let total: Counters = vec![a, b].into_iter().sum();
+        assert_eq!(total.pt_pairs, 8);
+    }
+
+    #[test]
+    fn counters_serialize_every_field_by_name() {
+        let json = serde_json::to_value(Counters::default()).expect("serializes");
+        let obj = json.as_object().expect("object");
+        assert_eq!(obj.len(), Counters::NAMES.len());
+        for name in Counters::NAMES {
+            assert_eq!(obj[*name], 0, "{name}");
+        }
+    }
+
+    #[test]
+    fn stages_record_names_and_skips() {
+        let mut s = Stages::default();
+        let v = s.time("light depth map", || 41 + 1);
+        s.skip("validity mask");
+        assert_eq!(v, 42);
+        assert_eq!(s.stages[0].name, "light depth map");
+        assert!(s.stages[0].ms >= 0.0);
+        assert_eq!(s.skipped, vec!["validity mask".to_string()]);
+    }
+}

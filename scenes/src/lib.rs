@@ -1,8 +1,21 @@
 //! Scenes for the shadow workbench: meshes, materials, lights, cameras, scene files,
 //! procedural generators, mesh loaders, and the effects a scene calls for.
 
+pub mod camera;
 pub mod generators;
 pub mod io;
+pub mod light;
 pub mod mesh;
+pub mod projection;
+pub mod scene;
 
+pub use camera::Camera;
+pub use light::Light;
 pub use mesh::{Mesh, MeshError};
+pub use projection::{Projector, Ray};
+pub use scene::{Effects, Geometry, Material, Object, Scene};
+pub mod registry;
+pub mod scene_file;
+
+pub use registry::{load, BUILTINS};
+pub use scene_file::{SceneDesc, SceneError};

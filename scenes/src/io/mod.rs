@@ -1,1 +1,203 @@
-//! Mesh loaders: OBJ, OFF and PLY. (Being written.)
+//! Mesh loaders: Wavefront OBJ, OFF and PLY, chosen by the file's extension (`.obj`, `.off`,
+//! `.ply`, any case).
+//!
+//! Every loader returns a validated [`Mesh`] in `f64`: polygons are fan-triangulated
+//! (`v0 vk vk+1`), and normals, texture coordinates, colours and materials are ignored. Bad
+//! input is a [`LoadError::Parse`] naming the file and, where there is one, the 1-based line
+//! (for binary PLY, the element index and byte offset instead); a file that cannot be read is a
+//! [`LoadError::Io`]. Non-finite coordinates and out-of-range indices are caught by the parsers
+//! so that the error names the line; [`LoadError::Invalid`] is left for what only the whole mesh
+//! shows (a file without triangles). No input makes a loader panic.
+//!
+//! See [`obj`], [`off`] and [`ply`] for what each format accepts.
+
+pub mod obj;
+pub mod off;
+pub mod ply;
+
+use crate::mesh::{Mesh, MeshError};
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// The mesh file formats the loaders read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum MeshFormat {
+    /// Wavefront OBJ (`.obj`).
+    Obj,
+    /// Object File Format (`.off`).
+    Off,
+    /// Polygon File Format (`.ply`), ASCII or binary.
+    Ply,
+}
+
+impl MeshFormat {
+    /// The format named by `path`'s extension (case-insensitive), if it is one the loaders read.
+    pub fn from_path(path: &Path) -> Option<Self> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "obj" => Some(Self::Obj),
+            "off" => Some(Self::Off),
+            "ply" => Some(Self::Ply),
+            _ => None,
+        }
+    }
+}
+
+/// Why a mesh file could not be loaded. Every message names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum LoadError {
+    /// The file could not be read.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// The file is malformed.
+    #[error("{path}: {}{message}", LinePrefix(*.line))]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// The 1-based line where the problem is, when the format has lines and the problem is
+        /// on one.
+        line: Option<usize>,
+        /// What is wrong (for binary PLY, with the element index and byte offset).
+        message: String,
+    },
+    /// The file parses but the mesh is unusable (e.g. it has no triangles).
+    #[error("{path}: {source}")]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with the mesh.
+        source: MeshError,
+    },
+    /// The extension is not one of `.obj`, `.off`, `.ply`.
+    #[error("{path}: unsupported mesh format (expected a .obj, .off or .ply file)")]
+    UnsupportedFormat {
+        /// The file.
+        path: PathBuf,
+    },
+}
+
+impl LoadError {
+    /// The file the error is about.
+    pub fn path(&self) -> &Path {
+        match self {
+            Self::Io { path, .. }
+            | Self::Parse { path, .. }
+            | Self::Invalid { path, .. }
+            | Self::UnsupportedFormat { path } => path,
+        }
+    }
+
+    /// The 1-based line the error is on, when known.
+    pub fn line(&self) -> Option<usize> {
+        match self {
+            Self::Parse { line, .. } => *line,
+            _ => None,
+        }
+    }
+}
+
+/// Formats `line N: ` when a line is known.
+struct LinePrefix(Option<usize>);
+
+impl fmt::Display for LinePrefix {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.0 {
+            Some(line) => write!(f, "line {line}: "),
+            None => Ok(()),
+        }
+    }
+}
+
+/// A parser's complaint, before the file's path is attached.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Syntax {
+    line: Option<usize>,
+    message: String,
+}
+
+impl Syntax {
+    /// A complaint about 1-based line `line`.
+    fn at(line: usize, message: impl Into<String>) -> Self {
+        Self {
+            line: Some(line),
+            message: message.into(),
+        }
+    }
+
+    /// A complaint that no single line is to blame for.
+    fn whole(message: impl Into<String>) -> Self {
+        Self {
+            line: None,
+            message: message.into(),
+        }
+    }
+
+    fn into_error(self, path: &Path) -> LoadError {
+        LoadError::Parse {
+            path: path.to_owned(),
+            line: self.line,
+            message: self.message,
+        }
+    }
+}
+
+/// Loads the mesh in `path`, choosing the format by the extension (case-insensitive `.obj`,
+/// `.off`, `.ply`).
+pub fn load_mesh(path: &Path) -> Result<Mesh, LoadError> {
+    let format = MeshFormat::from_path(path).ok_or_else(|| LoadError::UnsupportedFormat {
+        path: path.to_owned(),
+    })?;
+    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    load_mesh_from_bytes(&bytes, format, path)
+}
+
+/// Loads a mesh of the given format from memory; `name` is the path that errors name.
+pub fn load_mesh_from_bytes(
+    bytes: &[u8],
+    format: MeshFormat,
+    name: &Path,
+) -> Result<Mesh, LoadError> {
+    let parsed = match format {
+        MeshFormat::Obj => obj::parse(bytes),
+        MeshFormat::Off => off::parse(bytes),
+        MeshFormat::Ply => ply::parse(bytes),
+    };
+    let mesh = parsed.map_err(|e| e.into_error(name))?;
+    mesh.validate().map_err(|source| LoadError::Invalid {
+        path: name.to_owned(),
+        source,
+    })?;
+    Ok(mesh)
+}
+
+/// Number of lines in `text` as [`str::lines`] counts them: the line an unexpected end of file
+/// is reported on.
+fn last_line(text: &str) -> usize {
+    text.lines().count()
+}
+
+/// Parses a coordinate, rejecting what is not a number and what is not finite.
+fn coordinate(token: &str, line: usize) -> Result<f64, Syntax> {
+    let value: f64 = token
+        .parse()
+        .map_err(|_| Syntax::at(line, format!("malformed number `{token}`")))?;
+    if !value.is_finite() {
+        return Err(Syntax::at(line, format!("non-finite coordinate `{token}`")));
+    }
+    Ok(value)
+}
+
+/// Appends the fan `v0 vk vk+1` of `polygon` (at least 3 vertices) to `triangles`.
+fn fan(polygon: &[u32], triangles: &mut Vec<[u32; 3]>) {
+    if let Some((&first, rest)) = polygon.split_first() {
+        triangles.extend(rest.windows(2).map(|w| [first, w[0], w[1]]));
+    }
+}

@@ -1,0 +1,86 @@
+//! A frame: a scene prepared at one resolution, with its camera G-buffer. Methods read the
+//! frame; the light depth map is rendered only when a method asks for it.
+
+use crate::{depth_map::LightDepthMap, gbuffer::GBuffer, gbuffer::render_gbuffer};
+use instrumentation::Recorder;
+use scenes::{Effects, Geometry, Projector, Scene};
+
+/// Name of the stage that renders the camera G-buffer.
+pub const STAGE_GBUFFER: &str = "camera G-buffer";
+/// Name of the stage that renders the light depth map.
+pub const STAGE_LIGHT_DEPTH_MAP: &str = "light depth map";
+
+/// A scene at one resolution, with everything the methods share.
+#[derive(Debug, Clone)]
+pub struct Frame<'s> {
+    /// The scene.
+    pub scene: &'s Scene,
+    /// All triangles; triangle ids index into it.
+    pub geometry: Geometry,
+    /// Effects the scene calls for.
+    pub effects: Effects,
+    /// Camera projector at this resolution.
+    pub camera: Projector,
+    /// The camera G-buffer.
+    pub gbuffer: GBuffer,
+    casters: Vec<bool>,
+}
+
+impl<'s> Frame<'s> {
+    /// Prepares `scene` at `width x height`, timing the G-buffer as a stage of `rec`.
+    pub fn new(scene: &'s Scene, width: u32, height: u32, rec: &mut Recorder) -> Self {
+        let geometry = scene.geometry();
+        let camera = scene.camera.projector(width, height);
+        let gbuffer =
+            rec.stages.time(STAGE_GBUFFER, || render_gbuffer(&geometry, &camera, &mut rec.counters));
+        let casters = scene.objects.iter().map(|o| o.casts_shadows && o.material.opacity > 0.0).collect();
+        Self { scene, geometry, effects: scene.effects(), camera, gbuffer, casters }
+    }
+
+    /// Image width.
+    pub fn width(&self) -> u32 {
+        self.gbuffer.width
+    }
+
+    /// Image height.
+    pub fn height(&self) -> u32 {
+        self.gbuffer.height
+    }
+
+    /// Whether triangle `t` casts shadows.
+    #[inline]
+    pub fn is_caster(&self, t: usize) -> bool {
+        self.casters[self.geometry.object[t] as usize]
+    }
+
+    /// The light's projector onto a `res x res` map fitted to the scene.
+    pub fn light_projector(&self, res: u32) -> Projector {
+        self.scene.light.projector(self.scene.bounds(), res)
+    }
+
+    /// The span of light-space depths the scene occupies (far minus near of the fitted
+    /// frustum), the unit of constant depth biases.
+    pub fn light_depth_range(&self, light: &Projector) -> f64 {
+        let (lo, hi) = self.scene.bounds();
+        let (mut a, mut b) = (f64::INFINITY, f64::NEG_INFINITY);
+        for i in 0..8 {
+            let c = glam::DVec3::new(
+                if i & 1 == 0 { lo.x } else { hi.x },
+                if i & 2 == 0 { lo.y } else { hi.y },
+                if i & 4 == 0 { lo.z } else { hi.z },
+            );
+            let d = light.depth_of(c);
+            a = a.min(d);
+            b = b.max(d);
+        }
+        (b - a).max(f64::MIN_POSITIVE)
+    }
+
+    /// Renders the light depth map of the casters at `res x res`, as a timed stage.
+    pub fn light_depth_map(&self, res: u32, rec: &mut Recorder) -> LightDepthMap {
+        let projector = self.light_projector(res);
+        rec.stages.time(STAGE_LIGHT_DEPTH_MAP, || {
+            LightDepthMap::render(&self.geometry, |t| self.is_caster(t), &projector, &mut rec.counters)
+        })
+    }
+}

@@ -1,0 +1,428 @@
+//! The CPU triangle rasterizer shared by the camera G-buffer and the light depth map.
+//!
+//! Invariants:
+//! - **Exact coverage.** A sample point `p` (a pixel or texel centre) is inside a triangle when
+//!   it lies strictly on the inner side of every edge, decided by Shewchuk's exact `orient2d`
+//!   predicate on the `f64` image coordinates (crate `robust`); no snapping to a fixed-point
+//!   grid, so coverage is exact for the projected vertices as computed.
+//! - **Top-left rule.** A sample exactly on an edge `a -> b` of a triangle wound with positive
+//!   orientation belongs to it when `d = b - a` has `d.y < 0`, or `d.y == 0 && d.x > 0`. This is
+//!   the sign the predicate takes for the point moved by an infinitesimal `(ε, ε²)`, so the rule
+//!   is a consistent symbolic perturbation: on a watertight mesh every sample inside the
+//!   silhouette is covered exactly once, whether it lies on a shared edge or on a shared vertex.
+//! - **Near clipping.** Perspective projectors clip each triangle at `depth = near` in world
+//!   space. The point where an edge meets the plane is computed from the edge's endpoints in a
+//!   canonical order, so two triangles sharing that edge clip it identically.
+//! - **Depth.** The depth at a sample is where the sample's ray meets the triangle's plane, in
+//!   `f64` (so positions reproject onto their sample points), clamped to the depth range of the
+//!   triangle's corners to stay bounded for triangles seen nearly edge-on. Ties go to the lower
+//!   triangle id, so the result does not depend on thread scheduling.
+//! - Degenerate triangles (zero projected area, non-finite corners) cover nothing.
+//!
+//! Work runs in parallel over bands of rows (rayon); triangles are binned to bands first.
+
+use glam::{DVec2, DVec3};
+use instrumentation::Counters;
+use rayon::prelude::*;
+use robust::{orient2d, Coord};
+use scenes::{Geometry, Projector};
+
+/// Triangle id of a sample that no triangle covers.
+pub const NO_TRIANGLE: u32 = u32::MAX;
+
+/// Rows per band of parallel work.
+const BAND_ROWS: usize = 8;
+
+/// The nearest triangle and its depth at every sample point of a grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NearestSurface {
+    /// Grid width.
+    pub width: u32,
+    /// Grid height.
+    pub height: u32,
+    /// Depth of the nearest surface, `f64::INFINITY` where none.
+    pub depth: Vec<f64>,
+    /// Id of the nearest triangle, [`NO_TRIANGLE`] where none.
+    pub triangle: Vec<u32>,
+}
+
+/// A triangle prepared for rasterization: its (clipped) convex outline in image space with
+/// positive orientation, its pixel bounds and its plane.
+#[derive(Debug, Clone, Copy)]
+struct Setup {
+    outline: [DVec2; 4],
+    corners: usize,
+    x0: usize,
+    x1: usize,
+    y0: usize,
+    y1: usize,
+    normal: DVec3,
+    offset: f64,
+    depth_min: f64,
+    depth_max: f64,
+    id: u32,
+}
+
+#[inline]
+fn coord(p: DVec2) -> Coord<f64> {
+    Coord { x: p.x, y: p.y }
+}
+
+/// Whether sample `p` lies inside edge `a -> b` of a positively oriented outline, ties decided
+/// by the top-left rule.
+#[inline]
+pub fn inside_edge(a: DVec2, b: DVec2, p: DVec2) -> bool {
+    let s = orient2d(coord(a), coord(b), coord(p));
+    if s != 0.0 {
+        return s > 0.0;
+    }
+    let d = b - a;
+    d.y < 0.0 || (d.y == 0.0 && d.x > 0.0)
+}
+
+/// Clips a triangle at `depth >= near`; returns the clipped polygon (0, 3 or 4 corners).
+fn clip_near(corners: [DVec3; 3], depths: [f64; 3], near: f64) -> ([DVec3; 4], usize) {
+    let mut out = [DVec3::ZERO; 4];
+    let mut n = 0;
+    for i in 0..3 {
+        let j = (i + 1) % 3;
+        let (pi, pj, di, dj) = (corners[i], corners[j], depths[i], depths[j]);
+        let in_i = di >= near;
+        if in_i {
+            out[n] = pi;
+            n += 1;
+        }
+        if in_i != (dj >= near) {
+            // Canonical order: the same edge gives the same point in both its triangles.
+            let ((p, dp), (q, dq)) = if (pi.x, pi.y, pi.z) < (pj.x, pj.y, pj.z) {
+                ((pi, di), (pj, dj))
+            } else {
+                ((pj, dj), (pi, di))
+            };
+            let t = (near - dp) / (dq - dp);
+            out[n] = p + (q - p) * t;
+            n += 1;
+        }
+    }
+    (out, n)
+}
+
+fn setup(geometry: &Geometry, t: usize, proj: &Projector) -> Option<Setup> {
+    let corners = geometry.corners(t);
+    let normal = (corners[1] - corners[0]).cross(corners[2] - corners[0]).normalize_or_zero();
+    if normal == DVec3::ZERO || !normal.is_finite() {
+        return None;
+    }
+    let offset = normal.dot(corners[0]);
+    let (world, count) = if proj.is_perspective() {
+        clip_near(corners, corners.map(|c| proj.depth_of(c)), proj.near)
+    } else {
+        ([corners[0], corners[1], corners[2], DVec3::ZERO], 3)
+    };
+    if count < 3 {
+        return None;
+    }
+    let mut outline = [DVec2::ZERO; 4];
+    let (mut depth_min, mut depth_max) = (f64::INFINITY, f64::NEG_INFINITY);
+    for i in 0..count {
+        let (xy, d) = proj.project_unclipped(world[i]);
+        if !xy.is_finite() || !d.is_finite() {
+            return None;
+        }
+        outline[i] = xy;
+        depth_min = depth_min.min(d);
+        depth_max = depth_max.max(d);
+    }
+    // Orientation from the first non-collinear triple; an outline with none covers nothing.
+    let orientation = (1..count - 1)
+        .map(|i| orient2d(coord(outline[0]), coord(outline[i]), coord(outline[i + 1])))
+        .find(|&s| s != 0.0)?;
+    if orientation < 0.0 {
+        outline[..count].reverse();
+    }
+    let (lo, hi) = outline[..count]
+        .iter()
+        .fold((DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)), |(lo, hi), &p| {
+            (lo.min(p), hi.max(p))
+        });
+    // Samples at i + 0.5 with lo <= i + 0.5 <= hi.
+    let first = |v: f64| (v - 0.5).ceil().max(0.0);
+    let last = |v: f64, size: f64| (v - 0.5).floor().min(size - 1.0);
+    let (x0, x1) = (first(lo.x), last(hi.x, proj.width));
+    let (y0, y1) = (first(lo.y), last(hi.y, proj.height));
+    if x0 > x1 || y0 > y1 {
+        return None;
+    }
+    Some(Setup {
+        outline,
+        corners: count,
+        x0: x0 as usize,
+        x1: x1 as usize,
+        y0: y0 as usize,
+        y1: y1 as usize,
+        normal,
+        offset,
+        depth_min,
+        depth_max,
+        id: t as u32,
+    })
+}
+
+/// The columns `x0..=x1` (within `lo..=hi`) whose centres on the row `py` may lie inside the
+/// convex outline: where the line `y = py` crosses the outline, widened by a margin that
+/// covers the rounding of the crossing points. Conservative: the exact edge tests decide.
+fn row_span(outline: &[DVec2], py: f64, lo: usize, hi: usize) -> Option<(usize, usize)> {
+    let (mut xmin, mut xmax) = (f64::INFINITY, f64::NEG_INFINITY);
+    for e in 0..outline.len() {
+        let (a, b) = (outline[e], outline[(e + 1) % outline.len()]);
+        if py < a.y.min(b.y) || py > a.y.max(b.y) {
+            continue;
+        }
+        let x = if a.y == b.y { (a.x, b.x) } else {
+            let x = a.x + (py - a.y) * (b.x - a.x) / (b.y - a.y);
+            (x, x)
+        };
+        xmin = xmin.min(x.0.min(x.1));
+        xmax = xmax.max(x.0.max(x.1));
+    }
+    if xmin > xmax {
+        return None;
+    }
+    let margin = 1.0 + 1e-9 * xmin.abs().max(xmax.abs());
+    let first = ((xmin - 0.5 - margin).ceil().max(lo as f64)) as usize;
+    let last = (xmax - 0.5 + margin).floor().min(hi as f64);
+    if last < first as f64 {
+        return None;
+    }
+    Some((first, last as usize))
+}
+
+/// Rasterizes the triangles for which `include(t)` holds onto the projector's grid, keeping the
+/// nearest surface at every sample point (the pixel or texel centres).
+pub fn rasterize_nearest(
+    geometry: &Geometry,
+    include: impl Fn(usize) -> bool + Sync,
+    proj: &Projector,
+    counters: &mut Counters,
+) -> NearestSurface {
+    let (width, height) = (proj.width as usize, proj.height as usize);
+    let setups: Vec<Setup> = (0..geometry.len())
+        .into_par_iter()
+        .filter(|&t| include(t))
+        .filter_map(|t| setup(geometry, t, proj))
+        .collect();
+    counters.triangles_rasterized +=
+        (0..geometry.len()).into_par_iter().filter(|&t| include(t)).count() as u64;
+
+    let bands = height.div_ceil(BAND_ROWS).max(1);
+    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); bands];
+    for (i, s) in setups.iter().enumerate() {
+        for bin in &mut bins[s.y0 / BAND_ROWS..=s.y1 / BAND_ROWS] {
+            bin.push(i as u32);
+        }
+    }
+
+    let mut depth = vec![f64::INFINITY; width * height];
+    let mut triangle = vec![NO_TRIANGLE; width * height];
+    let chunk = width * BAND_ROWS;
+    let tested: u64 = depth
+        .par_chunks_mut(chunk.max(1))
+        .zip(triangle.par_chunks_mut(chunk.max(1)))
+        .zip(bins.par_iter())
+        .enumerate()
+        .map(|(band, ((depth, triangle), bin))| {
+            let row0 = band * BAND_ROWS;
+            let rows = depth.len() / width.max(1);
+            let mut tested = 0u64;
+            for &i in bin {
+                let s = &setups[i as usize];
+                let outline = &s.outline[..s.corners];
+                for y in s.y0.max(row0)..=s.y1.min(row0 + rows - 1) {
+                    let py = y as f64 + 0.5;
+                    let Some((x0, x1)) = row_span(outline, py, s.x0, s.x1) else { continue };
+                    for x in x0..=x1 {
+                        tested += 1;
+                        let p = DVec2::new(x as f64 + 0.5, py);
+                        let covered = (0..s.corners)
+                            .all(|e| inside_edge(outline[e], outline[(e + 1) % s.corners], p));
+                        if !covered {
+                            continue;
+                        }
+                        let ray = proj.ray(p);
+                        let d = ray
+                            .intersect_plane(s.normal, s.offset)
+                            .unwrap_or(s.depth_min)
+                            .clamp(s.depth_min, s.depth_max);
+                        let k = (y - row0) * width + x;
+                        if d < depth[k] {
+                            depth[k] = d;
+                            triangle[k] = s.id;
+                        }
+                    }
+                }
+            }
+            tested
+        })
+        .sum();
+    counters.raster_samples_tested += tested;
+    NearestSurface { width: width as u32, height: height as u32, depth, triangle }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use scenes::projection::{look_basis, ProjectionKind};
+
+    /// An orthographic projector looking down -z whose image x,y equal world x and -y + h,
+    /// so world coordinates are pixel coordinates.
+    pub(crate) fn pixel_projector(w: u32, h: u32) -> Projector {
+        let (right, up, forward) = look_basis(-DVec3::Z, DVec3::Y);
+        Projector {
+            origin: DVec3::new(f64::from(w) / 2.0, f64::from(h) / 2.0, 10.0),
+            right,
+            up,
+            forward,
+            kind: ProjectionKind::Orthographic {
+                half_width: f64::from(w) / 2.0,
+                half_height: f64::from(h) / 2.0,
+            },
+            near: f64::NEG_INFINITY,
+            width: f64::from(w),
+            height: f64::from(h),
+        }
+    }
+
+    /// Geometry from 2D triangles given in pixel coordinates (y down), at z = 0.
+    fn flat(tris: &[[[f64; 2]; 3]], h: u32) -> Geometry {
+        let mut g = Geometry::default();
+        for t in tris {
+            let base = g.positions.len() as u32;
+            for p in t {
+                g.positions.push(DVec3::new(p[0], f64::from(h) - p[1], 0.0));
+            }
+            g.triangles.push([base, base + 1, base + 2]);
+            g.object.push(0);
+        }
+        g
+    }
+
+    fn coverage_counts(tris: &[[[f64; 2]; 3]], w: u32, h: u32) -> Vec<u32> {
+        let g = flat(tris, h);
+        let proj = pixel_projector(w, h);
+        let mut counts = vec![0u32; (w * h) as usize];
+        for t in 0..tris.len() {
+            let s = rasterize_nearest(&g, |i| i == t, &proj, &mut Counters::default());
+            for (c, &id) in counts.iter_mut().zip(&s.triangle) {
+                *c += u32::from(id != NO_TRIANGLE);
+            }
+        }
+        counts
+    }
+
+    #[test]
+    fn pixel_projector_maps_world_to_pixels() {
+        let proj = pixel_projector(8, 6);
+        let (xy, _) = proj.project(DVec3::new(2.5, 6.0 - 1.5, 0.0)).expect("projects");
+        assert!((xy - DVec2::new(2.5, 1.5)).length() < 1e-12);
+    }
+
+    #[test]
+    fn shared_edge_through_pixel_centres_is_covered_once() {
+        // A square split along its diagonal, which passes through every pixel centre on it,
+        // and along axis-aligned edges lying on pixel rows and columns of centres.
+        let cases: Vec<Vec<[[f64; 2]; 3]>> = vec![
+            vec![[[0.5, 0.5], [7.5, 0.5], [7.5, 7.5]], [[0.5, 0.5], [7.5, 7.5], [0.5, 7.5]]],
+            vec![[[0.5, 0.5], [7.5, 7.5], [7.5, 0.5]], [[0.5, 0.5], [0.5, 7.5], [7.5, 7.5]]],
+            vec![[[0.5, 3.5], [7.5, 3.5], [4.0, 0.0]], [[0.5, 3.5], [4.0, 7.9], [7.5, 3.5]]],
+            vec![[[3.5, 0.2], [3.5, 7.8], [0.1, 4.0]], [[3.5, 0.2], [7.9, 4.0], [3.5, 7.8]]],
+        ];
+        for (case, tris) in cases.iter().enumerate() {
+            let counts = coverage_counts(tris, 8, 8);
+            assert!(counts.iter().all(|&c| c <= 1), "{counts:?}");
+            if case < 2 {
+                // The union is the square [0.5, 7.5]^2: every centre strictly inside it,
+                // the diagonal's included, is covered exactly once.
+                for j in 1..7 {
+                    for i in 1..7 {
+                        assert_eq!(counts[j * 8 + i], 1, "case {case}, pixel ({i}, {j})");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn fan_around_a_pixel_centre_covers_it_exactly_once() {
+        let c = [4.5, 4.5];
+        let ring = [[0.0, 0.0], [4.5, 0.0], [9.0, 0.0], [9.0, 4.5], [9.0, 9.0], [4.5, 9.0], [0.0, 9.0], [0.0, 4.5]];
+        let tris: Vec<[[f64; 2]; 3]> =
+            (0..ring.len()).map(|i| [c, ring[i], ring[(i + 1) % ring.len()]]).collect();
+        let counts = coverage_counts(&tris, 9, 9);
+        assert!(counts.iter().all(|&n| n == 1), "{counts:?}");
+    }
+
+    #[test]
+    fn degenerate_triangles_cover_nothing() {
+        let tris = [[[0.5, 0.5], [3.5, 3.5], [6.5, 6.5]], [[1.0, 1.0], [1.0, 1.0], [5.0, 2.0]]];
+        assert!(coverage_counts(&tris, 8, 8).iter().all(|&c| c == 0));
+    }
+
+    #[test]
+    fn huge_coordinates_stay_finite_and_cover_the_frame() {
+        let tris = [[[-1e15, -1e15], [1e15, -1e15], [0.0, 1e15]]];
+        assert!(coverage_counts(&tris, 8, 8).iter().all(|&c| c == 1));
+    }
+
+    #[test]
+    fn nearer_triangle_wins_and_ties_go_to_the_lower_id() {
+        let mut g = flat(&[[[0.0, 0.0], [8.0, 0.0], [0.0, 8.0]]; 3], 8);
+        for v in 3..6 {
+            g.positions[v].z = 1.0; // triangle 1 is nearer (camera at z = 10 looking down -z)
+        }
+        let s = rasterize_nearest(&g, |_| true, &pixel_projector(8, 8), &mut Counters::default());
+        assert_eq!(s.triangle[0], 1);
+        let s = rasterize_nearest(&g, |t| t != 1, &pixel_projector(8, 8), &mut Counters::default());
+        assert_eq!(s.triangle[0], 0);
+    }
+
+    proptest::proptest! {
+        /// A convex quad split along either diagonal covers every centre strictly inside it
+        /// exactly once and nothing outside it; corners on the half-pixel grid put many
+        /// centres exactly on the shared diagonal.
+        #[test]
+        fn split_quads_cover_their_inside_exactly_once(
+            pts in proptest::collection::vec((0u32..=32, 0u32..=32), 4),
+            diagonal in 0usize..2,
+        ) {
+            let p: Vec<DVec2> = pts.iter().map(|&(x, y)| DVec2::new(f64::from(x) * 0.5, f64::from(y) * 0.5)).collect();
+            // Keep only strictly convex quads, counter-clockwise in the predicate's sense.
+            let turn = |a: DVec2, b: DVec2, c: DVec2| orient2d(coord(a), coord(b), coord(c));
+            let signs: Vec<f64> = (0..4).map(|i| turn(p[i], p[(i + 1) % 4], p[(i + 2) % 4])).collect();
+            proptest::prop_assume!(signs.iter().all(|&s| s > 0.0) || signs.iter().all(|&s| s < 0.0));
+            let q = |i: usize| [p[i].x, p[i].y];
+            let tris = if diagonal == 0 {
+                vec![[q(0), q(1), q(2)], [q(0), q(2), q(3)]]
+            } else {
+                vec![[q(1), q(2), q(3)], [q(1), q(3), q(0)]]
+            };
+            let counts = coverage_counts(&tris, 16, 16);
+            let ccw = signs[0] > 0.0;
+            for j in 0..16 {
+                for i in 0..16 {
+                    let c = DVec2::new(i as f64 + 0.5, j as f64 + 0.5);
+                    let sides: Vec<f64> = (0..4)
+                        .map(|e| turn(p[e], p[(e + 1) % 4], c) * if ccw { 1.0 } else { -1.0 })
+                        .collect();
+                    let n = counts[j * 16 + i];
+                    if sides.iter().all(|&s| s > 0.0) {
+                        proptest::prop_assert_eq!(n, 1, "inside centre ({}, {}) covered {} times", i, j, n);
+                    } else if sides.iter().any(|&s| s < 0.0) {
+                        proptest::prop_assert_eq!(n, 0, "outside centre ({}, {}) covered", i, j);
+                    } else {
+                        proptest::prop_assert!(n <= 1);
+                    }
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,95 @@
+//! Writers for a render's three files: `visibility.exr`, `shadow.png`, `run.json`.
+
+use glam::DVec3;
+use image::RgbImage;
+use instrumentation::RunRecord;
+use methods::{Frame, Visibility};
+use std::path::{Path, PathBuf};
+
+/// A file could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    /// Writing `path` failed.
+    #[error("cannot write {path}: {message}")]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        message: String,
+    },
+}
+
+fn write_err(path: &Path, e: impl std::fmt::Display) -> OutputError {
+    OutputError::Write { path: path.to_owned(), message: e.to_string() }
+}
+
+/// Writes the lit fraction as a 32-bit float EXR: one channel `Y`, or `R`, `G`, `B` when the
+/// visibility carries RGB transmittance.
+pub fn write_visibility_exr(path: &Path, v: &Visibility) -> Result<(), OutputError> {
+    use exr::prelude::*;
+    let (w, h) = (v.width as usize, v.height as usize);
+    let result = match &v.transmittance {
+        None => {
+            let pixels = SpecificChannels::build()
+                .with_channel("Y")
+                .with_pixel_fn(|p: Vec2<usize>| (v.lit[p.y() * w + p.x()],));
+            Image::from_channels((w, h), pixels).write().to_file(path)
+        }
+        Some(rgb) => {
+            let pixels = SpecificChannels::rgb(|p: Vec2<usize>| {
+                let [r, g, b] = rgb[p.y() * w + p.x()];
+                (r, g, b)
+            });
+            Image::from_channels((w, h), pixels).write().to_file(path)
+        }
+    };
+    result.map_err(|e| write_err(path, e))
+}
+
+fn srgb8(linear: f64) -> u8 {
+    let c = linear.clamp(0.0, 1.0);
+    let s = if c <= 0.003_130_8 { 12.92 * c } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 };
+    (s * 255.0).round() as u8
+}
+
+/// Ambient share of the Lambert image, so that shadowed surfaces stay visible.
+const AMBIENT: f64 = 0.25;
+
+/// A Lambert image for looking at: `albedo * (ambient + (1 - ambient) * max(0, n·l) * lit)`,
+/// with the normal turned towards the camera; background dark grey. Not a renderer: only the
+/// shadow term comes from the method.
+pub fn shade(frame: &Frame<'_>, v: &Visibility) -> RgbImage {
+    let g = &frame.gbuffer;
+    let w = g.width;
+    RgbImage::from_fn(g.width, g.height, |x, y| {
+        let k = (y * w + x) as usize;
+        if !g.covered(k) {
+            return image::Rgb([40, 40, 48]);
+        }
+        let p = g.position[k];
+        let mut n = g.normal[k];
+        if n.dot(frame.camera.direction_to(p)) < 0.0 {
+            n = -n;
+        }
+        let l = frame.scene.light.direction_to_light(p);
+        let object = frame.geometry.object[g.triangle[k] as usize] as usize;
+        let albedo = DVec3::from(frame.scene.objects[object].material.color);
+        let lit = match &v.transmittance {
+            Some(t) => DVec3::new(f64::from(t[k][0]), f64::from(t[k][1]), f64::from(t[k][2])),
+            None => DVec3::splat(f64::from(v.lit[k])),
+        };
+        let c = albedo * (DVec3::splat(AMBIENT) + (1.0 - AMBIENT) * n.dot(l).max(0.0) * lit);
+        image::Rgb([srgb8(c.x), srgb8(c.y), srgb8(c.z)])
+    })
+}
+
+/// Writes the Lambert image as PNG.
+pub fn write_shadow_png(path: &Path, frame: &Frame<'_>, v: &Visibility) -> Result<(), OutputError> {
+    shade(frame, v).save(path).map_err(|e| write_err(path, e))
+}
+
+/// Writes the run record as pretty JSON.
+pub fn write_run_json(path: &Path, record: &RunRecord) -> Result<(), OutputError> {
+    let text = serde_json::to_string_pretty(record).map_err(|e| write_err(path, e))?;
+    std::fs::write(path, text + "\n").map_err(|e| write_err(path, e))
+}

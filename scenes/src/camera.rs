@@ -1,0 +1,111 @@
+//! Cameras: perspective or orthographic, placed with a look-at.
+
+use crate::projection::{look_basis, ProjectionKind, Projector};
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+fn default_up() -> DVec3 {
+    DVec3::Y
+}
+
+fn default_near() -> f64 {
+    0.01
+}
+
+/// A look-at camera. In scene files: a `[camera.perspective]` or `[camera.orthographic]` table.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase", deny_unknown_fields)]
+pub enum Camera {
+    /// Central projection.
+    Perspective {
+        /// Eye position.
+        eye: DVec3,
+        /// Point looked at.
+        target: DVec3,
+        /// Up hint (default `[0, 1, 0]`).
+        #[serde(default = "default_up")]
+        up: DVec3,
+        /// Vertical field of view in degrees, in (0, 180).
+        fov_y_deg: f64,
+        /// Near clipping distance, world units (default 0.01).
+        #[serde(default = "default_near")]
+        near: f64,
+    },
+    /// Parallel projection.
+    Orthographic {
+        /// Centre of the image plane.
+        eye: DVec3,
+        /// Point looked at (gives the direction).
+        target: DVec3,
+        /// Up hint (default `[0, 1, 0]`).
+        #[serde(default = "default_up")]
+        up: DVec3,
+        /// Height of the view volume in world units; the width follows the aspect ratio.
+        height: f64,
+    },
+}
+
+impl Camera {
+    /// Checks the camera; the error names the bad key.
+    pub fn validate(&self) -> Result<(), (&'static str, String)> {
+        let (eye, target, up) = match self {
+            Camera::Perspective { eye, target, up, fov_y_deg, near } => {
+                if !(*fov_y_deg > 0.0 && *fov_y_deg < 180.0) {
+                    return Err(("fov_y_deg", format!("must be in (0, 180), got {fov_y_deg}")));
+                }
+                if !(*near > 0.0 && near.is_finite()) {
+                    return Err(("near", format!("must be positive and finite, got {near}")));
+                }
+                (eye, target, up)
+            }
+            Camera::Orthographic { eye, target, up, height } => {
+                if !(*height > 0.0 && height.is_finite()) {
+                    return Err(("height", format!("must be positive and finite, got {height}")));
+                }
+                (eye, target, up)
+            }
+        };
+        for (key, v) in [("eye", eye), ("target", target), ("up", up)] {
+            if !v.is_finite() {
+                return Err((key, "must be finite".into()));
+            }
+        }
+        if (*target - *eye).length_squared() == 0.0 {
+            return Err(("target", "must differ from eye".into()));
+        }
+        if up.length_squared() == 0.0 {
+            return Err(("up", "must not be zero".into()));
+        }
+        Ok(())
+    }
+
+    /// Eye position.
+    pub fn eye(&self) -> DVec3 {
+        match self {
+            Camera::Perspective { eye, .. } | Camera::Orthographic { eye, .. } => *eye,
+        }
+    }
+
+    /// The projector onto a `width x height` image (square pixels).
+    pub fn projector(&self, width: u32, height: u32) -> Projector {
+        let (w, h) = (f64::from(width), f64::from(height));
+        let aspect = w / h;
+        let (eye, target, up, kind, near) = match *self {
+            Camera::Perspective { eye, target, up, fov_y_deg, near } => {
+                let tan_half_y = (fov_y_deg.to_radians() * 0.5).tan();
+                let kind =
+                    ProjectionKind::Perspective { tan_half_x: tan_half_y * aspect, tan_half_y };
+                (eye, target, up, kind, near)
+            }
+            Camera::Orthographic { eye, target, up, height } => {
+                let kind = ProjectionKind::Orthographic {
+                    half_width: 0.5 * height * aspect,
+                    half_height: 0.5 * height,
+                };
+                (eye, target, up, kind, f64::NEG_INFINITY)
+            }
+        };
+        let (right, up, forward) = look_basis(target - eye, up);
+        Projector { origin: eye, right, up, forward, kind, near, width: w, height: h }
+    }
+}

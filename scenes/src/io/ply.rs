@@ -1,0 +1,703 @@
+//! PLY (Polygon File Format): `format ascii 1.0`, `binary_little_endian 1.0` and
+//! `binary_big_endian 1.0`.
+//!
+//! The header may hold `comment` and `obj_info` lines and any elements in any order. Positions
+//! are the `x`, `y`, `z` properties of element `vertex`, of any scalar type (`char`, `uchar`,
+//! `short`, `ushort`, `int`, `uint`, `float`, `double` or the aliases `int8` .. `float64`),
+//! among any other properties, which are ignored. Polygons are the list property
+//! `vertex_indices` (or `vertex_index`) of element `face`, with integer count and index types;
+//! other properties of `face` and all other elements (lists included) are skipped.
+//!
+//! ASCII bodies are read one element per line (as every writer writes them): a line with fewer
+//! or more values than the header declares is an error naming it; blank lines are skipped, and
+//! an integer-typed value must be written as an integer. Data after the last element is ignored.
+//!
+//! Errors name the header line, the body line (ASCII) or the element, its index and the byte
+//! offset where its record starts (binary): malformed header, missing `x`/`y`/`z`, missing `face`
+//! element, truncated data, malformed or non-finite number, face with fewer than 3 vertices,
+//! index out of range.
+
+use super::{fan, last_line, Syntax};
+use crate::mesh::Mesh;
+use glam::DVec3;
+
+/// Parses a PLY file (not yet validated as a mesh).
+pub(crate) fn parse(bytes: &[u8]) -> Result<Mesh, Syntax> {
+    let header = Header::parse(bytes)?;
+    let plan = Plan::new(&header)?;
+    match header.encoding {
+        Encoding::Ascii => {
+            let body = String::from_utf8_lossy(bytes.get(header.body..).unwrap_or_default());
+            let end = header.lines + last_line(&body);
+            let mut reader = Ascii {
+                lines: body.lines().enumerate(),
+                first: header.lines + 1,
+                end,
+                line: 0,
+                tokens: "".split_whitespace(),
+                record: Record::default(),
+            };
+            read_body(&mut reader, &header, &plan, bytes.len())
+        }
+        Encoding::Binary { big_endian } => {
+            let mut reader = Binary {
+                data: bytes,
+                pos: header.body,
+                big_endian,
+                start: header.body,
+                record: Record::default(),
+            };
+            read_body(&mut reader, &header, &plan, bytes.len())
+        }
+    }
+}
+
+/// A scalar property type.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Scalar {
+    I8,
+    U8,
+    I16,
+    U16,
+    I32,
+    U32,
+    F32,
+    F64,
+}
+
+impl Scalar {
+    fn from_name(name: &str) -> Option<Self> {
+        Some(match name {
+            "char" | "int8" => Self::I8,
+            "uchar" | "uint8" => Self::U8,
+            "short" | "int16" => Self::I16,
+            "ushort" | "uint16" => Self::U16,
+            "int" | "int32" => Self::I32,
+            "uint" | "uint32" => Self::U32,
+            "float" | "float32" => Self::F32,
+            "double" | "float64" => Self::F64,
+            _ => return None,
+        })
+    }
+
+    fn size(self) -> usize {
+        match self {
+            Self::I8 | Self::U8 => 1,
+            Self::I16 | Self::U16 => 2,
+            Self::I32 | Self::U32 | Self::F32 => 4,
+            Self::F64 => 8,
+        }
+    }
+
+    fn is_integer(self) -> bool {
+        !matches!(self, Self::F32 | Self::F64)
+    }
+}
+
+/// A property: a scalar, or a list with its count and item types.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    Scalar(Scalar),
+    List(Scalar, Scalar),
+}
+
+#[derive(Debug)]
+struct Property {
+    name: String,
+    kind: Kind,
+    line: usize,
+}
+
+#[derive(Debug)]
+struct Element {
+    name: String,
+    count: usize,
+    line: usize,
+    properties: Vec<Property>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Encoding {
+    Ascii,
+    Binary { big_endian: bool },
+}
+
+#[derive(Debug)]
+struct Header {
+    encoding: Encoding,
+    elements: Vec<Element>,
+    /// Byte offset of the body.
+    body: usize,
+    /// Number of header lines (the last is `end_header`).
+    lines: usize,
+}
+
+impl Header {
+    fn parse(bytes: &[u8]) -> Result<Self, Syntax> {
+        let (mut pos, mut line) = (0, 0);
+        let mut encoding = None;
+        let mut elements: Vec<Element> = Vec::new();
+        loop {
+            let Some(rest) = bytes.get(pos..).filter(|rest| !rest.is_empty()) else {
+                return Err(match line {
+                    0 => Syntax::whole("empty file"),
+                    _ => Syntax::at(line, "the header ends without `end_header`"),
+                });
+            };
+            let (raw, next) = match rest.iter().position(|&b| b == b'\n') {
+                Some(n) => (&rest[..n], pos + n + 1),
+                None => (rest, bytes.len()),
+            };
+            line += 1;
+            pos = next;
+            let text = std::str::from_utf8(raw)
+                .map_err(|_| Syntax::at(line, "the header holds a line that is not text"))?;
+            if line == 1 {
+                if text.trim() != "ply" {
+                    return Err(Syntax::at(
+                        1,
+                        "not a PLY file: the first line must be `ply`",
+                    ));
+                }
+                continue;
+            }
+            let words: Vec<&str> = text.split_whitespace().collect();
+            match words.as_slice() {
+                [] | ["comment" | "obj_info", ..] => {}
+                ["format", format, version] => {
+                    if *version != "1.0" {
+                        return Err(Syntax::at(
+                            line,
+                            format!("unsupported PLY version `{version}`"),
+                        ));
+                    }
+                    encoding = Some(match *format {
+                        "ascii" => Encoding::Ascii,
+                        "binary_little_endian" => Encoding::Binary { big_endian: false },
+                        "binary_big_endian" => Encoding::Binary { big_endian: true },
+                        _ => {
+                            return Err(Syntax::at(line, format!("unknown PLY format `{format}`")))
+                        }
+                    });
+                }
+                ["element", name, count] => {
+                    let count = count.parse().map_err(|_| {
+                        Syntax::at(line, format!("malformed element count `{count}`"))
+                    })?;
+                    elements.push(Element {
+                        name: (*name).to_owned(),
+                        count,
+                        line,
+                        properties: Vec::new(),
+                    });
+                }
+                ["property", rest @ ..] => {
+                    let element = elements
+                        .last_mut()
+                        .ok_or_else(|| Syntax::at(line, "`property` before any `element`"))?;
+                    let scalar = |name: &str| {
+                        Scalar::from_name(name).ok_or_else(|| {
+                            Syntax::at(line, format!("unknown property type `{name}`"))
+                        })
+                    };
+                    let (name, kind) = match rest {
+                        ["list", count, item, name] => {
+                            let count = scalar(count)?;
+                            if !count.is_integer() {
+                                return Err(Syntax::at(
+                                    line,
+                                    "a list's count type must be an integer type",
+                                ));
+                            }
+                            (name, Kind::List(count, scalar(item)?))
+                        }
+                        [ty, name] if *ty != "list" => (name, Kind::Scalar(scalar(ty)?)),
+                        _ => return Err(Syntax::at(line, "malformed `property` line")),
+                    };
+                    element.properties.push(Property {
+                        name: (*name).to_owned(),
+                        kind,
+                        line,
+                    });
+                }
+                ["end_header"] => break,
+                [keyword, ..] => {
+                    return Err(Syntax::at(
+                        line,
+                        format!("malformed header line starting `{keyword}`"),
+                    ))
+                }
+            }
+        }
+        let encoding =
+            encoding.ok_or_else(|| Syntax::at(line, "the header has no `format` line"))?;
+        Ok(Self {
+            encoding,
+            elements,
+            body: pos,
+            lines: line,
+        })
+    }
+}
+
+/// Where the mesh is in the elements.
+#[derive(Debug)]
+struct Plan {
+    vertex: usize,
+    /// Indices of the `x`, `y`, `z` properties in the vertex element.
+    xyz: [usize; 3],
+    face: usize,
+    /// Index of the vertex index list in the face element.
+    indices: usize,
+    vertex_count: usize,
+}
+
+impl Plan {
+    fn new(header: &Header) -> Result<Self, Syntax> {
+        let find = |name: &str| -> Result<usize, Syntax> {
+            let mut found = header
+                .elements
+                .iter()
+                .enumerate()
+                .filter(|(_, e)| e.name == name);
+            let (index, _) = found.next().ok_or_else(|| {
+                Syntax::at(
+                    header.lines,
+                    format!("the header declares no `{name}` element"),
+                )
+            })?;
+            if let Some((_, again)) = found.next() {
+                return Err(Syntax::at(again.line, format!("a second `{name}` element")));
+            }
+            Ok(index)
+        };
+        let (vertex, face) = (find("vertex")?, find("face")?);
+        let vertices = &header.elements[vertex];
+        if u32::try_from(vertices.count).is_err() {
+            return Err(Syntax::at(vertices.line, "more than 2^32 vertices"));
+        }
+        let mut xyz = [0; 3];
+        for (slot, axis) in xyz.iter_mut().zip(["x", "y", "z"]) {
+            let (index, property) = vertices
+                .properties
+                .iter()
+                .enumerate()
+                .find(|(_, p)| p.name == axis)
+                .ok_or_else(|| {
+                    Syntax::at(
+                        vertices.line,
+                        format!("element `vertex` has no property `{axis}`"),
+                    )
+                })?;
+            if !matches!(property.kind, Kind::Scalar(_)) {
+                return Err(Syntax::at(
+                    property.line,
+                    format!("`{axis}` must be a scalar"),
+                ));
+            }
+            *slot = index;
+        }
+        let faces = &header.elements[face];
+        let (indices, property) = faces
+            .properties
+            .iter()
+            .enumerate()
+            .find(|(_, p)| p.name == "vertex_indices" || p.name == "vertex_index")
+            .ok_or_else(|| {
+                Syntax::at(
+                    faces.line,
+                    "element `face` has no property `vertex_indices`",
+                )
+            })?;
+        match property.kind {
+            Kind::List(_, item) if item.is_integer() => {}
+            _ => {
+                return Err(Syntax::at(
+                    property.line,
+                    format!("`{}` must be a list of integers", property.name),
+                ))
+            }
+        }
+        Ok(Self {
+            vertex,
+            xyz,
+            face,
+            indices,
+            vertex_count: vertices.count,
+        })
+    }
+}
+
+/// The element record being read, for messages.
+#[derive(Debug, Default)]
+struct Record {
+    element: String,
+    index: usize,
+}
+
+impl Record {
+    fn set(&mut self, element: &str, index: usize) {
+        if self.element != element {
+            element.clone_into(&mut self.element);
+        }
+        self.index = index;
+    }
+}
+
+/// A PLY body, ASCII or binary, read one value at a time.
+trait Body {
+    /// Starts record `index` of `count` of `element`.
+    fn begin(&mut self, element: &str, index: usize, count: usize) -> Result<(), Syntax>;
+    /// Reads a value (integer types are exact in `f64`).
+    fn read(&mut self, ty: Scalar) -> Result<f64, Syntax>;
+    /// Skips `n` values of type `ty`.
+    fn skip(&mut self, ty: Scalar, n: usize) -> Result<(), Syntax>;
+    /// Ends the record.
+    fn end(&mut self) -> Result<(), Syntax>;
+    /// A complaint about the current record.
+    fn error(&self, message: &str) -> Syntax;
+}
+
+/// Reads every element of `header` from `body` (`size` bytes in all).
+fn read_body(
+    body: &mut impl Body,
+    header: &Header,
+    plan: &Plan,
+    size: usize,
+) -> Result<Mesh, Syntax> {
+    let nv = plan.vertex_count;
+    // Each vertex value takes a byte at least: a lying count cannot reserve more than that.
+    let values = header.elements[plan.vertex].properties.len().max(1);
+    let mut positions = Vec::with_capacity(nv.min(size / values));
+    let mut triangles = Vec::new();
+    let mut polygon = Vec::new();
+    for (e, element) in header.elements.iter().enumerate() {
+        if element.properties.is_empty() {
+            continue; // records without data
+        }
+        for i in 0..element.count {
+            body.begin(&element.name, i, element.count)?;
+            let mut xyz = [0.0; 3];
+            for (p, property) in element.properties.iter().enumerate() {
+                match property.kind {
+                    Kind::Scalar(ty) => {
+                        let value = body.read(ty)?;
+                        if e == plan.vertex {
+                            if let Some(axis) = plan.xyz.iter().position(|&q| q == p) {
+                                xyz[axis] = value;
+                            }
+                        }
+                    }
+                    Kind::List(count, item) => {
+                        let n = body.read(count)?;
+                        if n < 0.0 {
+                            return Err(body.error(&format!("negative list length {n}")));
+                        }
+                        let n = n as usize;
+                        if e != plan.face || p != plan.indices {
+                            body.skip(item, n)?;
+                            continue;
+                        }
+                        if n < 3 {
+                            let message = format!("{n} vertices; a face needs at least 3");
+                            return Err(body.error(&message));
+                        }
+                        polygon.clear();
+                        for _ in 0..n {
+                            let v = body.read(item)?;
+                            if v < 0.0 || v >= nv as f64 {
+                                return Err(body.error(&format!(
+                                    "vertex index {v} out of range: the file has {nv} vertices"
+                                )));
+                            }
+                            polygon.push(v as u32);
+                        }
+                        fan(&polygon, &mut triangles);
+                    }
+                }
+            }
+            if e == plan.vertex {
+                if !xyz.iter().all(|c| c.is_finite()) {
+                    return Err(body.error(&format!("non-finite coordinate {xyz:?}")));
+                }
+                positions.push(DVec3::from_array(xyz));
+            }
+            body.end()?;
+        }
+    }
+    Ok(Mesh {
+        positions,
+        triangles,
+    })
+}
+
+/// An ASCII body: one record per line.
+struct Ascii<'a> {
+    lines: std::iter::Enumerate<std::str::Lines<'a>>,
+    /// Line number of the body's first line.
+    first: usize,
+    /// Line number of the file's last line.
+    end: usize,
+    line: usize,
+    tokens: std::str::SplitWhitespace<'a>,
+    record: Record,
+}
+
+impl Body for Ascii<'_> {
+    fn begin(&mut self, element: &str, index: usize, count: usize) -> Result<(), Syntax> {
+        self.record.set(element, index);
+        for (i, text) in self.lines.by_ref() {
+            let tokens = text.split_whitespace();
+            if tokens.clone().next().is_some() {
+                self.line = self.first + i;
+                self.tokens = tokens;
+                return Ok(());
+            }
+        }
+        Err(Syntax::at(
+            self.end,
+            format!("unexpected end of file: read {index} of {count} `{element}` elements"),
+        ))
+    }
+
+    fn read(&mut self, ty: Scalar) -> Result<f64, Syntax> {
+        let token = self
+            .tokens
+            .next()
+            .ok_or_else(|| self.error("fewer values than the header declares"))?;
+        let value = if ty.is_integer() {
+            token.parse::<i64>().map(|v| v as f64).ok()
+        } else {
+            token.parse::<f64>().ok()
+        };
+        value.ok_or_else(|| self.error(&format!("malformed number `{token}`")))
+    }
+
+    fn skip(&mut self, ty: Scalar, n: usize) -> Result<(), Syntax> {
+        for _ in 0..n {
+            self.read(ty)?;
+        }
+        Ok(())
+    }
+
+    fn end(&mut self) -> Result<(), Syntax> {
+        match self.tokens.next() {
+            Some(extra) => Err(self.error(&format!(
+                "more values than the header declares (`{extra}` is one too many)"
+            ))),
+            None => Ok(()),
+        }
+    }
+
+    fn error(&self, message: &str) -> Syntax {
+        Syntax::at(
+            self.line,
+            format!("{} {}: {message}", self.record.element, self.record.index),
+        )
+    }
+}
+
+/// A binary body.
+struct Binary<'a> {
+    data: &'a [u8],
+    pos: usize,
+    big_endian: bool,
+    /// Where the current record starts.
+    start: usize,
+    record: Record,
+}
+
+impl Binary<'_> {
+    fn bytes<const N: usize>(&mut self) -> Result<[u8; N], Syntax> {
+        let chunk = self.data.get(self.pos..self.pos.saturating_add(N));
+        let chunk = chunk
+            .and_then(|c| <[u8; N]>::try_from(c).ok())
+            .ok_or_else(|| self.error("truncated: the file ends in the middle of this element"))?;
+        self.pos += N;
+        Ok(chunk)
+    }
+}
+
+impl Body for Binary<'_> {
+    fn begin(&mut self, element: &str, index: usize, _count: usize) -> Result<(), Syntax> {
+        self.record.set(element, index);
+        self.start = self.pos;
+        Ok(())
+    }
+
+    fn read(&mut self, ty: Scalar) -> Result<f64, Syntax> {
+        macro_rules! number {
+            ($t:ty) => {{
+                let bytes = self.bytes::<{ std::mem::size_of::<$t>() }>()?;
+                let value = if self.big_endian {
+                    <$t>::from_be_bytes(bytes)
+                } else {
+                    <$t>::from_le_bytes(bytes)
+                };
+                f64::from(value)
+            }};
+        }
+        Ok(match ty {
+            Scalar::I8 => number!(i8),
+            Scalar::U8 => number!(u8),
+            Scalar::I16 => number!(i16),
+            Scalar::U16 => number!(u16),
+            Scalar::I32 => number!(i32),
+            Scalar::U32 => number!(u32),
+            Scalar::F32 => number!(f32),
+            Scalar::F64 => number!(f64),
+        })
+    }
+
+    fn skip(&mut self, ty: Scalar, n: usize) -> Result<(), Syntax> {
+        let end = n
+            .checked_mul(ty.size())
+            .and_then(|len| self.pos.checked_add(len));
+        match end {
+            Some(end) if end <= self.data.len() => {
+                self.pos = end;
+                Ok(())
+            }
+            _ => Err(self.error("truncated: the file ends in the middle of this element")),
+        }
+    }
+
+    fn end(&mut self) -> Result<(), Syntax> {
+        Ok(())
+    }
+
+    fn error(&self, message: &str) -> Syntax {
+        Syntax::whole(format!(
+            "{} {} (record at byte {}): {message}",
+            self.record.element, self.record.index, self.start
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const HEAD: &str = "ply\nformat ascii 1.0\ncomment hand-made\nelement vertex 3\n\
+                        property float x\nproperty float y\nproperty float z\n\
+                        element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+
+    fn err(text: &str) -> Syntax {
+        parse(text.as_bytes()).expect_err("malformed")
+    }
+
+    #[test]
+    fn reads_ascii_with_extra_properties_and_elements() {
+        let text = "ply\nformat ascii 1.0\nobj_info x\nelement material 1\n\
+                    property list uchar float rgb\nelement vertex 4\nproperty uchar red\n\
+                    property double z\nproperty int16 y\nproperty float32 x\nelement face 1\n\
+                    property list uint8 uint vertex_index\nproperty uchar flags\nelement edge 1\n\
+                    property int a\nproperty int b\nend_header\n\
+                    3 0.5 0.5 0.5\n1 0 0 0.5\n2 0 1 1.5\n\n3 1 1 2.5\n4 0 0 0\n4 0 1 2 3 7\n0 1\n";
+        let mesh = parse(text.as_bytes()).expect("valid");
+        assert_eq!(mesh.positions[0], DVec3::new(0.5, 0.0, 0.0));
+        assert_eq!(mesh.positions[2], DVec3::new(2.5, 1.0, 1.0));
+        assert_eq!(mesh.triangles, vec![[0, 1, 2], [0, 2, 3]]);
+    }
+
+    #[test]
+    fn reads_binary_both_endians() {
+        let header = |format: &str| {
+            format!(
+                "ply\r\nformat {format} 1.0\r\nelement vertex 3\r\nproperty double x\r\n\
+                 property float y\r\nproperty short z\r\nelement face 1\r\n\
+                 property list uchar uint vertex_indices\r\nend_header\r\n"
+            )
+        };
+        for big in [false, true] {
+            let mut bytes = header(if big {
+                "binary_big_endian"
+            } else {
+                "binary_little_endian"
+            })
+            .into_bytes();
+            for (x, y, z) in [(0.5f64, 0.0f32, 0i16), (1.0, 0.0, 0), (0.0, 1.0, -2)] {
+                if big {
+                    bytes.extend(
+                        x.to_be_bytes()
+                            .into_iter()
+                            .chain(y.to_be_bytes())
+                            .chain(z.to_be_bytes()),
+                    );
+                } else {
+                    bytes.extend(
+                        x.to_le_bytes()
+                            .into_iter()
+                            .chain(y.to_le_bytes())
+                            .chain(z.to_le_bytes()),
+                    );
+                }
+            }
+            bytes.push(3);
+            for i in [0u32, 1, 2] {
+                bytes.extend(if big {
+                    i.to_be_bytes()
+                } else {
+                    i.to_le_bytes()
+                });
+            }
+            let mesh = parse(&bytes).expect("valid");
+            assert_eq!(
+                mesh.positions[2],
+                DVec3::new(0.0, 1.0, -2.0),
+                "big endian: {big}"
+            );
+            assert_eq!(mesh.triangles, vec![[0, 1, 2]]);
+            let e = parse(&bytes[..bytes.len() - 1]).expect_err("truncated");
+            assert!(
+                e.line.is_none() && e.message.contains("face 0") && e.message.contains("truncated"),
+                "{e:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn errors_name_the_line() {
+        let body = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+        assert_eq!(
+            parse(format!("{HEAD}{body}").as_bytes())
+                .expect("valid")
+                .triangles
+                .len(),
+            1
+        );
+        for (text, line) in [
+            (format!("{HEAD}0 0 0\n1 x 0\n0 1 0\n3 0 1 2\n"), 12),
+            (format!("{HEAD}0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n"), 12),
+            (format!("{HEAD}0 0 0\n1 0 0\n0 1 inf\n3 0 1 2\n"), 13),
+            (format!("{HEAD}0 0 0\n1 0\n0 1 0\n3 0 1 2\n"), 12),
+            (format!("{HEAD}0 0 0\n1 0 0 0\n0 1 0\n3 0 1 2\n"), 12),
+            (format!("{HEAD}0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n"), 14),
+            (format!("{HEAD}0 0 0\n1 0 0\n0 1 0\n3 0 1 -1\n"), 14),
+            (format!("{HEAD}0 0 0\n1 0 0\n0 1 0\n2 0 1\n"), 14),
+            (format!("{HEAD}0 0 0\n1 0 0\n0 1 0\n4 0 1 2\n"), 14),
+            (format!("{HEAD}0 0 0\n1 0 0\n0 1 0\n"), 13),
+            (HEAD.replace("property float z\n", ""), 4),
+            (
+                HEAD.replace(
+                    "element face 1\nproperty list uchar int vertex_indices\n",
+                    "",
+                ),
+                8,
+            ),
+            (
+                HEAD.replace("list uchar int vertex_indices", "int vertex_indices"),
+                9,
+            ),
+            (HEAD.replace("list uchar int", "list float int"), 9),
+            (HEAD.replace("float y", "real y"), 6),
+            (HEAD.replace("ascii", "binary"), 2),
+            (HEAD.replace("end_header\n", ""), 9),
+            ("PLY\n".to_owned(), 1),
+        ] {
+            let e = err(&text);
+            assert_eq!(e.line, Some(line), "{text:?}: {e:?}");
+        }
+        assert_eq!(err(""), Syntax::whole("empty file"));
+    }
+}

@@ -1,0 +1,211 @@
+//! Projections from world space to an image plane, shared by cameras and lights.
+//!
+//! A [`Projector`] maps a world point to image coordinates `(x, y)` in pixels (or texels) and a
+//! depth, and maps an image point back to a ray. Image coordinates run from the top-left
+//! corner: pixel `(i, j)` covers `[i, i+1] x [j, j+1]` and its centre is `(i + 0.5, j + 0.5)`;
+//! `y` grows downwards. Depth is the distance along the forward axis from the projector's
+//! origin (perspective) or from its image plane (orthographic); it is linear in world space, so
+//! a depth computed by intersecting a ray with a triangle's plane is exact up to `f64` rounding.
+//!
+//! Everything is `f64`: the projector is the one place where world and image meet, and the
+//! exact reference and the rasterizer both rely on it agreeing with itself.
+
+use glam::{DVec2, DVec3};
+use serde::{Deserialize, Serialize};
+
+/// Perspective or orthographic projection.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum ProjectionKind {
+    /// Central projection through the origin.
+    Perspective {
+        /// `tan` of half the horizontal field of view.
+        tan_half_x: f64,
+        /// `tan` of half the vertical field of view.
+        tan_half_y: f64,
+    },
+    /// Parallel projection along the forward axis.
+    Orthographic {
+        /// Half the width of the view volume, in world units.
+        half_width: f64,
+        /// Half the height of the view volume, in world units.
+        half_height: f64,
+    },
+}
+
+/// A projection onto a `width x height` image.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Projector {
+    /// Eye (perspective) or centre of the image plane (orthographic).
+    pub origin: DVec3,
+    /// Unit vector along the image's `+x`.
+    pub right: DVec3,
+    /// Unit vector along the image's `-y` (up on screen).
+    pub up: DVec3,
+    /// Unit viewing direction.
+    pub forward: DVec3,
+    /// The projection.
+    pub kind: ProjectionKind,
+    /// Points nearer than this depth are not projected (perspective only; must be > 0 there).
+    pub near: f64,
+    /// Image width in pixels.
+    pub width: f64,
+    /// Image height in pixels.
+    pub height: f64,
+}
+
+/// A ray `origin + t * direction`; for a projector's ray, `t` is the depth.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ray {
+    /// Start point.
+    pub origin: DVec3,
+    /// Direction, scaled so that the ray parameter equals depth.
+    pub direction: DVec3,
+}
+
+impl Ray {
+    /// The point at parameter `t`.
+    #[inline]
+    pub fn at(&self, t: f64) -> DVec3 {
+        self.origin + t * self.direction
+    }
+
+    /// The parameter where the ray meets the plane `n·p = d`, or `None` when the ray is parallel
+    /// to it (or the result is not finite).
+    #[inline]
+    pub fn intersect_plane(&self, n: DVec3, d: f64) -> Option<f64> {
+        let denom = n.dot(self.direction);
+        let t = (d - n.dot(self.origin)) / denom;
+        (denom != 0.0 && t.is_finite()).then_some(t)
+    }
+}
+
+/// An orthonormal basis `(right, up, forward)` looking along `forward`, with `up` as close to
+/// `up_hint` as possible. Falls back to another hint when the two are parallel.
+pub fn look_basis(forward: DVec3, up_hint: DVec3) -> (DVec3, DVec3, DVec3) {
+    let f = forward.normalize();
+    let mut r = f.cross(up_hint);
+    if r.length_squared() < 1e-20 {
+        let alt = if f.x.abs() < 0.9 { DVec3::X } else { DVec3::Z };
+        r = f.cross(alt);
+    }
+    let r = r.normalize();
+    let u = r.cross(f);
+    (r, u, f)
+}
+
+impl Projector {
+    /// Image coordinates and depth of `p`; `None` for a perspective projector when `p` lies
+    /// nearer than `near` (or behind the eye).
+    #[inline]
+    pub fn project(&self, p: DVec3) -> Option<(DVec2, f64)> {
+        if self.is_perspective() && !(self.depth_of(p) >= self.near) {
+            return None;
+        }
+        let (xy, depth) = self.project_unclipped(p);
+        xy.is_finite().then_some((xy, depth))
+    }
+
+    /// Image coordinates and depth of `p` without the near test; the caller guarantees a
+    /// positive depth for perspective projectors (e.g. after clipping at `near`).
+    #[inline]
+    pub fn project_unclipped(&self, p: DVec3) -> (DVec2, f64) {
+        let v = p - self.origin;
+        let depth = v.dot(self.forward);
+        let (sx, sy) = match self.kind {
+            ProjectionKind::Perspective { tan_half_x, tan_half_y } => {
+                (v.dot(self.right) / (depth * tan_half_x), v.dot(self.up) / (depth * tan_half_y))
+            }
+            ProjectionKind::Orthographic { half_width, half_height } => {
+                (v.dot(self.right) / half_width, v.dot(self.up) / half_height)
+            }
+        };
+        (DVec2::new((1.0 + sx) * 0.5 * self.width, (1.0 - sy) * 0.5 * self.height), depth)
+    }
+
+    /// The ray through image point `xy`, parameterised by depth.
+    #[inline]
+    pub fn ray(&self, xy: DVec2) -> Ray {
+        let sx = 2.0 * xy.x / self.width - 1.0;
+        let sy = 1.0 - 2.0 * xy.y / self.height;
+        match self.kind {
+            ProjectionKind::Perspective { tan_half_x, tan_half_y } => Ray {
+                origin: self.origin,
+                direction: self.forward
+                    + self.right * (sx * tan_half_x)
+                    + self.up * (sy * tan_half_y),
+            },
+            ProjectionKind::Orthographic { half_width, half_height } => Ray {
+                origin: self.origin + self.right * (sx * half_width) + self.up * (sy * half_height),
+                direction: self.forward,
+            },
+        }
+    }
+
+    /// Depth of `p` along the forward axis (no near test).
+    #[inline]
+    pub fn depth_of(&self, p: DVec3) -> f64 {
+        (p - self.origin).dot(self.forward)
+    }
+
+    /// Whether this is a perspective projection.
+    pub fn is_perspective(&self) -> bool {
+        matches!(self.kind, ProjectionKind::Perspective { .. })
+    }
+
+    /// Unit direction from `p` towards the projector (towards the eye, or against `forward`).
+    #[inline]
+    pub fn direction_to(&self, p: DVec3) -> DVec3 {
+        match self.kind {
+            ProjectionKind::Perspective { .. } => (self.origin - p).normalize_or(-self.forward),
+            ProjectionKind::Orthographic { .. } => -self.forward,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn persp() -> Projector {
+        let (right, up, forward) = look_basis(DVec3::new(0.3, -1.0, -2.0), DVec3::Y);
+        Projector {
+            origin: DVec3::new(1.0, 5.0, 9.0),
+            right,
+            up,
+            forward,
+            kind: ProjectionKind::Perspective { tan_half_x: 0.7, tan_half_y: 0.5 },
+            near: 0.01,
+            width: 800.0,
+            height: 600.0,
+        }
+    }
+
+    #[test]
+    fn ray_and_project_are_inverse() {
+        for p in [persp(), Projector {
+            kind: ProjectionKind::Orthographic { half_width: 4.0, half_height: 3.0 },
+            ..persp()
+        }] {
+            for xy in [DVec2::new(0.5, 0.5), DVec2::new(400.25, 17.0), DVec2::new(799.5, 599.5)] {
+                let ray = p.ray(xy);
+                let (back, depth) = p.project(ray.at(7.25)).expect("in front");
+                assert!((back - xy).length() < 1e-9, "{back} vs {xy}");
+                assert!((depth - 7.25).abs() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn points_behind_a_perspective_eye_do_not_project() {
+        let p = persp();
+        assert!(p.project(p.origin - p.forward).is_none());
+        assert!(p.project(p.origin).is_none());
+    }
+
+    #[test]
+    fn basis_is_orthonormal_even_looking_straight_down() {
+        let (r, u, f) = look_basis(-DVec3::Y, DVec3::Y);
+        assert!((r.length() - 1.0).abs() < 1e-15 && (u.length() - 1.0).abs() < 1e-15);
+        assert!(r.dot(u).abs() < 1e-15 && r.dot(f).abs() < 1e-15 && u.dot(f).abs() < 1e-15);
+    }
+}

@@ -1,0 +1,388 @@
+//! Scene files (TOML, serde) and their resolution into [`Scene`]s.
+//!
+//! ```toml
+//! name = "my-scene"                 # optional; defaults to the file stem
+//! resolution = [800, 600]           # default image size
+//! [camera.perspective]              # or [camera.orthographic] with `height`
+//! eye = [0.0, 8.0, 12.0]
+//! target = [0.0, 0.0, 0.0]
+//! fov_y_deg = 45.0
+//! [light.directional]               # or [light.spot] with position, target, fov_deg
+//! direction = [-1.0, -2.0, -0.5]
+//! [effects]                         # optional: force derived effects off
+//! curved_receivers = false
+//! [[object]]
+//! name = "ground"
+//! shape.plane = { size = 20.0 }     # a generator and its parameters
+//! [[object]]
+//! shape.file = { path = "models/bunny00.off" }   # relative to this file
+//! transform = { fit_size = 4.0, on_ground = true, rotate_deg = [0.0, 30.0, 0.0] }
+//! material = { color = [0.9, 0.6, 0.3], opacity = 1.0 }
+//! ```
+//!
+//! Camera, light and shape are tables named after their kind (serde's external tagging), so
+//! that every parse error points at the offending key or value with its line.
+//! Unknown keys and bad values are errors naming the file and the key. A transform applies,
+//! in order: `scale`, `rotate_deg` (about x, then y, then z), `fit_size` (centre the bounds on
+//! the origin and scale uniformly so the largest extent equals it), `on_ground` (lift so the
+//! lowest point is at y = 0), `translate`.
+
+use crate::{
+    camera::Camera,
+    generators::{
+        CageParams, CityParams, Generator, HairballParams, HeightfieldParams, ParamError,
+        PlaneParams, PlantParams, RandomTrianglesParams, SpheresParams,
+    },
+    io::{load_mesh, LoadError},
+    light::Light,
+    mesh::Mesh,
+    scene::{EffectSwitches, Material, Object, Scene},
+};
+use glam::{DMat4, DVec3, EulerRot};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// Where an object's mesh comes from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Shape {
+    /// A square ground plane.
+    Plane(PlaneParams),
+    /// Random triangles of constant total area.
+    RandomTriangles(RandomTrianglesParams),
+    /// A cage of thin bars.
+    Cage(CageParams),
+    /// Spheres.
+    Spheres(SpheresParams),
+    /// A city of boxes.
+    City(CityParams),
+    /// A plant of thin leaves.
+    Plant(PlantParams),
+    /// A bumpy heightfield receiver.
+    Heightfield(HeightfieldParams),
+    /// A hair ball of thin strands.
+    Hairball(HairballParams),
+    /// A mesh file (.obj, .off, .ply), relative to the scene file.
+    File(FileShape),
+}
+
+/// A mesh file reference.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FileShape {
+    /// Path of the mesh file, relative to the scene file (or to the models folder for
+    /// built-in scenes).
+    pub path: PathBuf,
+}
+
+/// How an object is placed.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Transform {
+    /// Per-axis scale (default `[1, 1, 1]`).
+    pub scale: DVec3,
+    /// Rotation in degrees about x, then y, then z (default zero).
+    pub rotate_deg: DVec3,
+    /// If set, centre the bounds on the origin and scale so the largest extent equals this.
+    pub fit_size: Option<f64>,
+    /// Lift the object so its lowest point is at y = 0 (default false).
+    pub on_ground: bool,
+    /// Translation (default zero).
+    pub translate: DVec3,
+}
+
+impl Default for Transform {
+    fn default() -> Self {
+        Self {
+            scale: DVec3::ONE,
+            rotate_deg: DVec3::ZERO,
+            fit_size: None,
+            on_ground: false,
+            translate: DVec3::ZERO,
+        }
+    }
+}
+
+fn default_true() -> bool {
+    true
+}
+
+fn is_default<T: Default + PartialEq>(v: &T) -> bool {
+    *v == T::default()
+}
+
+/// One object of a scene file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectDesc {
+    /// Name (default: the shape's kind and index).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// Where the mesh comes from.
+    pub shape: Shape,
+    /// Placement.
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub transform: Transform,
+    /// Material.
+    #[serde(default)]
+    pub material: Material,
+    /// Whether the object blocks light (default true).
+    #[serde(default = "default_true")]
+    pub casts_shadows: bool,
+}
+
+fn default_resolution() -> [u32; 2] {
+    [800, 600]
+}
+
+/// A scene as written in a scene file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneDesc {
+    /// Scene name (default: the file stem).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// Default image size `[width, height]` (default `[800, 600]`).
+    #[serde(default = "default_resolution")]
+    pub resolution: [u32; 2],
+    /// Camera.
+    pub camera: Camera,
+    /// Light.
+    pub light: Light,
+    /// Effects forced off.
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub effects: EffectSwitches,
+    /// Objects, in order (`[[object]]`).
+    #[serde(rename = "object")]
+    pub objects: Vec<ObjectDesc>,
+}
+
+/// Why a scene could not be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// The scene file could not be read.
+    #[error("{path}: {source}")]
+    Io {
+        /// The scene file.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// The scene file is not valid TOML or does not match the format (names line and key).
+    #[error("{path}: {message}")]
+    Parse {
+        /// The scene file.
+        path: PathBuf,
+        /// The parser's message, with line and column.
+        message: String,
+    },
+    /// A value is out of range.
+    #[error("{path}: `{key}`: {message}")]
+    Invalid {
+        /// The scene file (or `builtin:NAME`).
+        path: PathBuf,
+        /// The key, e.g. `object[1].shape.count`.
+        key: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A mesh file referenced by the scene could not be loaded.
+    #[error("{path}: `{key}`: {source}")]
+    Mesh {
+        /// The scene file.
+        path: PathBuf,
+        /// The key, e.g. `object[1].shape.file.path`.
+        key: String,
+        /// The loader's error (names the mesh file and line).
+        source: LoadError,
+    },
+    /// A model the scene needs is not present.
+    #[error("{path}: `{key}`: scene `{scene}` needs {model}, which is missing{hint}")]
+    ModelMissing {
+        /// The scene file (or `builtin:NAME`).
+        path: PathBuf,
+        /// The key, e.g. `object[1].shape.file.path`.
+        key: String,
+        /// The scene.
+        scene: String,
+        /// The missing file.
+        model: PathBuf,
+        /// How to get it, when it is one of the models `scripts/fetch-models` fetches.
+        hint: String,
+    },
+    /// No built-in scene has this name and no file has this path.
+    #[error("unknown scene `{name}`: not a built-in scene (known: {known}) nor a .toml, .obj, .off or .ply file")]
+    Unknown {
+        /// What was asked for.
+        name: String,
+        /// The built-in names.
+        known: String,
+    },
+}
+
+impl SceneDesc {
+    /// Parses a scene file's text; `path` is used in messages.
+    pub fn from_toml(text: &str, path: &Path) -> Result<Self, SceneError> {
+        toml::from_str(text)
+            .map_err(|e| SceneError::Parse { path: path.to_owned(), message: e.to_string() })
+    }
+
+    /// The scene file text of this description.
+    pub fn to_toml(&self) -> String {
+        // Every field serializes; a failure would be an internal error of the format.
+        toml::to_string_pretty(self).unwrap_or_else(|e| format!("# cannot serialize: {e}\n"))
+    }
+
+    /// Reads and resolves a scene file.
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| SceneError::Io { path: path.to_owned(), source })?;
+        let desc = Self::from_toml(&text, path)?;
+        let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned());
+        let base = path.parent().unwrap_or(Path::new("."));
+        desc.resolve(stem.as_deref().unwrap_or("scene"), path, base)
+    }
+
+    /// Builds the scene: generates or loads every mesh and places it. `origin` names the file
+    /// in messages; mesh paths are relative to `base`.
+    pub fn resolve(&self, default_name: &str, origin: &Path, base: &Path) -> Result<Scene, SceneError> {
+        let invalid = |key: String, message: String| SceneError::Invalid {
+            path: origin.to_owned(),
+            key,
+            message,
+        };
+        let [width, height] = self.resolution;
+        if !(1..=16384).contains(&width) || !(1..=16384).contains(&height) {
+            return Err(invalid("resolution".into(), "each side must be in 1..=16384".into()));
+        }
+        self.camera.validate().map_err(|(k, m)| invalid(format!("camera.{k}"), m))?;
+        self.light.validate().map_err(|(k, m)| invalid(format!("light.{k}"), m))?;
+        if self.objects.is_empty() {
+            return Err(invalid("object".into(), "a scene needs at least one [[object]]".into()));
+        }
+        let name = self.name.clone().unwrap_or_else(|| default_name.to_owned());
+        let mut objects = Vec::with_capacity(self.objects.len());
+        for (i, o) in self.objects.iter().enumerate() {
+            let key = |k: &str| format!("object[{i}].{k}");
+            let m = &o.material;
+            if !m.color.iter().all(|c| (0.0..=1.0).contains(c)) {
+                return Err(invalid(key("material.color"), "components must be in [0, 1]".into()));
+            }
+            if !(0.0..=1.0).contains(&m.opacity) {
+                return Err(invalid(key("material.opacity"), format!("must be in [0, 1], got {}", m.opacity)));
+            }
+            let mut mesh = o.shape.build(base).map_err(|e| match e {
+                ShapeError::Param(p) => invalid(key(&format!("shape.{}", p.key)), p.message),
+                ShapeError::Missing(model) => {
+                    let hint = if model.starts_with(crate::registry::models_dir()) {
+                        ": run `scripts/fetch-models` to fetch it".to_owned()
+                    } else {
+                        String::new()
+                    };
+                    SceneError::ModelMissing {
+                        path: origin.to_owned(),
+                        key: key("shape.file.path"),
+                        scene: name.clone(),
+                        model,
+                        hint,
+                    }
+                }
+                ShapeError::Load(source) => {
+                    SceneError::Mesh { path: origin.to_owned(), key: key("shape.file.path"), source }
+                }
+            })?;
+            o.transform.apply(&mut mesh).map_err(|(k, msg)| invalid(key(&format!("transform.{k}")), msg))?;
+            let object_name = o.name.clone().unwrap_or_else(|| format!("{}{i}", o.shape.kind()));
+            objects.push(Object { name: object_name, mesh, material: *m, casts_shadows: o.casts_shadows });
+        }
+        Ok(Scene {
+            name,
+            width,
+            height,
+            camera: self.camera.clone(),
+            light: self.light.clone(),
+            objects,
+            switches: self.effects,
+        })
+    }
+}
+
+enum ShapeError {
+    Param(ParamError),
+    Missing(PathBuf),
+    Load(LoadError),
+}
+
+impl Shape {
+    /// The shape's kind as written in scene files.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Shape::Plane(_) => "plane",
+            Shape::RandomTriangles(_) => "random_triangles",
+            Shape::Cage(_) => "cage",
+            Shape::Spheres(_) => "spheres",
+            Shape::City(_) => "city",
+            Shape::Plant(_) => "plant",
+            Shape::Heightfield(_) => "heightfield",
+            Shape::Hairball(_) => "hairball",
+            Shape::File(_) => "file",
+        }
+    }
+
+    fn build(&self, base: &Path) -> Result<Mesh, ShapeError> {
+        let generator: &dyn Generator = match self {
+            Shape::Plane(p) => p,
+            Shape::RandomTriangles(p) => p,
+            Shape::Cage(p) => p,
+            Shape::Spheres(p) => p,
+            Shape::City(p) => p,
+            Shape::Plant(p) => p,
+            Shape::Heightfield(p) => p,
+            Shape::Hairball(p) => p,
+            Shape::File(f) => {
+                let path = base.join(&f.path);
+                if !path.exists() {
+                    return Err(ShapeError::Missing(path));
+                }
+                return load_mesh(&path).map_err(ShapeError::Load);
+            }
+        };
+        generator.validate().map_err(ShapeError::Param)?;
+        Ok(generator.generate())
+    }
+}
+
+impl Transform {
+    /// Applies the transform to `mesh`; errors name the bad key.
+    pub fn apply(&self, mesh: &mut Mesh) -> Result<(), (&'static str, String)> {
+        for (key, v) in [("scale", self.scale), ("rotate_deg", self.rotate_deg), ("translate", self.translate)] {
+            if !v.is_finite() {
+                return Err((key, "must be finite".into()));
+            }
+        }
+        if self.scale.cmpeq(DVec3::ZERO).any() {
+            return Err(("scale", "must not be zero on any axis".into()));
+        }
+        let r = self.rotate_deg;
+        let rotate = DMat4::from_euler(EulerRot::ZYX, r.z.to_radians(), r.y.to_radians(), r.x.to_radians());
+        mesh.transform(&(rotate * DMat4::from_scale(self.scale)));
+        if let Some(size) = self.fit_size {
+            if !(size > 0.0 && size.is_finite()) {
+                return Err(("fit_size", format!("must be positive and finite, got {size}")));
+            }
+            if let Some((lo, hi)) = mesh.bounds() {
+                let extent = (hi - lo).max_element();
+                let s = if extent > 0.0 { size / extent } else { 1.0 };
+                let m = DMat4::from_scale(DVec3::splat(s)) * DMat4::from_translation(-0.5 * (lo + hi));
+                mesh.transform(&m);
+            }
+        }
+        if self.on_ground {
+            if let Some((lo, _)) = mesh.bounds() {
+                mesh.transform(&DMat4::from_translation(DVec3::new(0.0, -lo.y, 0.0)));
+            }
+        }
+        mesh.transform(&DMat4::from_translation(self.translate));
+        Ok(())
+    }
+}

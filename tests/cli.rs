@@ -1,0 +1,131 @@
+//! The CLI contract of DESIGN.md: `scenes` and `render`.
+
+mod common;
+use common::{shadowbench, stderr};
+
+#[test]
+fn scenes_json_lists_at_least_twelve_scenes_with_counts_and_effects() {
+    let o = shadowbench(&["scenes", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let list: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    let list = list.as_array().expect("array");
+    let available: Vec<_> = list.iter().filter(|s| s["available"] == true).collect();
+    assert!(available.len() >= 12, "{} available scenes", available.len());
+    for s in available {
+        assert!(s["triangles"].as_u64().expect("count") > 0, "{s}");
+        assert!(s["effects"].is_array(), "{s}");
+    }
+    let names: Vec<&str> = list.iter().filter_map(|s| s["name"].as_str()).collect();
+    for required in [
+        "plane-square", "random-1k", "random-10k", "random-100k", "random-1m", "cage", "plant",
+        "spheres", "city", "bumpy", "hairball", "grazing", "bunny-plane",
+    ] {
+        assert!(names.contains(&required), "{required} missing from {names:?}");
+    }
+}
+
+#[test]
+fn scenes_toml_prints_a_scene_file_that_loads() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let o = shadowbench(&["scenes", "--toml", "cage"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let path = common::write(dir.path(), "cage-copy.toml", &String::from_utf8_lossy(&o.stdout));
+    let scene = scenes::scene_file::SceneDesc::load(std::path::Path::new(&path)).expect("loads");
+    let builtin = scenes::load("cage").expect("built-in");
+    assert_eq!(scene.objects, builtin.objects);
+}
+
+#[test]
+fn render_writes_the_three_files_with_every_counter_and_named_stages() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("run");
+    let o = shadowbench(&[
+        "render", "--scene", "plane-square", "--method", "sm", "--width", "160", "--height", "120",
+        "--map-res", "256", "--out", out.to_str().expect("utf-8"), "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in ["visibility.exr", "shadow.png", "run.json"] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let printed: serde_json::Value = serde_json::from_slice(&o.stdout).expect("stdout is run.json");
+    let written: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).expect("read")).expect("JSON");
+    assert_eq!(printed, written);
+    assert_eq!(written["scene"], "plane-square");
+    assert_eq!(written["method"], "sm");
+    assert_eq!(written["params"]["map_res"], 256);
+    assert_eq!((written["width"].as_u64(), written["height"].as_u64()), (Some(160), Some(120)));
+    assert!(written["effects"].as_array().expect("effects").contains(&"planar_receiver".into()));
+    let counters = written["counters"].as_object().expect("counters");
+    for name in instrumentation::Counters::NAMES {
+        assert!(counters.contains_key(*name), "counter {name} missing");
+    }
+    // One lookup per pixel that sees a surface (tests/sm.rs checks the exact count).
+    let lookups = counters["shadow_map_lookups"].as_u64().expect("count");
+    assert!(lookups > 1000 && lookups <= 160 * 120, "{lookups} lookups");
+    let stages: Vec<&str> = written["stages"]
+        .as_array()
+        .expect("stages")
+        .iter()
+        .map(|s| {
+            assert!(s["ms"].as_f64().expect("ms") >= 0.0);
+            s["name"].as_str().expect("name")
+        })
+        .collect();
+    assert_eq!(stages, ["camera G-buffer", "light depth map", "depth test"]);
+    let total = written["total_ms"].as_f64().expect("total_ms");
+    let sum: f64 = written["stages"].as_array().expect("stages").iter().map(|s| s["ms"].as_f64().unwrap_or(0.0)).sum();
+    assert!((total - sum).abs() < 1e-6);
+
+    let exr = exr::prelude::read_first_flat_layer_from_file(out.join("visibility.exr")).expect("EXR reads");
+    assert_eq!(exr.layer_data.size.width(), 160);
+    assert_eq!(exr.layer_data.size.height(), 120);
+    let png = image::open(out.join("shadow.png")).expect("PNG reads");
+    assert_eq!((png.width(), png.height()), (160, 120));
+}
+
+#[test]
+fn render_takes_a_mesh_file_as_scene() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tetra = common::write(
+        dir.path(),
+        "tetra.off",
+        "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n",
+    );
+    let out = dir.path().join("out");
+    let o = shadowbench(&[
+        "render", "--scene", &tetra, "--method", "sm", "--width", "64", "--height", "48", "--out",
+        out.to_str().expect("utf-8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let run: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).expect("read")).expect("JSON");
+    assert_eq!(run["scene"], "tetra");
+}
+
+#[test]
+fn gpu_device_is_refused_with_a_clear_message_until_it_exists() {
+    let o = shadowbench(&["render", "--scene", "plane-square", "--method", "sm", "--device", "gpu"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--device gpu"), "{}", stderr(&o));
+}
+
+#[test]
+fn help_explains_every_render_flag() {
+    let o = shadowbench(&["render", "--help"]);
+    let help = String::from_utf8_lossy(&o.stdout);
+    let lines: Vec<&str> = help.lines().collect();
+    for flag in [
+        "--scene", "--method", "--map-res", "--constant-bias", "--slope-bias", "--max-slope",
+        "--width", "--height", "--device", "--out", "--json",
+    ] {
+        let i = lines
+            .iter()
+            .position(|l| l.trim_start().starts_with(flag))
+            .unwrap_or_else(|| panic!("{flag} not in help:\n{help}"));
+        // Long help puts the explanation on the next line; short help after the flag.
+        let same_line = lines[i].trim_start()[flag.len()..].split("  ").last().unwrap_or("");
+        let explanation = if same_line.split_whitespace().count() >= 3 { same_line } else { lines.get(i + 1).copied().unwrap_or("") };
+        assert!(explanation.split_whitespace().count() >= 3, "{flag} is not explained: {explanation:?}");
+    }
+}

@@ -1,1 +1,0 @@
-//! Workspace-level tests live in this package's `tests/` folder.
