@@ -137,11 +137,17 @@ fn scenes(json: bool, toml: Option<String>) -> Result<(), Failure> {
     if json {
         println!("{}", serde_json::to_string_pretty(&rows)?);
     } else {
-        println!("{:<14} {:>10}  {:<11} {:<44} description", "scene", "triangles", "resolution", "effects");
+        println!(
+            "{:<14} {:>10}  {:<11} {:<44} description",
+            "scene", "triangles", "resolution", "effects"
+        );
         for r in &rows {
             let tris = r["triangles"].as_u64().map_or("missing".to_string(), |t| t.to_string());
-            let res = r["resolution"].as_array().map_or(String::from("-"), |a| format!("{}x{}", a[0], a[1]));
-            let effects: Vec<&str> = r["effects"].as_array().into_iter().flatten().filter_map(|e| e.as_str()).collect();
+            let res = r["resolution"]
+                .as_array()
+                .map_or(String::from("-"), |a| format!("{}x{}", a[0], a[1]));
+            let effects: Vec<&str> =
+                r["effects"].as_array().into_iter().flatten().filter_map(|e| e.as_str()).collect();
             println!(
                 "{:<14} {:>10}  {:<11} {:<44} {}",
                 r["name"].as_str().unwrap_or_default(),
@@ -194,7 +200,9 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
         notes: rec.notes,
     };
 
-    let out = a.out.unwrap_or_else(|| PathBuf::from(format!("shadowbench-out/{}-{}", scene.name, method.name())));
+    let out = a.out.unwrap_or_else(|| {
+        PathBuf::from(format!("shadowbench-out/{}-{}", scene.name, method.name()))
+    });
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
     reports::write_visibility_exr(&out.join("visibility.exr"), &visibility)?;
     reports::write_shadow_png(&out.join("shadow.png"), &frame, &visibility)?;

@@ -8,7 +8,8 @@ use common::{shadowbench, stderr, write};
 fn render(scene: &str, extra: &[&str]) -> (Option<i32>, String) {
     let dir = tempfile::tempdir().expect("tempdir");
     let out = dir.path().join("out");
-    let mut args = vec!["render", "--scene", scene, "--method", "sm", "--width", "32", "--height", "24"];
+    let mut args =
+        vec!["render", "--scene", scene, "--method", "sm", "--width", "32", "--height", "24"];
     args.extend_from_slice(extra);
     args.extend_from_slice(&["--out", out.to_str().expect("utf-8")]);
     let o = shadowbench(&args);
@@ -39,17 +40,64 @@ fn a_valid_scene_file_renders() {
 fn scene_file_errors_name_the_file_and_the_line_or_key() {
     let dir = tempfile::tempdir().expect("tempdir");
     let cases: &[(&str, String, &[&str])] = &[
-        ("unknown-key.toml", VALID.replace("fov_y_deg = 45.0", "fov_y_deg = 45.0\nzoom = 2"), &["zoom", "line 7"]),
-        ("bad-type.toml", VALID.replace("fov_y_deg = 45.0", "fov_y_deg = \"wide\""), &["fov_y_deg", "line 6"]),
-        ("bad-fov.toml", VALID.replace("fov_y_deg = 45.0", "fov_y_deg = 190.0"), &["camera.fov_y_deg"]),
-        ("bad-opacity.toml", format!("{VALID}material = {{ opacity = 2.0 }}\n"), &["object[0].material.opacity"]),
-        ("bad-generator.toml", VALID.replace("size = 10.0", "size = -1.0"), &["object[0].shape.size"]),
-        ("unknown-shape.toml", VALID.replace("shape.plane", "shape.teapot"), &["teapot", "line 10"]),
-        ("unknown-param.toml", VALID.replace("size = 10.0", "size = 10.0, colour = 1"), &["colour", "line 10"]),
-        ("bad-param-type.toml", VALID.replace("size = 10.0", "size = \"big\""), &["size = \"big\"", "line 10"]),
-        ("no-objects.toml", VALID.replace("[[object]]\nshape.plane = { size = 10.0 }\n", "object = []\n"), &["object"]),
-        ("zero-light.toml", VALID.replace("[-0.3, -1.0, -0.2]", "[0.0, 0.0, 0.0]"), &["light.direction"]),
-        ("missing-mesh.toml", VALID.replace("shape.plane = { size = 10.0 }", "shape.file = { path = \"nowhere.obj\" }"), &["nowhere.obj", "missing"]),
+        (
+            "unknown-key.toml",
+            VALID.replace("fov_y_deg = 45.0", "fov_y_deg = 45.0\nzoom = 2"),
+            &["zoom", "line 7"],
+        ),
+        (
+            "bad-type.toml",
+            VALID.replace("fov_y_deg = 45.0", "fov_y_deg = \"wide\""),
+            &["fov_y_deg", "line 6"],
+        ),
+        (
+            "bad-fov.toml",
+            VALID.replace("fov_y_deg = 45.0", "fov_y_deg = 190.0"),
+            &["camera.fov_y_deg"],
+        ),
+        (
+            "bad-opacity.toml",
+            format!("{VALID}material = {{ opacity = 2.0 }}\n"),
+            &["object[0].material.opacity"],
+        ),
+        (
+            "bad-generator.toml",
+            VALID.replace("size = 10.0", "size = -1.0"),
+            &["object[0].shape.size"],
+        ),
+        (
+            "unknown-shape.toml",
+            VALID.replace("shape.plane", "shape.teapot"),
+            &["teapot", "line 10"],
+        ),
+        (
+            "unknown-param.toml",
+            VALID.replace("size = 10.0", "size = 10.0, colour = 1"),
+            &["colour", "line 10"],
+        ),
+        (
+            "bad-param-type.toml",
+            VALID.replace("size = 10.0", "size = \"big\""),
+            &["size = \"big\"", "line 10"],
+        ),
+        (
+            "no-objects.toml",
+            VALID.replace("[[object]]\nshape.plane = { size = 10.0 }\n", "object = []\n"),
+            &["object"],
+        ),
+        (
+            "zero-light.toml",
+            VALID.replace("[-0.3, -1.0, -0.2]", "[0.0, 0.0, 0.0]"),
+            &["light.direction"],
+        ),
+        (
+            "missing-mesh.toml",
+            VALID.replace(
+                "shape.plane = { size = 10.0 }",
+                "shape.file = { path = \"nowhere.obj\" }",
+            ),
+            &["nowhere.obj", "missing"],
+        ),
         ("not-toml.toml", "this is = = not toml".to_string(), &["line 1"]),
     ];
     for (name, text, needles) in cases {
@@ -80,7 +128,10 @@ fn malformed_mesh_files_name_the_file_and_line() {
         let path = write(dir.path(), name, text);
         let (code, err) = render(&path, &[]);
         assert_eq!(code, Some(2), "{name}: {err}");
-        assert!(err.contains(name) && err.contains(needle), "{name}: expected `{needle}` in: {err}");
+        assert!(
+            err.contains(name) && err.contains(needle),
+            "{name}: expected `{needle}` in: {err}"
+        );
     }
 }
 
@@ -90,9 +141,15 @@ fn bad_flags_and_names_are_named() {
         (&["render", "--scene", "no-such-scene", "--method", "sm"], "no-such-scene"),
         (&["render", "--scene", "plane-square", "--method", "magic"], "--method"),
         (&["render", "--scene", "plane-square", "--method", "sm", "--map-res", "0"], "--map-res"),
-        (&["render", "--scene", "plane-square", "--method", "sm", "--slope-bias=-1"], "--slope-bias"),
+        (
+            &["render", "--scene", "plane-square", "--method", "sm", "--slope-bias=-1"],
+            "--slope-bias",
+        ),
         (&["render", "--scene", "plane-square", "--method", "sm", "--width", "0"], "--width"),
-        (&["render", "--scene", "plane-square", "--method", "sm", "--map-res", "many"], "--map-res"),
+        (
+            &["render", "--scene", "plane-square", "--method", "sm", "--map-res", "many"],
+            "--map-res",
+        ),
         (&["render", "--scene", "/no/such/file.obj", "--method", "sm"], "/no/such/file.obj"),
         (&["scenes", "--toml", "no-such-scene"], "no-such-scene"),
     ];

@@ -17,8 +17,19 @@ fn scenes_json_lists_at_least_twelve_scenes_with_counts_and_effects() {
     }
     let names: Vec<&str> = list.iter().filter_map(|s| s["name"].as_str()).collect();
     for required in [
-        "plane-square", "random-1k", "random-10k", "random-100k", "random-1m", "cage", "plant",
-        "spheres", "city", "bumpy", "hairball", "grazing", "bunny-plane",
+        "plane-square",
+        "random-1k",
+        "random-10k",
+        "random-100k",
+        "random-1m",
+        "cage",
+        "plant",
+        "spheres",
+        "city",
+        "bumpy",
+        "hairball",
+        "grazing",
+        "bunny-plane",
     ] {
         assert!(names.contains(&required), "{required} missing from {names:?}");
     }
@@ -40,8 +51,20 @@ fn render_writes_the_three_files_with_every_counter_and_named_stages() {
     let dir = tempfile::tempdir().expect("tempdir");
     let out = dir.path().join("run");
     let o = shadowbench(&[
-        "render", "--scene", "plane-square", "--method", "sm", "--width", "160", "--height", "120",
-        "--map-res", "256", "--out", out.to_str().expect("utf-8"), "--json",
+        "render",
+        "--scene",
+        "plane-square",
+        "--method",
+        "sm",
+        "--width",
+        "160",
+        "--height",
+        "120",
+        "--map-res",
+        "256",
+        "--out",
+        out.to_str().expect("utf-8"),
+        "--json",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     for f in ["visibility.exr", "shadow.png", "run.json"] {
@@ -49,7 +72,8 @@ fn render_writes_the_three_files_with_every_counter_and_named_stages() {
     }
     let printed: serde_json::Value = serde_json::from_slice(&o.stdout).expect("stdout is run.json");
     let written: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).expect("read")).expect("JSON");
+        serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).expect("read"))
+            .expect("JSON");
     assert_eq!(printed, written);
     assert_eq!(written["scene"], "plane-square");
     assert_eq!(written["method"], "sm");
@@ -74,10 +98,16 @@ fn render_writes_the_three_files_with_every_counter_and_named_stages() {
         .collect();
     assert_eq!(stages, ["camera G-buffer", "light depth map", "depth test"]);
     let total = written["total_ms"].as_f64().expect("total_ms");
-    let sum: f64 = written["stages"].as_array().expect("stages").iter().map(|s| s["ms"].as_f64().unwrap_or(0.0)).sum();
+    let sum: f64 = written["stages"]
+        .as_array()
+        .expect("stages")
+        .iter()
+        .map(|s| s["ms"].as_f64().unwrap_or(0.0))
+        .sum();
     assert!((total - sum).abs() < 1e-6);
 
-    let exr = exr::prelude::read_first_flat_layer_from_file(out.join("visibility.exr")).expect("EXR reads");
+    let exr = exr::prelude::read_first_flat_layer_from_file(out.join("visibility.exr"))
+        .expect("EXR reads");
     assert_eq!(exr.layer_data.size.width(), 160);
     assert_eq!(exr.layer_data.size.height(), 120);
     let png = image::open(out.join("shadow.png")).expect("PNG reads");
@@ -94,18 +124,29 @@ fn render_takes_a_mesh_file_as_scene() {
     );
     let out = dir.path().join("out");
     let o = shadowbench(&[
-        "render", "--scene", &tetra, "--method", "sm", "--width", "64", "--height", "48", "--out",
+        "render",
+        "--scene",
+        &tetra,
+        "--method",
+        "sm",
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--out",
         out.to_str().expect("utf-8"),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let run: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).expect("read")).expect("JSON");
+        serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).expect("read"))
+            .expect("JSON");
     assert_eq!(run["scene"], "tetra");
 }
 
 #[test]
 fn gpu_device_is_refused_with_a_clear_message_until_it_exists() {
-    let o = shadowbench(&["render", "--scene", "plane-square", "--method", "sm", "--device", "gpu"]);
+    let o =
+        shadowbench(&["render", "--scene", "plane-square", "--method", "sm", "--device", "gpu"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("--device gpu"), "{}", stderr(&o));
 }
@@ -116,8 +157,17 @@ fn help_explains_every_render_flag() {
     let help = String::from_utf8_lossy(&o.stdout);
     let lines: Vec<&str> = help.lines().collect();
     for flag in [
-        "--scene", "--method", "--map-res", "--constant-bias", "--slope-bias", "--max-slope",
-        "--width", "--height", "--device", "--out", "--json",
+        "--scene",
+        "--method",
+        "--map-res",
+        "--constant-bias",
+        "--slope-bias",
+        "--max-slope",
+        "--width",
+        "--height",
+        "--device",
+        "--out",
+        "--json",
     ] {
         let i = lines
             .iter()
@@ -125,7 +175,14 @@ fn help_explains_every_render_flag() {
             .unwrap_or_else(|| panic!("{flag} not in help:\n{help}"));
         // Long help puts the explanation on the next line; short help after the flag.
         let same_line = lines[i].trim_start()[flag.len()..].split("  ").last().unwrap_or("");
-        let explanation = if same_line.split_whitespace().count() >= 3 { same_line } else { lines.get(i + 1).copied().unwrap_or("") };
-        assert!(explanation.split_whitespace().count() >= 3, "{flag} is not explained: {explanation:?}");
+        let explanation = if same_line.split_whitespace().count() >= 3 {
+            same_line
+        } else {
+            lines.get(i + 1).copied().unwrap_or("")
+        };
+        assert!(
+            explanation.split_whitespace().count() >= 3,
+            "{flag} is not explained: {explanation:?}"
+        );
     }
 }

@@ -71,8 +71,19 @@ fn spheres_scene(camera: Camera) -> Scene {
 #[test]
 fn exact_closed_meshes_leave_no_pixel_empty_inside_their_silhouette() {
     let cameras = [
-        Camera::Perspective { eye: DVec3::new(1.0, 6.0, 9.0), target: DVec3::new(0.0, 1.5, 0.0), up: DVec3::Y, fov_y_deg: 50.0, near: 0.01 },
-        Camera::Orthographic { eye: DVec3::new(0.0, 9.0, 0.1), target: DVec3::ZERO, up: DVec3::Y, height: 12.0 },
+        Camera::Perspective {
+            eye: DVec3::new(1.0, 6.0, 9.0),
+            target: DVec3::new(0.0, 1.5, 0.0),
+            up: DVec3::Y,
+            fov_y_deg: 50.0,
+            near: 0.01,
+        },
+        Camera::Orthographic {
+            eye: DVec3::new(0.0, 9.0, 0.1),
+            target: DVec3::ZERO,
+            up: DVec3::Y,
+            height: 12.0,
+        },
     ];
     for camera in cameras {
         let scene = spheres_scene(camera);
@@ -120,11 +131,8 @@ fn exact_light_depth_map_of_plane_square_matches_the_analytic_depth() {
     let frame = Frame::new(&scene, 64, 48, &mut rec);
     let map = frame.light_depth_map(256, &mut rec);
     // Each object is one planar quad of two triangles: its plane and its corners.
-    let quads: Vec<_> = scene
-        .objects
-        .iter()
-        .map(|o| (o.mesh.plane().expect("planar"), o.mesh.clone()))
-        .collect();
+    let quads: Vec<_> =
+        scene.objects.iter().map(|o| (o.mesh.plane().expect("planar"), o.mesh.clone())).collect();
     let (mut checked, mut on_square) = (0, 0);
     for k in 0..map.depth.len() {
         let ray = map.projector.ray(centre(k, 256));
@@ -133,7 +141,10 @@ fn exact_light_depth_map_of_plane_square_matches_the_analytic_depth() {
         for (i, ((n, d), mesh)) in quads.iter().enumerate() {
             let Some(t) = ray.intersect_plane(*n, *d) else { continue };
             for tri in 0..mesh.triangle_count() {
-                let Some((_, u, v)) = ray_triangle(ray.origin, ray.direction, mesh.corners(tri)) else { continue };
+                let Some((_, u, v)) = ray_triangle(ray.origin, ray.direction, mesh.corners(tri))
+                else {
+                    continue;
+                };
                 let m = u.min(v).min(1.0 - u - v);
                 if m.abs() <= 1e-9 {
                     near_edge = true;
@@ -153,8 +164,14 @@ fn exact_light_depth_map_of_plane_square_matches_the_analytic_depth() {
         if expected.is_infinite() {
             assert!(got.is_infinite(), "texel {k}: {got} where nothing is");
         } else {
-            assert!((got - expected).abs() <= 1e-9 * expected.abs().max(1.0), "texel {k}: {got} vs {expected}");
+            assert!(
+                (got - expected).abs() <= 1e-9 * expected.abs().max(1.0),
+                "texel {k}: {got} vs {expected}"
+            );
         }
     }
-    assert!(checked > 60_000 && on_square > 500, "{checked} texels checked, {on_square} on the square");
+    assert!(
+        checked > 60_000 && on_square > 500,
+        "{checked} texels checked, {on_square} on the square"
+    );
 }

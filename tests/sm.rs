@@ -10,7 +10,12 @@ use scenes::{
     Camera, Light, Material, Scene,
 };
 
-fn run(scene: &Scene, w: u32, h: u32, options: MethodOptions) -> (Frame<'_>, methods::Visibility, Recorder) {
+fn run(
+    scene: &Scene,
+    w: u32,
+    h: u32,
+    options: MethodOptions,
+) -> (Frame<'_>, methods::Visibility, Recorder) {
     let mut rec = Recorder::default();
     let frame = Frame::new(scene, w, h, &mut rec);
     let v = method("sm", &options).expect("valid").run(&frame, &mut rec).expect("runs");
@@ -62,7 +67,10 @@ fn a_lit_plane_stays_fully_lit_at_every_valid_bias() {
                     };
                     let (_, v, _) = run(&scene, 96, 72, options);
                     let dark = v.lit.iter().filter(|&&l| l != 1.0).count();
-                    assert_eq!(dark, 0, "{light:?} map {map_res} slope {slope_bias} constant {constant_bias}");
+                    assert_eq!(
+                        dark, 0,
+                        "{light:?} map {map_res} slope {slope_bias} constant {constant_bias}"
+                    );
                 }
             }
         }
@@ -73,7 +81,12 @@ fn a_lit_plane_stays_fully_lit_at_every_valid_bias() {
 fn without_slope_bias_a_tilted_light_shows_acne() {
     // The bias bound is not vacuous: below the valid range, the same plane self-shadows.
     let scene = lone_plane(Light::Directional { direction: DVec3::new(1.0, -0.5, 0.3) });
-    let options = MethodOptions { map_res: Some(256), slope_bias: Some(0.0), constant_bias: Some(0.0), ..Default::default() };
+    let options = MethodOptions {
+        map_res: Some(256),
+        slope_bias: Some(0.0),
+        constant_bias: Some(0.0),
+        ..Default::default()
+    };
     let (_, v, _) = run(&scene, 96, 72, options);
     assert!(v.lit.iter().filter(|&&l| l == 0.0).count() > 100);
 }
@@ -95,7 +108,12 @@ fn hard_cases_stay_finite_and_in_range() {
     for name in ["grazing", "bumpy", "cage", "hairball", "spot-spheres"] {
         let scene = scenes::load(name).expect("built-in");
         for map_res in [16, 512] {
-            let (_, v, rec) = run(&scene, 120, 90, MethodOptions { map_res: Some(map_res), ..Default::default() });
+            let (_, v, rec) = run(
+                &scene,
+                120,
+                90,
+                MethodOptions { map_res: Some(map_res), ..Default::default() },
+            );
             assert!(v.lit.iter().all(|l| l.is_finite() && (0.0..=1.0).contains(l)), "{name}");
             if name == "hairball" {
                 assert!(rec.notes.iter().any(|n| n.contains("opaque")), "{name}: {:?}", rec.notes);

@@ -27,7 +27,12 @@ impl LightDepthMap {
         counters: &mut Counters,
     ) -> Self {
         let nearest = rasterize_nearest(geometry, is_caster, projector, counters);
-        Self { projector: *projector, res: nearest.width, depth: nearest.depth, triangle: nearest.triangle }
+        Self {
+            projector: *projector,
+            res: nearest.width,
+            depth: nearest.depth,
+            triangle: nearest.triangle,
+        }
     }
 
     /// Depth stored at texel `(x, y)`, or `None` outside the map.

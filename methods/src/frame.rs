@@ -1,7 +1,7 @@
 //! A frame: a scene prepared at one resolution, with its camera G-buffer. Methods read the
 //! frame; the light depth map is rendered only when a method asks for it.
 
-use crate::{depth_map::LightDepthMap, gbuffer::GBuffer, gbuffer::render_gbuffer};
+use crate::{depth_map::LightDepthMap, gbuffer::render_gbuffer, gbuffer::GBuffer};
 use instrumentation::Recorder;
 use scenes::{Effects, Geometry, Projector, Scene};
 
@@ -31,9 +31,11 @@ impl<'s> Frame<'s> {
     pub fn new(scene: &'s Scene, width: u32, height: u32, rec: &mut Recorder) -> Self {
         let geometry = scene.geometry();
         let camera = scene.camera.projector(width, height);
-        let gbuffer =
-            rec.stages.time(STAGE_GBUFFER, || render_gbuffer(&geometry, &camera, &mut rec.counters));
-        let casters = scene.objects.iter().map(|o| o.casts_shadows && o.material.opacity > 0.0).collect();
+        let gbuffer = rec
+            .stages
+            .time(STAGE_GBUFFER, || render_gbuffer(&geometry, &camera, &mut rec.counters));
+        let casters =
+            scene.objects.iter().map(|o| o.casts_shadows && o.material.opacity > 0.0).collect();
         Self { scene, geometry, effects: scene.effects(), camera, gbuffer, casters }
     }
 
@@ -80,7 +82,12 @@ impl<'s> Frame<'s> {
     pub fn light_depth_map(&self, res: u32, rec: &mut Recorder) -> LightDepthMap {
         let projector = self.light_projector(res);
         rec.stages.time(STAGE_LIGHT_DEPTH_MAP, || {
-            LightDepthMap::render(&self.geometry, |t| self.is_caster(t), &projector, &mut rec.counters)
+            LightDepthMap::render(
+                &self.geometry,
+                |t| self.is_caster(t),
+                &projector,
+                &mut rec.counters,
+            )
         })
     }
 }

@@ -7,6 +7,7 @@
 use crate::raster::{rasterize_nearest, NO_TRIANGLE};
 use glam::{DVec2, DVec3};
 use instrumentation::Counters;
+use rayon::prelude::*;
 use scenes::{Geometry, Projector};
 
 /// Per-pixel surface data seen by the camera.
@@ -39,6 +40,7 @@ pub fn render_gbuffer(geometry: &Geometry, camera: &Projector, counters: &mut Co
     let nearest = rasterize_nearest(geometry, |_| true, camera, counters);
     let w = nearest.width as usize;
     let normals: Vec<DVec3> = (0..geometry.len())
+        .into_par_iter()
         .map(|t| {
             let [a, b, c] = geometry.corners(t);
             (b - a).cross(c - a).normalize_or_zero()
@@ -46,7 +48,7 @@ pub fn render_gbuffer(geometry: &Geometry, camera: &Projector, counters: &mut Co
         .collect();
     let (position, normal) = nearest
         .triangle
-        .iter()
+        .par_iter()
         .zip(&nearest.depth)
         .enumerate()
         .map(|(k, (&t, &d))| {

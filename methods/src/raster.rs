@@ -178,7 +178,9 @@ fn row_span(outline: &[DVec2], py: f64, lo: usize, hi: usize) -> Option<(usize, 
         if py < a.y.min(b.y) || py > a.y.max(b.y) {
             continue;
         }
-        let x = if a.y == b.y { (a.x, b.x) } else {
+        let x = if a.y == b.y {
+            (a.x, b.x)
+        } else {
             let x = a.x + (py - a.y) * (b.x - a.x) / (b.y - a.y);
             (x, x)
         };
@@ -354,7 +356,16 @@ mod tests {
     #[test]
     fn fan_around_a_pixel_centre_covers_it_exactly_once() {
         let c = [4.5, 4.5];
-        let ring = [[0.0, 0.0], [4.5, 0.0], [9.0, 0.0], [9.0, 4.5], [9.0, 9.0], [4.5, 9.0], [0.0, 9.0], [0.0, 4.5]];
+        let ring = [
+            [0.0, 0.0],
+            [4.5, 0.0],
+            [9.0, 0.0],
+            [9.0, 4.5],
+            [9.0, 9.0],
+            [4.5, 9.0],
+            [0.0, 9.0],
+            [0.0, 4.5],
+        ];
         let tris: Vec<[[f64; 2]; 3]> =
             (0..ring.len()).map(|i| [c, ring[i], ring[(i + 1) % ring.len()]]).collect();
         let counts = coverage_counts(&tris, 9, 9);

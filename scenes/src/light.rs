@@ -110,7 +110,8 @@ impl Light {
             }
             Light::Spot { position, target, fov_deg } => {
                 let (right, up, forward) = look_basis(target - position, DVec3::Y);
-                let nearest = corners.map(|c| (c - position).dot(forward)).fold(f64::INFINITY, f64::min);
+                let nearest =
+                    corners.map(|c| (c - position).dot(forward)).fold(f64::INFINITY, f64::min);
                 let near = nearest.max(1e-4 * pad / FIT_MARGIN);
                 let t = (fov_deg.to_radians() * 0.5).tan();
                 Projector {

@@ -98,7 +98,8 @@ impl Projector {
     /// nearer than `near` (or behind the eye).
     #[inline]
     pub fn project(&self, p: DVec3) -> Option<(DVec2, f64)> {
-        if self.is_perspective() && !(self.depth_of(p) >= self.near) {
+        let depth = self.depth_of(p);
+        if self.is_perspective() && (depth < self.near || depth.is_nan()) {
             return None;
         }
         let (xy, depth) = self.project_unclipped(p);
@@ -182,10 +183,13 @@ mod tests {
 
     #[test]
     fn ray_and_project_are_inverse() {
-        for p in [persp(), Projector {
-            kind: ProjectionKind::Orthographic { half_width: 4.0, half_height: 3.0 },
-            ..persp()
-        }] {
+        for p in [
+            persp(),
+            Projector {
+                kind: ProjectionKind::Orthographic { half_width: 4.0, half_height: 3.0 },
+                ..persp()
+            },
+        ] {
             for xy in [DVec2::new(0.5, 0.5), DVec2::new(400.25, 17.0), DVec2::new(799.5, 599.5)] {
                 let ray = p.ray(xy);
                 let (back, depth) = p.project(ray.at(7.25)).expect("in front");

@@ -22,8 +22,14 @@ use std::path::{Path, PathBuf};
 pub const BUILTINS: &[(&str, &str)] = &[
     ("plane-square", "one square occluder over a plane (exact reference test bed)"),
     ("random-1k", "1k random triangles of constant total area over a plane (Aila & Laine Table 1)"),
-    ("random-10k", "10k random triangles of constant total area over a plane (Aila & Laine Table 1)"),
-    ("random-100k", "100k random triangles of constant total area over a plane (Aila & Laine Table 1)"),
+    (
+        "random-10k",
+        "10k random triangles of constant total area over a plane (Aila & Laine Table 1)",
+    ),
+    (
+        "random-100k",
+        "100k random triangles of constant total area over a plane (Aila & Laine Table 1)",
+    ),
     ("random-1m", "1M random triangles of constant total area over a plane (Aila & Laine Table 1)"),
     ("cage", "a cage of thin bars over a plane (Pan et al. Fig. 11)"),
     ("plant", "many thin leaves over a plane (Pan et al. Fig. 12c)"),
@@ -33,7 +39,10 @@ pub const BUILTINS: &[(&str, &str)] = &[
     ("hairball", "a ball of thin strands of opacity 0.1 over a plane (Aila & Laine Fig. 1)"),
     ("grazing", "boxes on a plane under a light 84 degrees from the vertical"),
     ("spot-spheres", "floating spheres over a plane under a spot light"),
-    ("bunny-plane", "the Stanford bunny (CGAL's bunny00.off, 75k triangles) over a plane (Pan et al. Fig. 8)"),
+    (
+        "bunny-plane",
+        "the Stanford bunny (CGAL's bunny00.off, 75k triangles) over a plane (Pan et al. Fig. 8)",
+    ),
 ];
 
 /// The folder models are read from.
@@ -77,7 +86,13 @@ fn directional(d: [f64; 3]) -> Light {
     Light::Directional { direction: DVec3::from(d) }
 }
 
-fn desc(name: &str, resolution: [u32; 2], camera: Camera, light: Light, objects: Vec<ObjectDesc>) -> SceneDesc {
+fn desc(
+    name: &str,
+    resolution: [u32; 2],
+    camera: Camera,
+    light: Light,
+    objects: Vec<ObjectDesc>,
+) -> SceneDesc {
     SceneDesc {
         name: Some(name.into()),
         resolution,
@@ -138,14 +153,20 @@ pub fn builtin(name: &str) -> Option<SceneDesc> {
             [800, 600],
             default_view(),
             directional([-0.5, -1.0, -0.6]),
-            vec![ground(16.0), caster("plant", Shape::Plant(PlantParams::default()), [0.3, 0.6, 0.3])],
+            vec![
+                ground(16.0),
+                caster("plant", Shape::Plant(PlantParams::default()), [0.3, 0.6, 0.3]),
+            ],
         ),
         "spheres" => desc(
             name,
             [800, 600],
             default_view(),
             directional([-0.5, -1.0, -0.4]),
-            vec![ground(16.0), caster("spheres", Shape::Spheres(SpheresParams::default()), [0.5, 0.6, 0.8])],
+            vec![
+                ground(16.0),
+                caster("spheres", Shape::Spheres(SpheresParams::default()), [0.5, 0.6, 0.8]),
+            ],
         ),
         "city" => desc(
             name,
@@ -157,8 +178,11 @@ pub fn builtin(name: &str) -> Option<SceneDesc> {
         "bumpy" => {
             let mut receiver = ground(20.0);
             receiver.name = Some("heightfield".into());
-            receiver.shape =
-                Shape::Heightfield(HeightfieldParams { size: 20.0, resolution: 512, ..Default::default() });
+            receiver.shape = Shape::Heightfield(HeightfieldParams {
+                size: 20.0,
+                resolution: 512,
+                ..Default::default()
+            });
             let spheres = SpheresParams { count: 5, ..Default::default() };
             desc(
                 name,
@@ -169,9 +193,16 @@ pub fn builtin(name: &str) -> Option<SceneDesc> {
             )
         }
         "hairball" => {
-            let mut ball = caster("hairball", Shape::Hairball(HairballParams::default()), [0.4, 0.3, 0.2]);
+            let mut ball =
+                caster("hairball", Shape::Hairball(HairballParams::default()), [0.4, 0.3, 0.2]);
             ball.material.opacity = 0.1;
-            desc(name, [800, 600], default_view(), directional([-0.4, -1.0, -0.3]), vec![ground(16.0), ball])
+            desc(
+                name,
+                [800, 600],
+                perspective([0.0, 6.0, 11.0], [0.0, 2.5, 0.0], 45.0),
+                directional([-0.4, -1.0, -0.3]),
+                vec![ground(16.0), ball],
+            )
         }
         "grazing" => {
             let blocks = CityParams { blocks: 3, ..Default::default() };
@@ -189,7 +220,10 @@ pub fn builtin(name: &str) -> Option<SceneDesc> {
             [800, 600],
             default_view(),
             Light::Spot { position: DVec3::new(3.0, 9.0, 2.0), target: DVec3::ZERO, fov_deg: 75.0 },
-            vec![ground(16.0), caster("spheres", Shape::Spheres(SpheresParams::default()), [0.5, 0.6, 0.8])],
+            vec![
+                ground(16.0),
+                caster("spheres", Shape::Spheres(SpheresParams::default()), [0.5, 0.6, 0.8]),
+            ],
         ),
         "bunny-plane" => {
             let mut bunny = caster(
@@ -197,7 +231,8 @@ pub fn builtin(name: &str) -> Option<SceneDesc> {
                 Shape::File(FileShape { path: "bunny00.off".into() }),
                 [0.8, 0.7, 0.6],
             );
-            bunny.transform = Transform { fit_size: Some(4.0), on_ground: true, ..Default::default() };
+            bunny.transform =
+                Transform { fit_size: Some(4.0), on_ground: true, ..Default::default() };
             desc(
                 name,
                 [800, 600],
@@ -220,10 +255,14 @@ pub fn load_builtin(name: &str) -> Option<Result<Scene, SceneError>> {
 /// A scene around one mesh file: the model fitted to 4 units, standing on a ground plane,
 /// with a default camera and light.
 pub fn mesh_scene(path: &Path) -> SceneDesc {
-    let mut model = caster("model", Shape::File(FileShape { path: path.to_owned() }), [0.8, 0.7, 0.6]);
+    let mut model =
+        caster("model", Shape::File(FileShape { path: path.to_owned() }), [0.8, 0.7, 0.6]);
     model.transform = Transform { fit_size: Some(4.0), on_ground: true, ..Default::default() };
     desc(
-        &path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "model".into()),
+        &path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "model".into()),
         [800, 600],
         perspective([0.0, 5.0, 8.0], [0.0, 1.5, 0.0], 45.0),
         directional([-0.5, -1.0, -0.4]),

@@ -245,7 +245,12 @@ impl SceneDesc {
 
     /// Builds the scene: generates or loads every mesh and places it. `origin` names the file
     /// in messages; mesh paths are relative to `base`.
-    pub fn resolve(&self, default_name: &str, origin: &Path, base: &Path) -> Result<Scene, SceneError> {
+    pub fn resolve(
+        &self,
+        default_name: &str,
+        origin: &Path,
+        base: &Path,
+    ) -> Result<Scene, SceneError> {
         let invalid = |key: String, message: String| SceneError::Invalid {
             path: origin.to_owned(),
             key,
@@ -269,7 +274,10 @@ impl SceneDesc {
                 return Err(invalid(key("material.color"), "components must be in [0, 1]".into()));
             }
             if !(0.0..=1.0).contains(&m.opacity) {
-                return Err(invalid(key("material.opacity"), format!("must be in [0, 1], got {}", m.opacity)));
+                return Err(invalid(
+                    key("material.opacity"),
+                    format!("must be in [0, 1], got {}", m.opacity),
+                ));
             }
             let mut mesh = o.shape.build(base).map_err(|e| match e {
                 ShapeError::Param(p) => invalid(key(&format!("shape.{}", p.key)), p.message),
@@ -287,13 +295,22 @@ impl SceneDesc {
                         hint,
                     }
                 }
-                ShapeError::Load(source) => {
-                    SceneError::Mesh { path: origin.to_owned(), key: key("shape.file.path"), source }
-                }
+                ShapeError::Load(source) => SceneError::Mesh {
+                    path: origin.to_owned(),
+                    key: key("shape.file.path"),
+                    source,
+                },
             })?;
-            o.transform.apply(&mut mesh).map_err(|(k, msg)| invalid(key(&format!("transform.{k}")), msg))?;
+            o.transform
+                .apply(&mut mesh)
+                .map_err(|(k, msg)| invalid(key(&format!("transform.{k}")), msg))?;
             let object_name = o.name.clone().unwrap_or_else(|| format!("{}{i}", o.shape.kind()));
-            objects.push(Object { name: object_name, mesh, material: *m, casts_shadows: o.casts_shadows });
+            objects.push(Object {
+                name: object_name,
+                mesh,
+                material: *m,
+                casts_shadows: o.casts_shadows,
+            });
         }
         Ok(Scene {
             name,
@@ -355,7 +372,9 @@ impl Shape {
 impl Transform {
     /// Applies the transform to `mesh`; errors name the bad key.
     pub fn apply(&self, mesh: &mut Mesh) -> Result<(), (&'static str, String)> {
-        for (key, v) in [("scale", self.scale), ("rotate_deg", self.rotate_deg), ("translate", self.translate)] {
+        for (key, v) in
+            [("scale", self.scale), ("rotate_deg", self.rotate_deg), ("translate", self.translate)]
+        {
             if !v.is_finite() {
                 return Err((key, "must be finite".into()));
             }
@@ -364,7 +383,8 @@ impl Transform {
             return Err(("scale", "must not be zero on any axis".into()));
         }
         let r = self.rotate_deg;
-        let rotate = DMat4::from_euler(EulerRot::ZYX, r.z.to_radians(), r.y.to_radians(), r.x.to_radians());
+        let rotate =
+            DMat4::from_euler(EulerRot::ZYX, r.z.to_radians(), r.y.to_radians(), r.x.to_radians());
         mesh.transform(&(rotate * DMat4::from_scale(self.scale)));
         if let Some(size) = self.fit_size {
             if !(size > 0.0 && size.is_finite()) {
@@ -373,7 +393,8 @@ impl Transform {
             if let Some((lo, hi)) = mesh.bounds() {
                 let extent = (hi - lo).max_element();
                 let s = if extent > 0.0 { size / extent } else { 1.0 };
-                let m = DMat4::from_scale(DVec3::splat(s)) * DMat4::from_translation(-0.5 * (lo + hi));
+                let m =
+                    DMat4::from_scale(DVec3::splat(s)) * DMat4::from_translation(-0.5 * (lo + hi));
                 mesh.transform(&m);
             }
         }

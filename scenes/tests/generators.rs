@@ -14,10 +14,7 @@ use std::collections::BTreeMap;
 fn defaults() -> Vec<(&'static str, Box<dyn Generator>)> {
     vec![
         ("plane", Box::new(PlaneParams::default())),
-        (
-            "random_triangles",
-            Box::new(RandomTrianglesParams::default()),
-        ),
+        ("random_triangles", Box::new(RandomTrianglesParams::default())),
         ("cage", Box::new(CageParams::default())),
         ("spheres", Box::new(SpheresParams::default())),
         ("city", Box::new(CityParams::default())),
@@ -101,21 +98,13 @@ fn signed_volume(mesh: &Mesh, triangles: &[usize]) -> f64 {
 /// Every component of `mesh` (or of its first `closed` triangles) is watertight and encloses a
 /// positive volume.
 fn assert_closed_outward(name: &str, mesh: &Mesh, closed: usize) {
-    let part = Mesh {
-        positions: mesh.positions.clone(),
-        triangles: mesh.triangles[..closed].to_vec(),
-    };
+    let part =
+        Mesh { positions: mesh.positions.clone(), triangles: mesh.triangles[..closed].to_vec() };
     let parts = components(&part);
     assert!(!parts.is_empty(), "{name}");
     for (i, c) in parts.iter().enumerate() {
-        assert!(
-            is_watertight(&part, c),
-            "{name}: component {i} is not watertight"
-        );
-        assert!(
-            signed_volume(&part, c) > 0.0,
-            "{name}: component {i} faces in"
-        );
+        assert!(is_watertight(&part, c), "{name}: component {i} is not watertight");
+        assert!(signed_volume(&part, c) > 0.0, "{name}: component {i} faces in");
     }
 }
 
@@ -143,81 +132,37 @@ fn defaults_build_the_documented_triangle_counts() {
 #[test]
 fn counts_follow_the_parameters() {
     for s in [1, 2, 5, 13] {
-        let plane = PlaneParams {
-            subdivisions: s,
-            ..Default::default()
-        }
-        .generate();
+        let plane = PlaneParams { subdivisions: s, ..Default::default() }.generate();
         assert_eq!(plane.triangle_count(), 2 * (s * s) as usize);
-        let city = CityParams {
-            blocks: s,
-            ..Default::default()
-        }
-        .generate();
+        let city = CityParams { blocks: s, ..Default::default() }.generate();
         assert_eq!(city.triangle_count(), 12 * (s * s) as usize);
-        let field = HeightfieldParams {
-            resolution: s,
-            ..Default::default()
-        }
-        .generate();
+        let field = HeightfieldParams { resolution: s, ..Default::default() }.generate();
         assert_eq!(field.triangle_count(), 2 * (s * s) as usize);
     }
     for count in [1, 7, 1234] {
-        let tris = RandomTrianglesParams {
-            count,
-            ..Default::default()
-        }
-        .generate();
+        let tris = RandomTrianglesParams { count, ..Default::default() }.generate();
         assert_eq!(tris.triangle_count(), count as usize);
     }
-    let cage = CageParams {
-        bars_per_side: 5,
-        ..Default::default()
-    };
+    let cage = CageParams { bars_per_side: 5, ..Default::default() };
     assert_eq!(cage.generate().triangle_count(), 12 * 12 * 4);
-    let spheres = SpheresParams {
-        count: 3,
-        subdivisions: 2,
-        ..Default::default()
-    };
+    let spheres = SpheresParams { count: 3, subdivisions: 2, ..Default::default() };
     assert_eq!(spheres.generate().triangle_count(), 3 * 320);
-    let plant = PlantParams {
-        leaves: 10,
-        stems: 2,
-        ..Default::default()
-    };
+    let plant = PlantParams { leaves: 10, stems: 2, ..Default::default() };
     assert_eq!(plant.generate().triangle_count(), 2 * 72 + 10 * 4);
-    let hair = HairballParams {
-        strands: 7,
-        segments: 96,
-        sides: 3,
-        ..Default::default()
-    };
-    assert_eq!(
-        hair.generate().triangle_count(),
-        7 * 576,
-        "Aila & Laine's 576 triangles a hair"
-    );
+    let hair = HairballParams { strands: 7, segments: 96, sides: 3, ..Default::default() };
+    assert_eq!(hair.generate().triangle_count(), 7 * 576, "Aila & Laine's 576 triangles a hair");
 }
 
 #[test]
 fn random_triangles_keep_their_total_area() {
     for count in [1_000, 10_000, 100_000, 1_000_000] {
-        let mesh = RandomTrianglesParams {
-            count,
-            ..Default::default()
-        }
-        .generate();
+        let mesh = RandomTrianglesParams { count, ..Default::default() }.generate();
         assert_eq!(mesh.triangle_count(), count as usize);
         let area = mesh.area();
         assert!((area - 40.0).abs() <= 1e-9 * 40.0, "{count}: {area}");
     }
-    let mesh = RandomTrianglesParams {
-        count: 500,
-        total_area: 3.5,
-        ..Default::default()
-    }
-    .generate();
+    let mesh =
+        RandomTrianglesParams { count: 500, total_area: 3.5, ..Default::default() }.generate();
     assert!((mesh.area() - 3.5).abs() <= 1e-9 * 3.5);
 }
 
@@ -227,93 +172,41 @@ fn same_seed_same_mesh_other_seed_other_mesh() {
     let pairs: Vec<Pair> = vec![
         (
             "random_triangles",
-            Box::new(RandomTrianglesParams {
-                count: 200,
-                seed: 11,
-                ..Default::default()
-            }),
-            Box::new(RandomTrianglesParams {
-                count: 200,
-                seed: 12,
-                ..Default::default()
-            }),
+            Box::new(RandomTrianglesParams { count: 200, seed: 11, ..Default::default() }),
+            Box::new(RandomTrianglesParams { count: 200, seed: 12, ..Default::default() }),
         ),
         (
             "spheres",
-            Box::new(SpheresParams {
-                subdivisions: 1,
-                seed: 11,
-                ..Default::default()
-            }),
-            Box::new(SpheresParams {
-                subdivisions: 1,
-                seed: 12,
-                ..Default::default()
-            }),
+            Box::new(SpheresParams { subdivisions: 1, seed: 11, ..Default::default() }),
+            Box::new(SpheresParams { subdivisions: 1, seed: 12, ..Default::default() }),
         ),
         (
             "city",
-            Box::new(CityParams {
-                seed: 11,
-                ..Default::default()
-            }),
-            Box::new(CityParams {
-                seed: 12,
-                ..Default::default()
-            }),
+            Box::new(CityParams { seed: 11, ..Default::default() }),
+            Box::new(CityParams { seed: 12, ..Default::default() }),
         ),
         (
             "plant",
-            Box::new(PlantParams {
-                leaves: 50,
-                seed: 11,
-                ..Default::default()
-            }),
-            Box::new(PlantParams {
-                leaves: 50,
-                seed: 12,
-                ..Default::default()
-            }),
+            Box::new(PlantParams { leaves: 50, seed: 11, ..Default::default() }),
+            Box::new(PlantParams { leaves: 50, seed: 12, ..Default::default() }),
         ),
         (
             "heightfield",
-            Box::new(HeightfieldParams {
-                resolution: 20,
-                seed: 11,
-                ..Default::default()
-            }),
-            Box::new(HeightfieldParams {
-                resolution: 20,
-                seed: 12,
-                ..Default::default()
-            }),
+            Box::new(HeightfieldParams { resolution: 20, seed: 11, ..Default::default() }),
+            Box::new(HeightfieldParams { resolution: 20, seed: 12, ..Default::default() }),
         ),
         (
             "hairball",
-            Box::new(HairballParams {
-                strands: 20,
-                seed: 11,
-                ..Default::default()
-            }),
-            Box::new(HairballParams {
-                strands: 20,
-                seed: 12,
-                ..Default::default()
-            }),
+            Box::new(HairballParams { strands: 20, seed: 11, ..Default::default() }),
+            Box::new(HairballParams { strands: 20, seed: 12, ..Default::default() }),
         ),
     ];
     for (name, a, b) in pairs {
         let first = a.generate();
-        assert!(
-            bit_identical(&first, &a.generate()),
-            "{name}: not deterministic"
-        );
+        assert!(bit_identical(&first, &a.generate()), "{name}: not deterministic");
         let other = b.generate();
         assert_eq!(first.triangles.len(), other.triangles.len(), "{name}");
-        assert_ne!(
-            first.positions, other.positions,
-            "{name}: the seed changes nothing"
-        );
+        assert_ne!(first.positions, other.positions, "{name}: the seed changes nothing");
     }
     // The deterministic generators also repeat themselves.
     for (name, g) in defaults() {
@@ -361,18 +254,10 @@ fn meshes_are_pinned_across_platforms() {
 
 #[test]
 fn closed_parts_are_watertight_and_face_out() {
-    let cage = CageParams {
-        bars_per_side: 4,
-        ..Default::default()
-    }
-    .generate();
+    let cage = CageParams { bars_per_side: 4, ..Default::default() }.generate();
     assert_closed_outward("cage", &cage, cage.triangle_count());
     assert_eq!(components(&cage).len(), 36, "one component per bar");
-    let spheres = SpheresParams {
-        subdivisions: 2,
-        ..Default::default()
-    }
-    .generate();
+    let spheres = SpheresParams { subdivisions: 2, ..Default::default() }.generate();
     assert_closed_outward("spheres", &spheres, spheres.triangle_count());
     assert_eq!(components(&spheres).len(), 8);
     let city = CityParams::default().generate();
@@ -380,12 +265,7 @@ fn closed_parts_are_watertight_and_face_out() {
     assert_eq!(components(&city).len(), 64);
     let plant = PlantParams::default().generate();
     assert_closed_outward("plant stems", &plant, 5 * 72);
-    let ico = SpheresParams {
-        count: 1,
-        subdivisions: 0,
-        ..Default::default()
-    }
-    .generate();
+    let ico = SpheresParams { count: 1, subdivisions: 0, ..Default::default() }.generate();
     assert_closed_outward("icosahedron", &ico, 20);
 }
 
@@ -398,11 +278,7 @@ fn casters_stand_on_or_above_the_ground_within_the_footprint() {
         match name {
             "plane" | "heightfield" => {
                 assert!(lo.y.abs() <= 0.15 && hi.y.abs() <= 0.15, "{name}");
-                assert_eq!(
-                    (lo.x, lo.z, hi.x, hi.z),
-                    (-10.0, -10.0, 10.0, 10.0),
-                    "{name}"
-                );
+                assert_eq!((lo.x, lo.z, hi.x, hi.z), (-10.0, -10.0, 10.0, 10.0), "{name}");
             }
             _ => {
                 assert!(lo.y >= 0.0, "{name} goes below the ground: {lo}");
@@ -422,18 +298,10 @@ fn casters_stand_on_or_above_the_ground_within_the_footprint() {
 
 #[test]
 fn receivers_face_up() {
-    let plane = PlaneParams {
-        subdivisions: 3,
-        ..Default::default()
-    }
-    .generate();
-    let field = HeightfieldParams {
-        resolution: 30,
-        amplitude: 0.5,
-        wavelength: 0.5,
-        ..Default::default()
-    }
-    .generate();
+    let plane = PlaneParams { subdivisions: 3, ..Default::default() }.generate();
+    let field =
+        HeightfieldParams { resolution: 30, amplitude: 0.5, wavelength: 0.5, ..Default::default() }
+            .generate();
     for mesh in [plane, field] {
         for t in 0..mesh.triangle_count() {
             let [a, b, c] = mesh.corners(t);
@@ -445,193 +313,59 @@ fn receivers_face_up() {
 #[test]
 fn validation_errors_name_the_field() {
     let cases: Vec<(Box<dyn Generator>, &str)> = vec![
+        (Box::new(PlaneParams { size: -1.0, ..Default::default() }), "size"),
+        (Box::new(PlaneParams { subdivisions: 0, ..Default::default() }), "subdivisions"),
+        (Box::new(RandomTrianglesParams { count: 0, ..Default::default() }), "count"),
+        (Box::new(RandomTrianglesParams { count: 30_000_000, ..Default::default() }), "count"),
         (
-            Box::new(PlaneParams {
-                size: -1.0,
-                ..Default::default()
-            }),
-            "size",
-        ),
-        (
-            Box::new(PlaneParams {
-                subdivisions: 0,
-                ..Default::default()
-            }),
-            "subdivisions",
-        ),
-        (
-            Box::new(RandomTrianglesParams {
-                count: 0,
-                ..Default::default()
-            }),
-            "count",
-        ),
-        (
-            Box::new(RandomTrianglesParams {
-                count: 30_000_000,
-                ..Default::default()
-            }),
-            "count",
-        ),
-        (
-            Box::new(RandomTrianglesParams {
-                total_area: f64::NAN,
-                ..Default::default()
-            }),
+            Box::new(RandomTrianglesParams { total_area: f64::NAN, ..Default::default() }),
             "total_area",
         ),
         (
-            Box::new(RandomTrianglesParams {
-                extent: [0.0, 1.0, 1.0],
-                ..Default::default()
-            }),
+            Box::new(RandomTrianglesParams { extent: [0.0, 1.0, 1.0], ..Default::default() }),
             "extent",
         ),
-        (
-            Box::new(CageParams {
-                bar_width: 1.0,
-                ..Default::default()
-            }),
-            "bar_width",
-        ),
-        (
-            Box::new(CageParams {
-                bars_per_side: 0,
-                ..Default::default()
-            }),
-            "bars_per_side",
-        ),
-        (
-            Box::new(SpheresParams {
-                count: 0,
-                ..Default::default()
-            }),
-            "count",
-        ),
-        (
-            Box::new(SpheresParams {
-                max_radius: 0.1,
-                ..Default::default()
-            }),
-            "max_radius",
-        ),
-        (
-            Box::new(SpheresParams {
-                subdivisions: 40,
-                ..Default::default()
-            }),
-            "subdivisions",
-        ),
-        (
-            Box::new(CityParams {
-                blocks: 0,
-                ..Default::default()
-            }),
-            "blocks",
-        ),
-        (
-            Box::new(CityParams {
-                max_height: f64::INFINITY,
-                ..Default::default()
-            }),
-            "max_height",
-        ),
-        (
-            Box::new(PlantParams {
-                leaves: 0,
-                ..Default::default()
-            }),
-            "leaves",
-        ),
-        (
-            Box::new(PlantParams {
-                leaf_width: 0.0,
-                ..Default::default()
-            }),
-            "leaf_width",
-        ),
-        (
-            Box::new(HeightfieldParams {
-                resolution: 0,
-                ..Default::default()
-            }),
-            "resolution",
-        ),
-        (
-            Box::new(HeightfieldParams {
-                wavelength: -1.0,
-                ..Default::default()
-            }),
-            "wavelength",
-        ),
-        (
-            Box::new(HairballParams {
-                strands: 0,
-                ..Default::default()
-            }),
-            "strands",
-        ),
-        (
-            Box::new(HairballParams {
-                thickness: f64::NAN,
-                ..Default::default()
-            }),
-            "thickness",
-        ),
-        (
-            Box::new(HairballParams {
-                center_height: 0.5,
-                ..Default::default()
-            }),
-            "center_height",
-        ),
+        (Box::new(CageParams { bar_width: 1.0, ..Default::default() }), "bar_width"),
+        (Box::new(CageParams { bars_per_side: 0, ..Default::default() }), "bars_per_side"),
+        (Box::new(SpheresParams { count: 0, ..Default::default() }), "count"),
+        (Box::new(SpheresParams { max_radius: 0.1, ..Default::default() }), "max_radius"),
+        (Box::new(SpheresParams { subdivisions: 40, ..Default::default() }), "subdivisions"),
+        (Box::new(CityParams { blocks: 0, ..Default::default() }), "blocks"),
+        (Box::new(CityParams { max_height: f64::INFINITY, ..Default::default() }), "max_height"),
+        (Box::new(PlantParams { leaves: 0, ..Default::default() }), "leaves"),
+        (Box::new(PlantParams { leaf_width: 0.0, ..Default::default() }), "leaf_width"),
+        (Box::new(HeightfieldParams { resolution: 0, ..Default::default() }), "resolution"),
+        (Box::new(HeightfieldParams { wavelength: -1.0, ..Default::default() }), "wavelength"),
+        (Box::new(HairballParams { strands: 0, ..Default::default() }), "strands"),
+        (Box::new(HairballParams { thickness: f64::NAN, ..Default::default() }), "thickness"),
+        (Box::new(HairballParams { center_height: 0.5, ..Default::default() }), "center_height"),
     ];
     for (g, key) in cases {
         let err = g.validate().expect_err(key);
         assert_eq!(err.key, key, "{err}");
         assert!(err.to_string().contains(key), "{err}");
-        assert!(
-            g.generate().triangles.is_empty(),
-            "{key}: invalid params build nothing"
-        );
+        assert!(g.generate().triangles.is_empty(), "{key}: invalid params build nothing");
     }
 }
 
 #[test]
 fn parameters_default_every_missing_key_and_reject_unknown_ones() {
     let plane: PlaneParams = toml::from_str("size = 3.0").expect("valid");
-    assert_eq!(
-        plane,
-        PlaneParams {
-            size: 3.0,
-            ..Default::default()
-        }
-    );
+    assert_eq!(plane, PlaneParams { size: 3.0, ..Default::default() });
     let hair: HairballParams = toml::from_str("").expect("valid");
     assert_eq!(hair, HairballParams::default());
     let tris: RandomTrianglesParams =
         toml::from_str("extent = [1.0, 2.0, 3.0]\nseed = 5").expect("valid");
     assert_eq!(tris.extent, [1.0, 2.0, 3.0]);
     assert_eq!(tris.seed, 5);
-    let err = toml::from_str::<CageParams>("bars = 3")
-        .expect_err("unknown key")
-        .to_string();
+    let err = toml::from_str::<CageParams>("bars = 3").expect_err("unknown key").to_string();
     assert!(err.contains("bars"), "{err}");
-    let err = toml::from_str::<SpheresParams>("radius = 3.0")
-        .expect_err("unknown key")
-        .to_string();
+    let err = toml::from_str::<SpheresParams>("radius = 3.0").expect_err("unknown key").to_string();
     assert!(err.contains("radius"), "{err}");
     // Round trip.
-    let city = CityParams {
-        blocks: 3,
-        street_width: 0.25,
-        ..Default::default()
-    };
+    let city = CityParams { blocks: 3, street_width: 0.25, ..Default::default() };
     let text = toml::to_string(&city).expect("serialisable");
-    assert_eq!(
-        toml::from_str::<CityParams>(&text).expect("round trip"),
-        city
-    );
+    assert_eq!(toml::from_str::<CityParams>(&text).expect("round trip"), city);
 }
 
 /// Builds `g` and checks what every mesh must satisfy.

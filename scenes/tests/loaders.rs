@@ -9,9 +9,7 @@ use scenes::{Mesh, MeshError};
 use std::path::{Path, PathBuf};
 
 fn data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(name)
 }
 
 fn cube() -> Mesh {
@@ -99,27 +97,15 @@ fn quads_are_fan_triangulated() {
     let hexagon = "OFF\n6 1 0\n0 0 0\n1 0 0\n2 1 0\n1 2 0\n0 2 0\n-1 1 0\n6 0 1 2 3 4 5\n";
     let mesh = load_mesh_from_bytes(hexagon.as_bytes(), MeshFormat::Off, Path::new("hex.off"))
         .expect("hexagon");
-    assert_eq!(
-        mesh.triangles,
-        vec![[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 4, 5]]
-    );
+    assert_eq!(mesh.triangles, vec![[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 4, 5]]);
 }
 
 #[test]
 fn extensions_choose_the_format_in_any_case() {
     let text = std::fs::read(data("cube.off")).expect("read");
-    assert_eq!(
-        load_as("CUBE.Off", &text).expect("upper-case extension"),
-        cube()
-    );
-    assert_eq!(
-        MeshFormat::from_path(Path::new("a/b.PLY")),
-        Some(MeshFormat::Ply)
-    );
-    assert_eq!(
-        MeshFormat::from_path(Path::new("a/b.obj")),
-        Some(MeshFormat::Obj)
-    );
+    assert_eq!(load_as("CUBE.Off", &text).expect("upper-case extension"), cube());
+    assert_eq!(MeshFormat::from_path(Path::new("a/b.PLY")), Some(MeshFormat::Ply));
+    assert_eq!(MeshFormat::from_path(Path::new("a/b.obj")), Some(MeshFormat::Obj));
     assert_eq!(MeshFormat::from_path(Path::new("a/off")), None);
 }
 
@@ -132,19 +118,11 @@ fn binary_little_endian_ply_written_here_loads() {
 #[test]
 fn binary_ply_errors_name_the_element_and_byte() {
     let bytes = binary_cube();
-    let body = bytes
-        .windows(11)
-        .position(|w| w == b"end_header\n")
-        .expect("header")
-        + 11;
+    let body = bytes.windows(11).position(|w| w == b"end_header\n").expect("header") + 11;
     let vertex = 13; // bytes per vertex record
     let face = 13; // bytes per face record
 
-    let msg = fails(
-        "truncated.ply",
-        &bytes[..body + 8 * vertex + 5 * face + 6],
-        None,
-    );
+    let msg = fails("truncated.ply", &bytes[..body + 8 * vertex + 5 * face + 6], None);
     assert!(
         msg.contains("face 5")
             && msg.contains(&format!("byte {}", body + 8 * vertex + 5 * face))
@@ -157,27 +135,18 @@ fn binary_ply_errors_name_the_element_and_byte() {
     let mut nan = bytes.clone();
     nan[body + 2 * vertex + 4..body + 2 * vertex + 8].copy_from_slice(&f32::NAN.to_le_bytes());
     let msg = fails("nan.ply", &nan, None);
-    assert!(
-        msg.contains("vertex 2") && msg.contains("non-finite"),
-        "{msg}"
-    );
+    assert!(msg.contains("vertex 2") && msg.contains("non-finite"), "{msg}");
 
     let mut out = bytes.clone();
     let last_index = body + 8 * vertex + 11 * face + 9;
     out[last_index..last_index + 4].copy_from_slice(&8i32.to_le_bytes());
     let msg = fails("out-of-range.ply", &out, None);
-    assert!(
-        msg.contains("face 11") && msg.contains("vertex index 8 out of range"),
-        "{msg}"
-    );
+    assert!(msg.contains("face 11") && msg.contains("vertex index 8 out of range"), "{msg}");
 
     let mut negative = bytes;
     negative[last_index..last_index + 4].copy_from_slice(&(-1i32).to_le_bytes());
     let msg = fails("negative.ply", &negative, None);
-    assert!(
-        msg.contains("face 11") && msg.contains("vertex index -1 out of range"),
-        "{msg}"
-    );
+    assert!(msg.contains("face 11") && msg.contains("vertex index -1 out of range"), "{msg}");
 }
 
 #[test]
@@ -193,14 +162,8 @@ fn missing_files_are_io_errors() {
 fn unsupported_extensions_are_named() {
     for name in ["mesh.stl", "mesh", "mesh.obj.gz"] {
         let err = load_mesh(Path::new(name)).expect_err(name);
-        assert!(
-            matches!(err, LoadError::UnsupportedFormat { .. }),
-            "{err:?}"
-        );
-        assert!(
-            err.to_string().contains(name) && err.to_string().contains("unsupported"),
-            "{err}"
-        );
+        assert!(matches!(err, LoadError::UnsupportedFormat { .. }), "{err:?}");
+        assert!(err.to_string().contains(name) && err.to_string().contains("unsupported"), "{err}");
     }
 }
 
@@ -209,29 +172,11 @@ fn empty_files_name_the_file() {
     fails("empty.off", "", None);
     fails("empty.ply", "", None);
     let err = load_as("empty.obj", "").expect_err("empty obj");
-    assert!(
-        matches!(
-            err,
-            LoadError::Invalid {
-                source: MeshError::Empty,
-                ..
-            }
-        ),
-        "{err:?}"
-    );
+    assert!(matches!(err, LoadError::Invalid { source: MeshError::Empty, .. }), "{err:?}");
     assert!(err.to_string().contains("empty.obj"), "{err}");
     // Vertices but no faces is a valid file without a mesh.
     let err = load_as("points.off", "OFF\n1 0 0\n0 0 0\n").expect_err("no faces");
-    assert!(
-        matches!(
-            err,
-            LoadError::Invalid {
-                source: MeshError::Empty,
-                ..
-            }
-        ),
-        "{err:?}"
-    );
+    assert!(matches!(err, LoadError::Invalid { source: MeshError::Empty, .. }), "{err:?}");
 }
 
 const OBJ: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
@@ -250,11 +195,7 @@ fn with_line(text: &str, line: usize, new: &str) -> String {
 #[test]
 fn the_templates_load() {
     for (name, text) in [("t.obj", OBJ), ("t.off", OFF), ("t.ply", PLY)] {
-        assert_eq!(
-            load_as(name, text).expect(name).triangles,
-            vec![[0, 1, 2]],
-            "{name}"
-        );
+        assert_eq!(load_as(name, text).expect(name).triangles, vec![[0, 1, 2]], "{name}");
     }
 }
 
@@ -265,11 +206,7 @@ fn malformed_numbers_name_the_line() {
     fails("number.off", with_line(OFF, 4, "1 0 0,5"), Some(4));
     fails("number.ply", with_line(PLY, 11, "1 0 0.0.0"), Some(11));
     fails("count.off", with_line(OFF, 2, "3 one 0"), Some(2));
-    fails(
-        "count.ply",
-        with_line(PLY, 3, "element vertex three"),
-        Some(3),
-    );
+    fails("count.ply", with_line(PLY, 3, "element vertex three"), Some(3));
     fails("index.obj", with_line(OBJ, 4, "f 1 2 3.0"), Some(4));
     fails("index.off", with_line(OFF, 6, "3 0 1 x"), Some(6));
     fails("index.ply", with_line(PLY, 13, "3 0 1 2.5"), Some(13));
@@ -277,23 +214,13 @@ fn malformed_numbers_name_the_line() {
 
 #[test]
 fn nan_and_inf_name_the_line() {
-    for (value, n) in [
-        ("nan", 1),
-        ("NaN", 2),
-        ("inf", 3),
-        ("-Infinity", 2),
-        ("1e400", 3),
-    ] {
+    for (value, n) in [("nan", 1), ("NaN", 2), ("inf", 3), ("-Infinity", 2), ("1e400", 3)] {
         let line = |x: &str| match n {
             1 => format!("{value} {x} 0"),
             2 => format!("{x} {value} 0"),
             _ => format!("{x} 0 {value}"),
         };
-        let msg = fails(
-            "nan.obj",
-            with_line(OBJ, 3, &format!("v {}", line("0"))),
-            Some(3),
-        );
+        let msg = fails("nan.obj", with_line(OBJ, 3, &format!("v {}", line("0"))), Some(3));
         assert!(msg.contains("non-finite"), "{msg}");
         fails("nan.off", with_line(OFF, 5, &line("0")), Some(5));
         fails("nan.ply", with_line(PLY, 12, &line("0")), Some(12));
@@ -307,9 +234,7 @@ fn out_of_range_indices_name_the_line() {
     let msg = fails("negative.obj", with_line(OBJ, 4, "f 1 2 -4"), Some(4));
     assert!(msg.contains("relative vertex index -4"), "{msg}");
     assert_eq!(
-        load_as("relative.obj", with_line(OBJ, 4, "f -3 -2 -1"))
-            .expect("relative")
-            .triangles,
+        load_as("relative.obj", with_line(OBJ, 4, "f -3 -2 -1")).expect("relative").triangles,
         vec![[0, 1, 2]]
     );
     fails("zero.obj", with_line(OBJ, 4, "f 0 1 2"), Some(4));
@@ -317,10 +242,7 @@ fn out_of_range_indices_name_the_line() {
     assert!(msg.contains("vertex index 3 out of range"), "{msg}");
     fails("negative.off", with_line(OFF, 6, "3 0 -1 2"), Some(6));
     let msg = fails("range.ply", with_line(PLY, 13, "3 0 1 3"), Some(13));
-    assert!(
-        msg.contains("face 0") && msg.contains("vertex index 3 out of range"),
-        "{msg}"
-    );
+    assert!(msg.contains("face 0") && msg.contains("vertex index 3 out of range"), "{msg}");
     fails("negative.ply", with_line(PLY, 13, "3 0 -1 2"), Some(13));
 }
 
@@ -329,20 +251,13 @@ fn truncated_files_name_the_last_line() {
     let cut =
         |text: &str, lines: usize| text.lines().take(lines).collect::<Vec<_>>().join("\n") + "\n";
     let msg = fails("truncated.off", cut(OFF, 5), Some(5));
-    assert!(
-        msg.contains("end of file") && msg.contains("0 of 1 faces"),
-        "{msg}"
-    );
+    assert!(msg.contains("end of file") && msg.contains("0 of 1 faces"), "{msg}");
     fails("truncated-vertices.off", cut(OFF, 3), Some(3));
     let msg = fails("truncated.ply", cut(PLY, 12), Some(12));
     assert!(msg.contains("end of file"), "{msg}");
     fails("header-only.ply", cut(PLY, 8), Some(8));
     // A vertex line cut in the middle.
-    fails(
-        "cut-line.off",
-        &OFF[..OFF.find("1 0 0").expect("vertex") + 3],
-        Some(4),
-    );
+    fails("cut-line.off", &OFF[..OFF.find("1 0 0").expect("vertex") + 3], Some(4));
 }
 
 #[test]
@@ -352,10 +267,7 @@ fn structural_errors_name_the_line() {
     fails("two.obj", with_line(OBJ, 4, "f 1 2"), Some(4));
     fails("two.ply", with_line(PLY, 13, "2 0 1"), Some(13));
     fails("no-z.ply", with_line(PLY, 6, "property float w"), Some(3));
-    let no_face = PLY.replace(
-        "element face 1\nproperty list uchar int vertex_indices\n",
-        "",
-    );
+    let no_face = PLY.replace("element face 1\nproperty list uchar int vertex_indices\n", "");
     let msg = fails("no-face.ply", no_face, Some(7));
     assert!(msg.contains("no `face` element"), "{msg}");
     fails("magic.ply", with_line(PLY, 1, "ply2"), Some(1));
@@ -369,29 +281,20 @@ fn cgal_bunny_loads_when_fetched() {
         .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("models"));
     let path = dir.join("bunny00.off");
     if !path.exists() {
-        eprintln!(
-            "skipped: {} is missing; run `scripts/fetch-models` to fetch it",
-            path.display()
-        );
+        eprintln!("skipped: {} is missing; run `scripts/fetch-models` to fetch it", path.display());
         return;
     }
     let bunny = load_mesh(&path).unwrap_or_else(|e| panic!("{e}"));
-    assert!(
-        (70_000..80_000).contains(&bunny.triangle_count()),
-        "{}",
-        bunny.triangle_count()
-    );
+    assert!((70_000..80_000).contains(&bunny.triangle_count()), "{}", bunny.triangle_count());
     let (lo, hi) = bunny.bounds().expect("vertices");
     assert!((hi - lo).cmpgt(DVec3::ZERO).all());
 }
 
 /// Every loader on `bytes`: must return, never panic.
 fn load_all(bytes: &[u8]) {
-    for (format, name) in [
-        (MeshFormat::Obj, "f.obj"),
-        (MeshFormat::Off, "f.off"),
-        (MeshFormat::Ply, "f.ply"),
-    ] {
+    for (format, name) in
+        [(MeshFormat::Obj, "f.obj"), (MeshFormat::Off, "f.off"), (MeshFormat::Ply, "f.ply")]
+    {
         if let Err(e) = load_mesh_from_bytes(bytes, format, Path::new(name)) {
             assert!(e.to_string().contains(name), "{e}");
         }

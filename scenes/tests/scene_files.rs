@@ -19,7 +19,10 @@ fn unknown_keys_are_named_with_file_and_line() {
     let text = "resolution = [8, 8]\n[camera.perspective]\neye = [0.0, 1.0, 2.0]\ntarget = [0.0, 0.0, 0.0]\nfov_y_deg = 40.0\nlens = 3\n";
     let err = SceneDesc::from_toml(text, Path::new("dir/file.toml")).expect_err("unknown key");
     let msg = err.to_string();
-    assert!(msg.contains("dir/file.toml") && msg.contains("lens") && msg.contains("line 6"), "{msg}");
+    assert!(
+        msg.contains("dir/file.toml") && msg.contains("lens") && msg.contains("line 6"),
+        "{msg}"
+    );
 }
 
 #[test]
@@ -34,7 +37,8 @@ direction = [0.0, -1.0, 0.0]
 [[object]]
 shape.cage = { bars = 3 }
 "#;
-    let msg = SceneDesc::from_toml(text, Path::new("cage.toml")).expect_err("unknown key").to_string();
+    let msg =
+        SceneDesc::from_toml(text, Path::new("cage.toml")).expect_err("unknown key").to_string();
     assert!(msg.contains("bars") && msg.contains("line 9"), "{msg}");
 }
 
@@ -68,7 +72,11 @@ fn missing_models_say_how_to_get_them() {
         .expect_err("no model there");
     assert!(matches!(err, SceneError::ModelMissing { .. }), "{err}");
     let err = desc
-        .resolve("bunny-plane", Path::new("builtin:bunny-plane"), &registry::models_dir().join("nowhere"))
+        .resolve(
+            "bunny-plane",
+            Path::new("builtin:bunny-plane"),
+            &registry::models_dir().join("nowhere"),
+        )
         .expect_err("no model there");
     assert!(err.to_string().contains("scripts/fetch-models"), "{err}");
 }

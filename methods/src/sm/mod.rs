@@ -86,12 +86,22 @@ pub struct StandardShadowMap {
 
 /// The receiver plane's depth change per texel step in x and y at light image point `xy`
 /// with depth `t`, for unit normal `n`; the ratios are clamped to `max_slope`.
-pub fn depth_slope(light: &Projector, n: DVec3, xy: glam::DVec2, t: f64, max_slope: f64) -> (f64, f64) {
+pub fn depth_slope(
+    light: &Projector,
+    n: DVec3,
+    xy: glam::DVec2,
+    t: f64,
+    max_slope: f64,
+) -> (f64, f64) {
     let dir = light.ray(xy).direction;
     let n_dir = n.dot(dir).abs();
     let ratio = |axis: DVec3| {
         let r = n.dot(axis).abs() / n_dir;
-        if r.is_finite() { r.min(max_slope) } else { max_slope }
+        if r.is_finite() {
+            r.min(max_slope)
+        } else {
+            max_slope
+        }
     };
     let (step_x, step_y) = match light.kind {
         ProjectionKind::Orthographic { half_width, half_height } => {
@@ -135,7 +145,9 @@ impl ShadowMethod for StandardShadowMap {
                     if g.triangle[k] == NO_TRIANGLE {
                         return (1.0, 0);
                     }
-                    let Some((xy, t)) = map.projector.project(g.position[k]) else { return (1.0, 0) };
+                    let Some((xy, t)) = map.projector.project(g.position[k]) else {
+                        return (1.0, 0);
+                    };
                     let Some(stored) = map.texel(xy.x.floor() as i64, xy.y.floor() as i64) else {
                         return (1.0, 0);
                     };

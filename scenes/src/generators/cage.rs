@@ -39,12 +39,7 @@ pub struct CageParams {
 
 impl Default for CageParams {
     fn default() -> Self {
-        Self {
-            size: [4.0, 4.0, 4.0],
-            bars_per_side: 12,
-            bar_width: 0.03,
-            height_above_ground: 1.0,
-        }
+        Self { size: [4.0, 4.0, 4.0], bars_per_side: 12, bar_width: 0.03, height_above_ground: 1.0 }
     }
 }
 
@@ -89,11 +84,7 @@ impl Generator for CageParams {
         }
         let n = self.bars_per_side;
         let w = self.bar_width;
-        let lo = DVec3::new(
-            -0.5 * self.size[0],
-            self.height_above_ground,
-            -0.5 * self.size[2],
-        );
+        let lo = DVec3::new(-0.5 * self.size[0], self.height_above_ground, -0.5 * self.size[2]);
         let hi = lo + DVec3::from_array(self.size);
         // Centre of grid line `k` along `axis`: the outermost lines are inset by half a bar.
         let line = |axis: usize, k: u32| {
@@ -138,43 +129,26 @@ mod tests {
         assert_eq!(mesh.triangle_count(), 1584);
         assert_eq!(mesh.triangle_count() as u64, p.triangle_count());
         let (lo, hi) = mesh.bounds().expect("vertices");
-        assert!(
-            (lo - DVec3::new(-2.0, 1.0, -2.0)).abs().max_element() < 1e-12,
-            "{lo}"
-        );
-        assert!(
-            (hi - DVec3::new(2.0, 5.0, 2.0)).abs().max_element() < 1e-12,
-            "{hi}"
-        );
+        assert!((lo - DVec3::new(-2.0, 1.0, -2.0)).abs().max_element() < 1e-12, "{lo}");
+        assert!((hi - DVec3::new(2.0, 5.0, 2.0)).abs().max_element() < 1e-12, "{hi}");
     }
 
     #[test]
     fn every_bar_is_a_closed_outward_box() {
-        let p = CageParams {
-            size: [2.0, 3.0, 1.0],
-            bars_per_side: 4,
-            ..Default::default()
-        };
+        let p = CageParams { size: [2.0, 3.0, 1.0], bars_per_side: 4, ..Default::default() };
         let mesh = p.generate();
         assert_eq!(mesh.triangle_count(), 12 * 12 * 3);
         assert_watertight(&mesh, 0..mesh.triangle_count());
         for bar in 0..p.bar_count() as usize {
             let volume = signed_volume6(&mesh, 12 * bar..12 * bar + 12) / 6.0;
             let [a, b, c] = [0.03f64, 0.03, 1.0];
-            assert!(
-                volume > 0.0 && volume <= a * b * c * 3.0 + 1e-12,
-                "bar {bar}: {volume}"
-            );
+            assert!(volume > 0.0 && volume <= a * b * c * 3.0 + 1e-12, "bar {bar}: {volume}");
         }
     }
 
     #[test]
     fn the_smallest_cage_is_its_twelve_edges() {
-        let mesh = CageParams {
-            bars_per_side: 2,
-            ..Default::default()
-        }
-        .generate();
+        let mesh = CageParams { bars_per_side: 2, ..Default::default() }.generate();
         assert_eq!(mesh.triangle_count(), 12 * 12);
     }
 
@@ -182,47 +156,11 @@ mod tests {
     fn validation_names_the_key() {
         let bad = |p: CageParams| p.validate().expect_err("invalid").key;
         let d = CageParams::default;
-        assert_eq!(
-            bad(CageParams {
-                size: [4.0, 0.0, 4.0],
-                ..d()
-            }),
-            "size"
-        );
-        assert_eq!(
-            bad(CageParams {
-                bars_per_side: 1,
-                ..d()
-            }),
-            "bars_per_side"
-        );
-        assert_eq!(
-            bad(CageParams {
-                bars_per_side: 10_000_000,
-                ..d()
-            }),
-            "bars_per_side"
-        );
-        assert_eq!(
-            bad(CageParams {
-                bar_width: 0.0,
-                ..d()
-            }),
-            "bar_width"
-        );
-        assert_eq!(
-            bad(CageParams {
-                bar_width: 0.4,
-                ..d()
-            }),
-            "bar_width"
-        );
-        assert_eq!(
-            bad(CageParams {
-                height_above_ground: f64::NAN,
-                ..d()
-            }),
-            "height_above_ground"
-        );
+        assert_eq!(bad(CageParams { size: [4.0, 0.0, 4.0], ..d() }), "size");
+        assert_eq!(bad(CageParams { bars_per_side: 1, ..d() }), "bars_per_side");
+        assert_eq!(bad(CageParams { bars_per_side: 10_000_000, ..d() }), "bars_per_side");
+        assert_eq!(bad(CageParams { bar_width: 0.0, ..d() }), "bar_width");
+        assert_eq!(bad(CageParams { bar_width: 0.4, ..d() }), "bar_width");
+        assert_eq!(bad(CageParams { height_above_ground: f64::NAN, ..d() }), "height_above_ground");
     }
 }

@@ -37,13 +37,7 @@ pub struct CityParams {
 
 impl Default for CityParams {
     fn default() -> Self {
-        Self {
-            blocks: 8,
-            min_height: 0.5,
-            max_height: 4.0,
-            street_width: 0.4,
-            seed: 1,
-        }
+        Self { blocks: 8, min_height: 0.5, max_height: 4.0, street_width: 0.4, seed: 1 }
     }
 }
 
@@ -114,10 +108,7 @@ mod tests {
         for b in 0..64 {
             let volume = signed_volume6(&mesh, 12 * b..12 * b + 12) / 6.0;
             let height = volume / footprint;
-            assert!(
-                (0.5 - 1e-9..=4.0 + 1e-9).contains(&height),
-                "box {b}: {height}"
-            );
+            assert!((0.5 - 1e-9..=4.0 + 1e-9).contains(&height), "box {b}: {height}");
         }
         let (lo, hi) = mesh.bounds().expect("vertices");
         assert_eq!(lo.y, 0.0);
@@ -126,19 +117,9 @@ mod tests {
 
     #[test]
     fn seeds_decide_the_heights() {
-        let p = CityParams {
-            blocks: 3,
-            ..Default::default()
-        };
+        let p = CityParams { blocks: 3, ..Default::default() };
         assert!(bit_identical(&p.generate(), &p.generate()));
-        assert_ne!(
-            p.generate(),
-            CityParams {
-                seed: 5,
-                ..p.clone()
-            }
-            .generate()
-        );
+        assert_ne!(p.generate(), CityParams { seed: 5, ..p.clone() }.generate());
     }
 
     #[test]
@@ -146,46 +127,11 @@ mod tests {
         let bad = |p: CityParams| p.validate().expect_err("invalid").key;
         let d = CityParams::default;
         assert_eq!(bad(CityParams { blocks: 0, ..d() }), "blocks");
-        assert_eq!(
-            bad(CityParams {
-                blocks: 5000,
-                ..d()
-            }),
-            "blocks"
-        );
-        assert_eq!(
-            bad(CityParams {
-                min_height: 0.0,
-                ..d()
-            }),
-            "min_height"
-        );
-        assert_eq!(
-            bad(CityParams {
-                max_height: 0.2,
-                ..d()
-            }),
-            "max_height"
-        );
-        assert_eq!(
-            bad(CityParams {
-                street_width: -0.1,
-                ..d()
-            }),
-            "street_width"
-        );
-        assert_eq!(
-            bad(CityParams {
-                street_width: 1.25,
-                ..d()
-            }),
-            "street_width"
-        );
-        assert!(CityParams {
-            street_width: 0.0,
-            ..d()
-        }
-        .validate()
-        .is_ok());
+        assert_eq!(bad(CityParams { blocks: 5000, ..d() }), "blocks");
+        assert_eq!(bad(CityParams { min_height: 0.0, ..d() }), "min_height");
+        assert_eq!(bad(CityParams { max_height: 0.2, ..d() }), "max_height");
+        assert_eq!(bad(CityParams { street_width: -0.1, ..d() }), "street_width");
+        assert_eq!(bad(CityParams { street_width: 1.25, ..d() }), "street_width");
+        assert!(CityParams { street_width: 0.0, ..d() }.validate().is_ok());
     }
 }

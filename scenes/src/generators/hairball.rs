@@ -17,7 +17,7 @@
 //!   `2 * sides * segments` triangles a hair, normals out, vertices in rings of `sides`;
 //! - `sides == 2`: a flat ribbon of width `thickness`: `2 * segments` triangles a hair.
 //!
-//! Invariants: `strands * 2 * segments * max(sides, 1 if ribbon)` triangles (72 000 at the
+//! Invariants: `strands` times the triangles of a hair above (72 000 at the
 //! defaults); hairs are emitted one after the other, each with the same vertex count; no vertex
 //! is below the ground (validation requires `center_height >= radius + length`, and the few
 //! vertices a tube's radius could push below y = 0 are clamped to it).
@@ -76,11 +76,7 @@ impl Default for HairballParams {
 impl HairballParams {
     /// Triangles of one hair: `2 * segments * sides` for a tube, `2 * segments` for a ribbon.
     pub fn triangles_per_strand(&self) -> u64 {
-        let around = if self.sides == 2 {
-            1
-        } else {
-            u64::from(self.sides)
-        };
+        let around = if self.sides == 2 { 1 } else { u64::from(self.sides) };
         2 * u64::from(self.segments) * around
     }
 
@@ -97,22 +93,14 @@ impl Generator for HairballParams {
         if !(2..=MAX_SIDES).contains(&self.sides) {
             return Err(ParamError::new(
                 "sides",
-                format!(
-                    "must be 2 (ribbon) or 3 to {MAX_SIDES} (tube), got {}",
-                    self.sides
-                ),
+                format!("must be 2 (ribbon) or 3 to {MAX_SIDES} (tube), got {}", self.sides),
             ));
         }
         triangle_budget("strands", self.triangle_count())?;
         positive("radius", self.radius)?;
         positive("length", self.length)?;
         positive("thickness", self.thickness)?;
-        at_least(
-            "center_height",
-            self.center_height,
-            self.radius + self.length,
-            "radius + length",
-        )
+        at_least("center_height", self.center_height, self.radius + self.length, "radius + length")
     }
 
     fn generate(&self) -> Mesh {
@@ -124,12 +112,8 @@ impl Generator for HairballParams {
         let segments = self.segments as usize;
         let step = self.length / self.segments as f64;
         let wiggle = 0.15 / (self.segments as f64).sqrt();
-        let per_strand_vertices = (segments + 1)
-            * if self.sides == 2 {
-                2
-            } else {
-                self.sides as usize
-            };
+        let per_strand_vertices =
+            (segments + 1) * if self.sides == 2 { 2 } else { self.sides as usize };
         let mut mesh = Mesh {
             positions: Vec::with_capacity(self.strands as usize * per_strand_vertices),
             triangles: Vec::with_capacity(self.triangle_count() as usize),
@@ -158,14 +142,7 @@ impl Generator for HairballParams {
             if self.sides == 2 {
                 push_ribbon(&mut mesh, &points, &tangents, self.thickness);
             } else {
-                push_tube(
-                    &mut mesh,
-                    &points,
-                    &tangents,
-                    0.5 * self.thickness,
-                    self.sides,
-                    false,
-                );
+                push_tube(&mut mesh, &points, &tangents, 0.5 * self.thickness, self.sides, false);
             }
             for p in &mut mesh.positions[start..] {
                 if p.y < 0.0 {
@@ -186,12 +163,7 @@ fn push_ribbon(mesh: &mut Mesh, points: &[DVec3], tangents: &[DVec3], width: f64
         mesh.positions.push(p + 0.5 * width * n);
     }
     for i in 0..points.len().saturating_sub(1) as u32 {
-        let (a, b, c, d) = (
-            base + 2 * i,
-            base + 2 * i + 1,
-            base + 2 * i + 3,
-            base + 2 * i + 2,
-        );
+        let (a, b, c, d) = (base + 2 * i, base + 2 * i + 1, base + 2 * i + 3, base + 2 * i + 2);
         mesh.triangles.push([a, b, c]);
         mesh.triangles.push([a, c, d]);
     }
@@ -216,26 +188,16 @@ mod tests {
 
     #[test]
     fn hairs_start_on_the_sphere_and_have_their_length() {
-        let p = HairballParams {
-            strands: 20,
-            sides: 4,
-            thickness: 0.02,
-            ..Default::default()
-        };
+        let p = HairballParams { strands: 20, sides: 4, thickness: 0.02, ..Default::default() };
         let mesh = p.generate();
         let centre = DVec3::new(0.0, 3.0, 0.0);
         for hair in mesh.positions.chunks_exact(25 * 4) {
-            let rings: Vec<DVec3> = hair
-                .chunks_exact(4)
-                .map(|r| r.iter().copied().sum::<DVec3>() / 4.0)
-                .collect();
+            let rings: Vec<DVec3> =
+                hair.chunks_exact(4).map(|r| r.iter().copied().sum::<DVec3>() / 4.0).collect();
             assert!(((rings[0] - centre).length() - 1.5).abs() < 1e-9);
             let length: f64 = rings.windows(2).map(|w| (w[1] - w[0]).length()).sum();
             assert!((length - 1.5).abs() < 1e-9, "{length}");
-            assert!(
-                (rings[1] - centre).length() > 1.5,
-                "the hair leaves the sphere"
-            );
+            assert!((rings[1] - centre).length() > 1.5, "the hair leaves the sphere");
             // Square cross-section: the diagonal is the thickness.
             assert!(((hair[0] - hair[2]).length() - 0.02).abs() < 1e-12);
         }
@@ -243,11 +205,7 @@ mod tests {
 
     #[test]
     fn tubes_face_out_and_ribbons_are_flat() {
-        let mesh = HairballParams {
-            strands: 3,
-            ..Default::default()
-        }
-        .generate();
+        let mesh = HairballParams { strands: 3, ..Default::default() }.generate();
         let per = 25 * 3;
         for t in 0..mesh.triangle_count() {
             let [a, b, c] = mesh.corners(t);
@@ -255,17 +213,9 @@ mod tests {
             let ring = (mesh.triangles[t][0] as usize - hair) / 3 * 3 + hair;
             let axis =
                 (mesh.positions[ring] + mesh.positions[ring + 1] + mesh.positions[ring + 2]) / 3.0;
-            assert!(
-                (b - a).cross(c - a).dot(a - axis) > 0.0,
-                "triangle {t} faces in"
-            );
+            assert!((b - a).cross(c - a).dot(a - axis) > 0.0, "triangle {t} faces in");
         }
-        let ribbon = HairballParams {
-            strands: 4,
-            segments: 10,
-            sides: 2,
-            ..Default::default()
-        };
+        let ribbon = HairballParams { strands: 4, segments: 10, sides: 2, ..Default::default() };
         let mesh = ribbon.generate();
         assert_eq!(mesh.triangle_count(), 4 * 2 * 10);
         for pair in mesh.positions.chunks_exact(2) {
@@ -275,19 +225,9 @@ mod tests {
 
     #[test]
     fn seeds_decide_the_hairs() {
-        let p = HairballParams {
-            strands: 10,
-            ..Default::default()
-        };
+        let p = HairballParams { strands: 10, ..Default::default() };
         assert!(bit_identical(&p.generate(), &p.generate()));
-        assert_ne!(
-            p.generate(),
-            HairballParams {
-                seed: 2,
-                ..p.clone()
-            }
-            .generate()
-        );
+        assert_ne!(p.generate(), HairballParams { seed: 2, ..p.clone() }.generate());
     }
 
     #[test]
@@ -295,38 +235,13 @@ mod tests {
         let bad = |p: HairballParams| p.validate().expect_err("invalid").key;
         let d = HairballParams::default;
         assert_eq!(bad(HairballParams { strands: 0, ..d() }), "strands");
-        assert_eq!(
-            bad(HairballParams {
-                strands: 100_000,
-                segments: 100,
-                ..d()
-            }),
-            "strands"
-        );
+        assert_eq!(bad(HairballParams { strands: 100_000, segments: 100, ..d() }), "strands");
         assert_eq!(bad(HairballParams { segments: 0, ..d() }), "segments");
         assert_eq!(bad(HairballParams { sides: 1, ..d() }), "sides");
         assert_eq!(bad(HairballParams { sides: 65, ..d() }), "sides");
         assert_eq!(bad(HairballParams { radius: 0.0, ..d() }), "radius");
-        assert_eq!(
-            bad(HairballParams {
-                length: f64::INFINITY,
-                ..d()
-            }),
-            "length"
-        );
-        assert_eq!(
-            bad(HairballParams {
-                thickness: -0.01,
-                ..d()
-            }),
-            "thickness"
-        );
-        assert_eq!(
-            bad(HairballParams {
-                center_height: 2.9,
-                ..d()
-            }),
-            "center_height"
-        );
+        assert_eq!(bad(HairballParams { length: f64::INFINITY, ..d() }), "length");
+        assert_eq!(bad(HairballParams { thickness: -0.01, ..d() }), "thickness");
+        assert_eq!(bad(HairballParams { center_height: 2.9, ..d() }), "center_height");
     }
 }

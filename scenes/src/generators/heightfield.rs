@@ -40,14 +40,7 @@ pub struct HeightfieldParams {
 
 impl Default for HeightfieldParams {
     fn default() -> Self {
-        Self {
-            size: 20.0,
-            resolution: 256,
-            amplitude: 0.15,
-            wavelength: 1.5,
-            waves: 6,
-            seed: 1,
-        }
+        Self { size: 20.0, resolution: 256, amplitude: 0.15, wavelength: 1.5, waves: 6, seed: 1 }
     }
 }
 
@@ -89,18 +82,11 @@ impl Generator for HeightfieldParams {
             })
             .collect();
         let height = |x: f64, z: f64| {
-            waves
-                .iter()
-                .map(|&(kx, kz, phase)| sin_cos(kx * x + kz * z + phase).0)
-                .sum::<f64>()
+            waves.iter().map(|&(kx, kz, phase)| sin_cos(kx * x + kz * z + phase).0).sum::<f64>()
         };
         let mut mesh = grid(self.size, self.resolution, height);
         let peak = mesh.positions.iter().fold(0.0f64, |m, p| m.max(p.y.abs()));
-        let scale = if peak > 0.0 {
-            self.amplitude / peak
-        } else {
-            0.0
-        };
+        let scale = if peak > 0.0 { self.amplitude / peak } else { 0.0 };
         for p in &mut mesh.positions {
             // Clamped so that rounding cannot push a height past the amplitude.
             p.y = (p.y * scale).clamp(-self.amplitude, self.amplitude);
@@ -116,11 +102,7 @@ mod tests {
 
     #[test]
     fn bumps_reach_the_amplitude_and_triangles_face_up() {
-        let p = HeightfieldParams {
-            resolution: 40,
-            size: 8.0,
-            ..Default::default()
-        };
+        let p = HeightfieldParams { resolution: 40, size: 8.0, ..Default::default() };
         let mesh = p.generate();
         assert_eq!(mesh.triangle_count(), 2 * 40 * 40);
         assert_eq!(mesh.positions.len(), 41 * 41);
@@ -137,30 +119,16 @@ mod tests {
 
     #[test]
     fn zero_amplitude_is_flat() {
-        let mesh = HeightfieldParams {
-            resolution: 4,
-            amplitude: 0.0,
-            ..Default::default()
-        }
-        .generate();
+        let mesh =
+            HeightfieldParams { resolution: 4, amplitude: 0.0, ..Default::default() }.generate();
         assert!(mesh.positions.iter().all(|p| p.y == 0.0));
     }
 
     #[test]
     fn seeds_decide_the_bumps() {
-        let p = HeightfieldParams {
-            resolution: 16,
-            ..Default::default()
-        };
+        let p = HeightfieldParams { resolution: 16, ..Default::default() };
         assert!(bit_identical(&p.generate(), &p.generate()));
-        assert_ne!(
-            p.generate(),
-            HeightfieldParams {
-                seed: 2,
-                ..p.clone()
-            }
-            .generate()
-        );
+        assert_ne!(p.generate(), HeightfieldParams { seed: 2, ..p.clone() }.generate());
     }
 
     #[test]
@@ -168,34 +136,10 @@ mod tests {
         let bad = |p: HeightfieldParams| p.validate().expect_err("invalid").key;
         let d = HeightfieldParams::default;
         assert_eq!(bad(HeightfieldParams { size: -1.0, ..d() }), "size");
-        assert_eq!(
-            bad(HeightfieldParams {
-                resolution: 0,
-                ..d()
-            }),
-            "resolution"
-        );
-        assert_eq!(
-            bad(HeightfieldParams {
-                resolution: 4000,
-                ..d()
-            }),
-            "resolution"
-        );
-        assert_eq!(
-            bad(HeightfieldParams {
-                amplitude: -0.1,
-                ..d()
-            }),
-            "amplitude"
-        );
-        assert_eq!(
-            bad(HeightfieldParams {
-                wavelength: 0.0,
-                ..d()
-            }),
-            "wavelength"
-        );
+        assert_eq!(bad(HeightfieldParams { resolution: 0, ..d() }), "resolution");
+        assert_eq!(bad(HeightfieldParams { resolution: 4000, ..d() }), "resolution");
+        assert_eq!(bad(HeightfieldParams { amplitude: -0.1, ..d() }), "amplitude");
+        assert_eq!(bad(HeightfieldParams { wavelength: 0.0, ..d() }), "wavelength");
         assert_eq!(bad(HeightfieldParams { waves: 0, ..d() }), "waves");
     }
 }

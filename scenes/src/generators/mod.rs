@@ -89,10 +89,7 @@ pub struct ParamError {
 impl ParamError {
     /// An error for `key`.
     pub fn new(key: &'static str, message: impl Into<String>) -> Self {
-        Self {
-            key,
-            message: message.into(),
-        }
+        Self { key, message: message.into() }
     }
 }
 
@@ -113,10 +110,7 @@ pub(crate) fn non_negative(key: &'static str, value: f64) -> Result<(), ParamErr
     if (0.0..=MAX_LENGTH).contains(&value) {
         Ok(())
     } else {
-        Err(ParamError::new(
-            key,
-            format!("must be a number in [0, {MAX_LENGTH:e}], got {value}"),
-        ))
+        Err(ParamError::new(key, format!("must be a number in [0, {MAX_LENGTH:e}], got {value}")))
     }
 }
 
@@ -143,10 +137,7 @@ pub(crate) fn count_at_least(key: &'static str, value: u32, min: u32) -> Result<
     if value >= min {
         Ok(())
     } else {
-        Err(ParamError::new(
-            key,
-            format!("must be at least {min}, got {value}"),
-        ))
+        Err(ParamError::new(key, format!("must be at least {min}, got {value}")))
     }
 }
 
@@ -188,11 +179,7 @@ pub(crate) fn push_box(mesh: &mut Mesh, min: DVec3, max: DVec3) {
         [4, 5, 7], // +z
         [4, 7, 6],
     ];
-    mesh.triangles.extend(
-        FACES
-            .iter()
-            .map(|t| [t[0] + base, t[1] + base, t[2] + base]),
-    );
+    mesh.triangles.extend(FACES.iter().map(|t| [t[0] + base, t[1] + base, t[2] + base]));
 }
 
 /// Unit tangents of a polyline: the direction of the first and last segments at the ends, the
@@ -203,16 +190,10 @@ pub(crate) fn polyline_tangents(points: &[DVec3]) -> Vec<DVec3> {
     let mut tangents = Vec::with_capacity(n);
     let mut last = DVec3::Y;
     for i in 0..n {
-        let prev = if i > 0 {
-            (points[i] - points[i - 1]).normalize_or_zero()
-        } else {
-            DVec3::ZERO
-        };
-        let next = if i + 1 < n {
-            (points[i + 1] - points[i]).normalize_or_zero()
-        } else {
-            DVec3::ZERO
-        };
+        let prev =
+            if i > 0 { (points[i] - points[i - 1]).normalize_or_zero() } else { DVec3::ZERO };
+        let next =
+            if i + 1 < n { (points[i + 1] - points[i]).normalize_or_zero() } else { DVec3::ZERO };
         last = (prev + next).normalize_or(last);
         tangents.push(last);
     }
@@ -276,8 +257,7 @@ pub(crate) fn push_tube(
         mesh.positions.push(points[last]);
         for j in 0..sides {
             mesh.triangles.push([start, vertex(0, j + 1), vertex(0, j)]);
-            mesh.triangles
-                .push([start + 1, vertex(last, j), vertex(last, j + 1)]);
+            mesh.triangles.push([start + 1, vertex(last, j), vertex(last, j + 1)]);
         }
     }
 }
@@ -300,10 +280,7 @@ pub(crate) mod testutil {
             }
         }
         for (edge, uses) in edges {
-            assert_eq!(
-                uses, 101,
-                "edge {edge:?} is not shared by two opposite half-edges"
-            );
+            assert_eq!(uses, 101, "edge {edge:?} is not shared by two opposite half-edges");
         }
     }
 
@@ -336,11 +313,7 @@ mod tests {
     #[test]
     fn a_box_is_closed_and_outward() {
         let mut mesh = Mesh::default();
-        push_box(
-            &mut mesh,
-            DVec3::new(-1.0, 0.0, 2.0),
-            DVec3::new(1.0, 3.0, 2.5),
-        );
+        push_box(&mut mesh, DVec3::new(-1.0, 0.0, 2.0), DVec3::new(1.0, 3.0, 2.5));
         assert_eq!(mesh.triangle_count(), 12);
         assert_watertight(&mesh, 0..12);
         assert!((signed_volume6(&mesh, 0..12) / 6.0 - 2.0 * 3.0 * 0.5).abs() < 1e-12);
@@ -349,9 +322,8 @@ mod tests {
 
     #[test]
     fn a_capped_tube_is_closed_and_outward() {
-        let points: Vec<DVec3> = (0..6)
-            .map(|i| DVec3::new(0.3 * f64::from(i), f64::from(i), 0.1))
-            .collect();
+        let points: Vec<DVec3> =
+            (0..6).map(|i| DVec3::new(0.3 * f64::from(i), f64::from(i), 0.1)).collect();
         let tangents = polyline_tangents(&points);
         let mut mesh = Mesh::default();
         push_tube(&mut mesh, &points, &tangents, 0.05, 5, true);

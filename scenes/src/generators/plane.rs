@@ -21,10 +21,7 @@ pub struct PlaneParams {
 
 impl Default for PlaneParams {
     fn default() -> Self {
-        Self {
-            size: 20.0,
-            subdivisions: 1,
-        }
+        Self { size: 20.0, subdivisions: 1 }
     }
 }
 
@@ -93,18 +90,12 @@ mod tests {
         let (n, d) = mesh.plane().expect("planar");
         assert_eq!((n, d), (DVec3::Y, 0.0));
         let (lo, hi) = mesh.bounds().expect("vertices");
-        assert_eq!(
-            (lo, hi),
-            (DVec3::new(-10.0, 0.0, -10.0), DVec3::new(10.0, 0.0, 10.0))
-        );
+        assert_eq!((lo, hi), (DVec3::new(-10.0, 0.0, -10.0), DVec3::new(10.0, 0.0, 10.0)));
     }
 
     #[test]
     fn subdivisions_give_two_triangles_per_quad() {
-        let p = PlaneParams {
-            size: 3.0,
-            subdivisions: 7,
-        };
+        let p = PlaneParams { size: 3.0, subdivisions: 7 };
         let mesh = p.generate();
         assert_eq!(mesh.triangle_count(), 2 * 7 * 7);
         assert_eq!(mesh.triangle_count() as u64, p.triangle_count());
@@ -120,40 +111,16 @@ mod tests {
     #[test]
     fn validation_names_the_key() {
         let bad = |p: PlaneParams| p.validate().expect_err("invalid").key;
+        assert_eq!(bad(PlaneParams { size: 0.0, ..Default::default() }), "size");
+        assert_eq!(bad(PlaneParams { size: f64::INFINITY, ..Default::default() }), "size");
+        assert_eq!(bad(PlaneParams { subdivisions: 0, ..Default::default() }), "subdivisions");
         assert_eq!(
-            bad(PlaneParams {
-                size: 0.0,
-                ..Default::default()
-            }),
-            "size"
-        );
-        assert_eq!(
-            bad(PlaneParams {
-                size: f64::INFINITY,
-                ..Default::default()
-            }),
-            "size"
-        );
-        assert_eq!(
-            bad(PlaneParams {
-                subdivisions: 0,
-                ..Default::default()
-            }),
+            bad(PlaneParams { subdivisions: 100_000, ..Default::default() }),
             "subdivisions"
         );
-        assert_eq!(
-            bad(PlaneParams {
-                subdivisions: 100_000,
-                ..Default::default()
-            }),
-            "subdivisions"
-        );
-        assert!(PlaneParams {
-            subdivisions: 0,
-            ..Default::default()
-        }
-        .generate()
-        .triangles
-        .is_empty());
+        assert!(PlaneParams { subdivisions: 0, ..Default::default() }
+            .generate()
+            .triangles
+            .is_empty());
     }
 }

@@ -118,11 +118,7 @@ impl Generator for PlantParams {
                 let azimuth = TAU * (f64::from(i) + rng.range(-0.3, 0.3)) / f64::from(self.stems);
                 let (s, c) = sin_cos(azimuth);
                 let outward = DVec3::new(c, 0.0, s);
-                let spread = if self.stems == 1 {
-                    0.0
-                } else {
-                    rng.range(0.03, 0.12)
-                };
+                let spread = if self.stems == 1 { 0.0 } else { rng.range(0.03, 0.12) };
                 let tall = if i == 0 { 1.0 } else { rng.range(0.6, 1.0) };
                 Stem {
                     base: spread * self.height * outward,
@@ -141,9 +137,8 @@ impl Generator for PlantParams {
         // A square of side w has circumradius w / √2.
         let tube_radius = self.stem_width * std::f64::consts::FRAC_1_SQRT_2;
         for stem in &stems {
-            let ts: Vec<f64> = (0..=STEM_SEGMENTS)
-                .map(|k| f64::from(k) / f64::from(STEM_SEGMENTS))
-                .collect();
+            let ts: Vec<f64> =
+                (0..=STEM_SEGMENTS).map(|k| f64::from(k) / f64::from(STEM_SEGMENTS)).collect();
             let points: Vec<DVec3> = ts.iter().map(|&t| stem.point(t)).collect();
             let tangents: Vec<DVec3> = ts.iter().map(|&t| stem.tangent(t)).collect();
             push_tube(&mut mesh, &points, &tangents, tube_radius, STEM_SIDES, true);
@@ -159,12 +154,7 @@ impl Generator for PlantParams {
             };
             let mut corners = leaf.corners(base, self.leaf_length, self.leaf_width);
             if corners.iter().any(|p| p.y < 0.0) {
-                let up = Leaf {
-                    elevation: leaf.elevation.abs(),
-                    droop: 0.0,
-                    roll: 0.0,
-                    ..leaf
-                };
+                let up = Leaf { elevation: leaf.elevation.abs(), droop: 0.0, roll: 0.0, ..leaf };
                 corners = up.corners(base, self.leaf_length, self.leaf_width);
             }
             let v = mesh.positions.len() as u32;
@@ -236,34 +226,19 @@ mod tests {
         }
         let (lo, hi) = mesh.bounds().expect("vertices");
         assert!(lo.y >= 0.0 && hi.y < 4.0 + 0.8, "{lo} {hi}");
-        assert!(
-            lo.x > -5.0 && lo.z > -5.0 && hi.x < 5.0 && hi.z < 5.0,
-            "{lo} {hi}"
-        );
+        assert!(lo.x > -5.0 && lo.z > -5.0 && hi.x < 5.0 && hi.z < 5.0, "{lo} {hi}");
     }
 
     #[test]
     fn leaves_are_thin_and_face_up_when_flat() {
-        let leaf = Leaf {
-            azimuth: 0.3,
-            elevation: 0.0,
-            droop: 0.0,
-            roll: 0.0,
-        };
+        let leaf = Leaf { azimuth: 0.3, elevation: 0.0, droop: 0.0, roll: 0.0 };
         let c = leaf.corners(DVec3::new(0.0, 1.0, 0.0), 0.8, 0.08);
         assert!(c.iter().all(|p| (p.y - 1.0).abs() < 1e-15));
         assert!(((c[3] - c[2]).length() - 0.08).abs() < 1e-15);
         assert!((c[1] - c[0]).cross(c[3] - c[0]).y > 0.0);
-        let mesh = PlantParams {
-            leaves: 50,
-            stems: 2,
-            ..Default::default()
-        }
-        .generate();
-        let leaves = Mesh {
-            positions: mesh.positions.clone(),
-            triangles: mesh.triangles[144..].to_vec(),
-        };
+        let mesh = PlantParams { leaves: 50, stems: 2, ..Default::default() }.generate();
+        let leaves =
+            Mesh { positions: mesh.positions.clone(), triangles: mesh.triangles[144..].to_vec() };
         let area = leaves.area();
         // Each leaf is about (0.4 + 2 * 1 + 0.2) / 4 * 0.08 * 0.8 = 0.0416 square units.
         assert!((area / 50.0 - 0.0416).abs() < 0.002, "{area}");
@@ -271,19 +246,9 @@ mod tests {
 
     #[test]
     fn seeds_decide_the_plant() {
-        let p = PlantParams {
-            leaves: 30,
-            ..Default::default()
-        };
+        let p = PlantParams { leaves: 30, ..Default::default() };
         assert!(bit_identical(&p.generate(), &p.generate()));
-        assert_ne!(
-            p.generate(),
-            PlantParams {
-                seed: 2,
-                ..p.clone()
-            }
-            .generate()
-        );
+        assert_ne!(p.generate(), PlantParams { seed: 2, ..p.clone() }.generate());
     }
 
     #[test]
@@ -291,41 +256,11 @@ mod tests {
         let bad = |p: PlantParams| p.validate().expect_err("invalid").key;
         let d = PlantParams::default;
         assert_eq!(bad(PlantParams { leaves: 0, ..d() }), "leaves");
-        assert_eq!(
-            bad(PlantParams {
-                leaves: u32::MAX,
-                ..d()
-            }),
-            "leaves"
-        );
-        assert_eq!(
-            bad(PlantParams {
-                leaf_length: 0.0,
-                ..d()
-            }),
-            "leaf_length"
-        );
-        assert_eq!(
-            bad(PlantParams {
-                leaf_width: f64::NAN,
-                ..d()
-            }),
-            "leaf_width"
-        );
-        assert_eq!(
-            bad(PlantParams {
-                height: -4.0,
-                ..d()
-            }),
-            "height"
-        );
+        assert_eq!(bad(PlantParams { leaves: u32::MAX, ..d() }), "leaves");
+        assert_eq!(bad(PlantParams { leaf_length: 0.0, ..d() }), "leaf_length");
+        assert_eq!(bad(PlantParams { leaf_width: f64::NAN, ..d() }), "leaf_width");
+        assert_eq!(bad(PlantParams { height: -4.0, ..d() }), "height");
         assert_eq!(bad(PlantParams { stems: 0, ..d() }), "stems");
-        assert_eq!(
-            bad(PlantParams {
-                stem_width: 5.0,
-                ..d()
-            }),
-            "stem_width"
-        );
+        assert_eq!(bad(PlantParams { stem_width: 5.0, ..d() }), "stem_width");
     }
 }

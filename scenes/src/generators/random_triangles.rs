@@ -43,13 +43,7 @@ pub struct RandomTrianglesParams {
 
 impl Default for RandomTrianglesParams {
     fn default() -> Self {
-        Self {
-            count: 1000,
-            total_area: 40.0,
-            extent: [8.0, 3.0, 8.0],
-            min_height: 1.0,
-            seed: 1,
-        }
+        Self { count: 1000, total_area: 40.0, extent: [8.0, 3.0, 8.0], min_height: 1.0, seed: 1 }
     }
 }
 
@@ -94,16 +88,9 @@ impl Generator for RandomTrianglesParams {
                 let (s, c) = sin_cos(angle);
                 *corner = radius * (c * u + s * v);
             }
-            let area = 0.5
-                * (corners[1] - corners[0])
-                    .cross(corners[2] - corners[0])
-                    .length();
+            let area = 0.5 * (corners[1] - corners[0]).cross(corners[2] - corners[0]).length();
             let t = sum + area;
-            compensation += if sum.abs() >= area {
-                (sum - t) + area
-            } else {
-                (area - t) + sum
-            };
+            compensation += if sum.abs() >= area { (sum - t) + area } else { (area - t) + sum };
             sum = t;
             positions.extend_from_slice(&corners);
         }
@@ -150,13 +137,8 @@ impl Generator for RandomTrianglesParams {
                 }
             }
         }
-        let triangles = (0..n as u32)
-            .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
-            .collect();
-        Mesh {
-            positions,
-            triangles,
-        }
+        let triangles = (0..n as u32).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect();
+        Mesh { positions, triangles }
     }
 }
 
@@ -168,10 +150,7 @@ mod tests {
     #[test]
     fn count_and_total_area_are_exact() {
         for count in [1, 2, 10, 1000] {
-            let p = RandomTrianglesParams {
-                count,
-                ..Default::default()
-            };
+            let p = RandomTrianglesParams { count, ..Default::default() };
             let mesh = p.generate();
             assert_eq!(mesh.triangle_count(), count as usize);
             assert_eq!(mesh.positions.len(), 3 * count as usize);
@@ -182,17 +161,10 @@ mod tests {
 
     #[test]
     fn triangles_stay_in_the_box_and_are_not_slivers() {
-        let p = RandomTrianglesParams {
-            count: 5000,
-            seed: 9,
-            ..Default::default()
-        };
+        let p = RandomTrianglesParams { count: 5000, seed: 9, ..Default::default() };
         let mesh = p.generate();
         let (lo, hi) = mesh.bounds().expect("vertices");
-        assert!(
-            lo.cmpge(DVec3::new(-4.0 - 1e-12, 1.0, -4.0 - 1e-12)).all(),
-            "{lo}"
-        );
+        assert!(lo.cmpge(DVec3::new(-4.0 - 1e-12, 1.0, -4.0 - 1e-12)).all(), "{lo}");
         assert!(hi.cmple(DVec3::splat(4.0 + 1e-12)).all(), "{hi}");
         for t in 0..mesh.triangle_count() {
             let [a, b, c] = mesh.corners(t);
@@ -205,11 +177,7 @@ mod tests {
 
     #[test]
     fn a_triangle_bigger_than_the_box_rests_on_its_bottom() {
-        let p = RandomTrianglesParams {
-            count: 1,
-            extent: [0.1, 0.1, 0.1],
-            ..Default::default()
-        };
+        let p = RandomTrianglesParams { count: 1, extent: [0.1, 0.1, 0.1], ..Default::default() };
         let mesh = p.generate();
         let (lo, _) = mesh.bounds().expect("vertices");
         assert!(lo.y >= 1.0 && lo.y - 1.0 < 1e-12, "{lo}");
@@ -217,19 +185,9 @@ mod tests {
 
     #[test]
     fn seeds_decide_the_mesh() {
-        let p = RandomTrianglesParams {
-            count: 100,
-            ..Default::default()
-        };
+        let p = RandomTrianglesParams { count: 100, ..Default::default() };
         assert!(bit_identical(&p.generate(), &p.generate()));
-        assert_ne!(
-            p.generate(),
-            RandomTrianglesParams {
-                seed: 2,
-                ..p.clone()
-            }
-            .generate()
-        );
+        assert_ne!(p.generate(), RandomTrianglesParams { seed: 2, ..p.clone() }.generate());
     }
 
     #[test]
@@ -237,33 +195,9 @@ mod tests {
         let bad = |p: RandomTrianglesParams| p.validate().expect_err("invalid").key;
         let d = RandomTrianglesParams::default;
         assert_eq!(bad(RandomTrianglesParams { count: 0, ..d() }), "count");
-        assert_eq!(
-            bad(RandomTrianglesParams {
-                count: 20_000_001,
-                ..d()
-            }),
-            "count"
-        );
-        assert_eq!(
-            bad(RandomTrianglesParams {
-                total_area: -1.0,
-                ..d()
-            }),
-            "total_area"
-        );
-        assert_eq!(
-            bad(RandomTrianglesParams {
-                extent: [1.0, f64::NAN, 1.0],
-                ..d()
-            }),
-            "extent"
-        );
-        assert_eq!(
-            bad(RandomTrianglesParams {
-                min_height: -0.1,
-                ..d()
-            }),
-            "min_height"
-        );
+        assert_eq!(bad(RandomTrianglesParams { count: 20_000_001, ..d() }), "count");
+        assert_eq!(bad(RandomTrianglesParams { total_area: -1.0, ..d() }), "total_area");
+        assert_eq!(bad(RandomTrianglesParams { extent: [1.0, f64::NAN, 1.0], ..d() }), "extent");
+        assert_eq!(bad(RandomTrianglesParams { min_height: -0.1, ..d() }), "min_height");
     }
 }

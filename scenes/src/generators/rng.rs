@@ -111,11 +111,8 @@ mod tests {
     fn splitmix_matches_the_reference_sequence() {
         // First outputs of SplitMix64 seeded with 1234567 (reference C implementation).
         let mut rng = Rng::new(1_234_567);
-        let expected = [
-            6_457_827_717_110_365_317,
-            3_203_168_211_198_807_973,
-            9_817_491_932_198_370_423,
-        ];
+        let expected =
+            [6_457_827_717_110_365_317, 3_203_168_211_198_807_973, 9_817_491_932_198_370_423];
         for e in expected {
             assert_eq!(rng.next_u64(), e);
         }

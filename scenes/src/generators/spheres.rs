@@ -69,8 +69,7 @@ impl Default for SpheresParams {
 impl SpheresParams {
     /// Triangles of one sphere: `20 * 4^subdivisions` (saturating).
     pub fn triangles_per_sphere(&self) -> u64 {
-        4u64.checked_pow(self.subdivisions)
-            .map_or(u64::MAX, |p| p.saturating_mul(20))
+        4u64.checked_pow(self.subdivisions).map_or(u64::MAX, |p| p.saturating_mul(20))
     }
 
     /// The number of triangles [`Generator::generate`] builds.
@@ -85,10 +84,7 @@ impl Generator for SpheresParams {
         if self.subdivisions > MAX_SUBDIVISIONS {
             return Err(ParamError::new(
                 "subdivisions",
-                format!(
-                    "must be at most {MAX_SUBDIVISIONS}, got {}",
-                    self.subdivisions
-                ),
+                format!("must be at most {MAX_SUBDIVISIONS}, got {}", self.subdivisions),
             ));
         }
         triangle_budget("count", self.triangle_count())?;
@@ -138,9 +134,7 @@ impl Generator for SpheresParams {
                     radius + rng.range(self.min_height, self.max_height),
                     rng.range(-half + radius, half - radius),
                 );
-                free = placed
-                    .iter()
-                    .all(|&(c, r)| (c - centre).length() > r + radius);
+                free = placed.iter().all(|&(c, r)| (c - centre).length() > r + radius);
                 if free {
                     break;
                 }
@@ -157,10 +151,8 @@ impl Generator for SpheresParams {
         };
         for (centre, radius) in placed {
             let base = mesh.positions.len() as u32;
-            mesh.positions
-                .extend(unit.positions.iter().map(|&p| centre + radius * p));
-            mesh.triangles
-                .extend(unit.triangles.iter().map(|t| t.map(|v| v + base)));
+            mesh.positions.extend(unit.positions.iter().map(|&p| centre + radius * p));
+            mesh.triangles.extend(unit.triangles.iter().map(|t| t.map(|v| v + base)));
         }
         mesh
     }
@@ -184,10 +176,7 @@ pub(crate) fn icosphere(level: u32) -> Mesh {
         [-t, 0.0, -1.0],
         [-t, 0.0, 1.0],
     ];
-    let mut positions: Vec<DVec3> = raw
-        .iter()
-        .map(|&p| DVec3::from_array(p).normalize())
-        .collect();
+    let mut positions: Vec<DVec3> = raw.iter().map(|&p| DVec3::from_array(p).normalize()).collect();
     let mut triangles: Vec<[u32; 3]> = vec![
         [0, 11, 5],
         [0, 5, 1],
@@ -229,10 +218,7 @@ pub(crate) fn icosphere(level: u32) -> Mesh {
         }
         triangles = finer;
     }
-    Mesh {
-        positions,
-        triangles,
-    }
+    Mesh { positions, triangles }
 }
 
 #[cfg(test)]
@@ -249,14 +235,8 @@ mod tests {
             assert_eq!(mesh.positions.len(), 10 * 4usize.pow(level) + 2);
             assert_watertight(&mesh, 0..n);
             let volume = signed_volume6(&mesh, 0..n) / 6.0;
-            assert!(
-                volume > 0.6 * 4.0 / 3.0 * PI && volume < 4.0 / 3.0 * PI,
-                "{level}: {volume}"
-            );
-            assert!(mesh
-                .positions
-                .iter()
-                .all(|p| (p.length() - 1.0).abs() < 1e-12));
+            assert!(volume > 0.6 * 4.0 / 3.0 * PI && volume < 4.0 / 3.0 * PI, "{level}: {volume}");
+            assert!(mesh.positions.iter().all(|p| (p.length() - 1.0).abs() < 1e-12));
         }
     }
 
@@ -278,9 +258,7 @@ mod tests {
             .positions
             .chunks_exact(vertices)
             .map(|s| {
-                let (lo, hi) = s
-                    .iter()
-                    .fold((s[0], s[0]), |(lo, hi), &q| (lo.min(q), hi.max(q)));
+                let (lo, hi) = s.iter().fold((s[0], s[0]), |(lo, hi), &q| (lo.min(q), hi.max(q)));
                 (0.5 * (lo + hi), 0.5 * (hi.x - lo.x))
             })
             .collect();
@@ -298,19 +276,9 @@ mod tests {
 
     #[test]
     fn seeds_decide_the_placement() {
-        let p = SpheresParams {
-            subdivisions: 0,
-            ..Default::default()
-        };
+        let p = SpheresParams { subdivisions: 0, ..Default::default() };
         assert!(bit_identical(&p.generate(), &p.generate()));
-        assert_ne!(
-            p.generate(),
-            SpheresParams {
-                seed: 2,
-                ..p.clone()
-            }
-            .generate()
-        );
+        assert_ne!(p.generate(), SpheresParams { seed: 2, ..p.clone() }.generate());
     }
 
     #[test]
@@ -319,64 +287,16 @@ mod tests {
         let d = SpheresParams::default;
         assert_eq!(bad(SpheresParams { count: 0, ..d() }), "count");
         assert_eq!(bad(SpheresParams { count: 100, ..d() }), "count");
+        assert_eq!(bad(SpheresParams { subdivisions: 9, ..d() }), "subdivisions");
+        assert_eq!(bad(SpheresParams { subdivisions: u32::MAX, ..d() }), "subdivisions");
         assert_eq!(
-            bad(SpheresParams {
-                subdivisions: 9,
-                ..d()
-            }),
-            "subdivisions"
-        );
-        assert_eq!(
-            bad(SpheresParams {
-                subdivisions: u32::MAX,
-                ..d()
-            }),
-            "subdivisions"
-        );
-        assert_eq!(
-            bad(SpheresParams {
-                count: 100,
-                max_radius: 0.5,
-                subdivisions: 8,
-                ..d()
-            }),
+            bad(SpheresParams { count: 100, max_radius: 0.5, subdivisions: 8, ..d() }),
             "count"
         );
-        assert_eq!(
-            bad(SpheresParams {
-                min_radius: 0.0,
-                ..d()
-            }),
-            "min_radius"
-        );
-        assert_eq!(
-            bad(SpheresParams {
-                max_radius: 0.3,
-                ..d()
-            }),
-            "max_radius"
-        );
-        assert_eq!(
-            bad(SpheresParams {
-                min_radius: 5.0,
-                max_radius: 5.0,
-                ..d()
-            }),
-            "max_radius"
-        );
-        assert_eq!(
-            bad(SpheresParams {
-                min_height: -1.0,
-                ..d()
-            }),
-            "min_height"
-        );
-        assert_eq!(
-            bad(SpheresParams {
-                max_height: f64::NAN,
-                ..d()
-            }),
-            "max_height"
-        );
+        assert_eq!(bad(SpheresParams { min_radius: 0.0, ..d() }), "min_radius");
+        assert_eq!(bad(SpheresParams { max_radius: 0.3, ..d() }), "max_radius");
+        assert_eq!(bad(SpheresParams { min_radius: 5.0, max_radius: 5.0, ..d() }), "max_radius");
+        assert_eq!(bad(SpheresParams { min_height: -1.0, ..d() }), "min_height");
+        assert_eq!(bad(SpheresParams { max_height: f64::NAN, ..d() }), "max_height");
     }
 }

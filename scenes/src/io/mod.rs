@@ -123,39 +123,26 @@ pub(crate) struct Syntax {
 impl Syntax {
     /// A complaint about 1-based line `line`.
     fn at(line: usize, message: impl Into<String>) -> Self {
-        Self {
-            line: Some(line),
-            message: message.into(),
-        }
+        Self { line: Some(line), message: message.into() }
     }
 
     /// A complaint that no single line is to blame for.
     fn whole(message: impl Into<String>) -> Self {
-        Self {
-            line: None,
-            message: message.into(),
-        }
+        Self { line: None, message: message.into() }
     }
 
     fn into_error(self, path: &Path) -> LoadError {
-        LoadError::Parse {
-            path: path.to_owned(),
-            line: self.line,
-            message: self.message,
-        }
+        LoadError::Parse { path: path.to_owned(), line: self.line, message: self.message }
     }
 }
 
 /// Loads the mesh in `path`, choosing the format by the extension (case-insensitive `.obj`,
 /// `.off`, `.ply`).
 pub fn load_mesh(path: &Path) -> Result<Mesh, LoadError> {
-    let format = MeshFormat::from_path(path).ok_or_else(|| LoadError::UnsupportedFormat {
-        path: path.to_owned(),
-    })?;
-    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
-        path: path.to_owned(),
-        source,
-    })?;
+    let format = MeshFormat::from_path(path)
+        .ok_or_else(|| LoadError::UnsupportedFormat { path: path.to_owned() })?;
+    let bytes =
+        std::fs::read(path).map_err(|source| LoadError::Io { path: path.to_owned(), source })?;
     load_mesh_from_bytes(&bytes, format, path)
 }
 
@@ -171,10 +158,7 @@ pub fn load_mesh_from_bytes(
         MeshFormat::Ply => ply::parse(bytes),
     };
     let mesh = parsed.map_err(|e| e.into_error(name))?;
-    mesh.validate().map_err(|source| LoadError::Invalid {
-        path: name.to_owned(),
-        source,
-    })?;
+    mesh.validate().map_err(|source| LoadError::Invalid { path: name.to_owned(), source })?;
     Ok(mesh)
 }
 
@@ -186,9 +170,8 @@ fn last_line(text: &str) -> usize {
 
 /// Parses a coordinate, rejecting what is not a number and what is not finite.
 fn coordinate(token: &str, line: usize) -> Result<f64, Syntax> {
-    let value: f64 = token
-        .parse()
-        .map_err(|_| Syntax::at(line, format!("malformed number `{token}`")))?;
+    let value: f64 =
+        token.parse().map_err(|_| Syntax::at(line, format!("malformed number `{token}`")))?;
     if !value.is_finite() {
         return Err(Syntax::at(line, format!("non-finite coordinate `{token}`")));
     }

@@ -21,10 +21,7 @@ use glam::DVec3;
 /// Parses an OBJ file (not yet validated as a mesh).
 pub(crate) fn parse(bytes: &[u8]) -> Result<Mesh, Syntax> {
     let text = String::from_utf8_lossy(bytes);
-    let total = text
-        .lines()
-        .filter(|line| words(line).next() == Some("v"))
-        .count();
+    let total = text.lines().filter(|line| words(line).next() == Some("v")).count();
 
     // The geometry, checked, for tobj; other lines become blank so that line numbers stay.
     let mut geometry = String::with_capacity(text.len());
@@ -87,20 +84,15 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<Mesh, Syntax> {
             .map_err(|_| Syntax::whole("more than 2^32 vertices"))?;
         let (positions, indices) = (&model.mesh.positions, &model.mesh.indices);
         if positions.len() % 3 != 0 || indices.len() % 3 != 0 {
-            return Err(Syntax::whole(
-                "OBJ: tobj returned incomplete vertices or triangles",
-            ));
+            return Err(Syntax::whole("OBJ: tobj returned incomplete vertices or triangles"));
         }
         mesh.positions.extend(
             // tobj's feature `use_f64` makes these `f64`, parsed as written.
-            positions
-                .chunks_exact(3)
-                .map(|p| DVec3::new(p[0], p[1], p[2])),
+            positions.chunks_exact(3).map(|p| DVec3::new(p[0], p[1], p[2])),
         );
         for t in indices.chunks_exact(3) {
             let corner = |k: usize| {
-                base.checked_add(t[k])
-                    .ok_or_else(|| Syntax::whole("more than 2^32 vertices"))
+                base.checked_add(t[k]).ok_or_else(|| Syntax::whole("more than 2^32 vertices"))
             };
             mesh.triangles.push([corner(0)?, corner(1)?, corner(2)?]);
         }
@@ -120,11 +112,7 @@ fn position_index(word: &str, line: usize, defined: usize, total: usize) -> Resu
     let mut parts = word.split('/');
     let position = parts.next().unwrap_or("");
     let others: Vec<&str> = parts.collect();
-    if others.len() > 2
-        || others
-            .iter()
-            .any(|p| !p.is_empty() && p.parse::<i64>().is_err())
-    {
+    if others.len() > 2 || others.iter().any(|p| !p.is_empty() && p.parse::<i64>().is_err()) {
         return Err(malformed());
     }
     let index: i64 = position.parse().map_err(|_| malformed())?;
@@ -199,8 +187,6 @@ mod tests {
             let e = err(&format!("{base}{tail}"));
             assert_eq!(e.line, Some(line), "{tail:?}: {e:?}");
         }
-        assert!(err("f 1 2 4\nv 0 0 0\nv 1 0 0\nv 0 1 0\n")
-            .message
-            .contains("3 vertices"));
+        assert!(err("f 1 2 4\nv 0 0 0\nv 1 0 0\nv 0 1 0\n").message.contains("3 vertices"));
     }
 }

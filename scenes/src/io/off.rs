@@ -34,11 +34,7 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<Mesh, Syntax> {
     let eof = |what: String| Syntax::at(end.max(1), format!("unexpected end of file: {what}"));
 
     let Some((header_line, mut tokens)) = lines.next() else {
-        let what = if text.trim().is_empty() {
-            "empty file"
-        } else {
-            "only comments"
-        };
+        let what = if text.trim().is_empty() { "empty file" } else { "only comments" };
         return Err(Syntax::whole(format!("{what}: no OFF header or counts")));
     };
     // A header keyword is any first word that is not a number.
@@ -51,27 +47,20 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<Mesh, Syntax> {
             return Err(Syntax::at(header_line, "binary OFF is not supported"));
         }
         if tokens.peek().is_none() {
-            (counts_line, tokens) = lines
-                .next()
-                .ok_or_else(|| eof("no counts line after the header".into()))?;
+            (counts_line, tokens) =
+                lines.next().ok_or_else(|| eof("no counts line after the header".into()))?;
         }
     }
     let counts: Vec<&str> = tokens.collect();
     if !(2..=3).contains(&counts.len()) {
         return Err(Syntax::at(
             counts_line,
-            format!(
-                "expected the counts `vertices faces edges`, found {} values",
-                counts.len()
-            ),
+            format!("expected the counts `vertices faces edges`, found {} values", counts.len()),
         ));
     }
     let count = |token: &str| {
         token.parse::<usize>().map_err(|_| {
-            Syntax::at(
-                counts_line,
-                format!("malformed count `{token}` (expected an integer ≥ 0)"),
-            )
+            Syntax::at(counts_line, format!("malformed count `{token}` (expected an integer ≥ 0)"))
         })
     };
     let (nv, nf) = (count(counts[0])?, count(counts[1])?);
@@ -79,18 +68,14 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<Mesh, Syntax> {
         count(ne)?;
     }
     if u32::try_from(nv).is_err() {
-        return Err(Syntax::at(
-            counts_line,
-            format!("{nv} vertices are more than 2^32"),
-        ));
+        return Err(Syntax::at(counts_line, format!("{nv} vertices are more than 2^32")));
     }
 
     // Capacities are bounded by the input size so that a lying count cannot exhaust memory.
     let mut positions = Vec::with_capacity(nv.min(bytes.len() / 6));
     for i in 0..nv {
-        let (line, tokens) = lines
-            .next()
-            .ok_or_else(|| eof(format!("read {i} of {nv} vertices")))?;
+        let (line, tokens) =
+            lines.next().ok_or_else(|| eof(format!("read {i} of {nv} vertices")))?;
         let xyz: Vec<&str> = tokens.take(3).collect();
         if xyz.len() < 3 {
             return Err(Syntax::at(
@@ -108,15 +93,11 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<Mesh, Syntax> {
     let mut triangles = Vec::with_capacity(nf.min(bytes.len() / 8));
     let mut polygon = Vec::new();
     for f in 0..nf {
-        let (line, mut tokens) = lines
-            .next()
-            .ok_or_else(|| eof(format!("read {f} of {nf} faces")))?;
+        let (line, mut tokens) =
+            lines.next().ok_or_else(|| eof(format!("read {f} of {nf} faces")))?;
         let n_token = tokens.next().unwrap_or("");
         let n: usize = n_token.parse().map_err(|_| {
-            Syntax::at(
-                line,
-                format!("malformed vertex count `{n_token}` of face {f}"),
-            )
+            Syntax::at(line, format!("malformed vertex count `{n_token}` of face {f}"))
         })?;
         if n < 3 {
             return Err(Syntax::at(
@@ -127,10 +108,7 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<Mesh, Syntax> {
         polygon.clear();
         for k in 0..n {
             let token = tokens.next().ok_or_else(|| {
-                Syntax::at(
-                    line,
-                    format!("face {f} announces {n} vertices but lists {k}"),
-                )
+                Syntax::at(line, format!("face {f} announces {n} vertices but lists {k}"))
             })?;
             let index: i64 = token
                 .parse()
@@ -147,10 +125,7 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<Mesh, Syntax> {
         }
         fan(&polygon, &mut triangles);
     }
-    Ok(Mesh {
-        positions,
-        triangles,
-    })
+    Ok(Mesh { positions, triangles })
 }
 
 /// Checks the header keyword: `OFF` with optional prefixes `ST`, `C`, `N` in that order.
@@ -162,10 +137,7 @@ fn header(keyword: &str, line: usize) -> Result<(), Syntax> {
         ));
     };
     if prefix.contains('4') || prefix.contains('n') {
-        return Err(Syntax::at(
-            line,
-            format!("`{keyword}`: only 3-dimensional OFF is supported"),
-        ));
+        return Err(Syntax::at(line, format!("`{keyword}`: only 3-dimensional OFF is supported")));
     }
     let rest = prefix.strip_prefix("ST").unwrap_or(prefix);
     let rest = rest.strip_prefix('C').unwrap_or(rest);
@@ -192,10 +164,7 @@ mod tests {
     fn reads_a_tetrahedron() {
         let mesh = parse(TETRA.as_bytes()).expect("valid");
         assert_eq!(mesh.positions.len(), 4);
-        assert_eq!(
-            mesh.triangles,
-            vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
-        );
+        assert_eq!(mesh.triangles, vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]);
         assert_eq!(mesh.positions[3], DVec3::Z);
     }
 
@@ -203,15 +172,9 @@ mod tests {
     fn tolerates_variants_comments_and_merged_header() {
         let text = "# made by hand\nCOFF 3 1 0\n\n0 0 0 255 0 0 255  # red\n1 0 0 0 255 0 255\n\
                     0 1 0 0 0 255 255\n3 0 1 2 0.5 0.5 0.5\n";
-        assert_eq!(
-            parse(text.as_bytes()).expect("valid").triangles,
-            vec![[0, 1, 2]]
-        );
+        assert_eq!(parse(text.as_bytes()).expect("valid").triangles, vec![[0, 1, 2]]);
         let headerless = "3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
-        assert_eq!(
-            parse(headerless.as_bytes()).expect("valid").triangles.len(),
-            1
-        );
+        assert_eq!(parse(headerless.as_bytes()).expect("valid").triangles.len(), 1);
         let noff = "NOFF\n3 1\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n3 0 1 2\n";
         assert_eq!(parse(noff.as_bytes()).expect("valid").triangles.len(), 1);
     }
@@ -225,40 +188,19 @@ mod tests {
 
     #[test]
     fn errors_name_the_line() {
-        assert_eq!(
-            err(""),
-            Syntax::whole("empty file: no OFF header or counts")
-        );
+        assert_eq!(err(""), Syntax::whole("empty file: no OFF header or counts"));
         assert_eq!(err("OFF\n3 1\n0 0 0\n1 x 0\n").line, Some(4));
-        assert_eq!(
-            err("OFF\n3 1\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n").line,
-            Some(4)
-        );
-        assert_eq!(
-            err("OFF\n3 1\n0 0 0\n1 0 0\n0 1 inf\n3 0 1 2\n").line,
-            Some(5)
-        );
+        assert_eq!(err("OFF\n3 1\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n").line, Some(4));
+        assert_eq!(err("OFF\n3 1\n0 0 0\n1 0 0\n0 1 inf\n3 0 1 2\n").line, Some(5));
         assert_eq!(err("OFF\n3 1\n0 0 0\n1 0\n0 1 0\n3 0 1 2\n").line, Some(4));
-        assert_eq!(
-            err("OFF\n3 1\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n").line,
-            Some(6)
-        );
-        assert_eq!(
-            err("OFF\n3 1\n0 0 0\n1 0 0\n0 1 0\n3 0 1 -1\n").line,
-            Some(6)
-        );
+        assert_eq!(err("OFF\n3 1\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n").line, Some(6));
+        assert_eq!(err("OFF\n3 1\n0 0 0\n1 0 0\n0 1 0\n3 0 1 -1\n").line, Some(6));
         assert_eq!(err("OFF\n3 1\n0 0 0\n1 0 0\n0 1 0\n2 0 1\n").line, Some(6));
-        assert_eq!(
-            err("OFF\n3 1\n0 0 0\n1 0 0\n0 1 0\n4 0 1 2\n").line,
-            Some(6)
-        );
+        assert_eq!(err("OFF\n3 1\n0 0 0\n1 0 0\n0 1 0\n4 0 1 2\n").line, Some(6));
         assert_eq!(err("OFF\n3 1 0 7\n").line, Some(2));
         assert_eq!(err("OFF\n3 -1 0\n").line, Some(2));
         assert_eq!(err("OFF\n3 1\n0 0 0\n1 0 0\n").line, Some(4));
-        assert_eq!(
-            err("OFF\n3 1\n0 0 0\n1 0 0\n0 1 0\n\n# no faces\n").line,
-            Some(7)
-        );
+        assert_eq!(err("OFF\n3 1\n0 0 0\n1 0 0\n0 1 0\n\n# no faces\n").line, Some(7));
         assert_eq!(err("OFF\n").line, Some(1));
         assert_eq!(err("PLY\n3 1 0\n").line, Some(1));
         assert!(err("4OFF\n").message.contains("3-dimensional"));

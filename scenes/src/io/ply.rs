@@ -154,10 +154,7 @@ impl Header {
                 .map_err(|_| Syntax::at(line, "the header holds a line that is not text"))?;
             if line == 1 {
                 if text.trim() != "ply" {
-                    return Err(Syntax::at(
-                        1,
-                        "not a PLY file: the first line must be `ply`",
-                    ));
+                    return Err(Syntax::at(1, "not a PLY file: the first line must be `ply`"));
                 }
                 continue;
             }
@@ -214,11 +211,7 @@ impl Header {
                         [ty, name] if *ty != "list" => (name, Kind::Scalar(scalar(ty)?)),
                         _ => return Err(Syntax::at(line, "malformed `property` line")),
                     };
-                    element.properties.push(Property {
-                        name: (*name).to_owned(),
-                        kind,
-                        line,
-                    });
+                    element.properties.push(Property { name: (*name).to_owned(), kind, line });
                 }
                 ["end_header"] => break,
                 [keyword, ..] => {
@@ -231,12 +224,7 @@ impl Header {
         }
         let encoding =
             encoding.ok_or_else(|| Syntax::at(line, "the header has no `format` line"))?;
-        Ok(Self {
-            encoding,
-            elements,
-            body: pos,
-            lines: line,
-        })
+        Ok(Self { encoding, elements, body: pos, lines: line })
     }
 }
 
@@ -255,16 +243,9 @@ struct Plan {
 impl Plan {
     fn new(header: &Header) -> Result<Self, Syntax> {
         let find = |name: &str| -> Result<usize, Syntax> {
-            let mut found = header
-                .elements
-                .iter()
-                .enumerate()
-                .filter(|(_, e)| e.name == name);
+            let mut found = header.elements.iter().enumerate().filter(|(_, e)| e.name == name);
             let (index, _) = found.next().ok_or_else(|| {
-                Syntax::at(
-                    header.lines,
-                    format!("the header declares no `{name}` element"),
-                )
+                Syntax::at(header.lines, format!("the header declares no `{name}` element"))
             })?;
             if let Some((_, again)) = found.next() {
                 return Err(Syntax::at(again.line, format!("a second `{name}` element")));
@@ -284,16 +265,10 @@ impl Plan {
                 .enumerate()
                 .find(|(_, p)| p.name == axis)
                 .ok_or_else(|| {
-                    Syntax::at(
-                        vertices.line,
-                        format!("element `vertex` has no property `{axis}`"),
-                    )
+                    Syntax::at(vertices.line, format!("element `vertex` has no property `{axis}`"))
                 })?;
             if !matches!(property.kind, Kind::Scalar(_)) {
-                return Err(Syntax::at(
-                    property.line,
-                    format!("`{axis}` must be a scalar"),
-                ));
+                return Err(Syntax::at(property.line, format!("`{axis}` must be a scalar")));
             }
             *slot = index;
         }
@@ -304,10 +279,7 @@ impl Plan {
             .enumerate()
             .find(|(_, p)| p.name == "vertex_indices" || p.name == "vertex_index")
             .ok_or_else(|| {
-                Syntax::at(
-                    faces.line,
-                    "element `face` has no property `vertex_indices`",
-                )
+                Syntax::at(faces.line, "element `face` has no property `vertex_indices`")
             })?;
         match property.kind {
             Kind::List(_, item) if item.is_integer() => {}
@@ -318,13 +290,7 @@ impl Plan {
                 ))
             }
         }
-        Ok(Self {
-            vertex,
-            xyz,
-            face,
-            indices,
-            vertex_count: vertices.count,
-        })
+        Ok(Self { vertex, xyz, face, indices, vertex_count: vertices.count })
     }
 }
 
@@ -425,10 +391,7 @@ fn read_body(
             body.end()?;
         }
     }
-    Ok(Mesh {
-        positions,
-        triangles,
-    })
+    Ok(Mesh { positions, triangles })
 }
 
 /// An ASCII body: one record per line.
@@ -490,10 +453,7 @@ impl Body for Ascii<'_> {
     }
 
     fn error(&self, message: &str) -> Syntax {
-        Syntax::at(
-            self.line,
-            format!("{} {}: {message}", self.record.element, self.record.index),
-        )
+        Syntax::at(self.line, format!("{} {}: {message}", self.record.element, self.record.index))
     }
 }
 
@@ -550,9 +510,7 @@ impl Body for Binary<'_> {
     }
 
     fn skip(&mut self, ty: Scalar, n: usize) -> Result<(), Syntax> {
-        let end = n
-            .checked_mul(ty.size())
-            .and_then(|len| self.pos.checked_add(len));
+        let end = n.checked_mul(ty.size()).and_then(|len| self.pos.checked_add(len));
         match end {
             Some(end) if end <= self.data.len() => {
                 self.pos = end;
@@ -610,43 +568,25 @@ mod tests {
             )
         };
         for big in [false, true] {
-            let mut bytes = header(if big {
-                "binary_big_endian"
-            } else {
-                "binary_little_endian"
-            })
-            .into_bytes();
+            let mut bytes =
+                header(if big { "binary_big_endian" } else { "binary_little_endian" }).into_bytes();
             for (x, y, z) in [(0.5f64, 0.0f32, 0i16), (1.0, 0.0, 0), (0.0, 1.0, -2)] {
                 if big {
                     bytes.extend(
-                        x.to_be_bytes()
-                            .into_iter()
-                            .chain(y.to_be_bytes())
-                            .chain(z.to_be_bytes()),
+                        x.to_be_bytes().into_iter().chain(y.to_be_bytes()).chain(z.to_be_bytes()),
                     );
                 } else {
                     bytes.extend(
-                        x.to_le_bytes()
-                            .into_iter()
-                            .chain(y.to_le_bytes())
-                            .chain(z.to_le_bytes()),
+                        x.to_le_bytes().into_iter().chain(y.to_le_bytes()).chain(z.to_le_bytes()),
                     );
                 }
             }
             bytes.push(3);
             for i in [0u32, 1, 2] {
-                bytes.extend(if big {
-                    i.to_be_bytes()
-                } else {
-                    i.to_le_bytes()
-                });
+                bytes.extend(if big { i.to_be_bytes() } else { i.to_le_bytes() });
             }
             let mesh = parse(&bytes).expect("valid");
-            assert_eq!(
-                mesh.positions[2],
-                DVec3::new(0.0, 1.0, -2.0),
-                "big endian: {big}"
-            );
+            assert_eq!(mesh.positions[2], DVec3::new(0.0, 1.0, -2.0), "big endian: {big}");
             assert_eq!(mesh.triangles, vec![[0, 1, 2]]);
             let e = parse(&bytes[..bytes.len() - 1]).expect_err("truncated");
             assert!(
@@ -659,13 +599,7 @@ mod tests {
     #[test]
     fn errors_name_the_line() {
         let body = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
-        assert_eq!(
-            parse(format!("{HEAD}{body}").as_bytes())
-                .expect("valid")
-                .triangles
-                .len(),
-            1
-        );
+        assert_eq!(parse(format!("{HEAD}{body}").as_bytes()).expect("valid").triangles.len(), 1);
         for (text, line) in [
             (format!("{HEAD}0 0 0\n1 x 0\n0 1 0\n3 0 1 2\n"), 12),
             (format!("{HEAD}0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n"), 12),
@@ -678,17 +612,8 @@ mod tests {
             (format!("{HEAD}0 0 0\n1 0 0\n0 1 0\n4 0 1 2\n"), 14),
             (format!("{HEAD}0 0 0\n1 0 0\n0 1 0\n"), 13),
             (HEAD.replace("property float z\n", ""), 4),
-            (
-                HEAD.replace(
-                    "element face 1\nproperty list uchar int vertex_indices\n",
-                    "",
-                ),
-                8,
-            ),
-            (
-                HEAD.replace("list uchar int vertex_indices", "int vertex_indices"),
-                9,
-            ),
+            (HEAD.replace("element face 1\nproperty list uchar int vertex_indices\n", ""), 8),
+            (HEAD.replace("list uchar int vertex_indices", "int vertex_indices"), 9),
             (HEAD.replace("list uchar int", "list float int"), 9),
             (HEAD.replace("float y", "real y"), 6),
             (HEAD.replace("ascii", "binary"), 2),
