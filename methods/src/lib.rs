@@ -9,6 +9,7 @@ pub mod depth_map;
 pub mod frame;
 pub mod gbuffer;
 pub mod method;
+pub mod pattern;
 pub mod raster;
 pub mod registry;
 pub mod sm;

@@ -2,6 +2,7 @@
 
 use crate::{
     method::{MethodError, ShadowMethod},
+    pattern::PatternKind,
     sm::{SmOptions, StandardShadowMap},
 };
 
@@ -20,6 +21,10 @@ pub struct MethodOptions {
     pub slope_bias: Option<f64>,
     /// Bound of the slope ratio (`--max-slope`).
     pub max_slope: Option<f64>,
+    /// Sub-samples per pixel (`--rate`), for methods that supersample.
+    pub rate: Option<u32>,
+    /// Sub-sample pattern (`--pattern`), for methods that supersample.
+    pub pattern: Option<PatternKind>,
 }
 
 /// The method called `name`, configured by `options` and validated.
