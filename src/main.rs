@@ -4,11 +4,12 @@
 //! codes: 0 success, 2 bad input (one message naming the file, line, key or flag), 1 internal
 //! failure.
 
+use analysis::{error_image, Metrics};
 use anyhow::Context;
 use clap::{Parser, Subcommand, ValueEnum};
 use instrumentation::{Recorder, RunRecord};
-use methods::{Frame, MethodOptions};
-use std::path::PathBuf;
+use methods::{pattern::PatternKind, Frame, MethodOptions, ShadowMethod, Visibility};
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 /// Research workbench for shadow-map antialiasing: runs the published techniques on the same
@@ -31,8 +32,50 @@ enum Command {
         #[arg(long, value_name = "NAME", conflicts_with = "json")]
         toml: Option<String>,
     },
-    /// Run one method on one scene; write visibility.exr, shadow.png and run.json.
+    /// Run one method (or a reference: `exact`, `raytrace`) on one scene; write
+    /// visibility.exr, shadow.png and run.json.
     Render(RenderArgs),
+    /// Run one method and a reference on the same frame; print the error metrics and write
+    /// error.png (10x absolute error), error_boundary.png, metrics.json and the method's
+    /// visibility.exr, shadow.png and run.json.
+    Compare(CompareArgs),
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum Pattern {
+    /// Regular grid, shifted so that one sample is at the pixel centre.
+    Grid,
+    /// Rotated grid (N-rooks lattice) with one sample at the pixel centre.
+    Rotated,
+}
+
+impl From<Pattern> for PatternKind {
+    fn from(p: Pattern) -> Self {
+        match p {
+            Pattern::Grid => PatternKind::Grid,
+            Pattern::Rotated => PatternKind::Rotated,
+        }
+    }
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum ReferenceName {
+    /// Exact lit area per pixel on the planar receiver (pixels whose square sees it).
+    Exact,
+    /// Ray-traced supersampling at --ref-rate sub-samples per pixel.
+    Raytrace,
+}
+
+#[derive(clap::Args)]
+struct CompareArgs {
+    #[command(flatten)]
+    render: RenderArgs,
+    /// The ground truth to compare against.
+    #[arg(long, value_enum, default_value_t = ReferenceName::Exact)]
+    reference: ReferenceName,
+    /// Sub-samples per pixel of the `raytrace` reference (1, 4, 8, ..., 1024); default 256.
+    #[arg(long, value_name = "N")]
+    ref_rate: Option<u32>,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -49,9 +92,17 @@ struct RenderArgs {
     /// file (.obj, .off, .ply) placed over a ground plane with a default light and camera.
     #[arg(long)]
     scene: String,
-    /// Method: `sm` (standard shadow map).
+    /// Method: `sm` (standard shadow map), or a reference run as a method: `exact`,
+    /// `raytrace` (see `--rate`, `--pattern`).
     #[arg(long)]
     method: String,
+    /// Sub-samples per pixel for methods that supersample and for `raytrace`:
+    /// 1, 4, 8, 16, 32, 64, 128 (up to 1024 for `raytrace`); default 1.
+    #[arg(long, value_name = "N")]
+    rate: Option<u32>,
+    /// Sub-sample pattern, shared by every method at equal rate; default grid.
+    #[arg(long, value_enum)]
+    pattern: Option<Pattern>,
     /// Shadow map resolution R (the map is R x R texels); default 1024.
     #[arg(long, value_name = "R")]
     map_res: Option<u32>,
@@ -161,7 +212,15 @@ fn scenes(json: bool, toml: Option<String>) -> Result<(), Failure> {
     Ok(())
 }
 
-fn render(a: RenderArgs) -> Result<(), Failure> {
+/// A scene, a technique and the frame size, checked.
+struct Job {
+    scene: scenes::Scene,
+    technique: Box<dyn ShadowMethod>,
+    width: u32,
+    height: u32,
+}
+
+fn job(a: &RenderArgs) -> Result<Job, Failure> {
     if a.device == Device::Gpu {
         return Err(input(anyhow::anyhow!(
             "--device gpu: the GPU path is not available yet; use --device cpu"
@@ -173,8 +232,20 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
         constant_bias: a.constant_bias,
         slope_bias: a.slope_bias,
         max_slope: a.max_slope,
+        rate: a.rate,
+        pattern: a.pattern.map(PatternKind::from),
     };
-    let method = methods::method(&a.method, &options).map_err(input)?;
+    let technique = analysis::registry::technique(&a.method, &options).map_err(input)?;
+    let params = technique.params();
+    for (flag, given, key) in [
+        ("--rate", a.rate.is_some(), "rate"),
+        ("--pattern", a.pattern.is_some(), "pattern"),
+        ("--map-res", a.map_res.is_some(), "map_res"),
+    ] {
+        if given && !params.contains_key(key) {
+            eprintln!("note: {} does not use {flag}; ignored", technique.name());
+        }
+    }
     let width = a.width.unwrap_or(scene.width);
     let height = a.height.unwrap_or(scene.height);
     for (flag, v) in [("--width", width), ("--height", height)] {
@@ -182,16 +253,22 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
             return Err(input(anyhow::anyhow!("{flag}: must be in 1..=16384, got {v}")));
         }
     }
+    Ok(Job { scene, technique, width, height })
+}
 
-    let mut rec = Recorder::default();
-    let frame = Frame::new(&scene, width, height, &mut rec);
-    let visibility = method.run(&frame, &mut rec).map_err(input)?;
+/// Runs the job's technique on `frame`, returning its visibility and run record.
+fn run(
+    job: &Job,
+    frame: &Frame<'_>,
+    mut rec: Recorder,
+) -> Result<(Visibility, RunRecord), Failure> {
+    let visibility = job.technique.run(frame, &mut rec).map_err(input)?;
     let record = RunRecord {
-        scene: scene.name.clone(),
-        method: method.name().to_owned(),
-        params: method.params(),
-        width,
-        height,
+        scene: job.scene.name.clone(),
+        method: job.technique.name().to_owned(),
+        params: job.technique.params(),
+        width: job.width,
+        height: job.height,
         effects: frame.effects.names().into_iter().map(String::from).collect(),
         counters: rec.counters,
         total_ms: rec.stages.total_ms(),
@@ -199,14 +276,40 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
         skipped_stages: rec.stages.skipped,
         notes: rec.notes,
     };
+    Ok((visibility, record))
+}
 
-    let out = a.out.unwrap_or_else(|| {
-        PathBuf::from(format!("shadowbench-out/{}-{}", scene.name, method.name()))
+fn out_dir(a: &RenderArgs, job: &Job, suffix: &str) -> Result<PathBuf, Failure> {
+    let out = a.out.clone().unwrap_or_else(|| {
+        PathBuf::from(format!(
+            "shadowbench-out/{}-{}{suffix}",
+            job.scene.name,
+            job.technique.name()
+        ))
     });
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
-    reports::write_visibility_exr(&out.join("visibility.exr"), &visibility)?;
-    reports::write_shadow_png(&out.join("shadow.png"), &frame, &visibility)?;
-    reports::write_run_json(&out.join("run.json"), &record)?;
+    Ok(out)
+}
+
+fn write_run(
+    out: &Path,
+    frame: &Frame<'_>,
+    v: &Visibility,
+    record: &RunRecord,
+) -> Result<(), Failure> {
+    reports::write_visibility_exr(&out.join("visibility.exr"), v)?;
+    reports::write_shadow_png(&out.join("shadow.png"), frame, v)?;
+    reports::write_run_json(&out.join("run.json"), record)?;
+    Ok(())
+}
+
+fn render(a: RenderArgs) -> Result<(), Failure> {
+    let job = job(&a)?;
+    let mut rec = Recorder::default();
+    let frame = Frame::new(&job.scene, job.width, job.height, &mut rec);
+    let (visibility, record) = run(&job, &frame, rec)?;
+    let out = out_dir(&a, &job, "")?;
+    write_run(&out, &frame, &visibility, &record)?;
     if a.json {
         println!("{}", serde_json::to_string_pretty(&record)?);
     }
@@ -214,11 +317,96 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
         "{} on {} at {}x{}: {:.1} ms; wrote {}",
         record.method,
         record.scene,
-        width,
-        height,
+        job.width,
+        job.height,
         record.total_ms,
         out.display()
     );
+    Ok(())
+}
+
+fn compare(c: CompareArgs) -> Result<(), Failure> {
+    let a = &c.render;
+    let job = job(a)?;
+    let (ref_name, ref_rate) = match c.reference {
+        ReferenceName::Exact => ("exact", None),
+        ReferenceName::Raytrace => {
+            ("raytrace", Some(c.ref_rate.unwrap_or(analysis::registry::DEFAULT_REF_RATE)))
+        }
+    };
+    if c.ref_rate.is_some() && ref_rate.is_none() {
+        eprintln!("note: exact does not use --ref-rate; ignored");
+    }
+    let pattern = a.pattern.map(PatternKind::from).unwrap_or_default();
+    let reference =
+        analysis::registry::reference(ref_name, ref_rate.unwrap_or(1), pattern).map_err(input)?;
+
+    let mut rec = Recorder::default();
+    let frame = Frame::new(&job.scene, job.width, job.height, &mut rec);
+    let (visibility, record) = run(&job, &frame, rec)?;
+    let mut ref_rec = Recorder::default();
+    let truth = reference.evaluate(&frame, &mut ref_rec).map_err(input)?;
+    let metrics = Metrics::compare(&visibility, &truth.lit, &truth.evaluated);
+    let flip = analysis::flip::flip_mean(&visibility, &truth.lit, &truth.evaluated);
+
+    let out = out_dir(a, &job, &format!("-vs-{ref_name}"))?;
+    write_run(&out, &frame, &visibility, &record)?;
+    let boundary: Vec<bool> =
+        truth.lit.iter().zip(&truth.evaluated).map(|(&r, &e)| e && r > 0.0 && r < 1.0).collect();
+    for (name, mask) in [("error.png", &truth.evaluated), ("error_boundary.png", &boundary)] {
+        let path = out.join(name);
+        error_image(&visibility, &truth.lit, mask)
+            .save(&path)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    let mut json = serde_json::json!({
+        "scene": record.scene,
+        "method": record.method,
+        "params": record.params,
+        "width": job.width,
+        "height": job.height,
+        "reference": ref_name,
+        "ref_rate": ref_rate,
+        "method_ms": record.total_ms,
+        "reference_ms": ref_rec.stages.total_ms(),
+        "flip_mean": flip,
+    });
+    if let (Some(obj), serde_json::Value::Object(m)) =
+        (json.as_object_mut(), serde_json::to_value(metrics)?)
+    {
+        obj.extend(m);
+    }
+    let text = serde_json::to_string_pretty(&json)?;
+    let path = out.join("metrics.json");
+    std::fs::write(&path, format!("{text}\n"))
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    if a.json {
+        println!("{text}");
+    } else {
+        println!(
+            "{} on {} at {}x{} against {}{}",
+            record.method,
+            record.scene,
+            job.width,
+            job.height,
+            ref_name,
+            ref_rate.map_or(String::new(), |r| format!(" at {r} samples/pixel"))
+        );
+        println!("  evaluated pixels        {}", metrics.evaluated_pixels);
+        println!("  mean abs error          {:.6}", metrics.mean_abs_error);
+        println!("  rmse                    {:.6}", metrics.rmse);
+        println!("  max abs error           {:.6}", metrics.max_abs_error);
+        println!("  pixel match (0.5/255)   {:.4}", metrics.pixel_match);
+        println!("  boundary pixels         {}", metrics.boundary_pixels);
+        println!("  boundary mean abs error {:.6}", metrics.boundary_mean_abs_error);
+        println!("  FLIP mean (whole frame) {:.6}", flip);
+        println!(
+            "  time: method {:.1} ms, reference {:.1} ms",
+            record.total_ms,
+            ref_rec.stages.total_ms()
+        );
+    }
+    eprintln!("wrote {}", out.display());
     Ok(())
 }
 
@@ -227,6 +415,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Scenes { json, toml } => scenes(json, toml),
         Command::Render(a) => render(a),
+        Command::Compare(c) => compare(c),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
