@@ -2,6 +2,7 @@
 //! frame; the light depth map is rendered only when a method asks for it.
 
 use crate::{depth_map::LightDepthMap, gbuffer::render_gbuffer, gbuffer::GBuffer};
+use glam::DVec2;
 use instrumentation::Recorder;
 use scenes::{Effects, Geometry, Projector, Scene};
 
@@ -63,6 +64,12 @@ impl<'s> Frame<'s> {
     /// The span of light-space depths the scene occupies (far minus near of the fitted
     /// frustum), the unit of constant depth biases.
     pub fn light_depth_range(&self, light: &Projector) -> f64 {
+        let (near, far) = self.light_depth_bounds(light);
+        (far - near).max(f64::MIN_POSITIVE)
+    }
+
+    /// The nearest and farthest light depth of the scene's bounding box corners.
+    pub fn light_depth_bounds(&self, light: &Projector) -> (f64, f64) {
         let (lo, hi) = self.scene.bounds();
         let (mut a, mut b) = (f64::INFINITY, f64::NEG_INFINITY);
         for i in 0..8 {
@@ -75,17 +82,30 @@ impl<'s> Frame<'s> {
             a = a.min(d);
             b = b.max(d);
         }
-        (b - a).max(f64::MIN_POSITIVE)
+        (a, b)
     }
 
     /// Renders the light depth map of the casters at `res x res`, as a timed stage.
     pub fn light_depth_map(&self, res: u32, rec: &mut Recorder) -> LightDepthMap {
+        self.jittered_light_depth_map(res, DVec2::ZERO, STAGE_LIGHT_DEPTH_MAP, rec)
+    }
+
+    /// Renders the light depth map of the casters at `res x res` with its sample points moved
+    /// by `shift` texels (a jittered image plane), as a stage timed under `stage`.
+    pub fn jittered_light_depth_map(
+        &self,
+        res: u32,
+        shift: DVec2,
+        stage: &str,
+        rec: &mut Recorder,
+    ) -> LightDepthMap {
         let projector = self.light_projector(res);
-        rec.stages.time(STAGE_LIGHT_DEPTH_MAP, || {
+        rec.stages.time(stage, || {
             LightDepthMap::render(
                 &self.geometry,
                 |t| self.is_caster(t),
                 &projector,
+                shift,
                 &mut rec.counters,
             )
         })
