@@ -92,12 +92,16 @@ struct RenderArgs {
     /// file (.obj, .off, .ply) placed over a ground plane with a default light and camera.
     #[arg(long)]
     scene: String,
-    /// Method: `sm` (standard shadow map), or a reference run as a method: `exact`,
-    /// `raytrace` (see `--rate`, `--pattern`).
+    /// Method: `sm` (standard shadow map); `pcf-reeves` (stochastic PCF of the pixel's
+    /// footprint, see `--rate`, `--seed`); `pcf-bs-2x2`, `pcf-bs-fast-2x2`, `pcf-bs-fast-4x4`
+    /// (Brabec & Seidel's packed PCF, see `--depth-bits`); `pcf-gems16`, `pcf-gems4` (GPU
+    /// Gems' 4x4-region PCF); or a reference run as a method: `exact`, `raytrace` (see
+    /// `--rate`, `--pattern`).
     #[arg(long)]
     method: String,
     /// Sub-samples per pixel for methods that supersample and for `raytrace`:
-    /// 1, 4, 8, 16, 32, 64, 128 (up to 1024 for `raytrace`); default 1.
+    /// 1, 4, 8, 16, 32, 64, 128 (up to 1024 for `raytrace`); default 1. For `pcf-reeves`, the
+    /// jittered samples per pixel footprint (same values); default 16.
     #[arg(long, value_name = "N")]
     rate: Option<u32>,
     /// Sub-sample pattern, shared by every method at equal rate; default grid.
@@ -106,16 +110,25 @@ struct RenderArgs {
     /// Shadow map resolution R (the map is R x R texels); default 1024.
     #[arg(long, value_name = "R")]
     map_res: Option<u32>,
-    /// Constant depth bias as a fraction of the scene's light depth range; default 1e-5.
+    /// Constant depth bias as a fraction of the scene's light depth range; default 1e-5
+    /// (for `pcf-bs-*`: max(1e-5, 2^(1 - depth bits)), the least valid at that precision).
     #[arg(long, value_name = "B")]
     constant_bias: Option<f64>,
-    /// Slope-scaled depth bias in units of the receiver's depth change per texel; default 1.
-    /// Values >= 1 keep lit planes free of shadow acne.
+    /// Slope-scaled depth bias in units of the receiver's depth change over the farthest
+    /// texel a method compares against; default 1. Values >= 1 keep lit planes free of
+    /// shadow acne for every shadow-map method.
     #[arg(long, value_name = "S")]
     slope_bias: Option<f64>,
     /// Upper bound of the receiver slope ratio used by the slope bias; default 10 (about 84°).
     #[arg(long, value_name = "M")]
     max_slope: Option<f64>,
+    /// Bits per stored depth of Brabec & Seidel's depth-as-colour maps: 8, 12, 24 or 32
+    /// (the paper's hardware had 8, at best 12); default 32.
+    #[arg(long, value_name = "BITS")]
+    depth_bits: Option<u32>,
+    /// Seed of stochastic sampling (`pcf-reeves`' jitter); default 0.
+    #[arg(long, value_name = "SEED")]
+    seed: Option<u64>,
     /// Image width in pixels; default: the scene's.
     #[arg(long, value_name = "W")]
     width: Option<u32>,
@@ -234,6 +247,8 @@ fn job(a: &RenderArgs) -> Result<Job, Failure> {
         max_slope: a.max_slope,
         rate: a.rate,
         pattern: a.pattern.map(PatternKind::from),
+        depth_bits: a.depth_bits,
+        seed: a.seed,
     };
     let technique = analysis::registry::technique(&a.method, &options).map_err(input)?;
     let params = technique.params();
@@ -241,6 +256,8 @@ fn job(a: &RenderArgs) -> Result<Job, Failure> {
         ("--rate", a.rate.is_some(), "rate"),
         ("--pattern", a.pattern.is_some(), "pattern"),
         ("--map-res", a.map_res.is_some(), "map_res"),
+        ("--depth-bits", a.depth_bits.is_some(), "depth_bits"),
+        ("--seed", a.seed.is_some(), "seed"),
     ] {
         if given && !params.contains_key(key) {
             eprintln!("note: {} does not use {flag}; ignored", technique.name());

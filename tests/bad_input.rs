@@ -152,6 +152,15 @@ fn bad_flags_and_names_are_named() {
         ),
         (&["render", "--scene", "/no/such/file.obj", "--method", "sm"], "/no/such/file.obj"),
         (&["scenes", "--toml", "no-such-scene"], "no-such-scene"),
+        (
+            &["render", "--scene", "plane-square", "--method", "pcf-bs-2x2", "--depth-bits", "16"],
+            "--depth-bits",
+        ),
+        (&["render", "--scene", "plane-square", "--method", "pcf-reeves", "--rate", "3"], "--rate"),
+        (
+            &["render", "--scene", "plane-square", "--method", "pcf-gems4", "--max-slope", "nan"],
+            "--max-slope",
+        ),
     ];
     for (args, needle) in cases {
         let o = shadowbench(args);

@@ -63,6 +63,8 @@ counters! {
     sampling_points_tested,
     /// Depth comparisons against a shadow map.
     shadow_map_lookups,
+    /// Hardware-style bilinear PCF lookups (four depth compares each, interpolated).
+    bilinear_lookups,
     /// Rays traced (camera and shadow rays).
     rays_traced,
     /// Triangles sent to a rasterizer (camera G-buffer and light maps).

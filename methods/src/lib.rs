@@ -1,15 +1,21 @@
 //! Shadow techniques and the shared kernels they use.
 //!
 //! Kernels: [`raster`] (exact CPU rasterizer), [`gbuffer`] (camera G-buffer), [`depth_map`]
-//! (light depth map), [`frame`] (a scene at one resolution). Techniques, one module each:
-//! [`sm`] (standard shadow map). Every technique implements [`method::ShadowMethod`];
+//! (light depth map), [`depth_test`] (map lookups, bias, depth quantization), [`pattern`]
+//! (sub-pixel sample patterns), [`frame`] (a scene at one resolution). Techniques, one module
+//! each: [`sm`] (standard shadow map), [`pcf_reeves`] (Reeves et al.'s stochastic PCF),
+//! [`pcf_bs`] (Brabec and Seidel's packed PCF), [`pcf_gems`] (GPU Gems' 4x4-region PCF). Every technique implements [`method::ShadowMethod`];
 //! [`registry`] finds them by name.
 
 pub mod depth_map;
+pub mod depth_test;
 pub mod frame;
 pub mod gbuffer;
 pub mod method;
 pub mod pattern;
+pub mod pcf_bs;
+pub mod pcf_gems;
+pub mod pcf_reeves;
 pub mod raster;
 pub mod registry;
 pub mod sm;

@@ -1,14 +1,32 @@
 //! Methods by name, as the command line and the reports name them.
 
 use crate::{
+    depth_test::MapOptions,
     method::{MethodError, ShadowMethod},
     pattern::PatternKind,
-    sm::{SmOptions, StandardShadowMap},
+    pcf_bs::{BrabecSeidelPcf, BsOptions, Variant, DEFAULT_DEPTH_BITS},
+    pcf_gems::{GemsPcf, GemsSamples},
+    pcf_reeves::{ReevesOptions, ReevesPcf},
+    sm::StandardShadowMap,
 };
 
 /// Name and one-line description of every available method.
-pub const METHODS: &[(&str, &str)] =
-    &[("sm", "standard shadow map: one depth test per pixel centre (Williams 1978)")];
+pub const METHODS: &[(&str, &str)] = &[
+    ("sm", "standard shadow map: one depth test per pixel centre (Williams 1978)"),
+    (
+        "pcf-reeves",
+        "percentage-closer filtering of the pixel's footprint, N jittered samples (Reeves et al. \
+         1987)",
+    ),
+    ("pcf-bs-2x2", "PCF 2x2 from four jittered maps packed as RGBA, 5 levels (Brabec & Seidel)"),
+    (
+        "pcf-bs-fast-2x2",
+        "fast PCF: one map, each texel packed with its 2x2 neighbourhood (Brabec & Seidel)",
+    ),
+    ("pcf-bs-fast-4x4", "fast PCF over 4x4 texels in four accumulated passes (Brabec & Seidel)"),
+    ("pcf-gems16", "16 bilinear PCF lookups over a 4x4-texel region (GPU Gems ch. 11)"),
+    ("pcf-gems4", "4 of the 16 lookups, dithered by screen position (GPU Gems ch. 11)"),
+];
 
 /// Options shared by the methods; `None` takes the method's documented default.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -21,26 +39,59 @@ pub struct MethodOptions {
     pub slope_bias: Option<f64>,
     /// Bound of the slope ratio (`--max-slope`).
     pub max_slope: Option<f64>,
-    /// Sub-samples per pixel (`--rate`), for methods that supersample.
+    /// Sub-samples per pixel (`--rate`), for methods that supersample or sample a filter.
     pub rate: Option<u32>,
     /// Sub-sample pattern (`--pattern`), for methods that supersample.
     pub pattern: Option<PatternKind>,
+    /// Bits per stored depth (`--depth-bits`), for depth-as-colour maps.
+    pub depth_bits: Option<u32>,
+    /// Seed of stochastic sampling (`--seed`).
+    pub seed: Option<u64>,
+}
+
+/// The map options given, with `defaults` for those not given; validated.
+fn map_options(options: &MethodOptions, d: MapOptions) -> Result<MapOptions, MethodError> {
+    let o = MapOptions {
+        map_res: options.map_res.unwrap_or(d.map_res),
+        constant_bias: options.constant_bias.unwrap_or(d.constant_bias),
+        slope_bias: options.slope_bias.unwrap_or(d.slope_bias),
+        max_slope: options.max_slope.unwrap_or(d.max_slope),
+    };
+    o.validate()?;
+    Ok(o)
 }
 
 /// The method called `name`, configured by `options` and validated.
 pub fn method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMethod>, MethodError> {
+    let bs = |variant: Variant| -> Result<Box<dyn ShadowMethod>, MethodError> {
+        let depth_bits = options.depth_bits.unwrap_or(DEFAULT_DEPTH_BITS);
+        let d = BsOptions::with_depth_bits(depth_bits);
+        let o = BsOptions { map: map_options(options, d.map)?, depth_bits };
+        o.validate()?;
+        Ok(Box::new(BrabecSeidelPcf { options: o, variant }))
+    };
+    let gems = |samples: GemsSamples| -> Result<Box<dyn ShadowMethod>, MethodError> {
+        Ok(Box::new(GemsPcf { options: map_options(options, MapOptions::default())?, samples }))
+    };
     match name {
-        "sm" => {
-            let d = SmOptions::default();
-            let o = SmOptions {
-                map_res: options.map_res.unwrap_or(d.map_res),
-                constant_bias: options.constant_bias.unwrap_or(d.constant_bias),
-                slope_bias: options.slope_bias.unwrap_or(d.slope_bias),
-                max_slope: options.max_slope.unwrap_or(d.max_slope),
+        "sm" => Ok(Box::new(StandardShadowMap {
+            options: map_options(options, MapOptions::default())?,
+        })),
+        "pcf-reeves" => {
+            let d = ReevesOptions::default();
+            let o = ReevesOptions {
+                map: map_options(options, d.map)?,
+                samples: options.rate.unwrap_or(d.samples),
+                seed: options.seed.unwrap_or(d.seed),
             };
             o.validate()?;
-            Ok(Box::new(StandardShadowMap { options: o }))
+            Ok(Box::new(ReevesPcf { options: o }))
         }
+        "pcf-bs-2x2" => bs(Variant::Stratified2x2),
+        "pcf-bs-fast-2x2" => bs(Variant::Fast2x2),
+        "pcf-bs-fast-4x4" => bs(Variant::Fast4x4),
+        "pcf-gems16" => gems(GemsSamples::Sixteen),
+        "pcf-gems4" => gems(GemsSamples::FourDithered),
         _ => Err(MethodError::InvalidOption {
             option: "--method",
             message: format!(
