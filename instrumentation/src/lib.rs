@@ -71,6 +71,22 @@ counters! {
     triangles_rasterized,
     /// Sample points (pixel or texel centres) tested for coverage by a rasterizer.
     raster_samples_tested,
+    /// Texel-triangle overlaps found by conservative rasterization (SPSM).
+    conservative_fragments,
+    /// Texels holding a triangle after packing (SPSM).
+    packed_texels,
+    /// Texels whose consistent minimum depth lies above the conservative corner depth (SPSM).
+    depth_corrected_texels,
+    /// Pixels lit by a single map lookup (SPSM).
+    lit_by_one_lookup,
+    /// Pixels shadowed by the triangle of their own texel (SPSM).
+    shadowed_by_one_lookup,
+    /// Pixels shadowed by a triangle of the 3x3 texel neighbourhood (SPSM).
+    shadowed_by_neighbourhood,
+    /// Uncertain pixels decided by a recovered silhouette function (SPSM).
+    recovered_pixels,
+    /// Sub-samples evaluated against a recovered silhouette (SPSM antialiasing).
+    antialiased_samples,
 }
 
 impl std::ops::AddAssign<&Counters> for Counters {
