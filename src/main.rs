@@ -95,13 +95,15 @@ struct RenderArgs {
     /// Method: `sm` (standard shadow map); `pcf-reeves` (stochastic PCF of the pixel's
     /// footprint, see `--rate`, `--seed`); `pcf-bs-2x2`, `pcf-bs-fast-2x2`, `pcf-bs-fast-4x4`
     /// (Brabec & Seidel's packed PCF, see `--depth-bits`); `pcf-gems16`, `pcf-gems4` (GPU
-    /// Gems' 4x4-region PCF); or a reference run as a method: `exact`, `raytrace` (see
-    /// `--rate`, `--pattern`).
+    /// Gems' 4x4-region PCF); `spsm`, `spsm-f32` (sub-pixel shadow maps with packed or f32
+    /// texels, see `--rate`, `--derivative-power`); or a reference run as a method: `exact`,
+    /// `raytrace` (see `--rate`, `--pattern`).
     #[arg(long)]
     method: String,
     /// Sub-samples per pixel for methods that supersample and for `raytrace`:
     /// 1, 4, 8, 16, 32, 64, 128 (up to 1024 for `raytrace`); default 1. For `pcf-reeves`, the
-    /// jittered samples per pixel footprint (same values); default 16.
+    /// jittered samples per pixel footprint (same values); default 16. For `spsm`, the
+    /// sub-samples of uncertain pixels (1: no antialiasing, the default).
     #[arg(long, value_name = "N")]
     rate: Option<u32>,
     /// Sub-sample pattern, shared by every method at equal rate; default grid.
@@ -129,6 +131,10 @@ struct RenderArgs {
     /// Seed of stochastic sampling (`pcf-reeves`' jitter); default 0.
     #[arg(long, value_name = "SEED")]
     seed: Option<u64>,
+    /// Exponent n of the x^n code of `spsm`'s 8-bit depth derivatives, 1 (linear) to 9;
+    /// default 5.
+    #[arg(long, value_name = "N")]
+    derivative_power: Option<u32>,
     /// Image width in pixels; default: the scene's.
     #[arg(long, value_name = "W")]
     width: Option<u32>,
@@ -249,6 +255,7 @@ fn job(a: &RenderArgs) -> Result<Job, Failure> {
         pattern: a.pattern.map(PatternKind::from),
         depth_bits: a.depth_bits,
         seed: a.seed,
+        derivative_power: a.derivative_power,
     };
     let technique = analysis::registry::technique(&a.method, &options).map_err(input)?;
     let params = technique.params();
@@ -258,6 +265,7 @@ fn job(a: &RenderArgs) -> Result<Job, Failure> {
         ("--map-res", a.map_res.is_some(), "map_res"),
         ("--depth-bits", a.depth_bits.is_some(), "depth_bits"),
         ("--seed", a.seed.is_some(), "seed"),
+        ("--derivative-power", a.derivative_power.is_some(), "derivative_power"),
     ] {
         if given && !params.contains_key(key) {
             eprintln!("note: {} does not use {flag}; ignored", technique.name());

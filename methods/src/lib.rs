@@ -4,7 +4,8 @@
 //! (light depth map), [`depth_test`] (map lookups, bias, depth quantization), [`pattern`]
 //! (sub-pixel sample patterns), [`frame`] (a scene at one resolution). Techniques, one module
 //! each: [`sm`] (standard shadow map), [`pcf_reeves`] (Reeves et al.'s stochastic PCF),
-//! [`pcf_bs`] (Brabec and Seidel's packed PCF), [`pcf_gems`] (GPU Gems' 4x4-region PCF). Every technique implements [`method::ShadowMethod`];
+//! [`pcf_bs`] (Brabec and Seidel's packed PCF), [`pcf_gems`] (GPU Gems' 4x4-region PCF), [`spsm`] (Lecocq et al.'s sub-pixel shadow
+//! maps). Every technique implements [`method::ShadowMethod`];
 //! [`registry`] finds them by name.
 
 pub mod depth_map;
@@ -19,6 +20,7 @@ pub mod pcf_reeves;
 pub mod raster;
 pub mod registry;
 pub mod sm;
+pub mod spsm;
 
 pub use frame::Frame;
 pub use method::{MethodError, ShadowMethod, Visibility};

@@ -8,6 +8,7 @@ use crate::{
     pcf_gems::{GemsPcf, GemsSamples},
     pcf_reeves::{ReevesOptions, ReevesPcf},
     sm::StandardShadowMap,
+    spsm::{Spsm, SpsmOptions, TexelFormat},
 };
 
 /// Name and one-line description of every available method.
@@ -26,6 +27,12 @@ pub const METHODS: &[(&str, &str)] = &[
     ("pcf-bs-fast-4x4", "fast PCF over 4x4 texels in four accumulated passes (Brabec & Seidel)"),
     ("pcf-gems16", "16 bilinear PCF lookups over a 4x4-texel region (GPU Gems ch. 11)"),
     ("pcf-gems4", "4 of the 16 lookups, dithered by screen position (GPU Gems ch. 11)"),
+    (
+        "spsm",
+        "sub-pixel shadow map: 128-bit triangle texels, silhouette recovery, AA at uncertain \
+         pixels with --rate (Lecocq et al. 2014)",
+    ),
+    ("spsm-f32", "sub-pixel shadow map with unpacked f32 texels (Lecocq et al. 2014)"),
 ];
 
 /// Options shared by the methods; `None` takes the method's documented default.
@@ -47,6 +54,8 @@ pub struct MethodOptions {
     pub depth_bits: Option<u32>,
     /// Seed of stochastic sampling (`--seed`).
     pub seed: Option<u64>,
+    /// Exponent of the derivative code `x^n` (`--derivative-power`), for packed SPSM texels.
+    pub derivative_power: Option<u32>,
 }
 
 /// The map options given, with `defaults` for those not given; validated.
@@ -92,6 +101,18 @@ pub fn method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMetho
         "pcf-bs-fast-4x4" => bs(Variant::Fast4x4),
         "pcf-gems16" => gems(GemsSamples::Sixteen),
         "pcf-gems4" => gems(GemsSamples::FourDithered),
+        "spsm" | "spsm-f32" => {
+            let d = SpsmOptions::default();
+            let o = SpsmOptions {
+                map: map_options(options, d.map)?,
+                texel: if name == "spsm" { TexelFormat::Packed } else { TexelFormat::F32 },
+                derivative_power: options.derivative_power.unwrap_or(d.derivative_power),
+                rate: options.rate.unwrap_or(d.rate),
+                pattern: options.pattern.unwrap_or(d.pattern),
+            };
+            o.validate()?;
+            Ok(Box::new(Spsm { options: o }))
+        }
         _ => Err(MethodError::InvalidOption {
             option: "--method",
             message: format!(

@@ -1,0 +1,293 @@
+//! `spsm`, `spsm-f32`: sub-pixel shadow maps (Lecocq, Marvie, Sourimant and Gautron,
+//! "Sub-Pixel Shadow Mapping", ACM i3D 2014; `../shared/papers/lecocq2014-sub-pixel-shadow-maps.txt`).
+//!
+//! The map stores, per texel, the closest triangle touching it instead of a depth, and each
+//! pixel's shadow is decided from that partial geometry with sub-pixel precision.
+//!
+//! # Stages (each timed under its name, see the `STAGE_*` constants)
+//!
+//! 1. **conservative rasterization** ([`raster`], section 3.2): every caster triangle gives a
+//!    fragment to every texel its projection touches; the texel keeps the fragment of smallest
+//!    minimum conservative depth (Hasselgren et al. 2005). Counters `triangles_rasterized`,
+//!    `raster_samples_tested` (texels tested exactly), `conservative_fragments`.
+//! 2. **packing** ([`texel`], sections 3.3 and 3.4): the kept triangle as a 128-bit texel
+//!    (three 16-bit 2D vertices, 16-bit depth at the texel centre, two 8-bit derivative codes
+//!    [`quantize`]) for `spsm`, or as `f32` for `spsm-f32`. Counter `packed_texels`.
+//! 3. **consistent min depth** ([`depth`], section 4, Fig. 9): the smallest depth the decoded
+//!    triangle spawns inside its texel. Counter `depth_corrected_texels` (texels where it lies
+//!    above the conservative corner depth).
+//! 4. **classification** ([`classify`], section 4.1, Algorithm 1): lit by one lookup,
+//!    shadowed by one lookup, shadowed by the 3x3 neighbourhood, or uncertain. Counters
+//!    `lit_by_one_lookup`, `shadowed_by_one_lookup`, `shadowed_by_neighbourhood`,
+//!    `uncertain_pixels`, `shadow_map_lookups`.
+//! 5. **silhouette recovery** ([`recover`], section 4.2, Figs. 7, 8, 10): uncertain pixels
+//!    from the 3x3 depth-test pattern, a tangent look-up table and the piecewise linear
+//!    silhouette function. Counters `recovered_pixels`, `shadow_map_lookups`.
+//! 6. **antialiasing** ([`antialias`], section 5): the recovered function at the shared
+//!    sample pattern's sub-samples, uncertain pixels only. Runs when `rate > 1`; recorded as
+//!    skipped at rate 1. Counter `antialiased_samples`.
+//!
+//! [`Spsm::run_classified`] also returns each pixel's [`PixelClass`], and [`class_image`]
+//! colours them as Fig. 14 does.
+//!
+//! # Invariants
+//!
+//! - Output values are in `[0, 1]`: 0 or 1 at rate 1, multiples of `1 / rate` above.
+//! - Deterministic: ties in the map go to the lower triangle id; every per-pixel decision
+//!   depends only on the map and the pixel.
+//! - Pixels with no surface, or whose point falls outside the map, are lit (as in `sm`).
+//! - The lit and shadowed classifications add the decoded texel's own error bounds (depth,
+//!   derivatives, vertices: [`texel::Tri`]) to the constant bias, so packing never makes a
+//!   lit plane dark by itself; a lit plane stays lit at every map size and light angle.
+//!
+//! # Choices where the paper is vague
+//!
+//! - **Map depth** is the light depth for directional lights and `-1/depth` for spot lights
+//!   (affine in the map, as equation 1 needs); derivative angles are taken against the world
+//!   size of a texel at the texel's depth ([`texel`]).
+//! - **16-bit vertices** are absolute fixed point over `[-R/2, 3R/2]` texels (so shared
+//!   vertices decode identically in every texel); **16-bit depth** is linear over the scene's
+//!   light depth range. A vertex outside the range is clamped, and the run record says so.
+//! - **Extreme derivative codes** (surfaces within about 0.07° of edge-on for `x^5`) have an
+//!   unbounded error: such a texel cannot prove a shadow by itself ([`quantize`]); the
+//!   recovery pattern caps the margin it allows ([`recover`]).
+//! - **Algorithm 1** as printed returns `true` on both branches; we read it as "the stored
+//!   triangle occludes `p` iff its plane passes in front of `p` and `p` lies in its 2D
+//!   triangle".
+//! - **Minimum conservative depth** is Hasselgren et al.'s: the plane at the texel corner
+//!   where it is smallest, clamped to the triangle's vertex depths ([`raster`]). Measured
+//!   without the clamp, steep silhouette triangles win more texels (Fig. 3's intent) and
+//!   the `f32` texel gains on ground shadow edges, but the packed texel loses more on those
+//!   nearly edge-on triangles than the `f32` one gains.
+//! - **Tolerances**: the constant term of the shared bias rule ([`crate::depth_test`],
+//!   `--constant-bias`) plus each decoded texel's own error bound. `slope_bias` and
+//!   `max_slope` are validated but not used: equation 1 evaluates each stored plane at the
+//!   point itself, and the recovery pattern compares against the receiver's own plane
+//!   exactly ([`classify`], [`recover`]); the run record lists only what is used.
+//! - **Consistent minimum depth** is computed exactly by clipping, once per texel ([`depth`]);
+//!   the recovery pattern also checks each neighbour against the receiver's own plane.
+//! - **Tangent patterns** are derived, not drawn: one tangent per run of free neighbours
+//!   around the ring, perpendicular to the run's mean direction; **4-connectivity** keeps the
+//!   occluded texels linked to the centre; **vertex selection** keeps the vertices of the
+//!   edges facing the tangent axis; **φ** is the nearest facing edge, linked across gaps,
+//!   `+∞` beyond the outermost vertex ([`recover`]).
+//! - **Antialiasing** positions each sub-sample on the plane of the pixel's surface
+//!   ([`antialias`]).
+//! - Casters with opacity < 1 are treated as opaque (the run record says so).
+
+pub mod antialias;
+pub mod classify;
+pub mod depth;
+pub mod quantize;
+pub mod raster;
+pub mod recover;
+pub mod texel;
+
+pub use classify::PixelClass;
+pub use texel::TexelFormat;
+
+use crate::{
+    depth_test::{DepthTester, MapOptions},
+    frame::Frame,
+    method::{MethodError, ShadowMethod, Visibility},
+    pattern::{PatternKind, SamplePattern},
+};
+use instrumentation::Recorder;
+
+/// Name of stage 1.
+pub const STAGE_RASTER: &str = "conservative rasterization";
+/// Name of stage 2.
+pub const STAGE_PACKING: &str = "packing";
+/// Name of stage 3.
+pub const STAGE_CONSISTENT_DEPTH: &str = "consistent min depth";
+/// Name of stage 4.
+pub const STAGE_CLASSIFICATION: &str = "classification";
+/// Name of stage 5.
+pub const STAGE_RECOVERY: &str = "silhouette recovery";
+/// Name of stage 6.
+pub const STAGE_ANTIALIASING: &str = "antialiasing";
+
+/// Largest sub-sample rate of the antialiasing stage.
+pub const MAX_RATE: u32 = 128;
+
+/// Options of the sub-pixel shadow map.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpsmOptions {
+    /// Map resolution and constant bias (`--map-res`, `--constant-bias`); defaults as
+    /// [`MapOptions::default`]. The slope-scaled terms are validated but not used.
+    pub map: MapOptions,
+    /// Texel storage: [`TexelFormat::Packed`] (128 bits, `spsm`, the default) or
+    /// [`TexelFormat::F32`] (`spsm-f32`).
+    pub texel: TexelFormat,
+    /// Exponent `n` of the derivative code `x^n` (`--derivative-power`), 1 (linear) to
+    /// [`quantize::MAX_POWER`]; default 5 (the paper's). Packed texels only.
+    pub derivative_power: u32,
+    /// Sub-samples per uncertain pixel (`--rate`): 1 (no antialiasing, the default), 4, 8,
+    /// 16, 32, 64 or 128.
+    pub rate: u32,
+    /// Sub-sample pattern (`--pattern`); default grid.
+    pub pattern: PatternKind,
+}
+
+impl Default for SpsmOptions {
+    fn default() -> Self {
+        Self {
+            map: MapOptions::default(),
+            texel: TexelFormat::Packed,
+            derivative_power: quantize::DEFAULT_POWER,
+            rate: 1,
+            pattern: PatternKind::Grid,
+        }
+    }
+}
+
+impl SpsmOptions {
+    /// Checks the options; errors name the command-line flag.
+    pub fn validate(&self) -> Result<SamplePattern, MethodError> {
+        self.map.validate()?;
+        if !(1..=quantize::MAX_POWER).contains(&self.derivative_power) {
+            return Err(MethodError::InvalidOption {
+                option: "--derivative-power",
+                message: format!(
+                    "must be in 1..={} (1 is the linear code), got {}",
+                    quantize::MAX_POWER,
+                    self.derivative_power
+                ),
+            });
+        }
+        if self.rate > MAX_RATE {
+            return Err(MethodError::InvalidOption {
+                option: "--rate",
+                message: format!(
+                    "spsm antialiases with at most {MAX_RATE} samples, got {}",
+                    self.rate
+                ),
+            });
+        }
+        SamplePattern::new(self.rate, self.pattern)
+    }
+}
+
+/// The sub-pixel shadow map.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Spsm {
+    /// Options.
+    pub options: SpsmOptions,
+}
+
+/// Colours the classes as Fig. 14 does, over a grey rendering of `lit`: green where the
+/// 3x3 neighbourhood shadowed the pixel, red where silhouette recovery ran; elsewhere
+/// light grey for lit and dark grey for shadowed pixels, black where no surface is mapped.
+/// Row by row, RGB.
+pub fn class_image(classes: &[PixelClass], lit: &[f32]) -> Vec<[u8; 3]> {
+    classes
+        .iter()
+        .zip(lit)
+        .map(|(&c, &l)| match (c.fig14_colour(), c) {
+            (Some(rgb), _) => rgb,
+            (None, PixelClass::Unmapped) => [0, 0, 0],
+            (None, _) => {
+                let g = (90.0 + 150.0 * l.clamp(0.0, 1.0)).round() as u8;
+                [g, g, g]
+            }
+        })
+        .collect()
+}
+
+impl Spsm {
+    /// Runs the method and also returns each pixel's class (Fig. 14).
+    pub fn run_classified(
+        &self,
+        frame: &Frame<'_>,
+        rec: &mut Recorder,
+    ) -> Result<(Visibility, Vec<PixelClass>), MethodError> {
+        let sample_pattern = self.options.validate()?;
+        if frame.effects.transparency {
+            rec.notes.push(format!("{} treats semi-transparent casters as opaque", self.name()));
+        }
+        let o = &self.options;
+        let projector = frame.light_projector(o.map.map_res);
+        let space = texel::LightSpace::new(&projector, frame.light_depth_bounds(&projector));
+        let tester = DepthTester::new(&o.map, projector, frame.light_depth_range(&projector));
+
+        let raster = rec.stages.time(STAGE_RASTER, || {
+            raster::rasterize_conservative(
+                &frame.geometry,
+                |t| frame.is_caster(t),
+                &projector,
+                &space,
+                &mut rec.counters,
+            )
+        });
+        let (map, packed, clamped) = rec
+            .stages
+            .time(STAGE_PACKING, || texel::pack_map(&raster, space, o.texel, o.derivative_power));
+        drop(raster);
+        rec.counters.packed_texels += packed;
+        if clamped > 0 {
+            rec.notes.push(format!(
+                "{clamped} packed texels hold a vertex outside the 16-bit range [-R/2, 3R/2] \
+                 (clamped)"
+            ));
+        }
+        let (consistent, corrected) =
+            rec.stages.time(STAGE_CONSISTENT_DEPTH, || depth::consistent_depths(&map));
+        rec.counters.depth_corrected_texels += corrected;
+
+        let lookup = classify::Lookup { map: &map, consistent: &consistent, tester, space };
+        let (classes, mut lit, uncertain, counters) =
+            rec.stages.time(STAGE_CLASSIFICATION, || classify::classify_pixels(frame, &lookup));
+        rec.counters.merge(&counters);
+
+        let (silhouettes, counters) = rec
+            .stages
+            .time(STAGE_RECOVERY, || recover::recover_pixels(frame, &lookup, &uncertain, &mut lit));
+        rec.counters.merge(&counters);
+
+        if o.rate > 1 {
+            let counters = rec.stages.time(STAGE_ANTIALIASING, || {
+                antialias::antialias_pixels(
+                    frame,
+                    &lookup,
+                    &sample_pattern,
+                    &uncertain,
+                    &silhouettes,
+                    &mut lit,
+                )
+            });
+            rec.counters.merge(&counters);
+        } else {
+            rec.stages.skip(STAGE_ANTIALIASING);
+        }
+        let vis =
+            Visibility { width: frame.width(), height: frame.height(), lit, transmittance: None };
+        Ok((vis, classes))
+    }
+}
+
+impl ShadowMethod for Spsm {
+    fn name(&self) -> &'static str {
+        match self.options.texel {
+            TexelFormat::Packed => "spsm",
+            TexelFormat::F32 => "spsm-f32",
+        }
+    }
+
+    fn params(&self) -> serde_json::Map<String, serde_json::Value> {
+        let o = &self.options;
+        let mut m = serde_json::Map::new();
+        m.insert("map_res".into(), o.map.map_res.into());
+        m.insert("constant_bias".into(), o.map.constant_bias.into());
+        m.insert("texel".into(), o.texel.name().into());
+        if o.texel == TexelFormat::Packed {
+            m.insert("derivative_power".into(), o.derivative_power.into());
+        }
+        m.insert("rate".into(), o.rate.into());
+        m.insert("pattern".into(), o.pattern.name().into());
+        m
+    }
+
+    fn run(&self, frame: &Frame<'_>, rec: &mut Recorder) -> Result<Visibility, MethodError> {
+        self.run_classified(frame, rec).map(|(v, _)| v)
+    }
+}
