@@ -3,14 +3,14 @@
 //! Every pixel's surface point `p` (the G-buffer position at the pixel centre) is projected
 //! into the map, and the texel it falls in is decoded:
 //!
-//! - **lit by one lookup**: `p` lies on the stored triangle: on its plane, `|p_z̃ - p_z| <=
-//!   tol`, with `p_z̃` the stored depth extrapolated to `p` (equation 1), and inside its 2D
-//!   projection (allowing for the vertex quantization, [`Tri::may_contain`]); conservative
+//! - **lit by one lookup**: `p` lies on the stored triangle's plane, `|p_z̃ - p_z| <= tol`,
+//!   with `p_z̃` the stored depth extrapolated to `p` (equation 1); conservative
 //!   rasterization kept the nearest triangle touching the texel, so nothing lies in front. An
-//!   empty texel (no caster touches it) is lit by one lookup too. Choice: the paper's
-//!   "`p_z̃ ≈ p_z`" alone lets a stored triangle whose plane merely passes near `p` (a steep
-//!   one, or one whose packed derivatives are coarse) light `p`; the containment test makes
-//!   it "`p` lies on the stored triangle" as the paper words it.
+//!   empty texel (no caster touches it) is lit by one lookup too. Choice: the error bounds of
+//!   a packed texel make "`p_z̃ ≈ p_z`" vacuous for a steep triangle far from the texel
+//!   centre, so `p` must also lie inside the triangle (allowing for the vertex quantization,
+//!   [`Tri::may_contain`]), or the triangle's plane must be known at `p` as well as the
+//!   receiver's own plane would be ([`Lookup::lies_on`]: a coplanar neighbour).
 //! - **shadowed by one lookup**: the stored triangle passes in front of `p` (`p_z̃ < p_z -
 //!   tol`, Algorithm 1's early rejection) and `p` lies inside its 2D projection whatever the
 //!   vertex quantization ([`Tri::surely_contains`], exact predicates).
@@ -78,6 +78,10 @@ pub struct MapPoint {
     pub tol: f64,
     /// Whether the surface faces the light.
     pub facing: bool,
+    /// World position of the surface point.
+    pub position: DVec3,
+    /// Unit normal of the surface.
+    pub normal: DVec3,
 }
 
 /// Lookups into one SPSM: the map, the bias rule and the map's depth space.
@@ -101,13 +105,13 @@ impl Lookup<'_> {
         let (xy, depth) = self.tester.projector.project(position)?;
         let tol = self.space.z_tolerance(self.tester.constant, depth);
         let facing = normal.dot(self.tester.projector.direction_to(position)) > 0.0;
-        Some(MapPoint { xy, depth, z: self.space.z(depth), tol, facing })
+        Some(MapPoint { xy, depth, z: self.space.z(depth), tol, facing, position, normal })
     }
 
-    /// The map-depth gradient per texel of the receiver's plane at `p` (surface point
-    /// `position`, unit normal `normal`), from two points of the plane a texel away; `None`
-    /// where the plane is seen edge-on.
-    pub fn gradient(&self, position: DVec3, normal: DVec3, p: &MapPoint) -> Option<DVec2> {
+    /// The map-depth gradient per texel of the receiver's plane at `p`, from two points of
+    /// the plane a texel away; `None` where the plane is seen edge-on.
+    pub fn gradient(&self, p: &MapPoint) -> Option<DVec2> {
+        let (position, normal) = (p.position, p.normal);
         let (t1, t2) = normal.any_orthonormal_pair();
         let size = self.space.texel_world_size(p.depth).max_element();
         let proj = &self.tester.projector;
@@ -126,10 +130,20 @@ impl Lookup<'_> {
         tri.depth_at(p.xy) < p.z - p.tol - tri.error_at(p.xy) && tri.surely_contains(p.xy)
     }
 
-    /// Whether `p` lies on `tri`: inside its 2D projection and on its plane.
-    #[inline]
-    pub fn lies_on(tri: &Tri, p: &MapPoint) -> bool {
-        (tri.depth_at(p.xy) - p.z).abs() <= p.tol + tri.error_at(p.xy) && tri.may_contain(p.xy)
+    /// Whether `p` lies on `tri`: on its plane, and inside its 2D projection (allowing for
+    /// the vertex quantization) or, outside it, with the plane known at `p` as well as the
+    /// receiver's own plane would be in that texel (a coplanar neighbour, as across the
+    /// diagonal of a quad; a steep triangle's plane, uncertain far from its centre, does not
+    /// light `p`).
+    pub fn lies_on(&self, tri: &Tri, p: &MapPoint) -> bool {
+        let err = tri.error_at(p.xy);
+        if (tri.depth_at(p.xy) - p.z).abs() > p.tol + err {
+            return false;
+        }
+        tri.may_contain(p.xy)
+            || self
+                .gradient(p)
+                .is_some_and(|g| err <= p.tol + self.map.plane_error(p.z, g, p.xy - tri.centre))
     }
 
     /// Classifies `p`; returns the class and the texels decoded.
@@ -141,7 +155,7 @@ impl Lookup<'_> {
         let Some(tri) = self.map.get(x, y) else {
             return (PixelClass::LitOneLookup, 1);
         };
-        if Self::lies_on(&tri, p) {
+        if self.lies_on(&tri, p) {
             return (PixelClass::LitOneLookup, 1);
         }
         if Self::intersects(&tri, p) {

@@ -15,7 +15,7 @@
 //!
 //! Choices:
 //! - The extreme codes 0 and 254 stand for `|θ|` up to exactly 90°, an infinite slope; they
-//!   decode to the slope at the inner end of their rounding interval (finite), and their
+//!   decode to the finite slope a quarter code inside their rounding interval, and their
 //!   error bound is infinite: a texel holding a triangle seen this close to edge-on cannot
 //!   prove a shadow nor a consistent depth (see [`DerivativeCode::error`]).
 //! - Code 255 is never written; it decodes as 254 so that the table covers every byte.
@@ -56,7 +56,7 @@ impl DerivativeCode {
             let q = c as f64;
             let (lo, hi) = (angle(q - 0.5), angle(q + 0.5));
             let (s, e) = if c == 254 {
-                (lo.tan(), f64::INFINITY)
+                (angle(q - 0.25).tan(), f64::INFINITY)
             } else {
                 let s = angle(q).tan();
                 (s, (lo.tan() - s).abs().max((hi.tan() - s).abs()))

@@ -319,7 +319,7 @@ fn occludes(
     if cmin >= p.z - p.tol - margin(centre + DVec2::splat(0.5)) - stored {
         return false;
     }
-    if Lookup::lies_on(tri, p) {
+    if lookup.lies_on(tri, p) {
         return false;
     }
     let Some(g) = grad else { return true };
@@ -367,7 +367,7 @@ pub fn recover_pixels(
             let Some(p) = lookup.point(position, normal) else {
                 return (None, true);
             };
-            let grad = lookup.gradient(position, normal, &p);
+            let grad = lookup.gradient(&p);
             match silhouette(lookup, &p, grad) {
                 Some(s) => {
                     let lit = Resolved::new(lookup.map, &s).lit(p.xy);
