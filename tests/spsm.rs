@@ -201,8 +201,8 @@ fn stages_counters_and_the_fig14_class_image() {
         [
             "conservative rasterization",
             "packing",
-            "consistent min depth",
             "classification",
+            "consistent min depth",
             "silhouette recovery"
         ]
     );

@@ -12,7 +12,7 @@
 //! Counter: `antialiased_samples`, one per sub-sample evaluated (pixels whose pattern was
 //! full or empty have a constant value and are not evaluated).
 
-use super::classify::Lookup;
+use super::classify::{Lookup, UncertainPixel};
 use super::recover::{Pattern, Resolved, Silhouette};
 use crate::frame::Frame;
 use crate::pattern::SamplePattern;
@@ -25,7 +25,7 @@ pub fn antialias_pixels(
     frame: &Frame<'_>,
     lookup: &Lookup<'_>,
     pattern: &SamplePattern,
-    uncertain: &[u32],
+    uncertain: &[UncertainPixel],
     silhouettes: &[Option<Silhouette>],
     lit: &mut [f32],
 ) -> Counters {
@@ -35,12 +35,12 @@ pub fn antialias_pixels(
     let out: Vec<Option<f32>> = uncertain
         .par_iter()
         .zip(silhouettes)
-        .map(|(&k, s)| {
+        .map(|(u, s)| {
             let s = s.as_ref()?;
             if !matches!(s.pattern(), Pattern::Tangents { .. }) {
                 return None;
             }
-            let k = k as usize;
+            let k = u.pixel as usize;
             let (position, normal) = (g.position[k], g.normal[k]);
             let centre = lookup.tester.projector.project(position)?.0;
             let resolved = Resolved::new(lookup.map, s);
@@ -60,9 +60,9 @@ pub fn antialias_pixels(
         })
         .collect();
     let mut c = Counters::default();
-    for (&k, v) in uncertain.iter().zip(out) {
+    for (u, v) in uncertain.iter().zip(out) {
         if let Some(v) = v {
-            lit[k as usize] = v;
+            lit[u.pixel as usize] = v;
             c.antialiased_samples += rate as u64;
         }
     }

@@ -1,4 +1,4 @@
-//! Stage 4, pixel classification (Lecocq et al. 2014, section 4.1, Algorithm 1).
+//! Stage 3, pixel classification (Lecocq et al. 2014, section 4.1, Algorithm 1).
 //!
 //! Every pixel's surface point `p` (the G-buffer position at the pixel centre) is projected
 //! into the map, and the texel it falls in is decoded:
@@ -89,8 +89,6 @@ pub struct MapPoint {
 pub struct Lookup<'a> {
     /// The map.
     pub map: &'a SpsmMap,
-    /// Consistent minimum depth per texel (stage 3).
-    pub consistent: &'a [f32],
     /// The shared bias rule.
     pub tester: DepthTester,
     /// The map's depth space.
@@ -141,9 +139,10 @@ impl Lookup<'_> {
             return false;
         }
         tri.may_contain(p.xy)
-            || self
-                .gradient(p)
-                .is_some_and(|g| err <= p.tol + self.map.plane_error(p.z, g, p.xy - tri.centre))
+            || self.gradient(p).is_some_and(|g| {
+                let (at_centre, per_texel) = self.map.plane_error(p.z, g);
+                err <= p.tol + at_centre + (p.xy - tri.centre).abs().dot(per_texel)
+            })
     }
 
     /// Classifies `p`; returns the class and the texels decoded.
@@ -174,29 +173,44 @@ impl Lookup<'_> {
     }
 }
 
+/// An uncertain pixel and the texel its point falls in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct UncertainPixel {
+    /// Pixel index, row by row.
+    pub pixel: u32,
+    /// Texel index, row by row.
+    pub texel: u32,
+}
+
 /// Classifies every pixel of the frame in parallel: the class, the lit value (1 or 0; 0 for
-/// uncertain pixels until recovery decides), the uncertain pixels' indices and the counters.
+/// uncertain pixels until recovery decides), the uncertain pixels and the counters.
 pub fn classify_pixels(
     frame: &Frame<'_>,
     lookup: &Lookup<'_>,
-) -> (Vec<PixelClass>, Vec<f32>, Vec<u32>, Counters) {
+) -> (Vec<PixelClass>, Vec<f32>, Vec<UncertainPixel>, Counters) {
     let g = &frame.gbuffer;
-    let out: Vec<(PixelClass, u64)> = (0..g.triangle.len())
+    let res = lookup.map.res;
+    let out: Vec<(PixelClass, u64, u32)> = (0..g.triangle.len())
         .into_par_iter()
         .map(|k| {
             if !g.covered(k) {
-                return (PixelClass::Unmapped, 0);
+                return (PixelClass::Unmapped, 0, 0);
             }
             match lookup.point(g.position[k], g.normal[k]) {
-                Some(p) => lookup.classify(&p),
-                None => (PixelClass::Unmapped, 0),
+                Some(p) => {
+                    let (class, lookups) = lookup.classify(&p);
+                    let texel =
+                        texel_at(p.xy, res).map_or(0, |(x, y)| (y * res as usize + x) as u32);
+                    (class, lookups, texel)
+                }
+                None => (PixelClass::Unmapped, 0, 0),
             }
         })
         .collect();
     let mut c = Counters::default();
     let mut uncertain = Vec::new();
     let mut lit = Vec::with_capacity(out.len());
-    for (k, &(class, lookups)) in out.iter().enumerate() {
+    for (k, &(class, lookups, texel)) in out.iter().enumerate() {
         c.shadow_map_lookups += lookups;
         let value = match class {
             PixelClass::Unmapped => 1.0,
@@ -214,7 +228,7 @@ pub fn classify_pixels(
             }
             PixelClass::Uncertain => {
                 c.uncertain_pixels += 1;
-                uncertain.push(k as u32);
+                uncertain.push(UncertainPixel { pixel: k as u32, texel });
                 0.0
             }
         };

@@ -1,4 +1,4 @@
-//! Stage 3, consistent minimum depth (Lecocq et al. 2014, section 4, Fig. 9).
+//! Stage 4, consistent minimum depth (Lecocq et al. 2014, section 4, Fig. 9).
 //!
 //! The conservative depth of Hasselgren et al. evaluates the plane at a texel corner, which
 //! underestimates the depth of a triangle that covers only part of the texel. The consistent
@@ -10,7 +10,9 @@
 //! exactly (Sutherland-Hodgman in `f64`, at most seven vertices) and take the smallest plane
 //! value at the clipped polygon's vertices: the minimum of an affine function over a convex
 //! polygon is at a vertex, so this is the exact value the paper's construction approximates.
-//! It is computed once per texel (a GPU would do it per lookup; the values are the same).
+//! It is computed once per texel, for the 3x3 neighbourhoods of the uncertain pixels, the only
+//! texels the tangent estimate reads (a GPU would compute it per lookup; the values are the
+//! same).
 //! Where quantization moved a packed triangle off its texel (the clipped polygon is empty),
 //! the texel keeps the conservative corner depth, clamped to the decoded vertex depths.
 
@@ -74,27 +76,64 @@ pub fn conservative_depth(tri: &Tri, x: usize, y: usize) -> f64 {
     tri.depth_at(DVec2::new(cx, cy)).clamp(lo, hi)
 }
 
-/// Per texel, the consistent minimum depth of its decoded triangle (`f32::INFINITY` where
-/// empty), and the number of texels where it lies above the conservative corner depth by
-/// more than the texel's own error bound (the depths the correction fixes).
-pub fn consistent_depths(map: &SpsmMap) -> (Vec<f32>, u64) {
-    let r = map.res as usize;
-    let out: Vec<(f32, bool)> = (0..r * r)
-        .into_par_iter()
-        .map(|k| {
-            let (x, y) = (k % r, k / r);
+/// Consistent minimum depths of a set of texels, by texel index (row by row).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ConsistentDepths {
+    index: Vec<u32>,
+    depth: Vec<f32>,
+}
+
+impl ConsistentDepths {
+    /// The stored consistent minimum depth of texel `k`, if it was computed.
+    #[inline]
+    pub fn get(&self, k: u32) -> Option<f64> {
+        self.index.binary_search(&k).ok().map(|i| f64::from(self.depth[i]))
+    }
+
+    /// Number of texels held.
+    pub fn len(&self) -> usize {
+        self.index.len()
+    }
+
+    /// Whether no texel is held.
+    pub fn is_empty(&self) -> bool {
+        self.index.is_empty()
+    }
+}
+
+/// Stage 4: the consistent minimum depth of every texel the silhouette recovery will read,
+/// the 3x3 neighbourhoods of `centres` (texel indices, in any order, repeats allowed), and the
+/// number of those texels where it lies above the conservative corner depth by more than the
+/// texel's own error bound (the depths the correction fixes). Computed where the paper
+/// computes it, for the pixels that need a tangent estimate, once per texel.
+pub fn consistent_depths(map: &SpsmMap, centres: &[u32]) -> (ConsistentDepths, u64) {
+    let r = i64::from(map.res);
+    let mut index: Vec<u32> = centres
+        .par_iter()
+        .flat_map_iter(|&k| {
+            let (x, y) = (i64::from(k) % r, i64::from(k) / r);
+            (-1..=1).flat_map(move |dy| (-1..=1).map(move |dx| (x + dx, y + dy)))
+        })
+        .filter(|&(x, y)| x >= 0 && y >= 0 && x < r && y < r)
+        .map(|(x, y)| (y * r + x) as u32)
+        .collect();
+    index.par_sort_unstable();
+    index.dedup();
+    let out: Vec<(f32, bool)> = index
+        .par_iter()
+        .map(|&k| {
+            let (x, y) = ((i64::from(k) % r) as usize, (i64::from(k) / r) as usize);
             let Some(tri) = map.get(x as i64, y as i64) else {
                 return (f32::INFINITY, false);
             };
             let (m, _) = consistent_min_depth(&tri, x, y);
             let corner = conservative_depth(&tri, x, y);
-            let centre = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
-            let slack = tri.error_at(centre + DVec2::splat(0.5));
+            let slack = tri.error_at(tri.centre + DVec2::splat(0.5));
             (m as f32, m > corner + slack)
         })
         .collect();
     let corrected = out.iter().filter(|o| o.1).count() as u64;
-    (out.into_iter().map(|o| o.0).collect(), corrected)
+    (ConsistentDepths { index, depth: out.into_iter().map(|o| o.0).collect() }, corrected)
 }
 
 #[cfg(test)]

@@ -13,13 +13,14 @@
 //! 2. **packing** ([`texel`], sections 3.3 and 3.4): the kept triangle as a 128-bit texel
 //!    (three 16-bit 2D vertices, 16-bit depth at the texel centre, two 8-bit derivative codes
 //!    [`quantize`]) for `spsm`, or as `f32` for `spsm-f32`. Counter `packed_texels`.
-//! 3. **consistent min depth** ([`depth`], section 4, Fig. 9): the smallest depth the decoded
-//!    triangle spawns inside its texel. Counter `depth_corrected_texels` (texels where it lies
-//!    above the conservative corner depth).
-//! 4. **classification** ([`classify`], section 4.1, Algorithm 1): lit by one lookup,
+//! 3. **classification** ([`classify`], section 4.1, Algorithm 1): lit by one lookup,
 //!    shadowed by one lookup, shadowed by the 3x3 neighbourhood, or uncertain. Counters
 //!    `lit_by_one_lookup`, `shadowed_by_one_lookup`, `shadowed_by_neighbourhood`,
 //!    `uncertain_pixels`, `shadow_map_lookups`.
+//! 4. **consistent min depth** ([`depth`], section 4, Fig. 9): the smallest depth the decoded
+//!    triangle spawns inside its texel, for the texels around uncertain pixels (the only ones
+//!    the tangent estimate reads). Counter `depth_corrected_texels` (those where it lies above
+//!    the conservative corner depth).
 //! 5. **silhouette recovery** ([`recover`], section 4.2, Figs. 7, 8, 10): uncertain pixels
 //!    from the 3x3 depth-test pattern, a tangent look-up table and the piecewise linear
 //!    silhouette function. Counters `recovered_pixels`, `shadow_map_lookups`.
@@ -64,7 +65,8 @@
 //!   `max_slope` are validated but not used: equation 1 evaluates each stored plane at the
 //!   point itself, and the recovery pattern compares against the receiver's own plane
 //!   exactly ([`classify`], [`recover`]); the run record lists only what is used.
-//! - **Consistent minimum depth** is computed exactly by clipping, once per texel ([`depth`]);
+//! - **Consistent minimum depth** is computed exactly by clipping, once per texel read
+//!   ([`depth`]);
 //!   the recovery pattern also checks each neighbour against the receiver's own plane.
 //! - **Tangent patterns** are derived, not drawn: one tangent per run of free neighbours
 //!   around the ring, perpendicular to the run's mean direction; **4-connectivity** keeps the
@@ -99,9 +101,9 @@ pub const STAGE_RASTER: &str = "conservative rasterization";
 /// Name of stage 2.
 pub const STAGE_PACKING: &str = "packing";
 /// Name of stage 3.
-pub const STAGE_CONSISTENT_DEPTH: &str = "consistent min depth";
-/// Name of stage 4.
 pub const STAGE_CLASSIFICATION: &str = "classification";
+/// Name of stage 4.
+pub const STAGE_CONSISTENT_DEPTH: &str = "consistent min depth";
 /// Name of stage 5.
 pub const STAGE_RECOVERY: &str = "silhouette recovery";
 /// Name of stage 6.
@@ -230,18 +232,20 @@ impl Spsm {
                  (clamped)"
             ));
         }
-        let (consistent, corrected) =
-            rec.stages.time(STAGE_CONSISTENT_DEPTH, || depth::consistent_depths(&map));
-        rec.counters.depth_corrected_texels += corrected;
-
-        let lookup = classify::Lookup { map: &map, consistent: &consistent, tester, space };
+        let lookup = classify::Lookup { map: &map, tester, space };
         let (classes, mut lit, uncertain, counters) =
             rec.stages.time(STAGE_CLASSIFICATION, || classify::classify_pixels(frame, &lookup));
         rec.counters.merge(&counters);
 
-        let (silhouettes, counters) = rec
-            .stages
-            .time(STAGE_RECOVERY, || recover::recover_pixels(frame, &lookup, &uncertain, &mut lit));
+        let (consistent, corrected) = rec.stages.time(STAGE_CONSISTENT_DEPTH, || {
+            let centres: Vec<u32> = uncertain.iter().map(|u| u.texel).collect();
+            depth::consistent_depths(&map, &centres)
+        });
+        rec.counters.depth_corrected_texels += corrected;
+
+        let (silhouettes, counters) = rec.stages.time(STAGE_RECOVERY, || {
+            recover::recover_pixels(frame, &lookup, &consistent, &uncertain, &mut lit)
+        });
         rec.counters.merge(&counters);
 
         if o.rate > 1 {

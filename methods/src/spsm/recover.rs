@@ -4,7 +4,7 @@
 //! 1. **Depth-test pattern** (consistent depth tests). Each texel of the 3x3 neighbourhood
 //!    is *occluded* when its stored triangle
 //!    - spawns a depth in front of the point inside the texel: its consistent minimum depth
-//!      (stage 3) is below the point's depth by more than the constant bias; and
+//!      (stage 4) is below the point's depth by more than the constant bias; and
 //!    - passes in front of the receiver's own plane there (the plane through the point with
 //!      the receiver's normal): checked exactly at the vertices of the triangle clipped to the
 //!      texel. This replaces the slope-scaled bias of a depth map: the receiver's own plane
@@ -48,8 +48,8 @@
 //! The recovered function is kept per pixel (its texel, occluder mask and tangents), so the
 //! antialiasing stage evaluates the same function at the sub-samples.
 
-use super::classify::{Lookup, MapPoint};
-use super::depth::clip_to_texel;
+use super::classify::{Lookup, MapPoint, UncertainPixel};
+use super::depth::{clip_to_texel, consistent_min_depth, ConsistentDepths};
 use super::texel::{SpsmMap, Tri};
 use crate::depth_test::texel_at;
 use crate::frame::Frame;
@@ -298,31 +298,30 @@ impl Resolved {
     }
 }
 
-/// Whether `tri`, stored in texel `(x, y)` with consistent minimum depth `cmin`, occludes the
-/// neighbourhood of `p` (see the module documentation); `grad` is the receiver plane's
-/// gradient.
-fn occludes(
-    lookup: &Lookup<'_>,
-    tri: &Tri,
-    (x, y): (i64, i64),
-    cmin: f64,
-    p: &MapPoint,
+/// What the depth-test pattern needs to know of the point: the point, its receiver plane's
+/// gradient, and the quantization bound of that plane in a texel of this map.
+#[derive(Debug, Clone, Copy)]
+struct Receiver {
+    p: MapPoint,
     grad: Option<DVec2>,
-) -> bool {
-    let centre = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+    error: (f64, DVec2),
+}
+
+/// Whether `tri`, stored in texel `(x, y)` with consistent minimum depth `cmin`, occludes the
+/// neighbourhood of the point (see the module documentation).
+fn occludes(lookup: &Lookup<'_>, tri: &Tri, (x, y): (i64, i64), cmin: f64, r: &Receiver) -> bool {
+    let p = &r.p;
     // Quantization margin: the triangle's own error bound, but no more than the receiver's
     // own plane would suffer in this texel.
-    let receiver_error =
-        |q: DVec2| lookup.map.plane_error(p.z, grad.unwrap_or(DVec2::ZERO), q - centre);
-    let margin = |q: DVec2| tri.error_at(q).min(receiver_error(q));
+    let margin = |q: DVec2| tri.error_at(q).min(r.error.0 + (q - tri.centre).abs().dot(r.error.1));
     let stored = cmin.abs() * 0.5 * f64::from(f32::EPSILON);
-    if cmin >= p.z - p.tol - margin(centre + DVec2::splat(0.5)) - stored {
+    if cmin >= p.z - p.tol - margin(tri.centre + DVec2::splat(0.5)) - stored {
         return false;
     }
     if lookup.lies_on(tri, p) {
         return false;
     }
-    let Some(g) = grad else { return true };
+    let Some(g) = r.grad else { return true };
     // The clipped vertices are as uncertain as the stored ones.
     let moved = tri.err_v * std::f64::consts::SQRT_2 * (tri.dz - g).length();
     let (poly, n) = clip_to_texel(&tri.v, x as f64, y as f64);
@@ -330,18 +329,27 @@ fn occludes(
 }
 
 /// The depth-test pattern of `p` over its 3x3 neighbourhood, filtered by 4-connectivity;
-/// `grad` is the receiver plane's gradient ([`Lookup::gradient`]). `None` when `p` falls
-/// outside the map.
-pub fn silhouette(lookup: &Lookup<'_>, p: &MapPoint, grad: Option<DVec2>) -> Option<Silhouette> {
+/// `consistent` holds the neighbourhood's consistent minimum depths (stage 4; a texel it
+/// lacks is computed here). `None` when `p` falls outside the map.
+pub fn silhouette(
+    lookup: &Lookup<'_>,
+    consistent: &ConsistentDepths,
+    p: &MapPoint,
+) -> Option<Silhouette> {
     let (x, y) = texel_at(p.xy, lookup.map.res)?;
     let (x, y) = (x as i64, y as i64);
     let r = i64::from(lookup.map.res);
+    let grad = lookup.gradient(p);
+    let receiver =
+        Receiver { p: *p, grad, error: lookup.map.plane_error(p.z, grad.unwrap_or(DVec2::ZERO)) };
     let mut mask = 0u16;
     for (k, &(dx, dy)) in NEIGHBOURHOOD.iter().enumerate() {
         let (nx, ny) = (x + dx, y + dy);
         let Some(tri) = lookup.map.get(nx, ny) else { continue };
-        let cmin = f64::from(lookup.consistent[(ny * r + nx) as usize]);
-        if occludes(lookup, &tri, (nx, ny), cmin, p, grad) {
+        let cmin = consistent
+            .get((ny * r + nx) as u32)
+            .unwrap_or_else(|| consistent_min_depth(&tri, nx as usize, ny as usize).0);
+        if occludes(lookup, &tri, (nx, ny), cmin, &receiver) {
             mask |= 1 << k;
         }
     }
@@ -355,20 +363,19 @@ pub fn silhouette(lookup: &Lookup<'_>, p: &MapPoint, grad: Option<DVec2>) -> Opt
 pub fn recover_pixels(
     frame: &Frame<'_>,
     lookup: &Lookup<'_>,
-    uncertain: &[u32],
+    consistent: &ConsistentDepths,
+    uncertain: &[UncertainPixel],
     lit: &mut [f32],
 ) -> (Vec<Option<Silhouette>>, Counters) {
     let g = &frame.gbuffer;
     let out: Vec<(Option<Silhouette>, bool)> = uncertain
         .par_iter()
-        .map(|&k| {
-            let k = k as usize;
-            let (position, normal) = (g.position[k], g.normal[k]);
-            let Some(p) = lookup.point(position, normal) else {
+        .map(|u| {
+            let k = u.pixel as usize;
+            let Some(p) = lookup.point(g.position[k], g.normal[k]) else {
                 return (None, true);
             };
-            let grad = lookup.gradient(&p);
-            match silhouette(lookup, &p, grad) {
+            match silhouette(lookup, consistent, &p) {
                 Some(s) => {
                     let lit = Resolved::new(lookup.map, &s).lit(p.xy);
                     (Some(s), lit)
@@ -379,8 +386,8 @@ pub fn recover_pixels(
         .collect();
     let mut c = Counters::default();
     let mut silhouettes = Vec::with_capacity(out.len());
-    for (&k, (s, value)) in uncertain.iter().zip(out) {
-        lit[k as usize] = if value { 1.0 } else { 0.0 };
+    for (u, (s, value)) in uncertain.iter().zip(out) {
+        lit[u.pixel as usize] = if value { 1.0 } else { 0.0 };
         if let Some(s) = &s {
             c.shadow_map_lookups += 9;
             c.recovered_pixels += u64::from(matches!(s.pattern(), Pattern::Tangents { .. }));

@@ -38,7 +38,7 @@
 //! a lit surface dark through its own quantization.
 
 use super::quantize::DerivativeCode;
-use super::raster::ConservativeMap;
+use super::raster::{ConservativeMap, NONE};
 use glam::DVec2;
 use rayon::prelude::*;
 use robust::{orient2d, Coord};
@@ -258,6 +258,17 @@ pub struct TexelData {
 /// The all-ones empty packed texel.
 pub const EMPTY_PACKED: [u32; 4] = [u32::MAX; 4];
 
+/// The triangle's share of a packed texel (see [`Packer::pack_triangle`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PackedTriangle {
+    /// Words R, G, B: the vertices.
+    pub words: [u32; 3],
+    /// Whether a vertex was clamped to the 16-bit range.
+    pub clamped: bool,
+    /// Derivative codes, when they do not depend on the texel.
+    pub codes: Option<(u8, u8)>,
+}
+
 /// The 128-bit codec of one map.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Packer {
@@ -296,23 +307,42 @@ impl Packer {
         }
     }
 
-    /// Packs a texel; also says whether a vertex had to be clamped.
-    pub fn pack(&self, d: &TexelData) -> ([u32; 4], bool) {
-        let mut words = [0u32; 4];
+    /// The parts of a packed texel that depend on the triangle only: the three vertex words,
+    /// whether a vertex was clamped, and the derivative codes when the slope scale does not
+    /// depend on depth (orthographic lights).
+    pub fn pack_triangle(&self, v: &[DVec2; 3], dz: DVec2) -> PackedTriangle {
+        let mut words = [0u32; 3];
         let mut clamped = false;
-        for (k, v) in d.v.iter().enumerate() {
-            let (x, cx) = self.vertex_code(v.x);
-            let (y, cy) = self.vertex_code(v.y);
+        for (k, p) in v.iter().enumerate() {
+            let (x, cx) = self.vertex_code(p.x);
+            let (y, cy) = self.vertex_code(p.y);
             clamped |= cx || cy;
             words[k] = x | (y << 16);
         }
-        let zq = self.depth_code(d.z);
-        let z = self.space.z_lo + f64::from(zq) * self.space.depth_step();
+        let codes = (!self.space.perspective).then(|| self.derivative_codes(dz, 0.0));
+        PackedTriangle { words, clamped, codes }
+    }
+
+    fn derivative_codes(&self, dz: DVec2, z: f64) -> (u8, u8) {
         let k = self.space.slope_scale(z);
-        let qx = u32::from(self.code.encode(d.dz.x / k.x));
-        let qy = u32::from(self.code.encode(d.dz.y / k.y));
-        words[3] = (zq << 16) | (qx << 8) | qy;
-        (words, clamped)
+        (self.code.encode(dz.x / k.x), self.code.encode(dz.y / k.y))
+    }
+
+    /// The texel holding triangle `t` with map depth `z` at its centre.
+    #[inline]
+    pub fn pack_texel(&self, t: &PackedTriangle, z: f64, dz: DVec2) -> [u32; 4] {
+        let zq = self.depth_code(z);
+        let (qx, qy) = t.codes.unwrap_or_else(|| {
+            self.derivative_codes(dz, self.space.z_lo + f64::from(zq) * self.space.depth_step())
+        });
+        let [a, b, c] = t.words;
+        [a, b, c, (zq << 16) | (u32::from(qx) << 8) | u32::from(qy)]
+    }
+
+    /// Packs a texel; also says whether a vertex had to be clamped.
+    pub fn pack(&self, d: &TexelData) -> ([u32; 4], bool) {
+        let t = self.pack_triangle(&d.v, d.dz);
+        (self.pack_texel(&t, d.z, d.dz), t.clamped)
     }
 
     /// Decodes the packed texel at `centre`; `None` for an empty texel.
@@ -421,19 +451,22 @@ impl SpsmMap {
         }
     }
 
-    /// Bound on the depth error, at `offset` texels from a texel centre, of a plane with map
-    /// depth `z` and gradient `grad` stored in this map's format: the quantization a
-    /// receiver's own surface would suffer in a texel.
-    pub fn plane_error(&self, z: f64, grad: DVec2, offset: DVec2) -> f64 {
+    /// Bound on the depth error of a plane with map depth `z` and gradient `grad` stored in
+    /// this map's format, as `(at the centre, per texel of offset along x and y)`: the
+    /// quantization a receiver's own surface would suffer in a texel.
+    pub fn plane_error(&self, z: f64, grad: DVec2) -> (f64, DVec2) {
         match &self.texels {
             Texels::Packed(_, p) => {
                 let k = self.space.slope_scale(z);
                 let code_error = |g: f64, k: f64| p.code.error(p.code.encode(g / k)) * k;
-                0.5 * self.space.depth_step()
-                    + offset.abs().dot(DVec2::new(code_error(grad.x, k.x), code_error(grad.y, k.y)))
+                (
+                    0.5 * self.space.depth_step(),
+                    DVec2::new(code_error(grad.x, k.x), code_error(grad.y, k.y)),
+                )
             }
             Texels::F32(_) => {
-                0.5 * f64::from(f32::EPSILON) * (z.abs() + offset.abs().dot(grad.abs()))
+                let half_ulp = 0.5 * f64::from(f32::EPSILON);
+                (z.abs() * half_ulp, grad.abs() * half_ulp)
             }
         }
     }
@@ -456,27 +489,56 @@ pub fn pack_map(
     format: TexelFormat,
     power: u32,
 ) -> (SpsmMap, u64, u64) {
-    let n = raster.texel.len();
-    let filled = (0..n).into_par_iter().filter(|&k| raster.texel_data(k).is_some()).count();
-    let (texels, clamped) = match format {
+    let r = raster.res as usize;
+    // One pass per row: (filled, clamped) texels.
+    let count = |row: &[u32], clamped: &dyn Fn(u32) -> bool| {
+        row.iter()
+            .filter(|&&s| s != NONE)
+            .fold((0u64, 0u64), |(f, c), &s| (f + 1, c + u64::from(clamped(s))))
+    };
+    let (texels, (filled, clamped)) = match format {
         TexelFormat::Packed => {
             let packer = Packer { space, code: DerivativeCode::new(power) };
-            let words: Vec<([u32; 4], bool)> = (0..n)
-                .into_par_iter()
-                .map(|k| raster.texel_data(k).map_or((EMPTY_PACKED, false), |d| packer.pack(&d)))
-                .collect();
-            let clamped = words.iter().filter(|w| w.1).count();
-            (Texels::Packed(words.into_iter().map(|w| w.0).collect(), Box::new(packer)), clamped)
+            let tris: Vec<PackedTriangle> =
+                raster.setups.par_iter().map(|s| packer.pack_triangle(&s.v, s.dz)).collect();
+            let mut words = vec![EMPTY_PACKED; r * r];
+            let counts = words
+                .par_chunks_mut(r.max(1))
+                .zip(raster.texel.par_chunks(r.max(1)))
+                .enumerate()
+                .map(|(j, (out, row))| {
+                    for (i, (w, &s)) in out.iter_mut().zip(row).enumerate() {
+                        if s != NONE {
+                            let setup = &raster.setups[s as usize];
+                            let centre = DVec2::new(i as f64 + 0.5, j as f64 + 0.5);
+                            *w =
+                                packer.pack_texel(&tris[s as usize], setup.plane(centre), setup.dz);
+                        }
+                    }
+                    count(row, &|s| tris[s as usize].clamped)
+                })
+                .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+            (Texels::Packed(words, Box::new(packer)), counts)
         }
         TexelFormat::F32 => {
-            let t = (0..n)
-                .into_par_iter()
-                .map(|k| raster.texel_data(k).map_or(F32Texel::EMPTY, |d| F32Texel::new(&d)))
-                .collect();
-            (Texels::F32(t), 0)
+            let mut t = vec![F32Texel::EMPTY; r * r];
+            let counts = t
+                .par_chunks_mut(r.max(1))
+                .zip(raster.texel.par_chunks(r.max(1)))
+                .enumerate()
+                .map(|(j, (out, row))| {
+                    for (i, (texel, &s)) in out.iter_mut().zip(row).enumerate() {
+                        if s != NONE {
+                            *texel = F32Texel::new(&raster.setups[s as usize].texel_data(i, j));
+                        }
+                    }
+                    count(row, &|_| false)
+                })
+                .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+            (Texels::F32(t), counts)
         }
     };
-    (SpsmMap { res: raster.res, space, texels }, filled as u64, clamped as u64)
+    (SpsmMap { res: raster.res, space, texels }, filled, clamped)
 }
 
 #[cfg(test)]
