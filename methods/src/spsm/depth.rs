@@ -89,16 +89,6 @@ impl ConsistentDepths {
     pub fn get(&self, k: u32) -> Option<f64> {
         self.index.binary_search(&k).ok().map(|i| f64::from(self.depth[i]))
     }
-
-    /// Number of texels held.
-    pub fn len(&self) -> usize {
-        self.index.len()
-    }
-
-    /// Whether no texel is held.
-    pub fn is_empty(&self) -> bool {
-        self.index.is_empty()
-    }
 }
 
 /// Stage 4: the consistent minimum depth of every texel the silhouette recovery will read,

@@ -68,11 +68,6 @@ impl DerivativeCode {
         Self { power, slope, error }
     }
 
-    /// The exponent `n`.
-    pub fn power(&self) -> u32 {
-        self.power
-    }
-
     /// The code of slope `s` (equation 3). NaN encodes as 127 (flat).
     #[inline]
     pub fn encode(&self, s: f64) -> u8 {

@@ -470,14 +470,6 @@ impl SpsmMap {
             }
         }
     }
-
-    /// Bytes per texel of the format.
-    pub fn texel_bytes(&self) -> usize {
-        match &self.texels {
-            Texels::Packed(..) => 16,
-            Texels::F32(_) => std::mem::size_of::<F32Texel>(),
-        }
-    }
 }
 
 /// Stage 2, packing: stores every texel of the conservatively rasterized map in `format`
