@@ -1,0 +1,204 @@
+//! A report's files: `runs.json` (everything), `runs.csv` (one line per run: parameters,
+//! metrics, times, counters), `report.md` (the tables), and `visibility/*.exr` (every
+//! visibility buffer).
+
+use crate::output::{write_visibility_exr, OutputError};
+use crate::sweep::{Produced, Report, Row};
+use instrumentation::Counters;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// A parameter of a row as text (empty when the method has no such parameter).
+fn param(row: &Row, key: &str) -> String {
+    row.params.get(key).map_or_else(String::new, |v| v.to_string().trim_matches('"').to_owned())
+}
+
+/// A short label of the row's parameters, e.g. `map_res=1024 rate=16`.
+pub fn param_label(row: &Row) -> String {
+    ["map_res", "rate", "depth_bits", "pattern"]
+        .iter()
+        .filter(|k| row.params.contains_key(**k))
+        .map(|k| format!("{k}={}", param(row, k)))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// The file stem of a row's visibility buffer.
+pub fn row_stem(row: &Row) -> String {
+    let label = param_label(row).replace(['=', ' '], "-");
+    let stem = format!("{}-{}-{label}", row.scene, row.method);
+    stem.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' }).collect()
+}
+
+/// Columns of `runs.csv` before the counters.
+pub const CSV_COLUMNS: &[&str] = &[
+    "scene",
+    "method",
+    "map_res",
+    "rate",
+    "depth_bits",
+    "pattern",
+    "width",
+    "height",
+    "reference",
+    "ref_rate",
+    "evaluated_pixels",
+    "mean_abs_error",
+    "rmse",
+    "max_abs_error",
+    "pixel_match",
+    "boundary_pixels",
+    "boundary_mean_abs_error",
+    "flip_mean",
+    "time_median_ms",
+    "time_min_ms",
+    "time_max_ms",
+];
+
+/// `runs.csv`: a header, then one line per row; counters follow the columns of
+/// [`CSV_COLUMNS`] under their own names.
+pub fn csv(report: &Report) -> String {
+    let mut out = CSV_COLUMNS.join(",");
+    for name in Counters::NAMES {
+        out.push(',');
+        out.push_str(name);
+    }
+    out.push('\n');
+    for r in &report.rows {
+        let m = &r.metrics;
+        let mut cells = vec![
+            r.scene.clone(),
+            r.method.clone(),
+            param(r, "map_res"),
+            param(r, "rate"),
+            param(r, "depth_bits"),
+            param(r, "pattern"),
+            r.width.to_string(),
+            r.height.to_string(),
+            r.reference.clone(),
+            r.ref_rate.map_or_else(String::new, |v| v.to_string()),
+            m.evaluated_pixels.to_string(),
+            m.mean_abs_error.to_string(),
+            m.rmse.to_string(),
+            m.max_abs_error.to_string(),
+            m.pixel_match.to_string(),
+            m.boundary_pixels.to_string(),
+            m.boundary_mean_abs_error.to_string(),
+            r.flip_mean.to_string(),
+            r.total_ms.median.to_string(),
+            r.total_ms.min.to_string(),
+            r.total_ms.max.to_string(),
+        ];
+        cells.extend(r.counters.entries().into_iter().map(|(_, v)| v.to_string()));
+        // Scene names and parameters hold no commas or quotes; quote defensively anyway.
+        let line: Vec<String> =
+            cells
+                .into_iter()
+                .map(|c| {
+                    if c.contains([',', '"']) {
+                        format!("\"{}\"", c.replace('"', "\"\""))
+                    } else {
+                        c
+                    }
+                })
+                .collect();
+        out.push_str(&line.join(","));
+        out.push('\n');
+    }
+    out
+}
+
+/// `report.md`: the machine, the scenes, and per scene a table of every run.
+pub fn markdown(report: &Report) -> String {
+    let mut s = String::new();
+    let m = &report.machine;
+    let _ = writeln!(s, "# shadowbench report: suite `{}`\n", report.suite.name);
+    if !report.suite.description.is_empty() {
+        let _ = writeln!(s, "{}\n", report.suite.description);
+    }
+    let _ = writeln!(
+        s,
+        "Machine: {} ({} cores, {} threads, {}); GPU: {}. Times: median of {} runs after {} \
+         warm-up, [min, max]; a method's time is its own stages (the camera G-buffer is shared \
+         and listed per scene).\n",
+        m.cpu,
+        m.cores,
+        m.threads,
+        m.os,
+        m.gpu.as_deref().unwrap_or("none used"),
+        report.suite.repeats,
+        report.suite.warmup
+    );
+    let _ = writeln!(s, "## Scenes\n");
+    let _ = writeln!(
+        s,
+        "| scene | triangles | effects | frame | G-buffer ms | reference | reference ms |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|");
+    for sc in &report.scenes {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {}x{} | {:.1} | {} | {:.1} |",
+            sc.scene,
+            sc.triangles,
+            sc.effects.join(", "),
+            sc.width,
+            sc.height,
+            sc.gbuffer_ms,
+            sc.reference,
+            sc.reference_ms
+        );
+    }
+    for sc in &report.scenes {
+        let _ = writeln!(s, "\n## {}\n", sc.scene);
+        let _ = writeln!(
+            s,
+            "| method | parameters | mean abs error | boundary error | pixel match | FLIP | time ms [min, max] |"
+        );
+        let _ = writeln!(s, "|---|---|---|---|---|---|---|");
+        for r in report.rows.iter().filter(|r| r.scene == sc.scene) {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {:.5} | {:.4} | {:.2} % | {:.4} | {:.1} [{:.1}, {:.1}] |",
+                r.method,
+                param_label(r),
+                r.metrics.mean_abs_error,
+                r.metrics.boundary_mean_abs_error,
+                100.0 * r.metrics.pixel_match,
+                r.flip_mean,
+                r.total_ms.median,
+                r.total_ms.min,
+                r.total_ms.max
+            );
+        }
+    }
+    if !report.skipped.is_empty() {
+        let _ = writeln!(s, "\n## Not run\n");
+        for k in &report.skipped {
+            let _ = writeln!(s, "- {k}");
+        }
+    }
+    s
+}
+
+/// Writes `runs.json`, `runs.csv`, `report.md` and `visibility/*.exr` into `dir`.
+pub fn write_report(dir: &Path, report: &Report, produced: &[Produced]) -> Result<(), OutputError> {
+    let err = |path: &Path, e: &dyn std::fmt::Display| OutputError::Write {
+        path: path.to_owned(),
+        message: e.to_string(),
+    };
+    let images = dir.join("visibility");
+    std::fs::create_dir_all(&images).map_err(|e| err(&images, &e))?;
+    let json = serde_json::to_string_pretty(report).map_err(|e| err(dir, &e))?;
+    for (name, text) in
+        [("runs.json", json), ("runs.csv", csv(report)), ("report.md", markdown(report))]
+    {
+        let path = dir.join(name);
+        std::fs::write(&path, text).map_err(|e| err(&path, &e))?;
+    }
+    for p in produced {
+        let path = images.join(format!("{}.exr", row_stem(&report.rows[p.row])));
+        write_visibility_exr(&path, &p.visibility)?;
+    }
+    Ok(())
+}
