@@ -90,3 +90,70 @@ fn bad_suites_are_named() {
         assert!(stderr(&o).contains(needle), "{}", stderr(&o));
     }
 }
+
+/// A Chromium to drive headless: the installed one, or Debian's package installed now (as
+/// root with apt-get); `None`, with the reason printed, when neither works.
+fn chromium() -> Option<String> {
+    let found = || {
+        ["chromium", "chromium-browser", "google-chrome"].into_iter().find(|b| {
+            std::process::Command::new("which").arg(b).output().is_ok_and(|o| o.status.success())
+        })
+    };
+    if let Some(b) = found() {
+        return Some(b.to_owned());
+    }
+    let root = std::process::Command::new("id")
+        .arg("-u")
+        .output()
+        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0");
+    if !root {
+        eprintln!("skipped: no chromium, and not root to install Debian's `chromium` package");
+        return None;
+    }
+    let apt = |args: &[&str]| {
+        std::process::Command::new("apt-get")
+            .args(args)
+            .env("DEBIAN_FRONTEND", "noninteractive")
+            .output()
+            .is_ok_and(|o| o.status.success())
+    };
+    if !(apt(&["install", "-y", "-q", "chromium"])
+        || (apt(&["update", "-q"]) && apt(&["install", "-y", "-q", "chromium"])))
+    {
+        eprintln!("skipped: could not install Debian's `chromium` package with apt-get");
+        return None;
+    }
+    found().map(str::to_owned)
+}
+
+#[test]
+fn index_html_loads_every_image_in_headless_chromium() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let suite = write(dir.path(), "tiny.toml", SUITE);
+    let out = dir.path().join("out");
+    let o = shadowbench(&["report", "--suite", &suite, "--out", out.to_str().expect("utf-8")]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let page = std::fs::read_to_string(out.join("index.html")).expect("index.html");
+    let images = page.matches("<img ").count();
+    assert!(images >= 4, "{images} images in the page");
+    for png in page.split("src=\"").skip(1).filter_map(|s| s.split('"').next()) {
+        assert!(out.join(png).is_file(), "{png} referenced but missing");
+    }
+    let Some(browser) = chromium() else { return };
+    let url = format!("file://{}", out.join("index.html").display());
+    let dom = std::process::Command::new(&browser)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--virtual-time-budget=10000",
+            "--dump-dom",
+            &url,
+        ])
+        .output()
+        .expect("chromium runs");
+    let dom = String::from_utf8_lossy(&dom.stdout);
+    assert!(dom.contains("data-checked=\"yes\""), "the page did not finish loading: {dom}");
+    assert_eq!(dom.matches("data-loaded=\"yes\"").count(), images, "{dom}");
+    assert!(!dom.contains("data-loaded=\"no\""));
+}

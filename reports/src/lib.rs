@@ -3,7 +3,9 @@
 //! and parameters, run by [`sweep`] under the timing protocol of [`timing`], written by
 //! [`write`] as JSON, CSV, Markdown tables and EXR images.
 
+pub mod html;
 pub mod output;
+pub mod plots;
 pub mod suite;
 pub mod sweep;
 pub mod timing;
@@ -12,4 +14,4 @@ pub mod write;
 pub use output::{shade, write_run_json, write_shadow_png, write_visibility_exr, OutputError};
 pub use suite::{Suite, SuiteError, BUILTIN_SUITES};
 pub use sweep::{run_count, run_suite, Report, Row};
-pub use write::write_report;
+pub use write::{write_plots, write_report};

@@ -3,6 +3,7 @@
 //! visibility buffer).
 
 use crate::output::{write_visibility_exr, OutputError};
+use crate::plots::{series, write_chart, Chart, Measure};
 use crate::sweep::{Produced, Report, Row};
 use instrumentation::Counters;
 use std::fmt::Write as _;
@@ -108,6 +109,30 @@ pub fn csv(report: &Report) -> String {
     out
 }
 
+/// Column heads of the per-scene run tables.
+pub const RUN_COLUMNS: [&str; 7] = [
+    "method",
+    "parameters",
+    "mean abs error",
+    "boundary error",
+    "pixel match",
+    "FLIP",
+    "time ms [min, max]",
+];
+
+/// A row's cells in the per-scene run tables, under [`RUN_COLUMNS`].
+pub fn run_cells(r: &Row) -> [String; 7] {
+    [
+        r.method.clone(),
+        param_label(r),
+        format!("{:.5}", r.metrics.mean_abs_error),
+        format!("{:.4}", r.metrics.boundary_mean_abs_error),
+        format!("{:.2} %", 100.0 * r.metrics.pixel_match),
+        format!("{:.4}", r.flip_mean),
+        format!("{:.1} [{:.1}, {:.1}]", r.total_ms.median, r.total_ms.min, r.total_ms.max),
+    ]
+}
+
 /// `report.md`: the machine, the scenes, and per scene a table of every run.
 pub fn markdown(report: &Report) -> String {
     let mut s = String::new();
@@ -151,25 +176,10 @@ pub fn markdown(report: &Report) -> String {
     }
     for sc in &report.scenes {
         let _ = writeln!(s, "\n## {}\n", sc.scene);
-        let _ = writeln!(
-            s,
-            "| method | parameters | mean abs error | boundary error | pixel match | FLIP | time ms [min, max] |"
-        );
-        let _ = writeln!(s, "|---|---|---|---|---|---|---|");
+        let _ = writeln!(s, "| {} |", RUN_COLUMNS.join(" | "));
+        let _ = writeln!(s, "|{}", "---|".repeat(RUN_COLUMNS.len()));
         for r in report.rows.iter().filter(|r| r.scene == sc.scene) {
-            let _ = writeln!(
-                s,
-                "| {} | {} | {:.5} | {:.4} | {:.2} % | {:.4} | {:.1} [{:.1}, {:.1}] |",
-                r.method,
-                param_label(r),
-                r.metrics.mean_abs_error,
-                r.metrics.boundary_mean_abs_error,
-                100.0 * r.metrics.pixel_match,
-                r.flip_mean,
-                r.total_ms.median,
-                r.total_ms.min,
-                r.total_ms.max
-            );
+            let _ = writeln!(s, "| {} |", run_cells(r).join(" | "));
         }
     }
     if !report.skipped.is_empty() {
@@ -181,7 +191,100 @@ pub fn markdown(report: &Report) -> String {
     s
 }
 
-/// Writes `runs.json`, `runs.csv`, `report.md` and `visibility/*.exr` into `dir`.
+/// A chart written for a report.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlotFile {
+    /// Scene it belongs to.
+    pub scene: String,
+    /// Title.
+    pub title: String,
+    /// File name of the PNG, relative to the report folder (the SVG is beside it).
+    pub png: String,
+}
+
+/// Writes the report's charts into `dir/plots/`, per scene: error against time (every run,
+/// with the Pareto front), error against shadow-map resolution, and error and time against
+/// sample rate where a method sweeps its rate.
+pub fn write_plots(dir: &Path, report: &Report) -> Result<Vec<PlotFile>, OutputError> {
+    let plots = dir.join("plots");
+    std::fs::create_dir_all(&plots)
+        .map_err(|e| OutputError::Write { path: plots.clone(), message: e.to_string() })?;
+    let mut files = Vec::new();
+    for sc in &report.scenes {
+        let rows: Vec<&Row> = report.rows.iter().filter(|r| r.scene == sc.scene).collect();
+        let rate_swept = |m: &str| {
+            let mut rates: Vec<String> = rows
+                .iter()
+                .filter(|r| r.method == m)
+                .filter_map(|r| r.params.get("rate").map(|v| v.to_string()))
+                .collect();
+            rates.sort();
+            rates.dedup();
+            rates.len() > 1
+        };
+        let rate_rows: Vec<&Row> = rows.iter().copied().filter(|r| rate_swept(&r.method)).collect();
+        let reference = format!("against {} at {}x{}", sc.reference, sc.width, sc.height);
+        let specs = [
+            ("error-vs-time", "error against time", &rows, Measure::Time, Measure::MeanError),
+            (
+                "error-vs-map",
+                "error against shadow map size",
+                &rows,
+                Measure::Param("map_res"),
+                Measure::MeanError,
+            ),
+            (
+                "error-vs-rate",
+                "error against sample rate",
+                &rate_rows,
+                Measure::Param("rate"),
+                Measure::MeanError,
+            ),
+            (
+                "time-vs-rate",
+                "time against sample rate",
+                &rate_rows,
+                Measure::Param("rate"),
+                Measure::Time,
+            ),
+        ];
+        for (kind, what, subset, x, y) in specs {
+            // Every run on one chart, against time: there the Pareto front tells what
+            // accuracy costs.
+            let pareto = x == Measure::Time;
+            let title = if y == Measure::MeanError {
+                format!("{}: {what}, {reference}", sc.scene)
+            } else {
+                format!("{}: {what}", sc.scene)
+            };
+            let lines = series(subset, x, y, pareto);
+            if lines.iter().all(|s| s.points.len() < 2) && !pareto {
+                continue;
+            }
+            if lines.is_empty() {
+                continue;
+            }
+            let stem = format!("{kind}-{}", sc.scene);
+            let chart = Chart {
+                title: title.clone(),
+                x_label: x.label(),
+                y_label: y.label(),
+                series: lines,
+                pareto,
+            };
+            write_chart(&plots.join(&stem), &chart)?;
+            files.push(PlotFile {
+                scene: sc.scene.clone(),
+                title,
+                png: format!("plots/{stem}.png"),
+            });
+        }
+    }
+    Ok(files)
+}
+
+/// Writes `index.html`, `report.md`, `runs.csv`, `runs.json`, `plots/*.png|svg` and
+/// `visibility/*.exr` into `dir`.
 pub fn write_report(dir: &Path, report: &Report, produced: &[Produced]) -> Result<(), OutputError> {
     let err = |path: &Path, e: &dyn std::fmt::Display| OutputError::Write {
         path: path.to_owned(),
@@ -190,9 +293,14 @@ pub fn write_report(dir: &Path, report: &Report, produced: &[Produced]) -> Resul
     let images = dir.join("visibility");
     std::fs::create_dir_all(&images).map_err(|e| err(&images, &e))?;
     let json = serde_json::to_string_pretty(report).map_err(|e| err(dir, &e))?;
-    for (name, text) in
-        [("runs.json", json), ("runs.csv", csv(report)), ("report.md", markdown(report))]
-    {
+    let plots = write_plots(dir, report)?;
+    let html = crate::html::index_html(report, &plots);
+    for (name, text) in [
+        ("runs.json", json),
+        ("runs.csv", csv(report)),
+        ("report.md", markdown(report)),
+        ("index.html", html),
+    ] {
         let path = dir.join(name);
         std::fs::write(&path, text).map_err(|e| err(&path, &e))?;
     }
