@@ -300,12 +300,12 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
         indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} runs, {elapsed} {msg}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
-    let (report, produced) = reports::run_suite(&suite, |label| {
+    let (report, produced, grids) = reports::run_suite(&suite, |label| {
         bar.set_message(label.to_owned());
         bar.inc(1);
     });
     bar.finish_and_clear();
-    reports::write_report(&out, &report, &produced)?;
+    reports::write_report(&out, &report, &produced, &grids)?;
     for skipped in &report.skipped {
         eprintln!("note: not run: {skipped}");
     }

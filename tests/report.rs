@@ -20,6 +20,13 @@ map_res = [64, 128]
 method = "pcf-bs-fast-2x2"
 map_res = [128]
 depth_bits = [8, 32]
+
+[[grid]]
+title = "result, reference and error"
+scene = "plane-square"
+inset = [0.4, 0.4, 0.25, 0.25]
+reference = true
+panels = [{ method = "sm", map_res = 64 }, { method = "pcf-gems4", map_res = 64 }]
 "#;
 
 #[test]
@@ -76,6 +83,10 @@ fn a_suite_file_writes_tables_that_parse_back() {
 
     let md = std::fs::read_to_string(out.join("report.md")).expect("report.md");
     assert!(md.contains("## plane-square") && md.contains("pcf-bs-fast-2x2"), "{md}");
+    let grids = json["grids"].as_array().expect("grids");
+    assert_eq!(grids.len(), 1);
+    let grid = image::open(out.join(grids[0]["png"].as_str().expect("path"))).expect("a PNG");
+    assert!(grid.width() > 4 * 64, "four panels: two methods, reference, error");
     let exrs = std::fs::read_dir(out.join("visibility")).expect("visibility").count();
     assert_eq!(exrs, rows.len());
 }

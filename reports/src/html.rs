@@ -69,6 +69,14 @@ pub fn index_html(report: &Report, plots: &[PlotFile]) -> String {
     s.push_str("</table>\n");
     for sc in &report.scenes {
         let _ = writeln!(s, "<h2 id=\"{0}\">{0}</h2>", escape(&sc.scene));
+        for g in report.grids.iter().filter(|g| g.scene == sc.scene) {
+            let _ = writeln!(
+                s,
+                "<figure><img src=\"{png}\" alt=\"{t}\"><figcaption>{t}</figcaption></figure>",
+                png = escape(&g.png),
+                t = escape(&g.title)
+            );
+        }
         for p in plots.iter().filter(|p| p.scene == sc.scene) {
             let svg = p.png.trim_end_matches(".png").to_owned() + ".svg";
             let _ = writeln!(

@@ -3,6 +3,7 @@
 //! and parameters, run by [`sweep`] under the timing protocol of [`timing`], written by
 //! [`write`] as JSON, CSV, Markdown tables and EXR images.
 
+pub mod grids;
 pub mod html;
 pub mod output;
 pub mod plots;

@@ -21,7 +21,8 @@ pub const LOG_FLOOR: f64 = 1e-7;
 static FONT: &[u8] = include_bytes!("../fonts/DejaVuSans.ttf");
 static REGISTER: Once = Once::new();
 
-fn register_font() {
+/// Registers the compiled-in font as `sans-serif` (once).
+pub(crate) fn register_font() {
     REGISTER.call_once(|| {
         // The font is compiled in and known to parse (unit-tested below).
         let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);

@@ -86,6 +86,43 @@ pub struct RunSpec {
     pub depth_bits: Vec<u32>,
 }
 
+/// One panel of an image grid: a method and its parameters.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PanelSpec {
+    /// Method name.
+    pub method: String,
+    /// Label; default: the method and its parameters.
+    #[serde(default)]
+    pub label: Option<String>,
+    /// Shadow map resolution.
+    #[serde(default)]
+    pub map_res: Option<u32>,
+    /// Sample rate.
+    #[serde(default)]
+    pub rate: Option<u32>,
+    /// Depth precision.
+    #[serde(default)]
+    pub depth_bits: Option<u32>,
+}
+
+/// An image grid with a zoomed inset, like the papers' comparison figures.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GridSpec {
+    /// Title (name the figure it reproduces).
+    pub title: String,
+    /// Scene (one of the suite's scenes).
+    pub scene: String,
+    /// The inset's region as fractions of the frame: `[x, y, width, height]`.
+    pub inset: [f64; 4],
+    /// The panels, left to right.
+    pub panels: Vec<PanelSpec>,
+    /// Also show the reference and the last panel's 10x error image (Pan et al. Fig. 8).
+    #[serde(default)]
+    pub reference: bool,
+}
+
 /// A suite.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -118,6 +155,9 @@ pub struct Suite {
     /// Methods and their sweeps.
     #[serde(rename = "run")]
     pub runs: Vec<RunSpec>,
+    /// Image grids.
+    #[serde(default, rename = "grid")]
+    pub grids: Vec<GridSpec>,
 }
 
 fn one() -> u32 {
@@ -163,6 +203,24 @@ impl Suite {
         }
         if suite.runs.is_empty() {
             return Err(invalid("run", "must list at least one [[run]]".into()));
+        }
+        for (k, g) in suite.grids.iter().enumerate() {
+            if !suite.scenes.contains(&g.scene) {
+                return Err(invalid(
+                    &format!("grid[{k}].scene"),
+                    format!("`{}` is not one of the suite's scenes", g.scene),
+                ));
+            }
+            if g.panels.is_empty() {
+                return Err(invalid(&format!("grid[{k}].panels"), "must not be empty".into()));
+            }
+            let [x, y, w, h] = g.inset;
+            if !((0.0..1.0).contains(&x) && (0.0..1.0).contains(&y) && w > 0.0 && h > 0.0) {
+                return Err(invalid(
+                    &format!("grid[{k}].inset"),
+                    "x and y in [0, 1), width and height > 0 (fractions of the frame)".into(),
+                ));
+            }
         }
         Ok(suite)
     }
@@ -211,6 +269,13 @@ mod tests {
         let e = Suite::parse(&format!("{base}map_res = \"big\"\n"), p).expect_err("bad type");
         assert!(e.to_string().contains("map_res"), "{e}");
         assert!(Suite::parse(base, p).is_ok());
+        let grid = "[[grid]]\ntitle = \"g\"\nscene = \"spheres\"\ninset = [0.1, 0.1, 0.2, 0.2]\n\
+                    panels = [{ method = \"sm\" }]\n";
+        let e = Suite::parse(&format!("{base}{grid}"), p).expect_err("scene not in the suite");
+        assert!(e.to_string().contains("grid[0].scene"), "{e}");
+        let grid = grid.replace("spheres", "cage").replace("[0.1, 0.1", "[1.5, 0.1");
+        let e = Suite::parse(&format!("{base}{grid}"), p).expect_err("inset outside");
+        assert!(e.to_string().contains("grid[0].inset"), "{e}");
         let e = Suite::load("/no/such/suite.toml").expect_err("missing");
         assert!(e.to_string().contains("quick"), "{e}");
     }

@@ -6,9 +6,11 @@
 //! per scene. The metrics come from the last timed run (every method is deterministic for
 //! its parameters, so all runs give the same image).
 
-use crate::suite::{ReferenceChoice, RunSpec, Suite};
+use crate::grids::Panel;
+use crate::output::shade;
+use crate::suite::{GridSpec, ReferenceChoice, RunSpec, Suite};
 use crate::timing::{stage_summaries, Machine, StageTimes, Summary};
-use analysis::{flip::flip_mean, Metrics, ReferenceImage};
+use analysis::{error_image, flip::flip_mean, Metrics, ReferenceImage};
 use instrumentation::{Counters, Recorder};
 use methods::{Frame, MethodOptions, Visibility};
 use serde::{Deserialize, Serialize};
@@ -80,6 +82,29 @@ pub struct Report {
     pub rows: Vec<Row>,
     /// What could not run, and why.
     pub skipped: Vec<String>,
+    /// Image grids, by title and file.
+    pub grids: Vec<GridFile>,
+}
+
+/// An image grid of a report.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GridFile {
+    /// Scene.
+    pub scene: String,
+    /// Title.
+    pub title: String,
+    /// PNG file, relative to the report folder.
+    pub png: String,
+}
+
+/// A grid's panels, to be written.
+pub struct GridImages {
+    /// Index into [`Report::grids`].
+    pub grid: usize,
+    /// The panels.
+    pub panels: Vec<crate::grids::Panel>,
+    /// The inset.
+    pub inset: crate::grids::Region,
 }
 
 /// A visibility buffer a sweep produced, for the image outputs.
@@ -133,17 +158,78 @@ fn reference_for(
     Ok((name.to_owned(), rate, image, t.elapsed().as_secs_f64() * 1e3))
 }
 
+/// The panels of `grid` on `frame` (untimed runs); panels whose method cannot run are left
+/// out with the reason in `skipped`.
+fn grid_panels(
+    grid: &GridSpec,
+    frame: &Frame<'_>,
+    truth: &ReferenceImage,
+    ref_name: &str,
+    skipped: &mut Vec<String>,
+) -> Vec<Panel> {
+    let mut panels = Vec::new();
+    let mut last = None;
+    for p in &grid.panels {
+        let options = MethodOptions {
+            map_res: p.map_res,
+            rate: p.rate,
+            depth_bits: p.depth_bits,
+            ..Default::default()
+        };
+        let run = analysis::registry::technique(&p.method, &options)
+            .and_then(|t| t.run(frame, &mut Recorder::default()).map(|v| (t, v)));
+        match run {
+            Ok((t, v)) => {
+                let label = p.label.clone().unwrap_or_else(|| {
+                    let given = [("map", p.map_res), ("rate", p.rate), ("bits", p.depth_bits)];
+                    let params: Vec<String> =
+                        given.iter().filter_map(|(k, v)| v.map(|v| format!("{k} {v}"))).collect();
+                    format!("{} {}", t.name(), params.join(", "))
+                });
+                panels.push(Panel { label, image: shade(frame, &v) });
+                last = Some(v);
+            }
+            Err(e) => skipped.push(format!("grid `{}`: {}: {e}", grid.title, p.method)),
+        }
+    }
+    if grid.reference {
+        let lit = truth.lit.iter().map(|&l| l as f32).collect();
+        let v = Visibility { width: truth.width, height: truth.height, lit, transmittance: None };
+        // Pixels the reference does not evaluate (its value there is not ground truth) are
+        // painted dark blue, as in the error image.
+        let mut image = shade(frame, &v);
+        for (k, px) in image.pixels_mut().enumerate() {
+            if !truth.evaluated[k] {
+                *px = image::Rgb([0, 0, 64]);
+            }
+        }
+        panels.push(Panel { label: format!("reference ({ref_name}; blue: not evaluated)"), image });
+        if let Some(v) = last {
+            panels.push(Panel {
+                label: "10x |error| of the last".into(),
+                image: error_image(&v, &truth.lit, &truth.evaluated),
+            });
+        }
+    }
+    panels
+}
+
 /// Runs `suite`; `progress` is called once per method run with a short label. Returns the
-/// report and every visibility buffer.
-pub fn run_suite(suite: &Suite, mut progress: impl FnMut(&str)) -> (Report, Vec<Produced>) {
+/// report, every visibility buffer and the grids' panels.
+pub fn run_suite(
+    suite: &Suite,
+    mut progress: impl FnMut(&str),
+) -> (Report, Vec<Produced>, Vec<GridImages>) {
     let mut report = Report {
         suite: suite.clone(),
         machine: Machine::current(),
         scenes: Vec::new(),
         rows: Vec::new(),
         skipped: Vec::new(),
+        grids: Vec::new(),
     };
     let mut produced = Vec::new();
+    let mut grid_images = Vec::new();
     let combos: usize = suite.runs.iter().map(|r| expand(r).len()).sum();
     for scene_name in &suite.scenes {
         let scene = match scenes::load(scene_name) {
@@ -233,8 +319,24 @@ pub fn run_suite(suite: &Suite, mut progress: impl FnMut(&str)) -> (Report, Vec<
                 produced.push(Produced { row: report.rows.len() - 1, visibility: v });
             }
         }
+        for grid in suite.grids.iter().filter(|g| g.scene == *scene_name) {
+            let panels = grid_panels(grid, &frame, &truth, &ref_name, &mut report.skipped);
+            if panels.is_empty() {
+                continue;
+            }
+            report.grids.push(GridFile {
+                scene: scene.name.clone(),
+                title: grid.title.clone(),
+                png: format!("grids/grid-{}.png", report.grids.len() + 1),
+            });
+            grid_images.push(GridImages {
+                grid: report.grids.len() - 1,
+                panels,
+                inset: grid.inset,
+            });
+        }
     }
-    (report, produced)
+    (report, produced, grid_images)
 }
 
 #[cfg(test)]

@@ -2,9 +2,10 @@
 //! metrics, times, counters), `report.md` (the tables), and `visibility/*.exr` (every
 //! visibility buffer).
 
+use crate::grids::write_grid;
 use crate::output::{write_visibility_exr, OutputError};
 use crate::plots::{series, write_chart, Chart, Measure};
-use crate::sweep::{Produced, Report, Row};
+use crate::sweep::{GridImages, Produced, Report, Row};
 use instrumentation::Counters;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -176,6 +177,9 @@ pub fn markdown(report: &Report) -> String {
     }
     for sc in &report.scenes {
         let _ = writeln!(s, "\n## {}\n", sc.scene);
+        for g in report.grids.iter().filter(|g| g.scene == sc.scene) {
+            let _ = writeln!(s, "![{}]({})\n", g.title, g.png);
+        }
         let _ = writeln!(s, "| {} |", RUN_COLUMNS.join(" | "));
         let _ = writeln!(s, "|{}", "---|".repeat(RUN_COLUMNS.len()));
         for r in report.rows.iter().filter(|r| r.scene == sc.scene) {
@@ -285,13 +289,23 @@ pub fn write_plots(dir: &Path, report: &Report) -> Result<Vec<PlotFile>, OutputE
 
 /// Writes `index.html`, `report.md`, `runs.csv`, `runs.json`, `plots/*.png|svg` and
 /// `visibility/*.exr` into `dir`.
-pub fn write_report(dir: &Path, report: &Report, produced: &[Produced]) -> Result<(), OutputError> {
+pub fn write_report(
+    dir: &Path,
+    report: &Report,
+    produced: &[Produced],
+    grids: &[GridImages],
+) -> Result<(), OutputError> {
     let err = |path: &Path, e: &dyn std::fmt::Display| OutputError::Write {
         path: path.to_owned(),
         message: e.to_string(),
     };
     let images = dir.join("visibility");
     std::fs::create_dir_all(&images).map_err(|e| err(&images, &e))?;
+    let grid_dir = dir.join("grids");
+    std::fs::create_dir_all(&grid_dir).map_err(|e| err(&grid_dir, &e))?;
+    for g in grids {
+        write_grid(&dir.join(&report.grids[g.grid].png), &g.panels, g.inset)?;
+    }
     let json = serde_json::to_string_pretty(report).map_err(|e| err(dir, &e))?;
     let plots = write_plots(dir, report)?;
     let html = crate::html::index_html(report, &plots);
