@@ -2,9 +2,10 @@
 //!
 //! Kernels: [`raster`] (exact CPU rasterizer), [`gbuffer`] (camera G-buffer), [`depth_map`]
 //! (light depth map), [`frame`] (a scene at one resolution). Techniques, one module each:
-//! [`sm`] (standard shadow map). Every technique implements [`method::ShadowMethod`];
+//! [`sm`] (standard shadow map), [`afsm`] (alias-free shadow maps, `afsm` and `afsm-ss`). Every technique implements [`method::ShadowMethod`];
 //! [`registry`] finds them by name.
 
+pub mod afsm;
 pub mod depth_map;
 pub mod frame;
 pub mod gbuffer;

@@ -1,14 +1,18 @@
 //! Methods by name, as the command line and the reports name them.
 
 use crate::{
+    afsm::{AfsmOptions, AliasFreeShadowMap},
     method::{MethodError, ShadowMethod},
     pattern::PatternKind,
     sm::{SmOptions, StandardShadowMap},
 };
 
 /// Name and one-line description of every available method.
-pub const METHODS: &[(&str, &str)] =
-    &[("sm", "standard shadow map: one depth test per pixel centre (Williams 1978)")];
+pub const METHODS: &[(&str, &str)] = &[
+    ("sm", "standard shadow map: one depth test per pixel centre (Williams 1978)"),
+    ("afsm", "alias-free shadow map: pixel centres as sampling points, 2D BSP (Aila & Laine 2004)"),
+    ("afsm-ss", "alias-free shadow map at --rate sub-samples per pixel (default 32)"),
+];
 
 /// Options shared by the methods; `None` takes the method's documented default.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -40,6 +44,22 @@ pub fn method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMetho
             };
             o.validate()?;
             Ok(Box::new(StandardShadowMap { options: o }))
+        }
+        "afsm" => {
+            let m = AliasFreeShadowMap::pixel_centres(AfsmOptions::default());
+            m.validate()?;
+            Ok(Box::new(m))
+        }
+        "afsm-ss" => {
+            let d = AfsmOptions::supersampled();
+            let o = AfsmOptions {
+                rate: options.rate.unwrap_or(d.rate),
+                pattern: options.pattern.unwrap_or(d.pattern),
+                ..d
+            };
+            let m = AliasFreeShadowMap::supersampled(o);
+            m.validate()?;
+            Ok(Box::new(m))
         }
         _ => Err(MethodError::InvalidOption {
             option: "--method",
