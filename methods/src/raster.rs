@@ -81,7 +81,7 @@ pub fn inside_edge(a: DVec2, b: DVec2, p: DVec2) -> bool {
 }
 
 /// Clips a triangle at `depth >= near`; returns the clipped polygon (0, 3 or 4 corners).
-fn clip_near(corners: [DVec3; 3], depths: [f64; 3], near: f64) -> ([DVec3; 4], usize) {
+pub(crate) fn clip_near(corners: [DVec3; 3], depths: [f64; 3], near: f64) -> ([DVec3; 4], usize) {
     let mut out = [DVec3::ZERO; 4];
     let mut n = 0;
     for i in 0..3 {
