@@ -39,6 +39,21 @@ enum Command {
     /// error.png (10x absolute error), error_boundary.png, metrics.json and the method's
     /// visibility.exr, shadow.png and run.json.
     Compare(CompareArgs),
+    /// Run a suite (scenes x methods x parameters) under the timing protocol and write
+    /// report.md, runs.csv, runs.json and every visibility buffer as EXR into --out.
+    Report(ReportArgs),
+}
+
+#[derive(clap::Args)]
+struct ReportArgs {
+    /// A built-in suite (`quick`: every method on small frames, a few minutes; `papers`: the
+    /// papers' frame and map sizes; `full`: every scene and parameter) or a suite file
+    /// (.toml; copy one from reports/suites/ and edit it).
+    #[arg(long, default_value = "quick", value_name = "SUITE")]
+    suite: String,
+    /// Output folder; default `shadowbench-out/report-SUITE`.
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -282,6 +297,36 @@ fn job(a: &RenderArgs) -> Result<Job, Failure> {
 }
 
 /// Runs the job's technique on `frame`, returning its visibility and run record.
+fn report(a: ReportArgs) -> Result<(), Failure> {
+    let suite =
+        reports::Suite::load(&a.suite).map_err(|e| input(anyhow::anyhow!("--suite: {e}")))?;
+    let out =
+        a.out.unwrap_or_else(|| PathBuf::from(format!("shadowbench-out/report-{}", suite.name)));
+    std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
+    let bar = indicatif::ProgressBar::new(reports::run_count(&suite));
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} runs, {elapsed} {msg}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let (report, produced, grids) = reports::run_suite(&suite, |label| {
+        bar.set_message(label.to_owned());
+        bar.inc(1);
+    });
+    bar.finish_and_clear();
+    reports::write_report(&out, &report, &produced, &grids)?;
+    for skipped in &report.skipped {
+        eprintln!("note: not run: {skipped}");
+    }
+    println!(
+        "suite {}: {} runs on {} scenes; wrote {}",
+        suite.name,
+        report.rows.len(),
+        report.scenes.len(),
+        out.display()
+    );
+    Ok(())
+}
+
 fn run(
     job: &Job,
     frame: &Frame<'_>,
@@ -441,6 +486,7 @@ fn main() -> ExitCode {
         Command::Scenes { json, toml } => scenes(json, toml),
         Command::Render(a) => render(a),
         Command::Compare(c) => compare(c),
+        Command::Report(r) => report(r),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -4,10 +4,12 @@
 //! (light depth map), [`depth_test`] (map lookups, bias, depth quantization), [`pattern`]
 //! (sub-pixel sample patterns), [`frame`] (a scene at one resolution). Techniques, one module
 //! each: [`sm`] (standard shadow map), [`pcf_reeves`] (Reeves et al.'s stochastic PCF),
-//! [`pcf_bs`] (Brabec and Seidel's packed PCF), [`pcf_gems`] (GPU Gems' 4x4-region PCF), [`spsm`] (Lecocq et al.'s sub-pixel shadow
-//! maps). Every technique implements [`method::ShadowMethod`];
+//! [`pcf_bs`] (Brabec and Seidel's packed PCF), [`pcf_gems`] (GPU Gems' 4x4-region PCF),
+//! [`afsm`] (alias-free shadow maps, `afsm` and `afsm-ss`), [`spsm`] (Lecocq et al.'s
+//! sub-pixel shadow maps). Every technique implements [`method::ShadowMethod`];
 //! [`registry`] finds them by name.
 
+pub mod afsm;
 pub mod depth_map;
 pub mod depth_test;
 pub mod frame;

@@ -1,6 +1,7 @@
 //! Methods by name, as the command line and the reports name them.
 
 use crate::{
+    afsm::{AfsmOptions, AliasFreeShadowMap},
     depth_test::MapOptions,
     method::{MethodError, ShadowMethod},
     pattern::PatternKind,
@@ -27,6 +28,8 @@ pub const METHODS: &[(&str, &str)] = &[
     ("pcf-bs-fast-4x4", "fast PCF over 4x4 texels in four accumulated passes (Brabec & Seidel)"),
     ("pcf-gems16", "16 bilinear PCF lookups over a 4x4-texel region (GPU Gems ch. 11)"),
     ("pcf-gems4", "4 of the 16 lookups, dithered by screen position (GPU Gems ch. 11)"),
+    ("afsm", "alias-free shadow map: pixel centres as sampling points, 2D BSP (Aila & Laine 2004)"),
+    ("afsm-ss", "alias-free shadow map at --rate sub-samples per pixel (default 32)"),
     (
         "spsm",
         "sub-pixel shadow map: 128-bit triangle texels, silhouette recovery, AA at uncertain \
@@ -101,6 +104,22 @@ pub fn method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMetho
         "pcf-bs-fast-4x4" => bs(Variant::Fast4x4),
         "pcf-gems16" => gems(GemsSamples::Sixteen),
         "pcf-gems4" => gems(GemsSamples::FourDithered),
+        "afsm" => {
+            let m = AliasFreeShadowMap::pixel_centres(AfsmOptions::default());
+            m.validate()?;
+            Ok(Box::new(m))
+        }
+        "afsm-ss" => {
+            let d = AfsmOptions::supersampled();
+            let o = AfsmOptions {
+                rate: options.rate.unwrap_or(d.rate),
+                pattern: options.pattern.unwrap_or(d.pattern),
+                ..d
+            };
+            let m = AliasFreeShadowMap::supersampled(o);
+            m.validate()?;
+            Ok(Box::new(m))
+        }
         "spsm" | "spsm-f32" => {
             let d = SpsmOptions::default();
             let o = SpsmOptions {

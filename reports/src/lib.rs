@@ -1,6 +1,18 @@
-//! What a run writes: the visibility buffer as EXR, a shaded PNG for looking, and the run
-//! record as JSON.
+//! What runs and reports write. A single run: the visibility buffer as EXR, a shaded PNG for
+//! looking, and the run record as JSON ([`output`]). A report: a [`suite`] of scenes, methods
+//! and parameters, run by [`sweep`] under the timing protocol of [`timing`], written by
+//! [`write`] as JSON, CSV, Markdown tables and EXR images.
 
+pub mod grids;
+pub mod html;
 pub mod output;
+pub mod plots;
+pub mod suite;
+pub mod sweep;
+pub mod timing;
+pub mod write;
 
 pub use output::{shade, write_run_json, write_shadow_png, write_visibility_exr, OutputError};
+pub use suite::{Suite, SuiteError, BUILTIN_SUITES};
+pub use sweep::{run_count, run_suite, Report, Row};
+pub use write::{write_plots, write_report};

@@ -15,14 +15,16 @@
 //!   `light depth map (jitter 1..4)`, then `texel packing` (the four maps into one RGBA map,
 //!   the effective resolution doubled per axis), then `depth test` (one lookup of the texel
 //!   the point falls in): 5 shadow levels.
-//! - **`pcf-bs-fast-2x2`** (section 4, Fig. 5, 6): one map; `texel packing` is the 3x3
+//! - **`pcf-bs-fast-2x2`** (section 4, Fig. 5, 6): one map, turned into colour once
+//!   (`depth encoding`, the ramp of section 2); `texel packing` is the 3x3
 //!   convolution that gathers each texel's 2x2 neighbourhood into its channels, and the lookup
 //!   is offset by half a texel (Fig. 6) so that the packed texel holds the four texels whose
 //!   centres surround the point: 5 levels at the map's own resolution.
 //! - **`pcf-bs-fast-4x4`** (section 4): the 4x4 texels around the point in four passes, each
 //!   packing one 2x2 quadrant of the region (upper left, upper right, lower left, lower right)
-//!   and adding its count into an accumulation buffer: stages `texel packing (pass k)` and
-//!   `depth test (pass k)` for `k = 1..4`. The sum takes the values `0..=16` (the paper
+//!   and adding its count into an accumulation buffer: stages `depth encoding` (once: the
+//!   map is rendered once), then `texel packing (pass k)` and `depth test (pass k)` for
+//!   `k = 1..4`. The sum takes the values `0..=16` (the paper
 //!   counts `4 * 5 = 20` levels, the passes' levels summed).
 //!
 //! Counter `shadow_map_lookups`: the depth compares, four per packed lookup inside the packed
@@ -164,18 +166,24 @@ pub fn pack_stratified(maps: &[LightDepthMap; 4], code: &DepthCode) -> PackedMap
     PackedMap { origin: 0, side, texels }
 }
 
-/// Texel packing of section 4 (the 3x3 convolution of Fig. 5): packed texel `k` holds the
-/// 2x2 texels from `k + offset` to `k + offset + (1, 1)` (channels: upper left, upper right,
-/// lower left, lower right); texels beyond the map give the far code. Indices run over
-/// `-1..res`, one more than the map, so every point inside the map finds its packed texel.
-pub fn pack_neighbourhood(map: &LightDepthMap, code: &DepthCode, offset: (i64, i64)) -> PackedMap {
-    let res = i64::from(map.res);
-    let side = map.res as usize + 1;
+/// Depth as colour (section 2): the map's depths through the linear ramp, one code per texel.
+pub fn encode_map(map: &LightDepthMap, code: &DepthCode) -> Vec<u32> {
+    map.depth.par_iter().map(|&d| code.encode(d)).collect()
+}
+
+/// Texel packing of section 4 (the 3x3 convolution of Fig. 5) of a `res x res` map of depth
+/// codes: packed texel `k` holds the 2x2 texels from `k + offset` to `k + offset + (1, 1)`
+/// (channels: upper left, upper right, lower left, lower right); texels beyond the map give
+/// the `far` code. Indices run over `-1..res`, one more than the map, so every point inside
+/// the map finds its packed texel.
+pub fn pack_neighbourhood(codes: &[u32], res: u32, far: u32, offset: (i64, i64)) -> PackedMap {
+    let r = i64::from(res);
+    let side = res as usize + 1;
     let texel = |x: i64, y: i64| {
-        if x >= 0 && y >= 0 && x < res && y < res {
-            code.encode(map.depth[(y * res + x) as usize])
+        if x >= 0 && y >= 0 && x < r && y < r {
+            codes[(y * r + x) as usize]
         } else {
-            code.max_code()
+            far
         }
     };
     let texels = (0..side * side)
@@ -302,18 +310,21 @@ impl ShadowMethod for BrabecSeidelPcf {
             }
             Variant::Fast2x2 => {
                 let map = frame.light_depth_map(o.map.map_res, rec);
-                let packed =
-                    rec.stages.time("texel packing", || pack_neighbourhood(&map, &code, (0, 0)));
+                let codes = rec.stages.time("depth encoding", || encode_map(&map, &code));
+                let packed = rec.stages.time("texel packing", || {
+                    pack_neighbourhood(&codes, map.res, code.max_code(), (0, 0))
+                });
                 compares += rec.stages.time("depth test", || {
                     shadow_test(frame, &tester, &code, self.variant, &packed, &mut counts)
                 });
             }
             Variant::Fast4x4 => {
                 let map = frame.light_depth_map(o.map.map_res, rec);
+                let codes = rec.stages.time("depth encoding", || encode_map(&map, &code));
                 for (pass, &quadrant) in QUADRANTS.iter().enumerate() {
                     let packed =
                         rec.stages.time(&format!("texel packing (pass {})", pass + 1), || {
-                            pack_neighbourhood(&map, &code, quadrant)
+                            pack_neighbourhood(&codes, map.res, code.max_code(), quadrant)
                         });
                     compares += rec.stages.time(&format!("depth test (pass {})", pass + 1), || {
                         shadow_test(frame, &tester, &code, self.variant, &packed, &mut counts)
@@ -339,7 +350,8 @@ mod tests {
     fn neighbourhood_packing_gathers_the_2x2_block_and_pads_with_far() {
         let m = LightDepthMap::from_depths((0..9).map(f64::from).collect(), 3);
         let code = DepthCode::new(8, 0.0, 255.0).expect("valid");
-        let p = pack_neighbourhood(&m, &code, (0, 0));
+        let codes = encode_map(&m, &code);
+        let p = pack_neighbourhood(&codes, 3, code.max_code(), (0, 0));
         assert_eq!(p.side, 4);
         assert_eq!(p.get(0, 0), Some(&[0, 1, 3, 4]));
         assert_eq!(p.get(1, 1), Some(&[4, 5, 7, 8]));
@@ -347,7 +359,7 @@ mod tests {
         assert_eq!(p.get(2, 2), Some(&[8, 255, 255, 255]));
         assert_eq!(p.get(3, 0), None);
         // Quadrant offsets move the block.
-        let q = pack_neighbourhood(&m, &code, (1, -1));
+        let q = pack_neighbourhood(&codes, 3, code.max_code(), (1, -1));
         assert_eq!(q.get(0, 1), Some(&[1, 2, 4, 5]));
     }
 

@@ -1,0 +1,745 @@
+//! Stage "rasterization of blockers" (Aila and Laine 2004, section 5.1; semi-transparent
+//! casters, section 4): every caster triangle is rasterized hierarchically into the 2D BSP of
+//! the samples, and the samples it covers in front of them are shadowed (or attenuated).
+//!
+//! Per triangle ([`Blocker`]): the light's projection of its corners (clipped at the spot
+//! light's `near` plane), wound positively, with its bounding box, the depth range of its
+//! corners and the rational function giving the light depth of its plane at any image point.
+//!
+//! Per node, in this order: the triangle must *overlap* the node (its box meets the node's box
+//! and no edge has the whole box strictly outside; a conservative test, see
+//! [`Blocker::overlaps`]); the node is then *visited* (`bsp_nodes_visited`); *max-depth
+//! culling* skips it when the triangle's nearest corner is not in front of the node's largest
+//! threshold depth (`nodes_depth_culled`); *occlusion culling* skips it when all its samples
+//! are already dark (`nodes_occlusion_culled`); otherwise the triangle goes on to both children,
+//! or, in a leaf, to every sample that is not dark yet (`sampling_points_tested`): not the
+//! sample's own triangle, inside the bounding box, depth in front of the sample's threshold,
+//! and covered by the exact test ([`Blocker::covers`]).
+//!
+//! Neither culling changes a result: a depth-culled triangle's depth (clamped to its corners'
+//! range) is at or beyond every threshold in the node, and a dark sample stays dark.
+//!
+//! Parallel scheme: the BSP's top [`TOP_LEVELS`] levels are walked per triangle first
+//! (binning, in parallel over fixed chunks of triangles), giving for each *frontier* node (at
+//! depth [`TOP_LEVELS`], or a shallower leaf) the triangles that reach it, in triangle order.
+//! Each frontier subtree, with its samples and occlusion state, is then owned by one task that
+//! rasterizes its triangles in triangle order. Samples are thus attenuated in the same order
+//! whatever the scheduling, and the result, the counters included, does not depend on the
+//! number of threads. Nodes above the frontier carry no occlusion state (they are only depth
+//! culled).
+
+use super::{
+    bsp::{Bsp, Node},
+    samples::Sample,
+};
+use crate::raster::{clip_near, inside_edge};
+use glam::{DVec2, DVec3};
+use instrumentation::Counters;
+use rayon::prelude::*;
+use robust::{orient2d, Coord};
+use scenes::{projection::ProjectionKind, Geometry, Projector};
+
+/// Depth of the frontier nodes, whose subtrees are the parallel tasks (up to 64).
+pub const TOP_LEVELS: usize = 6;
+
+/// Triangles per binning task.
+const BIN_CHUNK: usize = 1024;
+
+/// Binning tasks per batch: triangles are binned and rasterized in batches of
+/// `BIN_CHUNK * BATCH_CHUNKS`, so that the bins stay small and their memory is reused.
+const BATCH_CHUNKS: usize = 8;
+
+/// Which culling tests run (both on by default; off only to measure them).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Culling {
+    /// Skip nodes whose samples are all dark, and dark samples in leaves.
+    pub occlusion: bool,
+    /// Skip nodes whose farthest sample lies in front of the triangle.
+    pub depth: bool,
+}
+
+/// The light a sample receives, as the casters rasterized so far leave it.
+pub trait Shade: Copy + Send + Sync {
+    /// Fully lit.
+    const LIT: Self;
+    /// Whether no light reaches the sample any more (further casters cannot change it).
+    fn is_dark(&self) -> bool;
+    /// A caster letting `pass` of the light through covers the sample; returns whether the
+    /// sample became dark.
+    fn attenuate(&mut self, pass: &[f64; 3]) -> bool;
+    /// The RGB transmittance.
+    fn rgb(&self) -> [f64; 3];
+}
+
+/// Opaque casters: `true` once the sample is shadowed.
+impl Shade for bool {
+    const LIT: bool = false;
+
+    #[inline]
+    fn is_dark(&self) -> bool {
+        *self
+    }
+
+    #[inline]
+    fn attenuate(&mut self, _pass: &[f64; 3]) -> bool {
+        let became = !*self;
+        *self = true;
+        became
+    }
+
+    #[inline]
+    fn rgb(&self) -> [f64; 3] {
+        if *self {
+            [0.0; 3]
+        } else {
+            [1.0; 3]
+        }
+    }
+}
+
+/// Semi-transparent casters: the RGB transmittance, initially white (section 4).
+impl Shade for [f64; 3] {
+    const LIT: [f64; 3] = [1.0; 3];
+
+    #[inline]
+    fn is_dark(&self) -> bool {
+        self.iter().all(|&c| c == 0.0)
+    }
+
+    #[inline]
+    fn attenuate(&mut self, pass: &[f64; 3]) -> bool {
+        let was_dark = self.is_dark();
+        for (c, p) in self.iter_mut().zip(pass) {
+            *c *= p;
+        }
+        !was_dark && self.is_dark()
+    }
+
+    #[inline]
+    fn rgb(&self) -> [f64; 3] {
+        *self
+    }
+}
+
+#[inline]
+fn coord(p: DVec2) -> Coord<f64> {
+    Coord { x: p.x, y: p.y }
+}
+
+/// A caster triangle prepared for rasterization on the light's image plane.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Blocker {
+    /// The (clipped) convex outline, positively oriented, with the first corner repeated.
+    outline: [DVec2; 5],
+    /// Corners of the outline (3, or 4 after near clipping).
+    corners: usize,
+    /// Bounding box of the outline.
+    lo: DVec2,
+    hi: DVec2,
+    /// Light depth of the plane at `(x, y)`: `(n0 + n1 x + n2 y) / (d0 + d1 x + d2 y)`.
+    num: [f64; 3],
+    den: [f64; 3],
+    /// Depth range of the outline's corners.
+    dmin: f64,
+    dmax: f64,
+    /// Triangle id.
+    id: u32,
+    /// Object index (for its opacity).
+    object: u32,
+}
+
+impl Blocker {
+    /// Prepares triangle `t`; `None` when it covers nothing (zero area, collinear projection,
+    /// non-finite corners, or wholly nearer a spot light than its `near` plane).
+    pub fn new(geometry: &Geometry, t: usize, light: &Projector) -> Option<Self> {
+        let [i, j, k] = geometry.triangles[t];
+        let p = &geometry.positions;
+        let corners = [p[i as usize], p[j as usize], p[k as usize]];
+        // Any length will do: the depth is a ratio of two linear functions of the normal.
+        let normal = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
+        if normal == DVec3::ZERO || !normal.is_finite() {
+            return None;
+        }
+        let mut outline = [DVec2::ZERO; 5];
+        let mut depth = [0.0; 4];
+        let count = if light.is_perspective() {
+            let (world, count) = clip_near(corners, corners.map(|c| light.depth_of(c)), light.near);
+            for i in 0..count {
+                (outline[i], depth[i]) = light.project_unclipped(world[i]);
+            }
+            count
+        } else {
+            for i in 0..3 {
+                (outline[i], depth[i]) = light.project_unclipped(corners[i]);
+            }
+            3
+        };
+        if count < 3 || !outline[..count].iter().all(|q| q.is_finite()) {
+            return None;
+        }
+        let (dmin, dmax) = depth[..count]
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &d| (lo.min(d), hi.max(d)));
+        if !(dmin.is_finite() && dmax.is_finite()) {
+            return None;
+        }
+        let orientation = (1..count - 1)
+            .map(|i| orient2d(coord(outline[0]), coord(outline[i]), coord(outline[i + 1])))
+            .find(|&s| s != 0.0)?;
+        if orientation < 0.0 {
+            outline[..count].reverse();
+        }
+        outline[count] = outline[0];
+        let (lo, hi) = outline[..count].iter().fold(
+            (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
+            |(lo, hi), &p| (lo.min(p), hi.max(p)),
+        );
+        // The plane n·p = offset met by the light's ray through (x, y), with the projector's
+        // sx = 2x / W - 1 and sy = 1 - 2y / H (see `Projector::ray`).
+        let offset = normal.dot(corners[0]);
+        let (nr, nu, nf, no) = (
+            normal.dot(light.right),
+            normal.dot(light.up),
+            normal.dot(light.forward),
+            normal.dot(light.origin),
+        );
+        let (w, h) = (light.width, light.height);
+        let (num, den) = match light.kind {
+            ProjectionKind::Orthographic { half_width: hw, half_height: hh } => (
+                [offset - no + nr * hw - nu * hh, -2.0 * nr * hw / w, 2.0 * nu * hh / h],
+                [nf, 0.0, 0.0],
+            ),
+            ProjectionKind::Perspective { tan_half_x: tx, tan_half_y: ty } => (
+                [offset - no, 0.0, 0.0],
+                [nf - nr * tx + nu * ty, 2.0 * nr * tx / w, -2.0 * nu * ty / h],
+            ),
+        };
+        Some(Self {
+            outline,
+            corners: count,
+            lo,
+            hi,
+            num,
+            den,
+            dmin,
+            dmax,
+            id: t as u32,
+            object: geometry.object[t],
+        })
+    }
+
+    /// Whether the triangle may cover a point of the box `lo..=hi`. Conservative: `false` only
+    /// when the boxes are disjoint or, for some edge, the box's corner farthest inside lies
+    /// outside by more than `1e-12` of the terms' magnitude, far beyond the rounding of the
+    /// edge function (about `4.4e-16` of it); the exact test then rejects every point of
+    /// the box.
+    #[inline(always)]
+    pub fn overlaps(&self, lo: DVec2, hi: DVec2) -> bool {
+        if self.hi.x < lo.x || self.lo.x > hi.x || self.hi.y < lo.y || self.lo.y > hi.y {
+            return false;
+        }
+        // A box holding the whole triangle passes every edge test.
+        let inside =
+            lo.x <= self.lo.x && self.hi.x <= hi.x && lo.y <= self.lo.y && self.hi.y <= hi.y;
+        inside || self.edges_meet(lo, hi)
+    }
+
+    /// The edge part of [`Blocker::overlaps`].
+    #[inline(never)]
+    fn edges_meet(&self, lo: DVec2, hi: DVec2) -> bool {
+        for e in 0..self.corners {
+            let (a, b) = (self.outline[e], self.outline[e + 1]);
+            let (dx, dy) = (b.x - a.x, b.y - a.y);
+            // orient2d(a, b, p) = dx (p.y - a.y) - dy (p.x - a.x), largest at this corner:
+            let px = if dy < 0.0 { hi.x } else { lo.x };
+            let py = if dx > 0.0 { hi.y } else { lo.y };
+            let (u, v) = (dx * (py - a.y), dy * (px - a.x));
+            if u - v < -1e-12 * (u.abs() + v.abs()) {
+                return false;
+            }
+        }
+        true
+    }
+
+    /// Whether `p` lies inside the outline: exact orientation predicates, ties on an edge
+    /// decided by the rasterizer's top-left rule ([`crate::raster::inside_edge`]).
+    #[inline]
+    pub fn covers(&self, p: DVec2) -> bool {
+        (0..self.corners).all(|e| inside_edge(self.outline[e], self.outline[e + 1], p))
+    }
+
+    /// The light depth of the triangle's plane at image point `(x, y)`, clamped to the depth
+    /// range of its corners (the nearest corner's depth when the ray misses the plane).
+    #[inline]
+    pub fn depth_at(&self, x: f64, y: f64) -> f64 {
+        let d = (self.num[0] + self.num[1] * x + self.num[2] * y)
+            / (self.den[0] + self.den[1] * x + self.den[2] * y);
+        if d.is_finite() {
+            d.clamp(self.dmin, self.dmax)
+        } else {
+            self.dmin
+        }
+    }
+
+    /// Whether the triangle shadows `s`, which lies in its bounding box: not the sample's own
+    /// triangle, in front of its threshold depth, and covering it.
+    #[inline(never)]
+    pub fn shadows_boxed(&self, s: &Sample) -> bool {
+        s.tri != self.id && self.depth_at(s.x, s.y) < s.zt && self.covers(DVec2::new(s.x, s.y))
+    }
+
+    /// Whether the triangle shadows `s` (the predicate the hierarchy evaluates in leaves).
+    pub fn shadows(&self, s: &Sample) -> bool {
+        let inside = s.x >= self.lo.x && s.x <= self.hi.x && s.y >= self.lo.y && s.y <= self.hi.y;
+        inside && self.shadows_boxed(s)
+    }
+}
+
+/// The triangles of one chunk that reach each frontier node, in triangle order.
+struct Chunk {
+    /// For each frontier slot, the blockers that reach it (copied, so that each subtree
+    /// task reads its own triangles sequentially).
+    bins: Vec<Vec<Blocker>>,
+    counters: Counters,
+}
+
+/// Walks the top levels of the BSP.
+struct Binner<'a> {
+    nodes: &'a [Node],
+    /// Frontier nodes, increasing (preorder).
+    frontier: &'a [usize],
+    depth_culling: bool,
+}
+
+impl Binner<'_> {
+    /// Bins a blocker into every frontier node it reaches.
+    fn bin(&self, b: &Blocker, bins: &mut [Vec<Blocker>], c: &mut Counters) {
+        let root = &self.nodes[0];
+        if b.overlaps(root.lo, root.hi) {
+            c.bsp_nodes_visited += 1;
+            self.descend(b, 0, 0, bins, c);
+        }
+    }
+
+    /// `g` overlaps the blocker and was counted as visited.
+    fn descend(
+        &self,
+        b: &Blocker,
+        g: usize,
+        depth: usize,
+        bins: &mut [Vec<Blocker>],
+        c: &mut Counters,
+    ) {
+        let node = &self.nodes[g];
+        if self.depth_culling && b.dmin >= node.max_zt {
+            c.nodes_depth_culled += 1;
+            return;
+        }
+        if depth == TOP_LEVELS || node.is_leaf() {
+            if let Ok(slot) = self.frontier.binary_search(&g) {
+                bins[slot].push(*b);
+            }
+            return;
+        }
+        for child in [g + 1, g + node.right as usize] {
+            let n = &self.nodes[child];
+            if b.overlaps(n.lo, n.hi) {
+                c.bsp_nodes_visited += 1;
+                self.descend(b, child, depth + 1, bins, c);
+            }
+        }
+    }
+}
+
+/// The frontier nodes (depth [`TOP_LEVELS`], or shallower leaves) in preorder.
+fn frontier(bsp: &Bsp) -> Vec<usize> {
+    fn walk(bsp: &Bsp, g: usize, depth: usize, out: &mut Vec<usize>) {
+        let node = &bsp.nodes[g];
+        if depth == TOP_LEVELS || node.is_leaf() {
+            out.push(g);
+        } else {
+            walk(bsp, g + 1, depth + 1, out);
+            walk(bsp, g + node.right as usize, depth + 1, out);
+        }
+    }
+    let mut out = Vec::new();
+    walk(bsp, 0, 0, &mut out);
+    out
+}
+
+/// One frontier subtree with its exclusive state.
+struct Subtree<'a, S> {
+    nodes: &'a [Node],
+    bsp: &'a Bsp,
+    /// The frontier node; `live[g - root]` belongs to node `g`.
+    root: usize,
+    /// First sample of the subtree; `state[k - sample_base]` belongs to sample `k`.
+    sample_base: usize,
+    /// Samples not dark yet, per node of the subtree.
+    live: &'a mut [u32],
+    state: &'a mut [S],
+    passes: &'a [[f64; 3]],
+    culling: Culling,
+    counters: Counters,
+}
+
+impl<S: Shade> Subtree<'_, S> {
+    /// Rasterizes a blocker that reached the frontier node (overlap, visit and depth culling
+    /// done while binning).
+    fn rasterize(&mut self, b: &Blocker) {
+        let pass = self.passes.get(b.object as usize).copied().unwrap_or([0.0; 3]);
+        self.visit(self.root, b, &pass);
+    }
+
+    /// `g` overlaps the blocker, was counted as visited and passed depth culling; returns
+    /// the number of samples that became dark.
+    fn visit(&mut self, g: usize, b: &Blocker, pass: &[f64; 3]) -> u32 {
+        let nodes = self.nodes;
+        let node = &nodes[g];
+        if self.culling.occlusion && self.live[g - self.root] == 0 {
+            self.counters.nodes_occlusion_culled += 1;
+            return 0;
+        }
+        let darkened = if node.is_leaf() {
+            self.leaf(node, b, pass)
+        } else {
+            let mut darkened = 0;
+            for child in [g + 1, g + node.right as usize] {
+                let n = &nodes[child];
+                if !b.overlaps(n.lo, n.hi) {
+                    continue;
+                }
+                self.counters.bsp_nodes_visited += 1;
+                if self.culling.depth && b.dmin >= n.max_zt {
+                    self.counters.nodes_depth_culled += 1;
+                    continue;
+                }
+                darkened += self.visit(child, b, pass);
+            }
+            darkened
+        };
+        self.live[g - self.root] -= darkened;
+        darkened
+    }
+
+    fn leaf(&mut self, node: &Node, b: &Blocker, pass: &[f64; 3]) -> u32 {
+        let bsp = self.bsp;
+        let (start, end) = (node.start as usize, node.end as usize);
+        let skip_dark = self.culling.occlusion;
+        let (mut darkened, mut tested) = (0u32, 0u64);
+        let (lo, hi) = (b.lo, b.hi);
+        for first in (start..end).step_by(64) {
+            let last = (first + 64).min(end);
+            // Branch-free box test of up to 64 samples, one bit each.
+            let mut mask = 0u64;
+            for (i, (&x, &y)) in bsp.xs[first..last].iter().zip(&bsp.ys[first..last]).enumerate() {
+                let inside = (x >= lo.x) & (x <= hi.x) & (y >= lo.y) & (y <= hi.y);
+                mask |= u64::from(inside) << i;
+            }
+            while mask != 0 {
+                let k = first + mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                let st = &mut self.state[k - self.sample_base];
+                if skip_dark && st.is_dark() {
+                    continue;
+                }
+                tested += 1;
+                if b.shadows_boxed(&bsp.samples[k]) {
+                    darkened += u32::from(st.attenuate(pass));
+                }
+            }
+        }
+        self.counters.sampling_points_tested += tested;
+        darkened
+    }
+}
+
+/// Rasterizes every triangle `t` with `is_caster(t)` into the BSP: the light each sample
+/// receives, in the BSP's sample order, and the counters (`bsp_nodes_visited`,
+/// `nodes_depth_culled`, `nodes_occlusion_culled`, `sampling_points_tested`). `passes[o]`
+/// is the RGB fraction of light that object `o`'s triangles let through (used by
+/// `S = [f64; 3]`).
+pub fn rasterize_blockers<S: Shade>(
+    geometry: &Geometry,
+    is_caster: impl Fn(usize) -> bool + Sync,
+    passes: &[[f64; 3]],
+    light: &Projector,
+    bsp: &Bsp,
+    culling: Culling,
+) -> (Vec<S>, Counters) {
+    let frontier = frontier(bsp);
+    let binner = Binner { nodes: &bsp.nodes, frontier: &frontier, depth_culling: culling.depth };
+    let mut live: Vec<u32> = bsp.nodes.iter().map(|node| node.len() as u32).collect();
+    let mut state = vec![S::LIT; bsp.samples.len()];
+    let mut tasks = Vec::with_capacity(frontier.len());
+    {
+        let (mut live_rest, mut live_at): (&mut [u32], usize) = (&mut live, 0);
+        let (mut state_rest, mut state_at): (&mut [S], usize) = (&mut state, 0);
+        for &f in &frontier {
+            let end = bsp.subtree_end(f);
+            let (_, rest) = std::mem::take(&mut live_rest).split_at_mut(f - live_at);
+            let (mine, rest) = rest.split_at_mut(end - f);
+            (live_rest, live_at) = (rest, end);
+            let node = &bsp.nodes[f];
+            let skip = node.start as usize - state_at;
+            let (_, rest) = std::mem::take(&mut state_rest).split_at_mut(skip);
+            let (own, rest) = rest.split_at_mut(node.len());
+            (state_rest, state_at) = (rest, node.end as usize);
+            tasks.push(Subtree {
+                nodes: &bsp.nodes,
+                bsp,
+                root: f,
+                sample_base: node.start as usize,
+                live: mine,
+                state: own,
+                passes,
+                culling,
+                counters: Counters::default(),
+            });
+        }
+    }
+    // Batches of triangles, binned then rasterized, reusing the bins' memory.
+    let n = geometry.len();
+    let mut chunks: Vec<Chunk> = (0..n.div_ceil(BIN_CHUNK).min(BATCH_CHUNKS))
+        .map(|_| Chunk { bins: vec![Vec::new(); frontier.len()], counters: Counters::default() })
+        .collect();
+    for batch in (0..n).step_by(BIN_CHUNK * BATCH_CHUNKS) {
+        chunks.par_iter_mut().enumerate().for_each(|(c, chunk)| {
+            chunk.bins.iter_mut().for_each(Vec::clear);
+            let first = batch + c * BIN_CHUNK;
+            for t in first..(first + BIN_CHUNK).min(n) {
+                if !is_caster(t) {
+                    continue;
+                }
+                if let Some(b) = Blocker::new(geometry, t, light) {
+                    binner.bin(&b, &mut chunk.bins, &mut chunk.counters);
+                }
+            }
+        });
+        tasks.par_iter_mut().enumerate().for_each(|(slot, task)| {
+            for chunk in &chunks {
+                for b in &chunk.bins[slot] {
+                    task.rasterize(b);
+                }
+            }
+        });
+    }
+    let mut counters: Counters = tasks.iter().map(|t| t.counters).sum();
+    for chunk in &chunks {
+        counters.merge(&chunk.counters);
+    }
+    (state, counters)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::raster::NO_TRIANGLE;
+    use proptest::prelude::*;
+    use scenes::projection::look_basis;
+
+    /// An orthographic light looking down -z whose image x, y are world x and `h - y`, with
+    /// light depth `10 - z`.
+    fn ortho(w: f64, h: f64) -> Projector {
+        let (right, up, forward) = look_basis(-DVec3::Z, DVec3::Y);
+        Projector {
+            origin: DVec3::new(w / 2.0, h / 2.0, 10.0),
+            right,
+            up,
+            forward,
+            kind: ProjectionKind::Orthographic { half_width: w / 2.0, half_height: h / 2.0 },
+            near: f64::NEG_INFINITY,
+            width: w,
+            height: h,
+        }
+    }
+
+    /// A spot light above the square `[0, 16]^2` at height 12, looking straight down.
+    fn spot() -> Projector {
+        let (right, up, forward) = look_basis(-DVec3::Z, DVec3::Y);
+        Projector {
+            origin: DVec3::new(8.0, 8.0, 12.0),
+            right,
+            up,
+            forward,
+            kind: ProjectionKind::Perspective { tan_half_x: 0.8, tan_half_y: 0.8 },
+            near: 0.5,
+            width: 16.0,
+            height: 16.0,
+        }
+    }
+
+    fn geometry(tris: &[[(f64, f64, f64); 3]]) -> Geometry {
+        let mut g = Geometry::default();
+        for (i, t) in tris.iter().enumerate() {
+            let base = g.positions.len() as u32;
+            g.positions.extend(t.iter().map(|&(x, y, z)| DVec3::new(x, 16.0 - y, z)));
+            g.triangles.push([base, base + 1, base + 2]);
+            g.object.push((i % 3) as u32);
+        }
+        g
+    }
+
+    /// Light each sample receives, by testing every (sample, triangle) pair in triangle order.
+    fn brute_force<S: Shade>(
+        g: &Geometry,
+        light: &Projector,
+        samples: &[Sample],
+        passes: &[[f64; 3]],
+    ) -> Vec<S> {
+        let blockers: Vec<Blocker> =
+            (0..g.len()).filter_map(|t| Blocker::new(g, t, light)).collect();
+        samples
+            .iter()
+            .map(|s| {
+                let mut l = S::LIT;
+                for b in blockers.iter().filter(|b| b.shadows(s)) {
+                    l.attenuate(&passes[b.object as usize]);
+                }
+                l
+            })
+            .collect()
+    }
+
+    fn tri() -> impl Strategy<Value = [(f64, f64, f64); 3]> {
+        // Corners on a quarter-unit grid put many samples exactly on edges and corners.
+        let corner = (0u32..=64, 0u32..=64, 0u32..=8)
+            .prop_map(|(x, y, z)| (f64::from(x) / 4.0, f64::from(y) / 4.0, f64::from(z) / 2.0));
+        [corner.clone(), corner.clone(), corner]
+    }
+
+    fn sample_strategy(triangles: usize) -> impl Strategy<Value = (f64, f64, f64, u32)> {
+        (0u32..=64, 0u32..=64, 0u32..=20, 0..triangles as u32 + 1).prop_map(move |(x, y, z, t)| {
+            let tri = if t as usize == triangles { NO_TRIANGLE } else { t };
+            (f64::from(x) / 4.0, f64::from(y) / 4.0, f64::from(z) / 4.0, tri)
+        })
+    }
+
+    proptest! {
+        /// The hierarchy, with every combination of culling, gives exactly the light of the
+        /// brute-force test of every pair, for opaque and semi-transparent casters (the
+        /// products in the same triangle order, so bit for bit).
+        #[test]
+        fn hierarchy_equals_brute_force(
+            tris in proptest::collection::vec(tri(), 1..40),
+            raw in proptest::collection::vec(sample_strategy(40), 0..600),
+            leaf_size in 2usize..20,
+            perspective in any::<bool>(),
+        ) {
+            let g = geometry(&tris);
+            let light = if perspective { spot() } else { ortho(16.0, 16.0) };
+            let samples: Vec<Sample> = raw
+                .iter()
+                .enumerate()
+                .filter_map(|(i, &(x, y, z, tri))| {
+                    // Depth from the light of the world point (x, 16 - y, z): through the
+                    // light's projection, so spot samples get their perspective image point.
+                    let (xy, d) = light.project(DVec3::new(x, 16.0 - y, z))?;
+                    let tri = if (tri as usize) < g.len() || tri == NO_TRIANGLE { tri } else { 0 };
+                    Some(Sample { x: xy.x, y: xy.y, zt: d - 1e-9, id: i as u32, tri })
+                })
+                .collect();
+            let bsp = Bsp::build(samples, leaf_size);
+            let passes = [[0.5, 0.25, 0.75], [0.0; 3], [0.9, 0.9, 0.9]];
+            let opaque: Vec<bool> = brute_force(&g, &light, &bsp.samples, &passes);
+            let rgb: Vec<[f64; 3]> = brute_force(&g, &light, &bsp.samples, &passes);
+            for occlusion in [false, true] {
+                for depth in [false, true] {
+                    let culling = Culling { occlusion, depth };
+                    let (o, _) = rasterize_blockers::<bool>(&g, |_| true, &passes, &light, &bsp, culling);
+                    prop_assert_eq!(&o, &opaque);
+                    let (t, _) =
+                        rasterize_blockers::<[f64; 3]>(&g, |_| true, &passes, &light, &bsp, culling);
+                    prop_assert_eq!(&t, &rgb);
+                }
+            }
+        }
+
+        /// A box holding a point the triangle covers always overlaps the triangle.
+        #[test]
+        fn overlap_is_conservative(
+            t in tri(),
+            p in (0u32..=64, 0u32..=64),
+            grow in (0u32..8, 0u32..8, 0u32..8, 0u32..8),
+            perspective in any::<bool>(),
+        ) {
+            let g = geometry(&[t]);
+            let light = if perspective { spot() } else { ortho(16.0, 16.0) };
+            let Some(b) = Blocker::new(&g, 0, &light) else { return Ok(()) };
+            let Some((p, _)) = light.project(DVec3::new(f64::from(p.0) / 4.0, 16.0 - f64::from(p.1) / 4.0, 0.0)) else {
+                return Ok(())
+            };
+            let (a, bb, c, d) = grow;
+            let lo = p - DVec2::new(f64::from(a), f64::from(bb)) / 8.0;
+            let hi = p + DVec2::new(f64::from(c), f64::from(d)) / 8.0;
+            if b.covers(p) {
+                prop_assert!(b.overlaps(lo, hi));
+                prop_assert!(b.overlaps(p, p));
+            }
+        }
+
+        /// The rational depth function equals the ray-plane intersection.
+        #[test]
+        fn depth_is_the_ray_plane_intersection(
+            t in tri(),
+            q in (0.0f64..16.0, 0.0f64..16.0),
+            perspective in any::<bool>(),
+        ) {
+            let g = geometry(&[t]);
+            let light = if perspective { spot() } else { ortho(16.0, 16.0) };
+            let Some(b) = Blocker::new(&g, 0, &light) else { return Ok(()) };
+            let xy = DVec2::new(q.0, q.1);
+            if !b.covers(xy) {
+                return Ok(());
+            }
+            let [p0, p1, p2] = g.corners(0);
+            let n = (p1 - p0).cross(p2 - p0).normalize();
+            let Some(d) = light.ray(xy).intersect_plane(n, n.dot(p0)) else { return Ok(()) };
+            let d = d.clamp(b.dmin, b.dmax);
+            let got = b.depth_at(xy.x, xy.y);
+            prop_assert!((got - d).abs() <= 1e-9 * d.abs().max(1.0), "{} vs {}", got, d);
+        }
+    }
+
+    #[test]
+    fn culling_skips_nodes_on_a_covered_scene() {
+        // A far ground quad of samples under a near square covering its middle, and a second
+        // square farther than every sample: occlusion and depth culling both apply.
+        let tris = [
+            [(4.0, 4.0, 4.0), (12.0, 4.0, 4.0), (12.0, 12.0, 4.0)],
+            [(4.0, 4.0, 4.0), (12.0, 12.0, 4.0), (4.0, 12.0, 4.0)],
+            [(0.0, 0.0, -5.0), (16.0, 0.0, -5.0), (16.0, 16.0, -5.0)],
+            [(5.0, 5.0, 5.0), (6.0, 5.0, 5.0), (6.0, 6.0, 5.0)],
+        ];
+        let g = geometry(&tris);
+        let light = ortho(16.0, 16.0);
+        let samples: Vec<Sample> = (0..64 * 64)
+            .map(|i| {
+                let (x, y) = ((i % 64) as f64 / 4.0 + 0.125, (i / 64) as f64 / 4.0 + 0.125);
+                Sample { x, y, zt: 10.0 - 1e-9, id: i as u32, tri: NO_TRIANGLE }
+            })
+            .collect();
+        let bsp = Bsp::build(samples, 8);
+        let passes = [[0.0; 3]; 3];
+        let run = |occlusion, depth| {
+            rasterize_blockers::<bool>(
+                &g,
+                |_| true,
+                &passes,
+                &light,
+                &bsp,
+                Culling { occlusion, depth },
+            )
+        };
+        let (all, on) = run(true, true);
+        let (no_occlusion, off_o) = run(false, true);
+        let (no_depth, off_d) = run(true, false);
+        assert_eq!(all, no_occlusion);
+        assert_eq!(all, no_depth);
+        assert_eq!(all.iter().filter(|&&d| d).count(), 32 * 32);
+        assert!(on.nodes_occlusion_culled > 0 && off_o.nodes_occlusion_culled == 0);
+        assert!(on.nodes_depth_culled > 0 && off_d.nodes_depth_culled == 0);
+        assert!(on.sampling_points_tested < off_o.sampling_points_tested);
+        assert!(on.sampling_points_tested < off_d.sampling_points_tested);
+    }
+}

@@ -1,0 +1,384 @@
+//! `afsm` and `afsm-ss`: alias-free shadow maps (Aila and Laine 2004, "Alias-Free Shadow
+//! Maps", EGSR 2004, `../shared/papers/aila-laine2004-alias-free-shadow-maps.txt`).
+//!
+//! The visible samples themselves are the shadow map's sampling points (section 3): each is
+//! moved to the light's image plane with its light depth, without discretisation; the samples
+//! are organised in an axis-aligned 2D BSP (section 5.1); every caster triangle is rasterized
+//! hierarchically into it, with occlusion culling and max-depth culling (section 5.1);
+//! semi-transparent casters attenuate an RGB transmittance per sample (section 4). `afsm`
+//! samples pixel centres; `afsm-ss` takes `rate` sub-samples per pixel from the shared
+//! [`SamplePattern`], each with its own surface point (the brute-force supersampling baseline
+//! of Pan et al. 2009, Fig. 10).
+//!
+//! Stages, each timed on its own: [`STAGE_GBUFFER_SUBSAMPLE`] `(sub-sample s)` (`afsm-ss`
+//! only: the camera G-buffer at every non-centre sub-sample position, rendered by
+//! [`rasterize_nearest_at`]; the centre sub-sample uses the frame's G-buffer),
+//! [`STAGE_TRANSFORMATION`] ([`samples`]), [`STAGE_BSP`] ([`bsp`]) and
+//! [`STAGE_RASTERIZATION`] ([`blockers`]; it also writes the samples' light back to their
+//! pixels). Counters: `bsp_nodes`, `bsp_nodes_visited`, `nodes_depth_culled`,
+//! `nodes_occlusion_culled`, `sampling_points_tested` (defined in [`blockers`]), plus the
+//! G-buffers' `triangles_rasterized` and `raster_samples_tested`.
+//!
+//! # Invariants
+//!
+//! - **The shadow predicate is the ray-traced reference's.** A sample on triangle `R` is
+//!   shadowed by caster triangle `T` iff `T != R`, the sample's light image point lies inside
+//!   `T`'s projection, and `T` is nearer the light than the sample by more than
+//!   [`SHADOW_OFFSET`] times the scene's bounding-box diagonal (in world units along the
+//!   light's ray: the threshold depth of [`samples::threshold_depth`]). `raytrace`'s shadow
+//!   rays make the same test (they skip the hit triangle and hits nearer than the offset; a
+//!   spot light's segment ends at the light, and every caster in front of a sample's depth is
+//!   on that segment). With the shared pattern at equal rate the two evaluate the same image
+//!   points, so they can differ only where a sample lies exactly on a caster's edge, where
+//!   each breaks the tie by its own rule, or within `f64` rounding of one.
+//! - **Exact coverage.** Point-in-triangle is decided by Shewchuk's exact `orient2d` on the
+//!   `f64` light image coordinates, ties on an edge by the rasterizer's top-left rule, so a
+//!   sample on an edge shared by two casters is covered by exactly one of them.
+//! - **Culling never changes a pixel** (see [`blockers`]); switching either off (the options)
+//!   changes only the counters.
+//! - **Deterministic.** Pixels and counters do not depend on thread scheduling or count.
+//! - `lit` is in `[0, 1]`: the mean over a pixel's sub-samples of their light (background
+//!   sub-samples, and surface points a spot light cannot project, count as lit, as in
+//!   `raytrace`). Without transparency each sub-sample is 0 or 1, so values are `k / rate`.
+//!
+//! # Choices where the paper is vague
+//!
+//! - **Light image.** The light's projector fitted to the scene ([`Frame::light_projector`]) at
+//!   [`LIGHT_IMAGE_RES`]; the resolution only scales coordinates, nothing is discretised.
+//!   Samples outside that image are kept (the reference ignores the spot's cone). A spot light
+//!   projects only points beyond its `near` plane (the nearest depth of the scene's padded
+//!   bounds, so every surface unless the light is inside them): casters are clipped there,
+//!   and surface points nearer than it are lit.
+//! - **Depth.** A caster's depth at a sample is where the light's ray through the sample's
+//!   image point meets the caster's plane, clamped to the depth range of its corners (as the
+//!   rasterizer does); the sample's own depth is its surface point's light depth.
+//! - **BSP.** "Divided in half": the left child takes `floor(n / 2)` samples; the first split
+//!   is along `x`; a node of at least `leaf_size` samples is split, so leaves hold fewer
+//!   ("less than a predetermined number"). Nodes keep the exact bounding box of their samples,
+//!   a tighter region than the split planes, for the overlap test.
+//! - **Overlap** of a triangle and a node is tested on bounding boxes and on the triangle's
+//!   edge lines against the node's box (conservatively); the exact test decides per sample.
+//! - **Max-depth culling** compares the triangle's nearest corner with the node's farthest
+//!   threshold depth (the sample depth less the shadow offset).
+//! - **Occlusion culling** also skips dark samples inside a leaf; with transparency a sample
+//!   is dark only at zero transmittance (behind an opaque caster).
+//! - **Counting.** A node is *visited* when the triangle overlaps it (the paper's "subnodes
+//!   that are at least partially covered"); culled nodes are visited nodes that are then
+//!   skipped. `bsp_nodes` counts inner nodes and leaves (the paper's 16K at 1024x768 matches
+//!   our leaf count).
+//! - **Transmittance** is RGB per sample, initially white; opaque casters set it to black,
+//!   a semi-transparent one multiplies every channel by `1 - opacity` (materials have one
+//!   opacity and no transmission colour, as in `raytrace`, so the channels are equal). A
+//!   pixel's transmittance is the mean over its sub-samples, its `lit` the mean of the three
+//!   channels. Without the scene's `transparency` effect every caster is opaque and only a
+//!   shadowed flag is carried per sample.
+//! - **Parallelism** (see [`blockers`]): the BSP's top levels split the samples into up to 64
+//!   subtrees, each owned by one task that rasterizes its triangles in triangle order;
+//!   nodes above them are depth culled but never occlusion culled.
+//! - **Memory.** 32 bytes per visible sub-sample (coordinates, threshold depth, ids), 56 per
+//!   BSP node, and for `afsm-ss` the `rate - 1` extra G-buffers (12 bytes per pixel each)
+//!   until the samples are transformed.
+//!
+//! [`rasterize_nearest_at`]: crate::raster::rasterize_nearest_at
+
+pub mod blockers;
+pub mod bsp;
+pub mod samples;
+
+use crate::{
+    frame::Frame,
+    method::{MethodError, ShadowMethod, Visibility},
+    pattern::{PatternKind, SamplePattern, RATES},
+    raster::rasterize_nearest_at,
+};
+use blockers::{rasterize_blockers, Culling, Shade};
+use bsp::Bsp;
+use glam::{DVec2, DVec3};
+use instrumentation::{Counters, Recorder};
+use rayon::prelude::*;
+use samples::{transform_samples, Sample, Surface};
+use scenes::{Geometry, Projector};
+
+/// Name of the stage that moves the samples to the light's image plane.
+pub const STAGE_TRANSFORMATION: &str = "transformation of samples";
+/// Name of the stage that builds the 2D BSP.
+pub const STAGE_BSP: &str = "BSP construction";
+/// Name of the stage that rasterizes the casters into the BSP.
+pub const STAGE_RASTERIZATION: &str = "rasterization of blockers";
+/// Prefix of the stages that render the camera G-buffer at one sub-sample position
+/// (`afsm-ss`); the full name is given by [`gbuffer_stage`].
+pub const STAGE_GBUFFER_SUBSAMPLE: &str = "camera G-buffer";
+
+/// Shadow offset as a fraction of the scene's bounding-box diagonal; equal to the ray-traced
+/// reference's `SHADOW_RAY_OFFSET`.
+pub const SHADOW_OFFSET: f64 = 1e-9;
+
+/// Resolution of the light image the samples are expressed in (a scale, not a grid).
+pub const LIGHT_IMAGE_RES: u32 = 1024;
+
+/// Default sub-samples per pixel of `afsm-ss`.
+pub const DEFAULT_SS_RATE: u32 = 32;
+
+/// Highest sub-sample rate (the methods' rates of the shared pattern).
+pub const MAX_RATE: u32 = 128;
+
+/// Name of the stage that renders the camera G-buffer at sub-sample `s`.
+pub fn gbuffer_stage(s: usize) -> String {
+    format!("{STAGE_GBUFFER_SUBSAMPLE} (sub-sample {s})")
+}
+
+/// Options of the alias-free shadow map.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct AfsmOptions {
+    /// A BSP node with at least this many samples is split, so leaves hold fewer
+    /// (`--leaf-size`, at least 2). Default 64, the paper's.
+    pub leaf_size: u32,
+    /// Sub-samples per pixel (`--rate`): 1 for `afsm`; for `afsm-ss` one of the pattern's
+    /// rates up to [`MAX_RATE`], default [`DEFAULT_SS_RATE`].
+    pub rate: u32,
+    /// Sub-sample pattern (`--pattern`). Default grid.
+    pub pattern: PatternKind,
+    /// Occlusion culling: skip nodes (and samples) already fully shadowed. Default on.
+    pub occlusion_culling: bool,
+    /// Max-depth culling: skip nodes whose samples all lie in front of the triangle.
+    /// Default on.
+    pub depth_culling: bool,
+}
+
+impl Default for AfsmOptions {
+    fn default() -> Self {
+        Self {
+            leaf_size: 64,
+            rate: 1,
+            pattern: PatternKind::Grid,
+            occlusion_culling: true,
+            depth_culling: true,
+        }
+    }
+}
+
+impl AfsmOptions {
+    /// The defaults of `afsm-ss`: those of `afsm` at [`DEFAULT_SS_RATE`].
+    pub fn supersampled() -> Self {
+        Self { rate: DEFAULT_SS_RATE, ..Self::default() }
+    }
+
+    /// Checks the options; errors name the command-line flag.
+    pub fn validate(&self) -> Result<(), MethodError> {
+        if !(2..=1 << 20).contains(&self.leaf_size) {
+            return Err(MethodError::InvalidOption {
+                option: "--leaf-size",
+                message: format!("must be in 2..=1048576, got {}", self.leaf_size),
+            });
+        }
+        if self.rate > MAX_RATE {
+            return Err(MethodError::InvalidOption {
+                option: "--rate",
+                message: format!(
+                    "unsupported sample rate {}; available: {}",
+                    self.rate,
+                    RATES
+                        .iter()
+                        .filter(|&&r| r <= MAX_RATE)
+                        .map(u32::to_string)
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            });
+        }
+        SamplePattern::new(self.rate, self.pattern).map(|_| ())
+    }
+}
+
+/// The alias-free shadow map: `afsm` (pixel centres) or `afsm-ss` (sub-samples).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct AliasFreeShadowMap {
+    /// Options.
+    pub options: AfsmOptions,
+    /// `afsm-ss` when true; `afsm` requires rate 1.
+    pub supersampled: bool,
+}
+
+impl AliasFreeShadowMap {
+    /// `afsm` with the given options (their rate must be 1).
+    pub fn pixel_centres(options: AfsmOptions) -> Self {
+        Self { options, supersampled: false }
+    }
+
+    /// `afsm-ss` with the given options.
+    pub fn supersampled(options: AfsmOptions) -> Self {
+        Self { options, supersampled: true }
+    }
+
+    /// Checks the options.
+    pub fn validate(&self) -> Result<(), MethodError> {
+        if !self.supersampled && self.options.rate != 1 {
+            return Err(MethodError::InvalidOption {
+                option: "--rate",
+                message: format!(
+                    "afsm samples pixel centres (rate 1), got {}; afsm-ss takes sub-samples",
+                    self.options.rate
+                ),
+            });
+        }
+        self.options.validate()
+    }
+}
+
+/// The diagonal of the bounding box of the finite positions (as the ray-traced reference
+/// measures the scene).
+fn scene_diagonal(geometry: &Geometry) -> f64 {
+    let (lo, hi) =
+        geometry.positions.iter().filter(|p| p.is_finite()).fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), &p| (lo.min(p), hi.max(p)),
+        );
+    if lo.x <= hi.x {
+        (hi - lo).length()
+    } else {
+        0.0
+    }
+}
+
+/// Per pixel, the mean over its `rate` sub-samples of their light (lit for sub-samples that
+/// have no sample), from the light of each sample in BSP order.
+fn resolve<S: Shade>(bsp: &Bsp, light: &[S], pixels: usize, rate: usize) -> Vec<[f64; 3]> {
+    let mut per_id = vec![S::LIT; pixels * rate];
+    for (s, l) in bsp.samples.iter().zip(light) {
+        per_id[s.id as usize] = *l;
+    }
+    per_id
+        .par_chunks(rate)
+        .map(|subs| {
+            let mut sum = [0.0f64; 3];
+            for sub in subs {
+                for (acc, c) in sum.iter_mut().zip(sub.rgb()) {
+                    *acc += c;
+                }
+            }
+            sum.map(|c| (c / rate as f64).clamp(0.0, 1.0))
+        })
+        .collect()
+}
+
+impl AliasFreeShadowMap {
+    /// The BSP and rasterization stages with per-sample light `S`; the RGB light per pixel.
+    fn shade<S: Shade>(
+        &self,
+        frame: &Frame<'_>,
+        samples: Vec<Sample>,
+        light: &Projector,
+        rate: usize,
+        rec: &mut Recorder,
+    ) -> Vec<[f64; 3]> {
+        let leaf_size = self.options.leaf_size as usize;
+        let bsp = rec.stages.time(STAGE_BSP, || Bsp::build(samples, leaf_size));
+        let transparency = frame.effects.transparency;
+        let passes: Vec<[f64; 3]> = frame
+            .scene
+            .objects
+            .iter()
+            .map(|o| {
+                let pass =
+                    if transparency { (1.0 - o.material.opacity).clamp(0.0, 1.0) } else { 0.0 };
+                [pass; 3]
+            })
+            .collect();
+        let culling = Culling {
+            occlusion: self.options.occlusion_culling,
+            depth: self.options.depth_culling,
+        };
+        let pixels = frame.gbuffer.triangle.len();
+        let (rgb, counters) = rec.stages.time(STAGE_RASTERIZATION, || {
+            let (light_per_sample, counters) = rasterize_blockers::<S>(
+                &frame.geometry,
+                |t| frame.is_caster(t),
+                &passes,
+                light,
+                &bsp,
+                culling,
+            );
+            (resolve(&bsp, &light_per_sample, pixels, rate), counters)
+        });
+        rec.counters.merge(&Counters { bsp_nodes: bsp.nodes.len() as u64, ..counters });
+        rgb
+    }
+}
+
+impl ShadowMethod for AliasFreeShadowMap {
+    fn name(&self) -> &'static str {
+        if self.supersampled {
+            "afsm-ss"
+        } else {
+            "afsm"
+        }
+    }
+
+    fn params(&self) -> serde_json::Map<String, serde_json::Value> {
+        let o = &self.options;
+        let mut m = serde_json::Map::new();
+        if self.supersampled {
+            m.insert("rate".into(), o.rate.into());
+            m.insert("pattern".into(), o.pattern.name().into());
+        }
+        m.insert("leaf_size".into(), o.leaf_size.into());
+        m.insert("occlusion_culling".into(), o.occlusion_culling.into());
+        m.insert("depth_culling".into(), o.depth_culling.into());
+        m
+    }
+
+    fn run(&self, frame: &Frame<'_>, rec: &mut Recorder) -> Result<Visibility, MethodError> {
+        self.validate()?;
+        let pattern = SamplePattern::new(self.options.rate, self.options.pattern)?;
+        let rate = pattern.rate() as usize;
+        let g = &frame.gbuffer;
+        if (g.triangle.len() as u64) * rate as u64 > u64::from(u32::MAX) {
+            return Err(MethodError::NotApplicable(format!(
+                "{}: {} x {} pixels at {rate} sub-samples exceed 2^32 samples",
+                self.name(),
+                frame.width(),
+                frame.height()
+            )));
+        }
+        let extra: Vec<Option<crate::raster::NearestSurface>> = (0..rate)
+            .map(|s| {
+                if s == pattern.centre_index() {
+                    return None;
+                }
+                let shift = pattern.offsets()[s] - DVec2::splat(0.5);
+                Some(rec.stages.time(&gbuffer_stage(s), || {
+                    rasterize_nearest_at(
+                        &frame.geometry,
+                        |_| true,
+                        &frame.camera,
+                        shift,
+                        &mut rec.counters,
+                    )
+                }))
+            })
+            .collect();
+        let surfaces: Vec<Surface<'_>> = extra
+            .iter()
+            .map(|e| match e {
+                Some(n) => Surface { triangle: &n.triangle, depth: &n.depth },
+                None => Surface { triangle: &g.triangle, depth: &g.depth },
+            })
+            .collect();
+        let light = frame.light_projector(LIGHT_IMAGE_RES);
+        let offset = SHADOW_OFFSET * scene_diagonal(&frame.geometry);
+        let samples = rec.stages.time(STAGE_TRANSFORMATION, || {
+            transform_samples(&frame.camera, &light, &surfaces, &pattern, frame.width(), offset)
+        });
+        drop(surfaces);
+        drop(extra);
+        let rgb = if frame.effects.transparency {
+            self.shade::<[f64; 3]>(frame, samples, &light, rate, rec)
+        } else {
+            self.shade::<bool>(frame, samples, &light, rate, rec)
+        };
+        let lit = rgb.iter().map(|c| ((c[0] + c[1] + c[2]) / 3.0).clamp(0.0, 1.0) as f32).collect();
+        let transmittance =
+            frame.effects.transparency.then(|| rgb.iter().map(|c| c.map(|v| v as f32)).collect());
+        Ok(Visibility { width: frame.width(), height: frame.height(), lit, transmittance })
+    }
+}

@@ -1,0 +1,360 @@
+//! Running a suite: every scene, every method, every combination of its swept parameters,
+//! timed by the protocol of [`crate::timing`] and measured against the scene's reference.
+//!
+//! Per scene, the frame (camera G-buffer) and the reference are computed once and shared by
+//! every method, so a method's time is its own stages only; the G-buffer's time is reported
+//! per scene. The metrics come from the last timed run (every method is deterministic for
+//! its parameters, so all runs give the same image).
+
+use crate::grids::Panel;
+use crate::output::shade;
+use crate::suite::{GridSpec, ReferenceChoice, RunSpec, Suite};
+use crate::timing::{stage_summaries, Machine, StageTimes, Summary};
+use analysis::{error_image, flip::flip_mean, Metrics, ReferenceImage};
+use instrumentation::{Counters, Recorder};
+use methods::{Frame, MethodOptions, Visibility};
+use serde::{Deserialize, Serialize};
+
+/// One method with one parameter combination on one scene.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Row {
+    /// Scene name.
+    pub scene: String,
+    /// Method name.
+    pub method: String,
+    /// The method's parameters, as its run record gives them.
+    pub params: serde_json::Map<String, serde_json::Value>,
+    /// Frame width.
+    pub width: u32,
+    /// Frame height.
+    pub height: u32,
+    /// Reference measured against (`exact` or `raytrace`).
+    pub reference: String,
+    /// Rate of the `raytrace` reference (absent for `exact`).
+    pub ref_rate: Option<u32>,
+    /// Error metrics against the reference.
+    pub metrics: Metrics,
+    /// NVIDIA FLIP mean over the frame.
+    pub flip_mean: f64,
+    /// Total time of the method's stages.
+    pub total_ms: Summary,
+    /// Each stage's time.
+    pub stages: Vec<StageTimes>,
+    /// Stages the scene did not call for.
+    pub skipped_stages: Vec<String>,
+    /// Counters of the last run.
+    pub counters: Counters,
+    /// The method's notes.
+    pub notes: Vec<String>,
+}
+
+/// One scene's shared work.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SceneInfo {
+    /// Scene name.
+    pub scene: String,
+    /// Triangles.
+    pub triangles: u64,
+    /// Effects.
+    pub effects: Vec<String>,
+    /// Frame size.
+    pub width: u32,
+    /// Frame size.
+    pub height: u32,
+    /// Camera G-buffer time (shared by every method).
+    pub gbuffer_ms: f64,
+    /// Reference used and its time.
+    pub reference: String,
+    /// Reference time.
+    pub reference_ms: f64,
+}
+
+/// Everything a report is made of.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Report {
+    /// The suite as run.
+    pub suite: Suite,
+    /// Where the times were taken.
+    pub machine: Machine,
+    /// Per-scene shared work.
+    pub scenes: Vec<SceneInfo>,
+    /// Every measured run.
+    pub rows: Vec<Row>,
+    /// What could not run, and why.
+    pub skipped: Vec<String>,
+    /// Image grids, by title and file.
+    pub grids: Vec<GridFile>,
+}
+
+/// An image grid of a report.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GridFile {
+    /// Scene.
+    pub scene: String,
+    /// Title.
+    pub title: String,
+    /// PNG file, relative to the report folder.
+    pub png: String,
+}
+
+/// A grid's panels, to be written.
+pub struct GridImages {
+    /// Index into [`Report::grids`].
+    pub grid: usize,
+    /// The panels.
+    pub panels: Vec<crate::grids::Panel>,
+    /// The inset.
+    pub inset: crate::grids::Region,
+}
+
+/// A visibility buffer a sweep produced, for the image outputs.
+pub struct Produced {
+    /// Index of its row in [`Report::rows`].
+    pub row: usize,
+    /// The buffer.
+    pub visibility: Visibility,
+}
+
+/// The parameter combinations of one run spec.
+pub fn expand(spec: &RunSpec) -> Vec<MethodOptions> {
+    let or_default = |v: &[u32]| -> Vec<Option<u32>> {
+        if v.is_empty() {
+            vec![None]
+        } else {
+            v.iter().copied().map(Some).collect()
+        }
+    };
+    let mut out = Vec::new();
+    for map_res in or_default(&spec.map_res) {
+        for rate in or_default(&spec.rate) {
+            for depth_bits in or_default(&spec.depth_bits) {
+                out.push(MethodOptions { map_res, rate, depth_bits, ..Default::default() });
+            }
+        }
+    }
+    out
+}
+
+/// Number of method runs a suite makes (scenes times combinations), for progress bars.
+pub fn run_count(suite: &Suite) -> u64 {
+    (suite.scenes.len() * suite.runs.iter().map(|r| expand(r).len()).sum::<usize>()) as u64
+}
+
+fn reference_for(
+    suite: &Suite,
+    frame: &Frame<'_>,
+) -> Result<(String, Option<u32>, ReferenceImage, f64), String> {
+    let exact_applies = frame.effects.planar_receiver && !frame.effects.transparency;
+    let use_exact = match suite.reference {
+        ReferenceChoice::Auto => exact_applies,
+        ReferenceChoice::Exact => true,
+        ReferenceChoice::Raytrace => false,
+    };
+    let (name, rate) = if use_exact { ("exact", None) } else { ("raytrace", Some(suite.ref_rate)) };
+    let r = analysis::registry::reference(name, suite.ref_rate, Default::default())
+        .map_err(|e| e.to_string())?;
+    let t = std::time::Instant::now();
+    let image = r.evaluate(frame, &mut Recorder::default()).map_err(|e| e.to_string())?;
+    Ok((name.to_owned(), rate, image, t.elapsed().as_secs_f64() * 1e3))
+}
+
+/// The panels of `grid` on `frame` (untimed runs); panels whose method cannot run are left
+/// out with the reason in `skipped`.
+fn grid_panels(
+    grid: &GridSpec,
+    frame: &Frame<'_>,
+    truth: &ReferenceImage,
+    ref_name: &str,
+    skipped: &mut Vec<String>,
+) -> Vec<Panel> {
+    let mut panels = Vec::new();
+    let mut last = None;
+    for p in &grid.panels {
+        let options = MethodOptions {
+            map_res: p.map_res,
+            rate: p.rate,
+            depth_bits: p.depth_bits,
+            ..Default::default()
+        };
+        let run = analysis::registry::technique(&p.method, &options)
+            .and_then(|t| t.run(frame, &mut Recorder::default()).map(|v| (t, v)));
+        match run {
+            Ok((t, v)) => {
+                let label = p.label.clone().unwrap_or_else(|| {
+                    let given = [("map", p.map_res), ("rate", p.rate), ("bits", p.depth_bits)];
+                    let params: Vec<String> =
+                        given.iter().filter_map(|(k, v)| v.map(|v| format!("{k} {v}"))).collect();
+                    format!("{} {}", t.name(), params.join(", "))
+                });
+                panels.push(Panel { label, image: shade(frame, &v) });
+                last = Some(v);
+            }
+            Err(e) => skipped.push(format!("grid `{}`: {}: {e}", grid.title, p.method)),
+        }
+    }
+    if grid.reference {
+        let lit = truth.lit.iter().map(|&l| l as f32).collect();
+        let v = Visibility { width: truth.width, height: truth.height, lit, transmittance: None };
+        // Pixels the reference does not evaluate (its value there is not ground truth) are
+        // painted dark blue, as in the error image.
+        let mut image = shade(frame, &v);
+        for (k, px) in image.pixels_mut().enumerate() {
+            if !truth.evaluated[k] {
+                *px = image::Rgb([0, 0, 64]);
+            }
+        }
+        panels.push(Panel { label: format!("reference ({ref_name}; blue: not evaluated)"), image });
+        if let Some(v) = last {
+            panels.push(Panel {
+                label: "10x |error| of the last".into(),
+                image: error_image(&v, &truth.lit, &truth.evaluated),
+            });
+        }
+    }
+    panels
+}
+
+/// Runs `suite`; `progress` is called once per method run with a short label. Returns the
+/// report, every visibility buffer and the grids' panels.
+pub fn run_suite(
+    suite: &Suite,
+    mut progress: impl FnMut(&str),
+) -> (Report, Vec<Produced>, Vec<GridImages>) {
+    let mut report = Report {
+        suite: suite.clone(),
+        machine: Machine::current(),
+        scenes: Vec::new(),
+        rows: Vec::new(),
+        skipped: Vec::new(),
+        grids: Vec::new(),
+    };
+    let mut produced = Vec::new();
+    let mut grid_images = Vec::new();
+    let combos: usize = suite.runs.iter().map(|r| expand(r).len()).sum();
+    for scene_name in &suite.scenes {
+        let scene = match scenes::load(scene_name) {
+            Ok(s) => s,
+            Err(e) => {
+                report.skipped.push(format!("scene {scene_name}: {e}"));
+                (0..combos).for_each(|_| progress(scene_name));
+                continue;
+            }
+        };
+        let (w, h) = if suite.width == 0 {
+            (scene.width, scene.height)
+        } else {
+            (suite.width, suite.height)
+        };
+        let mut rec = Recorder::default();
+        let frame = Frame::new(&scene, w, h, &mut rec);
+        let (ref_name, ref_rate, truth, reference_ms) = match reference_for(suite, &frame) {
+            Ok(r) => r,
+            Err(e) => {
+                report.skipped.push(format!("scene {}: reference: {e}", scene.name));
+                (0..combos).for_each(|_| progress(&scene.name));
+                continue;
+            }
+        };
+        report.scenes.push(SceneInfo {
+            scene: scene.name.clone(),
+            triangles: frame.geometry.len() as u64,
+            effects: frame.effects.names().into_iter().map(String::from).collect(),
+            width: w,
+            height: h,
+            gbuffer_ms: rec.stages.total_ms(),
+            reference: ref_name.clone(),
+            reference_ms,
+        });
+        for spec in &suite.runs {
+            for options in expand(spec) {
+                progress(&format!("{} {}", scene.name, spec.method));
+                let technique = match analysis::registry::technique(&spec.method, &options) {
+                    Ok(t) => t,
+                    Err(e) => {
+                        report.skipped.push(format!("{} on {}: {e}", spec.method, scene.name));
+                        continue;
+                    }
+                };
+                let mut stage_runs = Vec::new();
+                let mut totals = Vec::new();
+                let mut last = None;
+                let mut failed = None;
+                for k in 0..suite.warmup + suite.repeats {
+                    let mut rec = Recorder::default();
+                    match technique.run(&frame, &mut rec) {
+                        Ok(v) => {
+                            if k >= suite.warmup {
+                                totals.push(rec.stages.total_ms());
+                                stage_runs.push(rec.stages.stages.clone());
+                                last = Some((v, rec));
+                            }
+                        }
+                        Err(e) => {
+                            failed = Some(e.to_string());
+                            break;
+                        }
+                    }
+                }
+                let (Some((v, rec)), Some(total_ms)) = (last, Summary::of(&totals)) else {
+                    let why = failed.unwrap_or_else(|| "no timed run".into());
+                    report.skipped.push(format!("{} on {}: {why}", spec.method, scene.name));
+                    continue;
+                };
+                report.rows.push(Row {
+                    scene: scene.name.clone(),
+                    method: technique.name().to_owned(),
+                    params: technique.params(),
+                    width: w,
+                    height: h,
+                    reference: ref_name.clone(),
+                    ref_rate,
+                    metrics: Metrics::compare(&v, &truth.lit, &truth.evaluated),
+                    flip_mean: flip_mean(&v, &truth.lit, &truth.evaluated),
+                    total_ms,
+                    stages: stage_summaries(&stage_runs),
+                    skipped_stages: rec.stages.skipped.clone(),
+                    counters: rec.counters,
+                    notes: rec.notes,
+                });
+                produced.push(Produced { row: report.rows.len() - 1, visibility: v });
+            }
+        }
+        for grid in suite.grids.iter().filter(|g| g.scene == *scene_name) {
+            let panels = grid_panels(grid, &frame, &truth, &ref_name, &mut report.skipped);
+            if panels.is_empty() {
+                continue;
+            }
+            report.grids.push(GridFile {
+                scene: scene.name.clone(),
+                title: grid.title.clone(),
+                png: format!("grids/grid-{}.png", report.grids.len() + 1),
+            });
+            grid_images.push(GridImages {
+                grid: report.grids.len() - 1,
+                panels,
+                inset: grid.inset,
+            });
+        }
+    }
+    (report, produced, grid_images)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn specs_expand_to_every_combination() {
+        let spec = RunSpec {
+            method: "pcf-bs-fast-2x2".into(),
+            map_res: vec![256, 512],
+            rate: vec![],
+            depth_bits: vec![8, 12, 32],
+        };
+        let all = expand(&spec);
+        assert_eq!(all.len(), 6);
+        assert!(all.iter().all(|o| o.rate.is_none()));
+        assert_eq!(all[5].map_res, Some(512));
+        assert_eq!(all[5].depth_bits, Some(32));
+    }
+}

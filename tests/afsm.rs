@@ -1,0 +1,314 @@
+//! Alias-free shadow maps (`afsm`, `afsm-ss`) against the ray-traced reference at the same
+//! sample points, semi-transparent casters, the two culling tests, determinism and options.
+
+use analysis::{raytrace::RayTrace, raytrace::SHADOW_RAY_OFFSET, Reference, ReferenceImage};
+use glam::{DVec2, DVec3};
+use instrumentation::Recorder;
+use methods::{
+    afsm::{self, AfsmOptions, AliasFreeShadowMap},
+    method, MethodError, MethodOptions, ShadowMethod, Visibility,
+};
+use methods::{
+    pattern::{PatternKind, SamplePattern},
+    raster::NO_TRIANGLE,
+    Frame,
+};
+use robust::{orient2d, Coord};
+use scenes::{registry::BUILTINS, Scene, SceneError};
+
+/// The built-in scene `name`, or `None` (with the reason printed) when its model is missing.
+fn load(name: &str) -> Option<Scene> {
+    match scenes::load(name) {
+        Ok(scene) => Some(scene),
+        Err(e @ SceneError::ModelMissing { .. }) => {
+            eprintln!("skipping {name}: {e}");
+            None
+        }
+        Err(e) => panic!("{name}: {e}"),
+    }
+}
+
+fn run(m: &AliasFreeShadowMap, frame: &Frame<'_>) -> (Visibility, Recorder) {
+    let mut rec = Recorder::default();
+    let v = m.run(frame, &mut rec).expect("afsm runs");
+    assert_eq!(v.lit.len(), frame.gbuffer.triangle.len());
+    assert!(v.lit.iter().all(|l| l.is_finite() && (0.0..=1.0).contains(l)));
+    (v, rec)
+}
+
+fn raytrace(frame: &Frame<'_>, rate: u32, kind: PatternKind) -> ReferenceImage {
+    let pattern = SamplePattern::new(rate, kind).expect("valid rate");
+    RayTrace { pattern }.evaluate(frame, &mut Recorder::default()).expect("raytrace applies")
+}
+
+fn xy(p: DVec2) -> Coord<f64> {
+    Coord { x: p.x, y: p.y }
+}
+
+/// Whether the surface point of pixel `k` (rate 1) projects exactly onto an edge that two
+/// caster triangles share, inside the closed projection of one of them: the only place
+/// where `afsm` and `raytrace` may break a tie differently.
+fn on_shared_caster_edge(frame: &Frame<'_>, k: usize) -> bool {
+    let light = frame.light_projector(afsm::LIGHT_IMAGE_RES);
+    let own = frame.gbuffer.triangle[k];
+    let Some((p, _)) = light.project(frame.gbuffer.position[k]) else { return false };
+    let g = &frame.geometry;
+    let key = |a: DVec3, b: DVec3| {
+        let (a, b) = (a.to_array().map(f64::to_bits), b.to_array().map(f64::to_bits));
+        if a < b {
+            (a, b)
+        } else {
+            (b, a)
+        }
+    };
+    let mut edges = std::collections::HashMap::new();
+    for t in (0..g.len()).filter(|&t| frame.is_caster(t)) {
+        let c = g.corners(t);
+        for e in 0..3 {
+            *edges.entry(key(c[e], c[(e + 1) % 3])).or_insert(0u32) += 1;
+        }
+    }
+    (0..g.len()).filter(|&t| frame.is_caster(t) && t as u32 != own).any(|t| {
+        let c = g.corners(t);
+        let q = c.map(|v| light.project_unclipped(v).0);
+        let area = orient2d(xy(q[0]), xy(q[1]), xy(q[2]));
+        let side: Vec<f64> =
+            (0..3).map(|e| orient2d(xy(q[e]), xy(q[(e + 1) % 3]), xy(p)) * area.signum()).collect();
+        side.iter().all(|&s| s >= 0.0)
+            && (0..3).any(|e| side[e] == 0.0 && edges[&key(c[e], c[(e + 1) % 3])] >= 2)
+    })
+}
+
+/// Pixels where the two results differ.
+fn differing(v: &Visibility, r: &ReferenceImage) -> Vec<usize> {
+    (0..v.lit.len()).filter(|&k| f64::from(v.lit[k]) != r.lit[k]).collect()
+}
+
+#[test]
+fn afsm_equals_raytrace_at_pixel_centres_on_every_opaque_builtin() {
+    assert_eq!(afsm::SHADOW_OFFSET, SHADOW_RAY_OFFSET);
+    let m = AliasFreeShadowMap::pixel_centres(AfsmOptions::default());
+    let mut compared = 0;
+    for (name, _) in BUILTINS {
+        let Some(scene) = load(name) else { continue };
+        if scene.effects().transparency {
+            eprintln!("{name}: has transparency, compared by the transmittance test");
+            continue;
+        }
+        let frame = Frame::new(&scene, 160, 120, &mut Recorder::default());
+        let (v, _) = run(&m, &frame);
+        let r = raytrace(&frame, 1, PatternKind::Grid);
+        let diff = differing(&v, &r);
+        let shadowed = v.lit.iter().filter(|&&l| l == 0.0).count();
+        eprintln!(
+            "{name}: {} differing pixels, {shadowed} shadowed of {}",
+            diff.len(),
+            v.lit.len()
+        );
+        assert!(shadowed > 0, "{name}: no shadow at all");
+        for &k in &diff {
+            assert!(
+                on_shared_caster_edge(&frame, k),
+                "{name}: pixel ({}, {}) differs: afsm {} raytrace {}",
+                k % 160,
+                k / 160,
+                v.lit[k],
+                r.lit[k]
+            );
+        }
+        compared += 1;
+    }
+    assert!(compared >= 10, "{compared} scenes compared");
+}
+
+#[test]
+fn afsm_ss_equals_raytrace_at_rate_32_on_cage_and_plant() {
+    for name in ["cage", "plant"] {
+        let scene = scenes::load(name).expect("built-in");
+        let frame = Frame::new(&scene, 64, 48, &mut Recorder::default());
+        for kind in [PatternKind::Grid, PatternKind::Rotated] {
+            let m = AliasFreeShadowMap::supersampled(AfsmOptions {
+                pattern: kind,
+                ..AfsmOptions::supersampled()
+            });
+            let (v, rec) = run(&m, &frame);
+            let r = raytrace(&frame, 32, kind);
+            let diff = differing(&v, &r);
+            let partial = v.lit.iter().filter(|&&l| l > 0.0 && l < 1.0).count();
+            eprintln!("{name} {kind}: {} differing pixels, {partial} partly lit", diff.len());
+            assert!(diff.is_empty(), "{name} {kind}: pixels {diff:?} differ");
+            assert!(partial > 20, "{name} {kind}: {partial} partly lit pixels");
+            let gbuffers = rec
+                .stages
+                .stages
+                .iter()
+                .filter(|s| s.name.starts_with("camera G-buffer ("))
+                .count();
+            assert_eq!(gbuffers, 31, "one G-buffer stage per non-centre sub-sample");
+        }
+    }
+}
+
+#[test]
+fn afsm_transmittance_matches_raytrace_on_hairball() {
+    let scene = scenes::load("hairball").expect("built-in");
+    assert!(scene.effects().transparency);
+    let frame = Frame::new(&scene, 160, 120, &mut Recorder::default());
+    let (v, _) = run(&AliasFreeShadowMap::pixel_centres(AfsmOptions::default()), &frame);
+    let r = raytrace(&frame, 1, PatternKind::Grid);
+    let (mine, theirs) = (
+        v.transmittance.as_ref().expect("afsm carries transmittance"),
+        r.transmittance.as_ref().expect("raytrace carries transmittance"),
+    );
+    let mut worst = 0.0f64;
+    for (a, b) in mine.iter().zip(theirs) {
+        for c in 0..3 {
+            assert!((0.0..=1.0).contains(&a[c]));
+            worst = worst.max((f64::from(a[c]) - b[c]).abs());
+        }
+    }
+    let attenuated = mine.iter().filter(|t| t[0] > 0.0 && t[0] < 0.95).count();
+    eprintln!("hairball: max channel difference {worst:.2e}, {attenuated} attenuated pixels");
+    assert!(worst <= 1e-5, "{worst}");
+    assert!(attenuated > 100, "{attenuated}");
+    for (l, t) in v.lit.iter().zip(mine) {
+        assert!((f64::from(*l) - f64::from(t[0])).abs() <= 1e-6);
+    }
+}
+
+/// Runs `afsm` with the default options and with `off` applied; the pixels must be equal.
+fn with_and_without(
+    frame: &Frame<'_>,
+    off: impl Fn(&mut AfsmOptions),
+) -> (instrumentation::Counters, instrumentation::Counters) {
+    let mut options = AfsmOptions::default();
+    let (on, rec_on) = run(&AliasFreeShadowMap::pixel_centres(options), frame);
+    off(&mut options);
+    let (without, rec_off) = run(&AliasFreeShadowMap::pixel_centres(options), frame);
+    assert_eq!(on, without, "culling changed a pixel");
+    (rec_on.counters, rec_off.counters)
+}
+
+#[test]
+fn occlusion_culling_skips_work_without_changing_a_pixel() {
+    for name in ["grazing", "spot-spheres"] {
+        let scene = scenes::load(name).expect("built-in");
+        let frame = Frame::new(&scene, 160, 120, &mut Recorder::default());
+        let (on, off) = with_and_without(&frame, |o| o.occlusion_culling = false);
+        eprintln!(
+            "{name}: occlusion culled {}, points tested {} vs {}, nodes visited {} vs {}",
+            on.nodes_occlusion_culled,
+            on.sampling_points_tested,
+            off.sampling_points_tested,
+            on.bsp_nodes_visited,
+            off.bsp_nodes_visited
+        );
+        assert!(on.nodes_occlusion_culled > 0, "{name}");
+        assert_eq!(off.nodes_occlusion_culled, 0, "{name}");
+        assert!(on.sampling_points_tested < off.sampling_points_tested, "{name}");
+        // Culled leaves save point tests; culled inner nodes also save visits below them.
+        assert!(on.bsp_nodes_visited <= off.bsp_nodes_visited, "{name}");
+    }
+}
+
+#[test]
+fn depth_culling_skips_work_without_changing_a_pixel() {
+    for name in ["spheres", "city", "spot-spheres"] {
+        let scene = scenes::load(name).expect("built-in");
+        let frame = Frame::new(&scene, 160, 120, &mut Recorder::default());
+        let (on, off) = with_and_without(&frame, |o| o.depth_culling = false);
+        eprintln!(
+            "{name}: depth culled {}, points tested {} vs {}, nodes visited {} vs {}",
+            on.nodes_depth_culled,
+            on.sampling_points_tested,
+            off.sampling_points_tested,
+            on.bsp_nodes_visited,
+            off.bsp_nodes_visited
+        );
+        assert!(on.nodes_depth_culled > 0, "{name}");
+        assert_eq!(off.nodes_depth_culled, 0, "{name}");
+        assert!(on.sampling_points_tested < off.sampling_points_tested, "{name}");
+        assert!(on.bsp_nodes_visited < off.bsp_nodes_visited, "{name}");
+    }
+}
+
+#[test]
+fn results_and_counters_do_not_depend_on_the_thread_count() {
+    for name in ["random-10k", "hairball"] {
+        let scene = scenes::load(name).expect("built-in");
+        let frame = Frame::new(&scene, 160, 120, &mut Recorder::default());
+        let m = AliasFreeShadowMap::supersampled(AfsmOptions { rate: 4, ..Default::default() });
+        let (many, rec_many) = run(&m, &frame);
+        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a pool");
+        let (single, rec_single) = one.install(|| run(&m, &frame));
+        assert_eq!(many, single, "{name}");
+        assert_eq!(rec_many.counters, rec_single.counters, "{name}");
+    }
+}
+
+#[test]
+fn stages_and_counters_are_recorded() {
+    let scene = scenes::load("plane-square").expect("built-in");
+    let frame = Frame::new(&scene, 96, 72, &mut Recorder::default());
+    let (_, rec) = run(&AliasFreeShadowMap::pixel_centres(AfsmOptions::default()), &frame);
+    let names: Vec<&str> = rec.stages.stages.iter().map(|s| s.name.as_str()).collect();
+    assert_eq!(names, [afsm::STAGE_TRANSFORMATION, afsm::STAGE_BSP, afsm::STAGE_RASTERIZATION]);
+    assert_eq!(
+        [afsm::STAGE_TRANSFORMATION, afsm::STAGE_BSP, afsm::STAGE_RASTERIZATION],
+        ["transformation of samples", "BSP construction", "rasterization of blockers"]
+    );
+    let c = rec.counters;
+    let visible = frame.gbuffer.triangle.iter().filter(|&&t| t != NO_TRIANGLE).count() as u64;
+    fn leaves(n: u64) -> u64 {
+        if n < 64 {
+            1
+        } else {
+            leaves(n / 2) + leaves(n - n / 2)
+        }
+    }
+    assert!(visible > 64 * 32);
+    assert_eq!(c.bsp_nodes, 2 * leaves(visible) - 1);
+    assert!(c.bsp_nodes_visited > 0 && c.sampling_points_tested >= visible);
+    assert_eq!(c.shadow_map_lookups + c.rays_traced, 0);
+}
+
+#[test]
+fn afsm_ss_at_rate_1_is_afsm() {
+    let scene = scenes::load("spot-spheres").expect("built-in");
+    let frame = Frame::new(&scene, 96, 72, &mut Recorder::default());
+    let (a, _) = run(&AliasFreeShadowMap::pixel_centres(AfsmOptions::default()), &frame);
+    let (b, rec) = run(
+        &AliasFreeShadowMap::supersampled(AfsmOptions { rate: 1, ..AfsmOptions::default() }),
+        &frame,
+    );
+    assert_eq!(a, b);
+    assert_eq!(rec.stages.stages.len(), 3, "no extra G-buffer at rate 1");
+}
+
+#[test]
+fn registry_builds_both_and_rejects_bad_options() {
+    for name in ["afsm", "afsm-ss"] {
+        assert!(methods::METHODS.iter().any(|(n, _)| *n == name));
+        assert_eq!(method(name, &MethodOptions::default()).expect("valid").name(), name);
+    }
+    let ss = method("afsm-ss", &MethodOptions::default()).expect("valid");
+    assert_eq!(ss.params()["rate"], 32);
+    assert_eq!(ss.params()["pattern"], "grid");
+    let bad_rate =
+        |name, rate| method(name, &MethodOptions { rate: Some(rate), ..Default::default() }).err();
+    for rate in [0, 3, 256, 1024] {
+        assert!(matches!(
+            bad_rate("afsm-ss", rate),
+            Some(MethodError::InvalidOption { option: "--rate", .. })
+        ));
+    }
+    for leaf_size in [0, 1] {
+        let m = AliasFreeShadowMap::pixel_centres(AfsmOptions { leaf_size, ..Default::default() });
+        assert!(matches!(
+            m.validate(),
+            Err(MethodError::InvalidOption { option: "--leaf-size", .. })
+        ));
+    }
+    let m = AliasFreeShadowMap::pixel_centres(AfsmOptions { rate: 4, ..Default::default() });
+    assert!(matches!(m.validate(), Err(MethodError::InvalidOption { option: "--rate", .. })));
+}

@@ -1,0 +1,170 @@
+//! `shadowbench report`: a suite file runs, and its CSV and JSON parse back with every run.
+
+mod common;
+use common::{shadowbench, stderr, write};
+
+const SUITE: &str = r#"
+name = "tiny"
+width = 64
+height = 48
+warmup = 1
+repeats = 2
+ref_rate = 4
+scenes = ["plane-square", "hairball", "no-such-scene"]
+
+[[run]]
+method = "sm"
+map_res = [64, 128]
+
+[[run]]
+method = "pcf-bs-fast-2x2"
+map_res = [128]
+depth_bits = [8, 32]
+
+[[grid]]
+title = "result, reference and error"
+scene = "plane-square"
+inset = [0.4, 0.4, 0.25, 0.25]
+reference = true
+panels = [{ method = "sm", map_res = 64 }, { method = "pcf-gems4", map_res = 64 }]
+"#;
+
+#[test]
+fn a_suite_file_writes_tables_that_parse_back() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let suite = write(dir.path(), "tiny.toml", SUITE);
+    let out = dir.path().join("out");
+    let o = shadowbench(&["report", "--suite", &suite, "--out", out.to_str().expect("utf-8")]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no-such-scene"), "{}", stderr(&o));
+
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("runs.json")).expect("runs.json"))
+            .expect("valid JSON");
+    let rows = json["rows"].as_array().expect("rows");
+    assert_eq!(rows.len(), 2 * 4, "two scenes, four combinations");
+    for r in rows {
+        let mean = r["metrics"]["mean_abs_error"].as_f64().expect("metric");
+        assert!((0.0..=1.0).contains(&mean));
+        let t = &r["total_ms"];
+        assert!(t["min"].as_f64() <= t["median"].as_f64());
+        assert!(t["median"].as_f64() <= t["max"].as_f64());
+        assert!(!r["stages"].as_array().expect("stages").is_empty());
+    }
+    let by_scene = |s: &str| rows.iter().filter(|r| r["scene"] == s).count();
+    assert_eq!((by_scene("plane-square"), by_scene("hairball")), (4, 4));
+    // Exact where it applies, ray traced where the scene has transparency.
+    let reference =
+        |s: &str| rows.iter().find(|r| r["scene"] == s).expect("row")["reference"].clone();
+    assert_eq!(reference("plane-square"), "exact");
+    assert_eq!(reference("hairball"), "raytrace");
+    assert!(json["machine"]["cores"].as_u64() >= Some(1));
+    assert!(json["skipped"]
+        .as_array()
+        .expect("skipped")
+        .iter()
+        .any(|s| s.as_str().is_some_and(|s| s.contains("no-such-scene"))));
+
+    let csv = std::fs::read_to_string(out.join("runs.csv")).expect("runs.csv");
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).expect(name);
+    let lines: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(lines.len(), rows.len());
+    for l in &lines {
+        assert_eq!(l.len(), header.len());
+        let err: f64 = l[col("mean_abs_error")].parse().expect("number");
+        assert!((0.0..=1.0).contains(&err));
+        let _: f64 = l[col("time_median_ms")].parse().expect("number");
+        let _: u64 = l[col("shadow_map_lookups")].parse().expect("counter");
+    }
+    let bits: Vec<&str> = lines.iter().map(|l| l[col("depth_bits")]).collect();
+    assert!(bits.contains(&"8") && bits.contains(&"32") && bits.contains(&""));
+
+    let md = std::fs::read_to_string(out.join("report.md")).expect("report.md");
+    assert!(md.contains("## plane-square") && md.contains("pcf-bs-fast-2x2"), "{md}");
+    let grids = json["grids"].as_array().expect("grids");
+    assert_eq!(grids.len(), 1);
+    let grid = image::open(out.join(grids[0]["png"].as_str().expect("path"))).expect("a PNG");
+    assert!(grid.width() > 4 * 64, "four panels: two methods, reference, error");
+    let exrs = std::fs::read_dir(out.join("visibility")).expect("visibility").count();
+    assert_eq!(exrs, rows.len());
+}
+
+#[test]
+fn bad_suites_are_named() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let bad = write(dir.path(), "bad.toml", "name = \"x\"\nscenes = [\"cage\"]\nrepeat = 2\n");
+    for (suite, needle) in [(bad.as_str(), "repeat"), ("no-such-suite", "no-such-suite")] {
+        let o = shadowbench(&["report", "--suite", suite, "--out", "/tmp/unused"]);
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert!(stderr(&o).contains(needle), "{}", stderr(&o));
+    }
+}
+
+/// A Chromium to drive headless: the installed one, or Debian's package installed now (as
+/// root with apt-get); `None`, with the reason printed, when neither works.
+fn chromium() -> Option<String> {
+    let found = || {
+        ["chromium", "chromium-browser", "google-chrome"].into_iter().find(|b| {
+            std::process::Command::new("which").arg(b).output().is_ok_and(|o| o.status.success())
+        })
+    };
+    if let Some(b) = found() {
+        return Some(b.to_owned());
+    }
+    let root = std::process::Command::new("id")
+        .arg("-u")
+        .output()
+        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0");
+    if !root {
+        eprintln!("skipped: no chromium, and not root to install Debian's `chromium` package");
+        return None;
+    }
+    let apt = |args: &[&str]| {
+        std::process::Command::new("apt-get")
+            .args(args)
+            .env("DEBIAN_FRONTEND", "noninteractive")
+            .output()
+            .is_ok_and(|o| o.status.success())
+    };
+    if !(apt(&["install", "-y", "-q", "chromium"])
+        || (apt(&["update", "-q"]) && apt(&["install", "-y", "-q", "chromium"])))
+    {
+        eprintln!("skipped: could not install Debian's `chromium` package with apt-get");
+        return None;
+    }
+    found().map(str::to_owned)
+}
+
+#[test]
+fn index_html_loads_every_image_in_headless_chromium() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let suite = write(dir.path(), "tiny.toml", SUITE);
+    let out = dir.path().join("out");
+    let o = shadowbench(&["report", "--suite", &suite, "--out", out.to_str().expect("utf-8")]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let page = std::fs::read_to_string(out.join("index.html")).expect("index.html");
+    let images = page.matches("<img ").count();
+    assert!(images >= 4, "{images} images in the page");
+    for png in page.split("src=\"").skip(1).filter_map(|s| s.split('"').next()) {
+        assert!(out.join(png).is_file(), "{png} referenced but missing");
+    }
+    let Some(browser) = chromium() else { return };
+    let url = format!("file://{}", out.join("index.html").display());
+    let dom = std::process::Command::new(&browser)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--virtual-time-budget=10000",
+            "--dump-dom",
+            &url,
+        ])
+        .output()
+        .expect("chromium runs");
+    let dom = String::from_utf8_lossy(&dom.stdout);
+    assert!(dom.contains("data-checked=\"yes\""), "the page did not finish loading: {dom}");
+    assert_eq!(dom.matches("data-loaded=\"yes\"").count(), images, "{dom}");
+    assert!(!dom.contains("data-loaded=\"no\""));
+}
