@@ -27,6 +27,12 @@ scene = "plane-square"
 inset = [0.4, 0.4, 0.25, 0.25]
 reference = true
 panels = [{ method = "sm", map_res = 64 }, { method = "pcf-gems4", map_res = 64 }]
+
+[[table]]
+paper = "aila-laine-table1"
+scenes = ["random-1k", "plane-square"]
+width = 64
+height = 48
 "#;
 
 #[test]
@@ -89,6 +95,26 @@ fn a_suite_file_writes_tables_that_parse_back() {
     assert!(grid.width() > 4 * 64, "four panels: two methods, reference, error");
     let exrs = std::fs::read_dir(out.join("visibility")).expect("visibility").count();
     assert_eq!(exrs, rows.len());
+
+    // The paper's table: our figures beside the paper's, its hardware named.
+    let tables = json["tables"].as_array().expect("tables");
+    assert_eq!(tables.len(), 1);
+    let t = &tables[0];
+    assert!(t["paper_hardware"].as_str().expect("hardware").contains("Pentium 4"));
+    let header: Vec<&str> =
+        t["header"].as_array().expect("header").iter().filter_map(|h| h.as_str()).collect();
+    assert_eq!(header, ["", "random-1k ours", "paper (1K)", "plane-square ours", "paper (10K)"]);
+    let table_rows = t["rows"].as_array().expect("rows");
+    assert_eq!(table_rows.len(), 9);
+    let cell = |row: usize, col: usize| table_rows[row][col].as_str().expect("cell").to_owned();
+    assert_eq!((cell(0, 1), cell(0, 2)), ("1.0K".to_owned(), "1K".to_owned()));
+    assert_eq!(cell(0, 3), "4", "plane-square has four triangles");
+    let total: f64 = cell(8, 1).parse().expect("total ms");
+    assert!(total > 0.0);
+    assert_eq!(cell(8, 2), "675");
+    assert!(md.contains("Paper's figures measured on: 1.6 GHz Mobile Pentium 4"), "{md}");
+    let csv = std::fs::read_to_string(out.join("tables/aila-laine-table1.csv")).expect("csv");
+    assert_eq!(csv.lines().count(), 1 + 9);
 }
 
 #[test]

@@ -10,26 +10,16 @@
 
 use instrumentation::{Counters, Recorder};
 use methods::{
-    afsm::{AfsmOptions, AliasFreeShadowMap, STAGE_BSP, STAGE_RASTERIZATION, STAGE_TRANSFORMATION},
+    afsm::{
+        AfsmOptions, AliasFreeShadowMap, PAPER_TABLE1, STAGE_BSP, STAGE_RASTERIZATION,
+        STAGE_TRANSFORMATION,
+    },
     Frame, ShadowMethod,
 };
 
 const SCENES: [&str; 4] = ["random-1k", "random-10k", "random-100k", "random-1m"];
 const WIDTH: u32 = 1024;
 const HEIGHT: u32 = 768;
-
-/// The paper's Table 1 (1.6 GHz Mobile Pentium 4), per scene.
-const PAPER: [[&str; 4]; 8] = [
-    ["1K", "10K", "100K", "1M"],
-    ["16K", "16K", "16K", "16K"],
-    ["91K", "471K", "3.2M", "23M"],
-    ["5.3K", "5.4K", "5.8K", "6.8K"],
-    ["458K", "513K", "506K", "501K"],
-    ["130", "130", "130", "130"],
-    ["400", "402", "391", "408"],
-    ["145", "381", "1568", "8102"],
-];
-const PAPER_TOTAL: [&str; 4] = ["675", "913", "2089", "8640"];
 
 /// One cell of a table row, from a scene's measurements.
 type Cell = fn(&Measured) -> String;
@@ -157,13 +147,13 @@ fn main() {
     ];
     for (row, (label, cell)) in rows.iter().enumerate() {
         let mut line = format!("| {label} |");
-        for (m, paper) in measured.iter().zip(PAPER[row]) {
+        for (m, paper) in measured.iter().zip(PAPER_TABLE1[row]) {
             line.push_str(&format!(" {} | {paper} |", cell(m)));
         }
         println!("{line}");
     }
     let mut line = String::from("| **Total time (ms)** |");
-    for (m, paper) in measured.iter().zip(PAPER_TOTAL) {
+    for (m, paper) in measured.iter().zip(PAPER_TABLE1[8]) {
         line.push_str(&format!(" **{:.1}** | {paper} |", m.ms[3]));
     }
     println!("{line}");

@@ -98,6 +98,26 @@ pub fn index_html(report: &Report, plots: &[PlotFile]) -> String {
         }
         s.push_str("</table>\n");
     }
+    if !report.tables.is_empty() {
+        s.push_str("<h2 id=\"tables\">The papers' tables</h2>\n");
+        for t in &report.tables {
+            let _ = writeln!(
+                s,
+                "<h3>{}</h3>\n<p>Paper's figures measured on: {}. {} (<a href=\"tables/{}.csv\">CSV\
+                 </a>)</p>\n<table><tr>{}</tr>",
+                escape(&t.title),
+                escape(&t.paper_hardware),
+                escape(&t.notes.join(" ")),
+                t.paper.name(),
+                t.header.iter().map(|c| format!("<th>{}</th>", escape(c))).collect::<String>()
+            );
+            for r in &t.rows {
+                let cells: String = r.iter().map(|c| format!("<td>{}</td>", escape(c))).collect();
+                let _ = writeln!(s, "<tr>{cells}</tr>");
+            }
+            s.push_str("</table>\n");
+        }
+    }
     if !report.skipped.is_empty() {
         s.push_str("<h2>Not run</h2>\n<ul>\n");
         for k in &report.skipped {

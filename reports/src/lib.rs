@@ -1,7 +1,8 @@
 //! What runs and reports write. A single run: the visibility buffer as EXR, a shaded PNG for
 //! looking, and the run record as JSON ([`output`]). A report: a [`suite`] of scenes, methods
 //! and parameters, run by [`sweep`] under the timing protocol of [`timing`], written by
-//! [`write`] as JSON, CSV, Markdown tables and EXR images.
+//! [`write`] as JSON, CSV, Markdown tables and EXR images; the papers' tables are measured by
+//! [`tables`].
 
 pub mod grids;
 pub mod html;
@@ -9,6 +10,7 @@ pub mod output;
 pub mod plots;
 pub mod suite;
 pub mod sweep;
+pub mod tables;
 pub mod timing;
 pub mod write;
 

@@ -17,11 +17,15 @@
 //! method = "pcf-reeves"
 //! map_res = [512, 1024]   # each list is swept; a run is every combination
 //! rate = [4, 16]
+//!
+//! [[table]]                  # a paper's table, see `tables`
+//! paper = "lecocq-table2"
 //! ```
 //!
 //! Unknown keys and bad values are errors that name the file and the key (and the line,
 //! through the TOML parser).
 
+use crate::tables::TableSpec;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -104,6 +108,11 @@ pub struct PanelSpec {
     /// Depth precision.
     #[serde(default)]
     pub depth_bits: Option<u32>,
+    /// Show the pixel classes of `spsm` / `spsm-f32` in Lecocq et al.'s Fig. 14 colours
+    /// (green: shadowed by the 3x3 neighbourhood, red: silhouette recovery) instead of the
+    /// shaded result.
+    #[serde(default)]
+    pub classes: bool,
 }
 
 /// An image grid with a zoomed inset, like the papers' comparison figures.
@@ -158,6 +167,9 @@ pub struct Suite {
     /// Image grids.
     #[serde(default, rename = "grid")]
     pub grids: Vec<GridSpec>,
+    /// The papers' tables ([`crate::tables`]).
+    #[serde(default, rename = "table")]
+    pub tables: Vec<TableSpec>,
 }
 
 fn one() -> u32 {
@@ -222,6 +234,14 @@ impl Suite {
                 ));
             }
         }
+        for (k, t) in suite.tables.iter().enumerate() {
+            if (t.width == 0) != (t.height == 0) || t.width > 16384 || t.height > 16384 {
+                return Err(invalid(
+                    &format!("table[{k}].width"),
+                    "give both width and height (at most 16384), or neither".into(),
+                ));
+            }
+        }
         Ok(suite)
     }
 
@@ -276,6 +296,13 @@ mod tests {
         let grid = grid.replace("spheres", "cage").replace("[0.1, 0.1", "[1.5, 0.1");
         let e = Suite::parse(&format!("{base}{grid}"), p).expect_err("inset outside");
         assert!(e.to_string().contains("grid[0].inset"), "{e}");
+        let e = Suite::parse(&format!("{base}[[table]]\npaper = \"table-9\"\n"), p)
+            .expect_err("unknown table");
+        assert!(e.to_string().contains("table-9"), "{e}");
+        let e =
+            Suite::parse(&format!("{base}[[table]]\npaper = \"lecocq-table2\"\nwidth = 64\n"), p)
+                .expect_err("width without height");
+        assert!(e.to_string().contains("table[0].width"), "{e}");
         let e = Suite::load("/no/such/suite.toml").expect_err("missing");
         assert!(e.to_string().contains("quick"), "{e}");
     }

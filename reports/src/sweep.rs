@@ -8,8 +8,9 @@
 
 use crate::grids::Panel;
 use crate::output::shade;
-use crate::suite::{GridSpec, ReferenceChoice, RunSpec, Suite};
-use crate::timing::{stage_summaries, Machine, StageTimes, Summary};
+use crate::suite::{GridSpec, PanelSpec, ReferenceChoice, RunSpec, Suite};
+use crate::tables::{run_table, table_run_count, Table};
+use crate::timing::{time_method, Machine, StageTimes, Summary};
 use analysis::{error_image, flip::flip_mean, Metrics, ReferenceImage};
 use instrumentation::{Counters, Recorder};
 use methods::{Frame, MethodOptions, Visibility};
@@ -84,6 +85,8 @@ pub struct Report {
     pub skipped: Vec<String>,
     /// Image grids, by title and file.
     pub grids: Vec<GridFile>,
+    /// The papers' tables, measured.
+    pub tables: Vec<Table>,
 }
 
 /// An image grid of a report.
@@ -138,6 +141,7 @@ pub fn expand(spec: &RunSpec) -> Vec<MethodOptions> {
 /// Number of method runs a suite makes (scenes times combinations), for progress bars.
 pub fn run_count(suite: &Suite) -> u64 {
     (suite.scenes.len() * suite.runs.iter().map(|r| expand(r).len()).sum::<usize>()) as u64
+        + suite.tables.iter().map(table_run_count).sum::<u64>()
 }
 
 fn reference_for(
@@ -158,6 +162,30 @@ fn reference_for(
     Ok((name.to_owned(), rate, image, t.elapsed().as_secs_f64() * 1e3))
 }
 
+/// A panel of the sub-pixel shadow map's pixel classes (Lecocq et al. Fig. 14).
+fn spsm_classes(p: &PanelSpec, frame: &Frame<'_>) -> Result<Panel, String> {
+    use methods::spsm::{class_image, Spsm, SpsmOptions, TexelFormat};
+    let texel = match p.method.as_str() {
+        "spsm" => TexelFormat::Packed,
+        "spsm-f32" => TexelFormat::F32,
+        _ => return Err("`classes` shows the pixel classes of spsm or spsm-f32 only".into()),
+    };
+    let d = SpsmOptions::default();
+    let mut map = d.map;
+    map.map_res = p.map_res.unwrap_or(map.map_res);
+    let options = SpsmOptions { map, texel, rate: p.rate.unwrap_or(d.rate), ..d };
+    let (v, classes) = Spsm { options }
+        .run_classified(frame, &mut Recorder::default())
+        .map_err(|e| e.to_string())?;
+    let rgb = class_image(&classes, &v.lit);
+    let image = image::RgbImage::from_fn(v.width, v.height, |x, y| {
+        image::Rgb(rgb[(y * v.width + x) as usize])
+    });
+    let label =
+        p.label.clone().unwrap_or_else(|| format!("{} classes, map {}", p.method, map.map_res));
+    Ok(Panel { label, image })
+}
+
 /// The panels of `grid` on `frame` (untimed runs); panels whose method cannot run are left
 /// out with the reason in `skipped`.
 fn grid_panels(
@@ -176,6 +204,13 @@ fn grid_panels(
             depth_bits: p.depth_bits,
             ..Default::default()
         };
+        if p.classes {
+            match spsm_classes(p, frame) {
+                Ok(panel) => panels.push(panel),
+                Err(e) => skipped.push(format!("grid `{}`: {}: {e}", grid.title, p.method)),
+            }
+            continue;
+        }
         let run = analysis::registry::technique(&p.method, &options)
             .and_then(|t| t.run(frame, &mut Recorder::default()).map(|v| (t, v)));
         match run {
@@ -227,6 +262,7 @@ pub fn run_suite(
         rows: Vec::new(),
         skipped: Vec::new(),
         grids: Vec::new(),
+        tables: Vec::new(),
     };
     let mut produced = Vec::new();
     let mut grid_images = Vec::new();
@@ -275,31 +311,17 @@ pub fn run_suite(
                         continue;
                     }
                 };
-                let mut stage_runs = Vec::new();
-                let mut totals = Vec::new();
-                let mut last = None;
-                let mut failed = None;
-                for k in 0..suite.warmup + suite.repeats {
-                    let mut rec = Recorder::default();
-                    match technique.run(&frame, &mut rec) {
-                        Ok(v) => {
-                            if k >= suite.warmup {
-                                totals.push(rec.stages.total_ms());
-                                stage_runs.push(rec.stages.stages.clone());
-                                last = Some((v, rec));
-                            }
+                let timed =
+                    match time_method(technique.as_ref(), &frame, suite.warmup, suite.repeats) {
+                        Ok(t) => t,
+                        Err(why) => {
+                            report
+                                .skipped
+                                .push(format!("{} on {}: {why}", spec.method, scene.name));
+                            continue;
                         }
-                        Err(e) => {
-                            failed = Some(e.to_string());
-                            break;
-                        }
-                    }
-                }
-                let (Some((v, rec)), Some(total_ms)) = (last, Summary::of(&totals)) else {
-                    let why = failed.unwrap_or_else(|| "no timed run".into());
-                    report.skipped.push(format!("{} on {}: {why}", spec.method, scene.name));
-                    continue;
-                };
+                    };
+                let v = timed.visibility;
                 report.rows.push(Row {
                     scene: scene.name.clone(),
                     method: technique.name().to_owned(),
@@ -310,11 +332,11 @@ pub fn run_suite(
                     ref_rate,
                     metrics: Metrics::compare(&v, &truth.lit, &truth.evaluated),
                     flip_mean: flip_mean(&v, &truth.lit, &truth.evaluated),
-                    total_ms,
-                    stages: stage_summaries(&stage_runs),
-                    skipped_stages: rec.stages.skipped.clone(),
-                    counters: rec.counters,
-                    notes: rec.notes,
+                    total_ms: timed.total_ms,
+                    stages: timed.stages,
+                    skipped_stages: timed.record.stages.skipped.clone(),
+                    counters: timed.record.counters,
+                    notes: timed.record.notes,
                 });
                 produced.push(Produced { row: report.rows.len() - 1, visibility: v });
             }
@@ -335,6 +357,11 @@ pub fn run_suite(
                 inset: grid.inset,
             });
         }
+    }
+    for spec in &suite.tables {
+        let table =
+            run_table(spec, suite.warmup, suite.repeats, &mut report.skipped, &mut progress);
+        report.tables.push(table);
     }
     (report, produced, grid_images)
 }

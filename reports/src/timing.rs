@@ -2,6 +2,8 @@
 //! minimum and maximum, for the whole method and for each of its stages; and the machine the
 //! times were taken on.
 
+use instrumentation::Recorder;
+use methods::{Frame, ShadowMethod, Visibility};
 use serde::{Deserialize, Serialize};
 
 /// Median, minimum and maximum of repeated measurements, in milliseconds.
@@ -51,6 +53,44 @@ pub fn stage_summaries(runs: &[Vec<instrumentation::Stage>]) -> Vec<StageTimes> 
             Summary::of(&times).map(|ms| StageTimes { name: stage.name.clone(), ms })
         })
         .collect()
+}
+
+/// What the timed runs of one method on one frame gave.
+pub struct Timed {
+    /// The last timed run's result (every method is deterministic for its parameters).
+    pub visibility: Visibility,
+    /// The last timed run's record: counters, notes, skipped stages.
+    pub record: Recorder,
+    /// Total of the method's stages.
+    pub total_ms: Summary,
+    /// Each stage.
+    pub stages: Vec<StageTimes>,
+}
+
+/// Runs `method` on `frame` `warmup` times untimed, then `repeats` times timed (at least one).
+/// The error is the method's own, as text.
+pub fn time_method(
+    method: &dyn ShadowMethod,
+    frame: &Frame<'_>,
+    warmup: u32,
+    repeats: u32,
+) -> Result<Timed, String> {
+    let mut stage_runs = Vec::new();
+    let mut totals = Vec::new();
+    let mut last = None;
+    for k in 0..warmup + repeats.max(1) {
+        let mut rec = Recorder::default();
+        let v = method.run(frame, &mut rec).map_err(|e| e.to_string())?;
+        if k >= warmup {
+            totals.push(rec.stages.total_ms());
+            stage_runs.push(rec.stages.stages.clone());
+            last = Some((v, rec));
+        }
+    }
+    let (Some((visibility, record)), Some(total_ms)) = (last, Summary::of(&totals)) else {
+        return Err("no timed run gave a finite time".into());
+    };
+    Ok(Timed { visibility, record, total_ms, stages: stage_summaries(&stage_runs) })
 }
 
 /// The machine the times were taken on.

@@ -186,6 +186,12 @@ pub fn markdown(report: &Report) -> String {
             let _ = writeln!(s, "| {} |", run_cells(r).join(" | "));
         }
     }
+    if !report.tables.is_empty() {
+        let _ = writeln!(s, "\n## The papers' tables\n");
+        for t in &report.tables {
+            let _ = writeln!(s, "{}", crate::tables::markdown(t));
+        }
+    }
     if !report.skipped.is_empty() {
         let _ = writeln!(s, "\n## Not run\n");
         for k in &report.skipped {
@@ -287,8 +293,8 @@ pub fn write_plots(dir: &Path, report: &Report) -> Result<Vec<PlotFile>, OutputE
     Ok(files)
 }
 
-/// Writes `index.html`, `report.md`, `runs.csv`, `runs.json`, `plots/*.png|svg` and
-/// `visibility/*.exr` into `dir`.
+/// Writes `index.html`, `report.md`, `runs.csv`, `runs.json`, `plots/*.png|svg`,
+/// `tables/*.csv` (the papers' tables) and `visibility/*.exr` into `dir`.
 pub fn write_report(
     dir: &Path,
     report: &Report,
@@ -317,6 +323,14 @@ pub fn write_report(
     ] {
         let path = dir.join(name);
         std::fs::write(&path, text).map_err(|e| err(&path, &e))?;
+    }
+    if !report.tables.is_empty() {
+        let tables = dir.join("tables");
+        std::fs::create_dir_all(&tables).map_err(|e| err(&tables, &e))?;
+        for t in &report.tables {
+            let path = tables.join(format!("{}.csv", t.paper.name()));
+            std::fs::write(&path, crate::tables::csv(t)).map_err(|e| err(&path, &e))?;
+        }
     }
     for p in produced {
         let path = images.join(format!("{}.exr", row_stem(&report.rows[p.row])));
