@@ -65,9 +65,12 @@ fn pixel_match_against_raytrace_beside_sm() {
                  {unpacked:.3}%"
             );
             assert!(packed > 99.0 && unpacked > 99.0, "{name} {map_res}: {packed} {unpacked}");
-            if name == "spheres" {
-                // Curved casters over a plane: the sub-texel silhouette beats the map's texels.
-                assert!(packed > sm + 0.2, "{name} {map_res}: spsm {packed} vs sm {sm}");
+            // The sub-texel silhouette beats the map's texels, on curved casters and on a
+            // dense mesh (75K triangles) alike (the paper: 99.63% against 97.93% at 2K).
+            assert!(packed > sm + 0.2, "{name} {map_res}: spsm {packed} vs sm {sm}");
+            assert!(unpacked > sm + 0.2, "{name} {map_res}: spsm-f32 {unpacked} vs sm {sm}");
+            if map_res == 2048 {
+                assert!(packed >= 99.6 && unpacked >= 99.6, "{name}: {packed} {unpacked}");
             }
             // Packing costs little: within half a point of the f32 texel.
             assert!((packed - unpacked).abs() < 0.5, "{name} {map_res}");

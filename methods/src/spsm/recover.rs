@@ -46,13 +46,13 @@
 //!    is shadowed when `d(q) > φ(t(q))`.
 //!
 //! **Receivers facing away from the light** (their face normal, as the G-buffer stores it,
-//! points away from it) are shadowed without reading the pattern: light reaches such a point
-//! only through the surface it lies on, so a closed caster's back side is in the shadow of its
-//! own front (what the reference's shadow ray finds, crossing the mesh), and a shaded image
-//! is dark there whatever the shadow (the paper's images). The depth-test pattern cannot see
-//! that occluder reliably: near the light's silhouette the front side is nearly edge-on and
-//! within the quantization margin of the receiver's plane. Only uncertain pixels get here;
-//! a back face that lies on its own stored triangle was lit by one lookup.
+//! points away from it) whose filtered pattern holds an occluded texel are shadowed, whatever
+//! the tangents say: light reaches such a point only through the surface it lies on, so a
+//! closed caster's back side is in the shadow of its own front (what the reference's shadow
+//! ray finds, crossing the mesh, and what a shaded image shows). The silhouette function
+//! misses that occluder near the light's silhouette, where the front side is nearly edge-on
+//! and its recorded edges stop short of the receiver. Where no occluder is found around it
+//! (an open, single-sided surface seen from behind), the pattern decides as usual.
 //!
 //! The recovered function is kept per pixel (its texel, occluder mask and tangents), so the
 //! antialiasing stage evaluates the same function at the sub-samples.
@@ -187,8 +187,8 @@ pub struct Silhouette {
     pub texel: (u32, u32),
     /// The occluded texels kept (9-bit pattern after the connectivity filter).
     pub kept: u16,
-    /// Whether the receiver faces away from the light: shadowed by its own surface, no
-    /// pattern is read (`kept` is 0).
+    /// Whether the receiver faces away from the light and the pattern holds an occluded
+    /// texel: shadowed whatever the tangents say.
     pub facing_away: bool,
 }
 
@@ -199,7 +199,7 @@ impl Silhouette {
     }
 
     /// What the pattern says; [`Pattern::Shadowed`] for a receiver facing away from the
-    /// light.
+    /// light with an occluded texel around it.
     pub fn pattern(&self) -> Pattern {
         if self.facing_away {
             return Pattern::Shadowed;
@@ -353,9 +353,6 @@ pub fn silhouette(
     p: &MapPoint,
 ) -> Option<Silhouette> {
     let (x, y) = texel_at(p.xy, lookup.map.res)?;
-    if !p.facing {
-        return Some(Silhouette { texel: (x as u32, y as u32), kept: 0, facing_away: true });
-    }
     let (x, y) = (x as i64, y as i64);
     let r = i64::from(lookup.map.res);
     let grad = lookup.gradient(p);
@@ -372,18 +369,16 @@ pub fn silhouette(
             mask |= 1 << k;
         }
     }
-    Some(Silhouette {
-        texel: (x as u32, y as u32),
-        kept: connectivity_table()[mask as usize],
-        facing_away: false,
-    })
+    let kept = connectivity_table()[mask as usize];
+    // A receiver facing away from the light, with an occluder found around it, is shadowed.
+    let facing_away = !p.facing && kept != 0;
+    Some(Silhouette { texel: (x as u32, y as u32), kept, facing_away })
 }
 
 /// Runs silhouette recovery for the uncertain pixels (indices into the frame), writing their
 /// lit value (1 or 0) into `lit`. Returns each pixel's silhouette, in the order of
 /// `uncertain`, and the counters: `recovered_pixels` (pixels decided by a silhouette
-/// function rather than a full or empty pattern) and `shadow_map_lookups` (9 per pixel
-/// facing the light; none for a receiver facing away).
+/// function rather than a full or empty pattern) and `shadow_map_lookups` (9 per pixel).
 pub fn recover_pixels(
     frame: &Frame<'_>,
     lookup: &Lookup<'_>,
@@ -412,7 +407,7 @@ pub fn recover_pixels(
     let mut silhouettes = Vec::with_capacity(out.len());
     for (u, (s, value)) in uncertain.iter().zip(out) {
         lit[u.pixel as usize] = if value { 1.0 } else { 0.0 };
-        if let Some(s) = s.as_ref().filter(|s| !s.facing_away) {
+        if let Some(s) = &s {
             c.shadow_map_lookups += 9;
             c.recovered_pixels += u64::from(matches!(s.pattern(), Pattern::Tangents { .. }));
         }
