@@ -4,6 +4,7 @@ use crate::{
     afsm::{AfsmOptions, AliasFreeShadowMap},
     depth_test::MapOptions,
     method::{MethodError, ShadowMethod},
+    pan09::{Pan09, Pan09Options, VisibilityMode},
     pattern::PatternKind,
     pcf_bs::{BrabecSeidelPcf, BsOptions, Variant, DEFAULT_DEPTH_BITS},
     pcf_gems::{GemsPcf, GemsSamples},
@@ -29,6 +30,11 @@ pub const METHODS: &[(&str, &str)] = &[
     ("pcf-gems4", "4 of the 16 lookups, dithered by screen position (GPU Gems ch. 11)"),
     ("afsm", "alias-free shadow map: pixel centres as sampling points, 2D BSP (Aila & Laine 2004)"),
     ("afsm-ss", "alias-free shadow map at --rate sub-samples per pixel (default 32)"),
+    (
+        "pan09",
+        "fast sub-pixel antialiased shadow maps: silhouette mask map, facets, half-plane bitmask \
+         lookup table, --rate sub-samples (default 32) (Pan et al. 2009)",
+    ),
 ];
 
 /// Options shared by the methods; `None` takes the method's documented default.
@@ -50,6 +56,8 @@ pub struct MethodOptions {
     pub depth_bits: Option<u32>,
     /// Seed of stochastic sampling (`--seed`).
     pub seed: Option<u64>,
+    /// How `pan09` turns half-planes into sub-sample masks (`--visibility`).
+    pub visibility: Option<VisibilityMode>,
 }
 
 /// The map options given, with `defaults` for those not given; validated.
@@ -110,6 +118,16 @@ pub fn method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMetho
             let m = AliasFreeShadowMap::supersampled(o);
             m.validate()?;
             Ok(Box::new(m))
+        }
+        "pan09" => {
+            let d = Pan09Options::default();
+            let o = Pan09Options {
+                map: map_options(options, d.map)?,
+                rate: options.rate.unwrap_or(d.rate),
+                pattern: options.pattern.unwrap_or(d.pattern),
+                visibility: options.visibility.unwrap_or(d.visibility),
+            };
+            Ok(Box::new(Pan09::new(o)?))
         }
         _ => Err(MethodError::InvalidOption {
             option: "--method",

@@ -1,0 +1,117 @@
+//! Stage "validity mask" (section 3.4, Fig. 7): sub-samples where the facet runs into nearby
+//! geometry are left out of the occlusion ratio. Run only on scenes with curved receivers.
+//!
+//! For each visibility evaluation whose triangle's plane cuts the pixel (the depth
+//! half-plane's line crosses the pixel square), and whose triangle *intersects the facet*
+//! (the segment where the triangle meets the tangent plane, projected to the screen, meets
+//! the pixel square): the samples on the side of that line away from the centre sample are
+//! invalid, provided the triangle occludes some of them. That is the concave case (Fig. 7,
+//! `p1`): beyond the crease the facet runs under the neighbouring face, which would shadow it
+//! ("incorrect self-shadow"). At convex creases (`p2`) the neighbour is farther from the
+//! light than the facet beyond the line and occludes nothing there: nothing is masked ("we do
+//! not mask the samples ... since the intersecting face is farther from the light source than
+//! the facet"). The centre sample is always valid ("a view sample at the pixel center should
+//! always be valid"), so every ratio has a denominator.
+//!
+//! The paper folds this into the visibility evaluation; here it is a second pass over the
+//! same pairs, so that its cost is measured on its own and planar scenes skip it. Masks are
+//! combined with atomic AND.
+
+use super::coverage::Coverage;
+use super::facets::Facet;
+use super::footprint::clip_segment;
+use super::mask::Mask;
+use super::pairs::{TexelLists, TtPair};
+use super::screen::Crossing;
+use super::visibility::{for_each_evaluation, Scene};
+use glam::{DVec2, DVec3};
+use scenes::Projector;
+
+/// The segment where the triangle `corners` meets the plane `normal·X = offset`, or `None`
+/// when it does not (or lies in it).
+pub fn plane_section(corners: [DVec3; 3], normal: DVec3, offset: f64) -> Option<[DVec3; 2]> {
+    let d = corners.map(|c| normal.dot(c) - offset);
+    if d.iter().all(|&v| v == 0.0) {
+        return None;
+    }
+    let mut pts = [DVec3::ZERO; 3];
+    let mut n = 0;
+    for i in 0..3 {
+        let j = (i + 1) % 3;
+        if d[i] == 0.0 {
+            pts[n] = corners[i];
+            n += 1;
+        } else if d[i] * d[j] < 0.0 && n < 3 {
+            pts[n] = corners[i] + (corners[j] - corners[i]) * (d[i] / (d[i] - d[j]));
+            n += 1;
+        }
+    }
+    match n {
+        0 => None,
+        1 => Some([pts[0], pts[0]]),
+        _ => Some([pts[0], pts[1]]),
+    }
+}
+
+/// Whether the triangle `corners` meets the facet within pixel `(i, j)`'s square on screen.
+fn meets_pixel(corners: [DVec3; 3], facet: &Facet, camera: &Projector, width: u32) -> bool {
+    let Some([a, b]) = plane_section(corners, facet.normal, facet.offset) else { return false };
+    let (Some((pa, _)), Some((pb, _))) = (camera.project(a), camera.project(b)) else {
+        return false;
+    };
+    let (i, j) = (facet.pixel % width, facet.pixel / width);
+    let lo = DVec2::new(f64::from(i), f64::from(j));
+    clip_segment(pa, pb, lo, lo + DVec2::ONE, 0.0).is_some()
+}
+
+/// The validity mask of every silhouette facet.
+#[allow(clippy::too_many_arguments)]
+pub fn validity_masks<M: Mask, C: Coverage<M>>(
+    scene: &Scene<'_>,
+    camera: &Projector,
+    width: u32,
+    tt: &[TtPair],
+    pt: &TexelLists,
+    facets: &[Facet],
+    coverage: &C,
+) -> Vec<M> {
+    let all = coverage.all();
+    let masks: Vec<M::Atomic> = (0..facets.len()).map(|_| M::atomic(all)).collect();
+    for_each_evaluation(scene, tt, pt, facets, |occluder, t, f| {
+        let facet = &facets[f as usize];
+        let depth = facet.map.half_plane(&occluder.planes[3]);
+        if depth.crossing() != Crossing::Split || depth.g0 > 0.0 {
+            return; // the plane misses the pixel, or the centre's side is the occluded one
+        }
+        // The occluded samples all lie beyond the line (the depth half-plane is one factor).
+        if occluder.occlusion::<M, C>(&facet.map, coverage) == M::ZERO {
+            return;
+        }
+        let beyond = coverage.open(&depth);
+        if meets_pixel(scene.geometry.corners(t), facet, camera, width) {
+            M::fetch_and(&masks[f as usize], !beyond | coverage.centre());
+        }
+    });
+    masks.iter().map(M::load).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sections_of_a_triangle_with_a_plane() {
+        let tri =
+            [DVec3::new(0.0, -1.0, 0.0), DVec3::new(2.0, 1.0, 0.0), DVec3::new(0.0, 1.0, 0.0)];
+        let [a, b] = plane_section(tri, DVec3::Y, 0.0).expect("crosses");
+        let (lo, hi) = (a.x.min(b.x), a.x.max(b.x));
+        assert!((lo - 0.0).abs() < 1e-15 && (hi - 1.0).abs() < 1e-15, "{a} {b}");
+        assert!(plane_section(tri, DVec3::Y, 2.0).is_none());
+        // An edge lying in the plane is the section; a corner touching it is a point.
+        let [a, b] = plane_section(tri, DVec3::Y, 1.0).expect("touches");
+        assert_eq!((a.y, b.y), (1.0, 1.0));
+        assert!(plane_section(tri, DVec3::Z, 0.0).is_none(), "coplanar");
+        let [a, b] = plane_section(tri, DVec3::Y, -1.0).expect("corner");
+        assert_eq!(a, b);
+    }
+}
