@@ -82,7 +82,7 @@ fn compare_on_plane(frame: &Frame<'_>, masks: &SubsampleMasks, truth: &SampleIma
 
 #[test]
 fn exact_mode_equals_raytrace_sub_sample_for_sub_sample_on_planar_receivers() {
-    for name in ["plane-square", "cage", "random-10k", "plant"] {
+    for name in ["plane-square", "cage", "random-10k", "plant", "bunny-plane", "spheres"] {
         let Some(scene) = load(name) else { continue };
         let frame = Frame::new(&scene, 160, 120, &mut Recorder::default());
         for (rate, kind) in

@@ -25,7 +25,7 @@
 //! squares meet the footprint's bounding box, counted with four SAT references. Pixels whose
 //! centre a spot light cannot project are lit, as in `sm`.
 
-use super::footprint::Footprint;
+use super::footprint::{Footprint, MAX_CORNERS};
 use super::sat::SummedAreaTable;
 use super::screen::{CameraBasis, Crossing, FacetMap, HalfPlane, WorldPlane};
 use crate::frame::Frame;
@@ -102,19 +102,23 @@ pub struct ProjectedFacet {
     pub footprint: Footprint,
 }
 
-/// Clips the convex polygon `poly` (pixel-local screen points) to `h >= 0`.
-fn clip(poly: &[DVec2], h: &HalfPlane, out: &mut Vec<DVec2>) {
-    out.clear();
+/// Clips the convex polygon `poly[..n]` (pixel-local screen points) to `h >= 0` into `out`;
+/// returns the corners kept (at most `n + 1`).
+fn clip(poly: &[DVec2], h: &HalfPlane, out: &mut [DVec2; MAX_CORNERS]) -> usize {
+    let mut m = 0;
     for i in 0..poly.len() {
         let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
         let (ga, gb) = (h.at(a), h.at(b));
         if ga >= 0.0 {
-            out.push(a);
+            out[m] = a;
+            m += 1;
         }
         if (ga >= 0.0) != (gb >= 0.0) {
-            out.push(a + (b - a) * (ga / (ga - gb)));
+            out[m] = a + (b - a) * (ga / (ga - gb));
+            m += 1;
         }
     }
+    m
 }
 
 /// The facet of the surface `position`, `normal`, `triangle` seen through pixel `(i, j)`, and
@@ -128,7 +132,9 @@ pub fn project_facet(
     position: DVec3,
     normal: DVec3,
 ) -> Option<ProjectedFacet> {
-    light.project(position)?;
+    if light.is_perspective() {
+        light.project(position)?;
+    }
     let centre = DVec2::new(f64::from(pixel.0) + 0.5, f64::from(pixel.1) + 0.5);
     let offset = normal.dot(position);
     let map = FacetMap::new(camera, centre, normal, offset)?;
@@ -158,23 +164,28 @@ pub fn project_facet(
             count += 1;
         }
     }
-    let mut poly = vec![
+    // The pixel square, clipped by each region half-plane (4 corners, one more per clip).
+    let mut poly = [DVec2::ZERO; MAX_CORNERS];
+    poly[..4].copy_from_slice(&[
         DVec2::new(-0.5, -0.5),
         DVec2::new(0.5, -0.5),
         DVec2::new(0.5, 0.5),
         DVec2::new(-0.5, 0.5),
-    ];
-    let mut scratch = Vec::with_capacity(8);
+    ]);
+    let mut corners = 4;
+    let mut scratch = [DVec2::ZERO; MAX_CORNERS];
     for h in &region[..count] {
-        clip(&poly, h, &mut scratch);
+        corners = clip(&poly[..corners], h, &mut scratch);
         std::mem::swap(&mut poly, &mut scratch);
     }
-    if poly.is_empty() {
-        poly.push(DVec2::ZERO); // the centre always belongs to the facet
+    if corners == 0 {
+        corners = 1; // the centre always belongs to the facet
+        poly[0] = DVec2::ZERO;
     }
-    let corners: Vec<DVec2> =
-        poly.iter().map(|&u| light.project_unclipped(map.point_at(camera, u)).0).collect();
-    let footprint = Footprint::new(&corners)?;
+    for u in &mut poly[..corners] {
+        *u = light.project_unclipped(map.point_at(camera, *u)).0;
+    }
+    let footprint = Footprint::new(&poly[..corners])?;
     let facet = Facet {
         pixel: pixel.1 * width + pixel.0,
         triangle,
@@ -189,6 +200,10 @@ pub fn project_facet(
 
 /// Builds every covered pixel's facet, projects it to the light and classifies it with the
 /// summed-area table `sat` of the `res x res` silhouette mask map.
+///
+/// Two passes: every pixel is classified (its facet and footprint are built and dropped),
+/// then the silhouette pixels' facets are built again and kept, so that no per-pixel record
+/// is stored for the many pixels off the silhouette.
 pub fn classify_facets(
     frame: &Frame<'_>,
     light: &Projector,
@@ -198,44 +213,50 @@ pub fn classify_facets(
     let g = &frame.gbuffer;
     let camera = CameraBasis::new(&frame.camera);
     let w = g.width;
+    let facet_of = |k: usize| {
+        let pixel = ((k % w as usize) as u32, (k / w as usize) as u32);
+        project_facet(&camera, light, pixel, w, g.triangle[k], g.position[k], g.normal[k])
+    };
+    let rect_of = |pf: &ProjectedFacet| {
+        let (x0, y0, x1, y1) = pf.footprint.texel_rect(res)?;
+        (sat.count(x0, y0, x1, y1) > 0).then_some([x0 as u32, y0 as u32, x1 as u32, y1 as u32])
+    };
     let mut class = vec![PixelClass::Lit; g.triangle.len()];
-    let silhouettes: Vec<(ProjectedFacet, [u32; 4])> = class
-        .par_iter_mut()
-        .enumerate()
-        .with_min_len(256)
-        .filter_map(|(k, c)| {
-            if !g.covered(k) {
-                return None;
-            }
-            let pixel = ((k % w as usize) as u32, (k / w as usize) as u32);
-            let pf =
-                project_facet(&camera, light, pixel, w, g.triangle[k], g.position[k], g.normal[k]);
-            let Some(pf) = pf else {
-                // The centre does not project: lit. A facet the camera meets edge-on at the
-                // centre keeps the depth test, as in `sm`.
-                *c = if light.project(g.position[k]).is_some() {
-                    PixelClass::DepthTest
-                } else {
-                    PixelClass::Lit
-                };
-                return None;
-            };
-            *c = PixelClass::DepthTest;
-            let (x0, y0, x1, y1) = pf.footprint.texel_rect(res)?;
-            if sat.count(x0, y0, x1, y1) == 0 {
-                return None;
-            }
-            Some((pf, [x0 as u32, y0 as u32, x1 as u32, y1 as u32]))
+    class.par_iter_mut().enumerate().with_min_len(256).for_each(|(k, c)| {
+        if !g.covered(k) {
+            return;
+        }
+        *c = match facet_of(k) {
+            Some(pf) if rect_of(&pf).is_some() => PixelClass::Silhouette(0),
+            Some(_) => PixelClass::DepthTest,
+            // The centre does not project: lit. A facet the camera meets edge-on at the
+            // centre keeps the depth test, as in `sm`.
+            None if light.project(g.position[k]).is_some() => PixelClass::DepthTest,
+            None => PixelClass::Lit,
+        };
+    });
+    let mut pixels = Vec::new();
+    for (k, c) in class.iter_mut().enumerate() {
+        if let PixelClass::Silhouette(i) = c {
+            *i = pixels.len() as u32;
+            pixels.push(k);
+        }
+    }
+    let kept: Vec<(Facet, Footprint, [u32; 4])> = pixels
+        .par_iter()
+        .map(|&k| {
+            let pf = facet_of(k).expect("classified as a silhouette facet");
+            let rect = rect_of(&pf).expect("classified as a silhouette facet");
+            (pf.facet, pf.footprint, rect)
         })
         .collect();
-    let mut facets = Vec::with_capacity(silhouettes.len());
-    let mut footprints = Vec::with_capacity(silhouettes.len());
-    let mut rects = Vec::with_capacity(silhouettes.len());
-    for (i, (pf, rect)) in silhouettes.into_iter().enumerate() {
-        class[pf.facet.pixel as usize] = PixelClass::Silhouette(i as u32);
-        facets.push(pf.facet);
-        footprints.push(pf.footprint);
-        rects.push(rect);
+    let mut facets = Vec::with_capacity(kept.len());
+    let mut footprints = Vec::with_capacity(kept.len());
+    let mut rects = Vec::with_capacity(kept.len());
+    for (f, fp, r) in kept {
+        facets.push(f);
+        footprints.push(fp);
+        rects.push(r);
     }
     Facets { class, facets, footprints, rects }
 }

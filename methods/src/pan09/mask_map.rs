@@ -29,54 +29,75 @@ use crate::raster::{clip_near, NO_TRIANGLE};
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 use scenes::Geometry;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 /// Widening of every texel, in texels, when testing whether an edge touches it.
 pub const EDGE_MARGIN: f64 = 1e-7;
 
-/// For each texel, the depth beyond which a silhouette edge is hidden in it: the largest of
-/// its five samples' depth plus tolerance (`f64::INFINITY` where some sample sees no caster or
-/// is missing).
-pub fn hidden_depths(
-    geometry: &Geometry,
-    centres: &LightDepthMap,
-    corners: &LightDepthMap,
-    tester: &DepthTester,
-) -> Vec<f64> {
-    let res = centres.res as usize;
-    // Depth plus tolerance of one map's samples.
-    let reach = |map: &LightDepthMap| -> Vec<f64> {
-        let light = &map.projector;
-        (0..res * res)
-            .into_par_iter()
-            .map(|k| {
-                let (z, t) = (map.depth[k], map.triangle[k]);
-                if t == NO_TRIANGLE || !z.is_finite() {
-                    return f64::INFINITY;
-                }
-                let xy = DVec2::new((k % res) as f64 + 0.5, (k / res) as f64 + 0.5) + map.shift;
-                let [a, b, c] = geometry.corners(t as usize);
-                let normal = (b - a).cross(c - a).normalize_or_zero();
-                match tester.receiver(light.ray(xy).at(z), normal) {
-                    Some(r) => z + tester.tolerance(&r, DVec2::ONE),
-                    None => f64::INFINITY,
-                }
-            })
-            .collect()
-    };
-    let (centre, corner) = (reach(centres), reach(corners));
-    (0..res * res)
-        .into_par_iter()
-        .map(|k| {
-            let (x, y) = (k % res, k / res);
-            if x + 1 >= res || y + 1 >= res {
-                return f64::INFINITY;
-            }
-            [centre[k], corner[k], corner[k + 1], corner[k + res], corner[k + res + 1]]
+/// The depth beyond which a silhouette edge is hidden in a texel: the largest of its five
+/// samples' depth plus tolerance (`f64::INFINITY` where some sample sees no caster or is
+/// missing). Computed on demand for the texels edges touch, and remembered.
+pub struct HiddenDepths<'a> {
+    geometry: &'a Geometry,
+    centres: &'a LightDepthMap,
+    corners: &'a LightDepthMap,
+    tester: &'a DepthTester,
+    /// `f64` bits per texel; [`UNKNOWN`] until computed.
+    memo: Vec<AtomicU64>,
+}
+
+/// Marks a texel whose hidden depth is not computed yet (a NaN no computation yields).
+const UNKNOWN: u64 = 0x7ff8_dead_beef_0001;
+
+impl<'a> HiddenDepths<'a> {
+    /// The hidden depths of the maps `centres` (texel centres) and `corners` (texel corners:
+    /// the same map's image shifted by half a texel up-left), with the tolerances of `tester`.
+    pub fn new(
+        geometry: &'a Geometry,
+        centres: &'a LightDepthMap,
+        corners: &'a LightDepthMap,
+        tester: &'a DepthTester,
+    ) -> Self {
+        let n = centres.res as usize * centres.res as usize;
+        let memo = (0..n).map(|_| AtomicU64::new(UNKNOWN)).collect();
+        Self { geometry, centres, corners, tester, memo }
+    }
+
+    /// Depth plus tolerance of sample `k` of `map`.
+    fn reach(&self, map: &LightDepthMap, k: usize) -> f64 {
+        let res = map.res as usize;
+        let (z, t) = (map.depth[k], map.triangle[k]);
+        if t == NO_TRIANGLE || !z.is_finite() {
+            return f64::INFINITY;
+        }
+        let xy = DVec2::new((k % res) as f64 + 0.5, (k / res) as f64 + 0.5) + map.shift;
+        let [a, b, c] = self.geometry.corners(t as usize);
+        let normal = (b - a).cross(c - a).normalize_or_zero();
+        match self.tester.receiver(map.projector.ray(xy).at(z), normal) {
+            Some(r) => z + self.tester.tolerance(&r, DVec2::ONE),
+            None => f64::INFINITY,
+        }
+    }
+
+    /// The hidden depth of texel `k`.
+    pub fn get(&self, k: usize) -> f64 {
+        let known = self.memo[k].load(Ordering::Relaxed);
+        if known != UNKNOWN {
+            return f64::from_bits(known);
+        }
+        let res = self.centres.res as usize;
+        let (x, y) = (k % res, k / res);
+        let d = if x + 1 >= res || y + 1 >= res {
+            f64::INFINITY
+        } else {
+            [k, k + 1, k + res, k + res + 1]
                 .into_iter()
-                .fold(f64::NEG_INFINITY, f64::max)
-        })
-        .collect()
+                .map(|c| self.reach(self.corners, c))
+                .fold(self.reach(self.centres, k), f64::max)
+        };
+        self.memo[k].store(d.to_bits(), Ordering::Relaxed);
+        d
+    }
 }
 
 /// A silhouette edge on the light's image plane: endpoints and their light depths.
@@ -124,13 +145,13 @@ impl ProjectedEdge {
 }
 
 /// The silhouette mask map of `edges` at `res x res`: `true` where a visible silhouette edge
-/// touches the texel. `hidden[k]` is the depth beyond which an edge is hidden in texel `k`
-/// ([`hidden_depths`]).
+/// touches the texel. `hidden(k)` is the depth beyond which an edge is hidden in texel `k`
+/// ([`HiddenDepths::get`]).
 pub fn silhouette_mask(
     edges: &[[DVec3; 2]],
     light: &scenes::Projector,
     res: u32,
-    hidden: &[f64],
+    hidden: impl Fn(usize) -> f64 + Sync,
 ) -> Vec<bool> {
     let n = res as usize;
     let marks: Vec<AtomicBool> = (0..n * n).map(|_| AtomicBool::new(false)).collect();
@@ -165,7 +186,7 @@ pub fn silhouette_mask(
                     continue;
                 };
                 let nearest = e.depth_at(u0).min(e.depth_at(u1));
-                if nearest <= hidden[k] || nearest.is_nan() {
+                if nearest <= hidden(k) || nearest.is_nan() {
                     marks[k].store(true, Ordering::Relaxed);
                 }
             }
@@ -206,7 +227,7 @@ mod tests {
         let never = vec![f64::INFINITY; 64];
         // A diagonal through texel corners touches the texels sharing those corners.
         let edge = [DVec3::new(1.0, 7.0, 0.0), DVec3::new(3.0, 5.0, 0.0)]; // image (1,1)-(3,3)
-        let m = silhouette_mask(&[edge], &light(res), res, &never);
+        let m = silhouette_mask(&[edge], &light(res), res, |k| never[k]);
         let mut got = marked(&m, 8);
         got.sort();
         let mut want = vec![(0, 0), (1, 1), (2, 2), (3, 3), (0, 1), (1, 0), (1, 2), (2, 1)];
@@ -215,7 +236,7 @@ mod tests {
         assert_eq!(got, want);
         // A short edge inside one texel marks only it.
         let edge = [DVec3::new(4.2, 3.3, 0.0), DVec3::new(4.7, 3.6, 0.0)];
-        assert_eq!(marked(&silhouette_mask(&[edge], &light(res), res, &never), 8), [(4, 4)]);
+        assert_eq!(marked(&silhouette_mask(&[edge], &light(res), res, |k| never[k]), 8), [(4, 4)]);
     }
 
     #[test]
@@ -226,7 +247,7 @@ mod tests {
         let mut hidden = vec![f64::INFINITY; 64];
         hidden[4 * 8 + 2] = 5.0;
         hidden[4 * 8 + 3] = 8.5;
-        let m = silhouette_mask(&[edge], &light(res), res, &hidden);
+        let m = silhouette_mask(&[edge], &light(res), res, |k| hidden[k]);
         assert!(!m[4 * 8 + 2], "hidden behind a surface 3 units nearer");
         assert!(m[4 * 8 + 3], "a surface behind the edge hides nothing");
         assert_eq!(m.iter().filter(|&&b| b).count(), 7);

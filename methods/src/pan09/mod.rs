@@ -420,8 +420,8 @@ impl Pan09 {
             silhouette::silhouette_edges(geometry, &adjacency, model)
         });
         let mask = rec.stages.time(STAGE_SILHOUETTE_MASK, || {
-            let hidden = mask_map::hidden_depths(geometry, &map, &corners, &tester);
-            mask_map::silhouette_mask(&edges, &light, res, &hidden)
+            let hidden = mask_map::HiddenDepths::new(geometry, &map, &corners, &tester);
+            mask_map::silhouette_mask(&edges, &light, res, |k| hidden.get(k))
         });
         let sat = rec.stages.time(STAGE_SAT, || sat::SummedAreaTable::new(&mask, res));
         rec.counters.silhouette_texels += u64::from(sat.total());
@@ -484,21 +484,17 @@ impl Pan09 {
             camera: &camera,
         };
         let fs = &facets.facets;
-        let (occlusion, evaluations) = rec
-            .stages
-            .time(STAGE_VISIBILITY, || visibility::occlusion_masks(&scene, &tt, &pt, fs, coverage));
-        rec.counters.visibility_evaluations += evaluations;
-        let validity: Option<Vec<M>> = if frame.effects.curved_receivers {
+        let curved = frame.effects.curved_receivers;
+        let evaluated = rec.stages.time(STAGE_VISIBILITY, || {
+            visibility::occlusion_masks(&scene, &tt, &pt, fs, coverage, curved)
+        });
+        rec.counters.visibility_evaluations += evaluated.evaluations;
+        let occlusion = evaluated.masks;
+        let candidates = evaluated.validity_candidates;
+        let validity: Option<Vec<M>> = if curved {
             Some(rec.stages.time(STAGE_VALIDITY, || {
-                validity::validity_masks(
-                    &scene,
-                    &frame.camera,
-                    frame.width(),
-                    &tt,
-                    &pt,
-                    fs,
-                    coverage,
-                )
+                let camera = &frame.camera;
+                validity::validity_masks(&scene, camera, frame.width(), &candidates, fs, coverage)
             }))
         } else {
             rec.stages.skip(STAGE_VALIDITY);

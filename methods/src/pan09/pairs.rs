@@ -20,6 +20,14 @@
 //! silhouette facet with *every* texel its footprint touches, so every triangle that covers a
 //! sub-sample's light image point is tested (the pair through that point's texel). The
 //! summed-area table of the silhouette mask still decides which facets are silhouettes.
+//! The paper's rule also leaves without any pair a facet whose rectangle holds a silhouette
+//! texel that the footprint itself does not touch, so a pixel wholly inside a shadow, next to
+//! its outline, comes out lit. Measured in exact mode at 32 grid sub-samples on 160 x 120
+//! frames, on the pixels that see the ground: with the paper's rule 736 of 461 K sub-samples
+//! differ from the ray tracer on `plane-square`, 2 485 of 296 K on `bunny-plane`, 4 541 of
+//! 338 K on `spheres`; with ours none (and none on `cage`, `random-10k`, `plant` either way).
+//! The price is a few more pairs: at 800 x 600 with a 512 map, `bunny-plane` takes 2.71 M
+//! visibility evaluations instead of 2.30 M, `cage` 2.651 M instead of 2.649 M.
 
 use super::footprint::Footprint;
 use super::sat::SummedAreaTable;
@@ -201,44 +209,51 @@ pub fn triangle_texel_pairs(
     let n = res as usize;
     let busy: Vec<bool> = (0..n * n).into_par_iter().map(|k| pt.len_of(k) > 0).collect();
     let sat = SummedAreaTable::new(&busy, res);
-    // Pass 1: count the busy texels of each triangle's rectangle.
-    let setup = |t: usize| -> Option<(Footprint, [u32; 4])> {
-        if !is_caster(t) {
-            return None;
-        }
-        let f = triangle_footprint(geometry, t, light)?;
-        let (x0, y0, x1, y1) = f.texel_rect(res)?;
-        Some((f, [x0 as u32, y0 as u32, x1 as u32, y1 as u32]))
-    };
-    let counts: Vec<usize> = (0..geometry.len())
+    // Pass 1: each caster's footprint and the busy texels of its rectangle, kept for the
+    // triangles that have some.
+    let setups: Vec<(u32, Footprint, [u32; 4], usize)> = (0..geometry.len())
         .into_par_iter()
-        .map(|t| {
-            setup(t).map_or(0, |(_, r)| {
-                sat.count(r[0] as usize, r[1] as usize, r[2] as usize, r[3] as usize) as usize
-            })
+        .with_min_len(256)
+        .filter_map(|t| {
+            if !is_caster(t) {
+                return None;
+            }
+            let f = triangle_footprint(geometry, t, light)?;
+            let (x0, y0, x1, y1) = f.texel_rect(res)?;
+            let count = sat.count(x0, y0, x1, y1) as usize;
+            (count > 0).then_some((
+                t as u32,
+                f,
+                [x0 as u32, y0 as u32, x1 as u32, y1 as u32],
+                count,
+            ))
         })
         .collect();
-    let keys = emit(&counts, |t, out| {
-        let Some((_, r)) = setup(t) else { return };
-        let texels = rect_texels(r).map(|(x, y)| y * n + x).filter(|&k| busy[k]);
+    let counts: Vec<usize> = setups.iter().map(|s| s.3).collect();
+    let keys = emit(&counts, |i, out| {
+        let texels = rect_texels(setups[i].2).map(|(x, y)| y * n + x).filter(|&k| busy[k]);
         for (slot, k) in out.iter_mut().zip(texels) {
-            *slot = ((k as u64) << 32) | t as u64;
+            *slot = ((k as u64) << 32) | i as u64;
         }
     });
     let emitted = keys.len();
-    // Pass 2 needs each triangle's footprint again: recompute it for triangles with pairs.
+    // Keys carry the index into `setups`, which is in triangle order.
     let lists = compact_and_list(
         keys,
         |k| {
-            let (texel, t) = ((k >> 32) as usize, k as u32 as usize);
-            setup(t).is_some_and(|(f, _)| f.touches_texel(texel % n, texel / n))
+            let (texel, i) = ((k >> 32) as usize, k as u32 as usize);
+            setups[i].1.touches_texel(texel % n, texel / n)
         },
         res,
     );
     let mut pairs: Vec<TtPair> = (0..n * n)
         .into_par_iter()
         .flat_map_iter(|k| {
-            lists.of(k).iter().map(move |&t| TtPair { texel: k as u32, triangle: t })
+            let setups = &setups;
+            lists
+                .of(k)
+                .iter()
+                .map(move |&i| TtPair { texel: k as u32, triangle: setups[i as usize].0 })
         })
         .collect();
     pairs.par_sort_unstable_by_key(|p| {

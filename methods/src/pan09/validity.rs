@@ -13,18 +13,18 @@
 //! the facet"). The centre sample is always valid ("a view sample at the pixel center should
 //! always be valid"), so every ratio has a denominator.
 //!
-//! The paper folds this into the visibility evaluation; here it is a second pass over the
-//! same pairs, so that its cost is measured on its own and planar scenes skip it. Masks are
-//! combined with atomic AND.
+//! As in the paper, the test is folded into the visibility evaluation: that pass notes the
+//! candidate (facet, triangle) pairs (plane cutting the pixel, centre on the unoccluded side,
+//! some sub-sample occluded beyond the line); this stage keeps those whose triangle meets the
+//! facet inside the pixel and ANDs the masks, with atomic AND. Planar scenes skip both.
 
 use super::coverage::Coverage;
 use super::facets::Facet;
 use super::footprint::clip_segment;
 use super::mask::Mask;
-use super::pairs::{TexelLists, TtPair};
-use super::screen::Crossing;
-use super::visibility::{for_each_evaluation, Scene};
+use super::visibility::{Occluder, Scene};
 use glam::{DVec2, DVec3};
+use rayon::prelude::*;
 use scenes::Projector;
 
 /// The segment where the triangle `corners` meets the plane `normal·X = offset`, or `None`
@@ -64,33 +64,28 @@ fn meets_pixel(corners: [DVec3; 3], facet: &Facet, camera: &Projector, width: u3
     clip_segment(pa, pb, lo, lo + DVec2::ONE, 0.0).is_some()
 }
 
-/// The validity mask of every silhouette facet.
-#[allow(clippy::too_many_arguments)]
+/// The validity mask of every silhouette facet, from the candidates the visibility
+/// evaluation noted ([`super::visibility::Occlusion::validity_candidates`]).
 pub fn validity_masks<M: Mask, C: Coverage<M>>(
     scene: &Scene<'_>,
     camera: &Projector,
     width: u32,
-    tt: &[TtPair],
-    pt: &TexelLists,
+    candidates: &[(u32, u32)],
     facets: &[Facet],
     coverage: &C,
 ) -> Vec<M> {
-    let all = coverage.all();
-    let masks: Vec<M::Atomic> = (0..facets.len()).map(|_| M::atomic(all)).collect();
-    for_each_evaluation(scene, tt, pt, facets, |occluder, t, f| {
+    let masks: Vec<M::Atomic> = (0..facets.len()).map(|_| M::atomic(coverage.all())).collect();
+    candidates.par_iter().with_min_len(16).for_each(|&(f, t)| {
         let facet = &facets[f as usize];
-        let depth = facet.map.half_plane(&occluder.planes[3]);
-        if depth.crossing() != Crossing::Split || depth.g0 > 0.0 {
-            return; // the plane misses the pixel, or the centre's side is the occluded one
-        }
-        // The occluded samples all lie beyond the line (the depth half-plane is one factor).
-        if occluder.occlusion::<M, C>(&facet.map, coverage) == M::ZERO {
+        let corners = scene.geometry.corners(t as usize);
+        if !meets_pixel(corners, facet, camera, width) {
             return;
         }
-        let beyond = coverage.open(&depth);
-        if meets_pixel(scene.geometry.corners(t), facet, camera, width) {
-            M::fetch_and(&masks[f as usize], !beyond | coverage.centre());
-        }
+        let Some(occluder) = Occluder::new(corners, scene.light, scene.offset, scene.camera) else {
+            return;
+        };
+        let beyond = coverage.open(&facet.map.half_plane(&occluder.planes[3]));
+        M::fetch_and(&masks[f as usize], !beyond | coverage.centre());
     });
     masks.iter().map(M::load).collect()
 }

@@ -28,13 +28,14 @@
 //!
 //! Parallel over TT-pairs (rayon, pairs sorted by PT-list length so that neighbouring tasks
 //! do similar work); the masks are updated with atomic OR, so the result does not depend on
-//! scheduling.
+//! scheduling. On curved receivers the same pass notes the candidates of the validity mask,
+//! as the paper integrates that mask into the evaluation ([`super::validity`]).
 
 use super::coverage::Coverage;
 use super::facets::Facet;
 use super::mask::Mask;
 use super::pairs::{TexelLists, TtPair};
-use super::screen::{CameraBasis, FacetMap, WorldPlane};
+use super::screen::{CameraBasis, Crossing, FacetMap, HalfPlane, WorldPlane};
 use super::silhouette::LightModel;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -104,14 +105,25 @@ impl Occluder {
     /// The sub-samples of the facet seen through `map` that the triangle occludes.
     #[inline(always)]
     pub fn occlusion<M: Mask, C: Coverage<M>>(&self, map: &FacetMap, coverage: &C) -> M {
-        let mut m = coverage.open(&map.half_plane(&self.planes[3]));
+        self.occlusion_and_depth(map, coverage).0
+    }
+
+    /// [`Occluder::occlusion`], and the depth half-plane on the screen.
+    #[inline(always)]
+    pub fn occlusion_and_depth<M: Mask, C: Coverage<M>>(
+        &self,
+        map: &FacetMap,
+        coverage: &C,
+    ) -> (M, HalfPlane) {
+        let depth = map.half_plane(&self.planes[3]);
+        let mut m = coverage.open(&depth);
         for plane in &self.planes[..3] {
             if m == M::ZERO {
                 break;
             }
             m &= coverage.closed(&map.half_plane(plane));
         }
-        m
+        (m, depth)
     }
 }
 
@@ -128,54 +140,70 @@ pub struct Scene<'a> {
     pub camera: &'a CameraBasis,
 }
 
-/// Runs `visit(occluder, pair's triangle, facet index)` for every (TT-pair, PT-list pixel)
-/// whose facet is not on the pair's triangle, in parallel over the pairs; returns the number
-/// of visits (the visibility evaluations).
-pub fn for_each_evaluation(
-    scene: &Scene<'_>,
-    tt: &[TtPair],
-    pt: &TexelLists,
-    facets: &[Facet],
-    visit: impl Fn(&Occluder, usize, u32) + Sync,
-) -> u64 {
-    tt.par_iter()
-        .with_min_len(PAIRS_PER_TASK)
-        .map(|pair| {
-            let t = pair.triangle as usize;
-            let corners = scene.geometry.corners(t);
-            let Some(occluder) = Occluder::new(corners, scene.light, scene.offset, scene.camera)
-            else {
-                return 0;
-            };
-            let mut evaluations = 0u64;
-            for &f in pt.of(pair.texel as usize) {
-                if facets[f as usize].triangle == pair.triangle {
-                    continue;
-                }
-                evaluations += 1;
-                visit(&occluder, t, f);
-            }
-            evaluations
-        })
-        .sum()
+/// The result of the visibility evaluation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Occlusion<M> {
+    /// Occlusion mask per silhouette facet.
+    pub masks: Vec<M>,
+    /// Triangle-pixel evaluations made.
+    pub evaluations: u64,
+    /// `(facet, triangle)` pairs for the validity mask (when asked for): the triangle's plane
+    /// cuts the pixel, the centre is on its unoccluded side and the triangle occludes some
+    /// sub-samples on the other side ([`super::validity`]).
+    pub validity_candidates: Vec<(u32, u32)>,
 }
 
-/// The occlusion mask of every silhouette facet and the number of visibility evaluations.
+/// The occlusion mask of every silhouette facet: every TT-pair's triangle against every pixel
+/// of its texel's PT list (less the pixel's own triangle), in parallel over the pairs. With
+/// `validity`, also the candidates of the validity mask.
 pub fn occlusion_masks<M: Mask, C: Coverage<M>>(
     scene: &Scene<'_>,
     tt: &[TtPair],
     pt: &TexelLists,
     facets: &[Facet],
     coverage: &C,
-) -> (Vec<M>, u64) {
+    validity: bool,
+) -> Occlusion<M> {
     let masks: Vec<M::Atomic> = (0..facets.len()).map(|_| M::atomic(M::ZERO)).collect();
-    let evaluations = for_each_evaluation(scene, tt, pt, facets, |occluder, _, f| {
-        let m = occluder.occlusion(&facets[f as usize].map, coverage);
-        if m != M::ZERO {
-            M::fetch_or(&masks[f as usize], m);
-        }
-    });
-    (masks.iter().map(M::load).collect(), evaluations)
+    let (evaluations, validity_candidates) = tt
+        .par_iter()
+        .with_min_len(PAIRS_PER_TASK)
+        .fold(
+            || (0u64, Vec::new()),
+            |(mut evaluations, mut candidates), pair| {
+                let t = pair.triangle;
+                let corners = scene.geometry.corners(t as usize);
+                let Some(occluder) =
+                    Occluder::new(corners, scene.light, scene.offset, scene.camera)
+                else {
+                    return (evaluations, candidates);
+                };
+                for &f in pt.of(pair.texel as usize) {
+                    let facet = &facets[f as usize];
+                    if facet.triangle == t {
+                        continue;
+                    }
+                    evaluations += 1;
+                    let (m, depth) = occluder.occlusion_and_depth(&facet.map, coverage);
+                    if m == M::ZERO {
+                        continue;
+                    }
+                    M::fetch_or(&masks[f as usize], m);
+                    if validity && depth.g0 <= 0.0 && depth.crossing() == Crossing::Split {
+                        candidates.push((f, t));
+                    }
+                }
+                (evaluations, candidates)
+            },
+        )
+        .reduce(
+            || (0, Vec::new()),
+            |(a, mut ca), (b, cb)| {
+                ca.extend(cb);
+                (a + b, ca)
+            },
+        );
+    Occlusion { masks: masks.iter().map(M::load).collect(), evaluations, validity_candidates }
 }
 
 #[cfg(test)]
