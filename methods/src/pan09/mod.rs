@@ -101,10 +101,12 @@
 //! - **Lookup table** ([`lut`]): normals indexed along the boundary of the unit square (128
 //!   bins per side), offsets in 256 bins over `[-1, 1]`; the flip bound is 1/128 pixel.
 //!   Half-planes whose line misses the pixel square are settled without the table.
-//! - **Validity mask** ([`validity`]): a triangle invalidates the samples beyond its
-//!   intersection line with the facet when it actually meets the facet inside the pixel and
-//!   occludes some of those samples (concave creases); the centre is always valid. The paper
-//!   runs it inside the visibility evaluation; here it is a second pass over the same pairs.
+//! - **Validity mask** ([`validity`]): a triangle takes part when it meets the facet inside
+//!   the pixel and lies nearer the light than the facet beyond their intersection line (the
+//!   paper's concave case); it invalidates the sub-samples it hides from the camera (the
+//!   paper masks the line's whole far side, which also drops sub-samples that see the facet);
+//!   the centre is always valid. The visibility evaluation notes the candidates; the validity
+//!   stage tests them.
 //! - **Spot lights**: the shadow offset is measured perpendicular to the caster's plane.
 //! - **Transparency**: casters are opaque (the run record says so when the scene has
 //!   semi-transparent ones).

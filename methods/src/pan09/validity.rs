@@ -1,27 +1,49 @@
 //! Stage "validity mask" (section 3.4, Fig. 7): sub-samples where the facet runs into nearby
 //! geometry are left out of the occlusion ratio. Run only on scenes with curved receivers.
 //!
-//! For each visibility evaluation whose triangle's plane cuts the pixel (the depth
-//! half-plane's line crosses the pixel square), and whose triangle *intersects the facet*
-//! (the segment where the triangle meets the tangent plane, projected to the screen, meets
-//! the pixel square): the samples on the side of that line away from the centre sample are
-//! invalid, provided the triangle occludes some of them. That is the concave case (Fig. 7,
-//! `p1`): beyond the crease the facet runs under the neighbouring face, which would shadow it
-//! ("incorrect self-shadow"). At convex creases (`p2`) the neighbour is farther from the
-//! light than the facet beyond the line and occludes nothing there: nothing is masked ("we do
-//! not mask the samples ... since the intersecting face is farther from the light source than
-//! the facet"). The centre sample is always valid ("a view sample at the pixel center should
-//! always be valid"), so every ratio has a denominator.
+//! "For each triangle intersecting a facet, the intersection line is calculated and projected
+//! to the view plane": a visibility evaluation's triangle takes part when it *intersects the
+//! facet* (the segment where the triangle meets the tangent plane, projected to the screen,
+//! meets the pixel square) and lies nearer the light than the facet on the side of that line
+//! away from the centre sample. That is the concave case (Fig. 7, `p1`): beyond the crease
+//! the facet runs under the neighbouring face, which would shadow it ("incorrect
+//! self-shadow"). At convex creases (`p2`) the neighbour is farther from the light beyond the
+//! line and takes no part ("we do not mask the samples ... since the intersecting face is
+//! farther from the light source than the facet"). The line is the depth half-plane's (the
+//! triangle's plane less the shadow offset), so "nearer beyond the line" is "the centre lies
+//! outside the depth half-plane".
+//!
+//! **Which sub-samples are invalid.** The paper masks the whole side of the line ("if the
+//! returned bitmask ... marks the pixel center as invalid, the bitmask is negated"). That also
+//! drops sub-samples that do see the facet: a box standing on the ground whose wall meets a
+//! ground facet only at the box's corner cuts the pixel along the wall's whole line (measured
+//! on the ground of `plant` and `grazing`: a few sub-samples that the ray tracer sees on the
+//! ground, lit or shadowed, left out). We mask exactly the sub-samples the triangle hides from
+//! the camera: those whose camera ray meets the triangle before the facet, i.e. the triangle
+//! as an [`Occluder`] seen from the camera instead of the light (its edges with the eye, its
+//! plane nearer the eye). At a concave crease these are the sub-samples beyond the line that
+//! the neighbouring face covers on screen; a sub-sample the ray tracer sees on a planar
+//! receiver is never among them, since its camera ray meets that receiver first.
+//! Measured on `bumpy` at 400 x 300 and 32 grid sub-samples against `raytrace` at the same
+//! points: mean absolute error 0.00588 without a validity mask, 0.00462 with ours, 0.00368
+//! with the paper's whole-side mask (boundary pixels: 0.188, 0.171, 0.177). The paper's rule
+//! also catches sub-samples beyond a concave crease that a triangle *not* meeting the facet
+//! hides, but it leaves out sub-samples the ray tracer sees on the ground (9 of 388 K on
+//! `plant` at 160 x 120, rotated pattern), which breaks the exactness on planar receivers.
+//!
+//! The centre sample is always valid ("a view sample at the pixel center should always be
+//! valid"), so every ratio has a denominator.
 //!
 //! As in the paper, the test is folded into the visibility evaluation: that pass notes the
-//! candidate (facet, triangle) pairs (plane cutting the pixel, centre on the unoccluded side,
-//! some sub-sample occluded beyond the line); this stage keeps those whose triangle meets the
-//! facet inside the pixel and ANDs the masks, with atomic AND. Planar scenes skip both.
+//! candidate (facet, triangle) pairs (plane cutting the pixel, nearer the light beyond the
+//! line); this stage keeps those whose triangle meets the facet inside the pixel and ANDs
+//! the masks, with atomic AND. Planar scenes skip both.
 
 use super::coverage::Coverage;
 use super::facets::Facet;
 use super::footprint::clip_segment;
 use super::mask::Mask;
+use super::silhouette::LightModel;
 use super::visibility::{Occluder, Scene};
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
@@ -75,17 +97,19 @@ pub fn validity_masks<M: Mask, C: Coverage<M>>(
     coverage: &C,
 ) -> Vec<M> {
     let masks: Vec<M::Atomic> = (0..facets.len()).map(|_| M::atomic(coverage.all())).collect();
+    let eye = LightModel::of(camera);
     candidates.par_iter().with_min_len(16).for_each(|&(f, t)| {
         let facet = &facets[f as usize];
         let corners = scene.geometry.corners(t as usize);
         if !meets_pixel(corners, facet, camera, width) {
             return;
         }
-        let Some(occluder) = Occluder::new(corners, scene.light, scene.offset, scene.camera) else {
-            return;
-        };
-        let beyond = coverage.open(&facet.map.half_plane(&occluder.planes[3]));
-        M::fetch_and(&masks[f as usize], !beyond | coverage.centre());
+        // The triangle seen from the camera: the sub-samples whose rays it hides.
+        let Some(viewer) = Occluder::new(corners, eye, 0.0, scene.camera) else { return };
+        let hidden = viewer.occlusion(&facet.map, coverage);
+        if hidden != M::ZERO {
+            M::fetch_and(&masks[f as usize], !hidden | coverage.centre());
+        }
     });
     masks.iter().map(M::load).collect()
 }

@@ -148,8 +148,8 @@ pub struct Occlusion<M> {
     /// Triangle-pixel evaluations made.
     pub evaluations: u64,
     /// `(facet, triangle)` pairs for the validity mask (when asked for): the triangle's plane
-    /// cuts the pixel, the centre is on its unoccluded side and the triangle occludes some
-    /// sub-samples on the other side ([`super::validity`]).
+    /// cuts the pixel and lies nearer the light than the facet on the side away from the
+    /// centre ([`super::validity`]).
     pub validity_candidates: Vec<(u32, u32)>,
 }
 
@@ -185,10 +185,9 @@ pub fn occlusion_masks<M: Mask, C: Coverage<M>>(
                     }
                     evaluations += 1;
                     let (m, depth) = occluder.occlusion_and_depth(&facet.map, coverage);
-                    if m == M::ZERO {
-                        continue;
+                    if m != M::ZERO {
+                        M::fetch_or(&masks[f as usize], m);
                     }
-                    M::fetch_or(&masks[f as usize], m);
                     if validity && depth.g0 <= 0.0 && depth.crossing() == Crossing::Split {
                         candidates.push((f, t));
                     }
