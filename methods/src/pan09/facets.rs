@@ -33,7 +33,7 @@ use super::screen::{CameraBasis, Crossing, FacetMap, HalfPlane, WorldPlane};
 use crate::frame::Frame;
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
-use scenes::Projector;
+use scenes::{projection::ProjectionKind, Projector};
 
 /// A perspective camera's facet holds the points up to this multiple of the centre's depth.
 pub const FACET_DEPTH_RATIO: f64 = 4.0;
@@ -123,11 +123,60 @@ fn clip(poly: &[DVec2], h: &HalfPlane, out: &mut [DVec2; MAX_CORNERS]) -> usize 
     m
 }
 
+/// The light's view of the screen: light image coordinates are ratios of world-plane values
+/// (`x = X_num / W`, `y = Y_num / W` with `W` the light depth for a spot light, 1 for a
+/// directional one), so on a facet they are ratios of screen half-plane functions
+/// ([`FacetMap::half_plane`] scales every plane by the same `a(u)`), and a footprint corner
+/// costs three affine evaluations and a division.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LightPlanes {
+    x: WorldPlane,
+    y: WorldPlane,
+    /// The depth plane of a spot light; `None` for directional lights (denominator `a(u)`).
+    w: Option<WorldPlane>,
+    /// A spot light's near plane (points in front of it project).
+    near: Option<WorldPlane>,
+}
+
+impl LightPlanes {
+    /// The planes of `light` seen by `camera`.
+    pub fn new(light: &Projector, camera: &CameraBasis) -> Self {
+        let (o, r, up, f) = (light.origin, light.right, light.up, light.forward);
+        let (w, h) = (0.5 * light.width, 0.5 * light.height);
+        let plane = |n: DVec3, c: f64| WorldPlane::new(n, c, camera);
+        match light.kind {
+            ProjectionKind::Orthographic { half_width, half_height } => {
+                // x = w + w (X - o)·r / hw, y = h - h (X - o)·up / hh.
+                let (nx, ny) = (r * (w / half_width), -up * (h / half_height));
+                Self {
+                    x: plane(nx, nx.dot(o) - w),
+                    y: plane(ny, ny.dot(o) - h),
+                    w: None,
+                    near: None,
+                }
+            }
+            ProjectionKind::Perspective { tan_half_x, tan_half_y } => {
+                // x = w + w (X - o)·r / (tx (X - o)·f), likewise y; numerators over the depth.
+                let nx = r * (w / tan_half_x) + f * w;
+                let ny = -up * (h / tan_half_y) + f * h;
+                Self {
+                    x: plane(nx, nx.dot(o)),
+                    y: plane(ny, ny.dot(o)),
+                    w: Some(plane(f, f.dot(o))),
+                    near: Some(plane(f, light.near + f.dot(o))),
+                }
+            }
+        }
+    }
+}
+
 /// The facet of the surface `position`, `normal`, `triangle` seen through pixel `(i, j)`, and
 /// its footprint; `None` when the light cannot project the pixel's centre point (lit).
+#[allow(clippy::too_many_arguments)]
 pub fn project_facet(
     camera: &CameraBasis,
     light: &Projector,
+    planes: &LightPlanes,
     pixel: (u32, u32),
     width: u32,
     triangle: u32,
@@ -152,10 +201,8 @@ pub fn project_facet(
         limits[1] = HalfPlane { g0: span, gx: bx, gy: by };
         2
     };
-    if light.is_perspective() {
-        let near =
-            WorldPlane::new(light.forward, light.near + light.forward.dot(light.origin), camera);
-        limits[n] = map.half_plane(&near);
+    if let Some(near) = &planes.near {
+        limits[n] = map.half_plane(near);
         n += 1;
     }
     let mut region = [HalfPlane { g0: 0.0, gx: 0.0, gy: 0.0 }; MAX_REGION];
@@ -184,8 +231,14 @@ pub fn project_facet(
         corners = 1; // the centre always belongs to the facet
         poly[0] = DVec2::ZERO;
     }
+    let (hx, hy) = (map.half_plane(&planes.x), map.half_plane(&planes.y));
+    let hw = match &planes.w {
+        Some(w) => map.half_plane(w),
+        None => HalfPlane { g0: a0, gx: ax, gy: ay },
+    };
     for u in &mut poly[..corners] {
-        *u = light.project_unclipped(map.point_at(camera, *u)).0;
+        let inv = 1.0 / hw.at(*u);
+        *u = DVec2::new(hx.at(*u) * inv, hy.at(*u) * inv);
     }
     let footprint = Footprint::new(&poly[..corners])?;
     let facet = Facet {
@@ -214,10 +267,12 @@ pub fn classify_facets(
 ) -> Facets {
     let g = &frame.gbuffer;
     let camera = CameraBasis::new(&frame.camera);
+    let planes = LightPlanes::new(light, &camera);
     let w = g.width;
     let facet_of = |k: usize| {
         let pixel = ((k % w as usize) as u32, (k / w as usize) as u32);
-        project_facet(&camera, light, pixel, w, g.triangle[k], g.position[k], g.normal[k])
+        let (t, p, n) = (g.triangle[k], g.position[k], g.normal[k]);
+        project_facet(&camera, light, &planes, pixel, w, t, p, n)
     };
     let rect_of = |pf: &ProjectedFacet| {
         let (x0, y0, x1, y1) = pf.footprint.texel_rect(res)?;
@@ -302,7 +357,8 @@ mod tests {
         let basis = CameraBasis::new(&cam);
         let ray = cam.ray(DVec2::new(f64::from(i) + 0.5, f64::from(j) + 0.5));
         let t = ray.intersect_plane(DVec3::Y, 0.0)?;
-        project_facet(&basis, &light(), (i, j), 80, 0, ray.at(t), normal)
+        let planes = LightPlanes::new(&light(), &basis);
+        project_facet(&basis, &light(), &planes, (i, j), 80, 0, ray.at(t), normal)
     }
 
     #[test]
@@ -328,6 +384,43 @@ mod tests {
     }
 
     #[test]
+    fn light_planes_reproduce_the_light_projection() {
+        let cam = camera();
+        let basis = CameraBasis::new(&cam);
+        let (right, up, forward) = look_basis(DVec3::new(-0.3, -1.0, -0.2), DVec3::Y);
+        let spot = Projector {
+            origin: DVec3::new(2.0, 9.0, 1.0),
+            right,
+            up,
+            forward,
+            kind: ProjectionKind::Perspective { tan_half_x: 0.9, tan_half_y: 0.9 },
+            near: 0.5,
+            width: 256.0,
+            height: 256.0,
+        };
+        for l in [light(), spot] {
+            let planes = LightPlanes::new(&l, &basis);
+            for (i, j) in [(40, 40), (3, 60), (77, 33)] {
+                let centre = DVec2::new(f64::from(i) + 0.5, f64::from(j) + 0.5);
+                let ray = cam.ray(centre);
+                let x0 = ray.at(ray.intersect_plane(DVec3::Y, 0.0).expect("hits"));
+                let normal = DVec3::new(0.1, 1.0, -0.2).normalize();
+                let map = FacetMap::new(&basis, centre, normal, normal.dot(x0)).expect("in front");
+                let (hx, hy) = (map.half_plane(&planes.x), map.half_plane(&planes.y));
+                let hw =
+                    planes.w.map_or(HalfPlane { g0: map.a[0], gx: map.a[1], gy: map.a[2] }, |w| {
+                        map.half_plane(&w)
+                    });
+                for u in [DVec2::ZERO, DVec2::new(-0.5, 0.5), DVec2::new(0.5, 0.25)] {
+                    let (want, _) = l.project_unclipped(map.point_at(&basis, u));
+                    let got = DVec2::new(hx.at(u), hy.at(u)) / hw.at(u);
+                    assert!((got - want).length() < 1e-9, "{got} vs {want}");
+                }
+            }
+        }
+    }
+
+    #[test]
     fn edge_on_facets_are_bounded_by_their_region() {
         // A plane through the pixel-centre point containing the centre ray's direction almost
         // exactly: seen edge-on; its facet is cut at four times the depth.
@@ -336,9 +429,10 @@ mod tests {
         let t = ray.intersect_plane(DVec3::Y, 0.0).expect("hits");
         let side = ray.direction.cross(DVec3::X).normalize();
         let normal = (side + ray.direction.normalize() * 1e-4).normalize();
-        let pf =
-            project_facet(&CameraBasis::new(&cam), &light(), (40, 40), 80, 0, ray.at(t), normal)
-                .expect("the centre projects");
+        let basis = CameraBasis::new(&cam);
+        let planes = LightPlanes::new(&light(), &basis);
+        let pf = project_facet(&basis, &light(), &planes, (40, 40), 80, 0, ray.at(t), normal)
+            .expect("the centre projects");
         assert_eq!(pf.facet.region_count, 1);
         let extent = pf.footprint.hi - pf.footprint.lo;
         assert!(extent.is_finite() && extent.max_element() < 256.0, "{extent}");

@@ -67,6 +67,40 @@ impl Footprint {
         Some((first(self.lo.x), first(self.lo.y), last(self.hi.x), last(self.hi.y)))
     }
 
+    /// The texels `x0..=x1` of row `y` (clamped to `0..res`) whose closed squares may meet the
+    /// footprint: those meeting the footprint's x-extent over the strip `y <= Y <= y + 1`,
+    /// widened by a rounding margin; `None` when the footprint misses the strip.
+    #[inline]
+    pub fn row_texels(&self, y: usize, res: u32) -> Option<(usize, usize)> {
+        let (lo, hi) = (y as f64, y as f64 + 1.0);
+        let (mut xmin, mut xmax) = (f64::INFINITY, f64::NEG_INFINITY);
+        let pts = self.corners();
+        for i in 0..self.count {
+            let (a, b) = (pts[i], pts[(i + 1) % self.count]);
+            let (ylo, yhi) = (a.y.min(b.y).max(lo), a.y.max(b.y).min(hi));
+            if ylo > yhi {
+                continue;
+            }
+            let xs = if a.y == b.y {
+                (a.x.min(b.x), a.x.max(b.x))
+            } else {
+                let at = |v: f64| a.x + (v - a.y) * (b.x - a.x) / (b.y - a.y);
+                let (p, q) = (at(ylo), at(yhi));
+                (p.min(q), q.max(p))
+            };
+            xmin = xmin.min(xs.0);
+            xmax = xmax.max(xs.1);
+        }
+        if xmin > xmax {
+            return None;
+        }
+        let margin = 1e-9 * (1.0 + xmin.abs().max(xmax.abs()));
+        let r = f64::from(res);
+        let (first, last) =
+            ((xmin - margin - 1.0).ceil().max(0.0), (xmax + margin).floor().min(r - 1.0));
+        (first <= last).then_some((first as usize, last as usize))
+    }
+
     /// Whether the closed texel square `[x, x + 1] x [y, y + 1]` meets the footprint (up to a
     /// rounding margin, conservatively). The texel should meet the bounding box.
     #[inline]
@@ -213,6 +247,29 @@ mod tests {
         }
         assert_eq!(Footprint::new(&[DVec2::new(-3.0, -3.0)]).expect("finite").texel_rect(8), None);
         assert!(Footprint::new(&[DVec2::new(f64::NAN, 0.0)]).is_none());
+    }
+
+    proptest! {
+        /// Every texel the edge test passes lies in its row's span.
+        #[test]
+        fn row_spans_hold_every_touched_texel(
+            raw in proptest::collection::vec((0u32..=64, 0u32..=64), 3..7),
+        ) {
+            let pts: Vec<DVec2> =
+                raw.iter().map(|&(x, y)| DVec2::new(f64::from(x) / 8.0, f64::from(y) / 8.0)).collect();
+            let hull = convex_hull(pts);
+            prop_assume!(hull.len() >= 3);
+            let f = Footprint::new(&hull).expect("finite");
+            let (x0, y0, x1, y1) = f.texel_rect(8).expect("inside the map");
+            for y in y0..=y1 {
+                let span = f.row_texels(y, 8);
+                for x in x0..=x1 {
+                    if f.touches_texel(x, y) {
+                        prop_assert!(span.is_some_and(|(a, b)| a <= x && x <= b), "({}, {}) {:?}", x, y, span);
+                    }
+                }
+            }
+        }
     }
 
     #[test]
