@@ -95,9 +95,10 @@
 //!   valid. The classification rectangle holds every texel whose closed square meets the
 //!   footprint's bounding box.
 //! - **PT-pairs** are made with every texel the facet touches, not only silhouette texels
-//!   ([`pairs`] explains the light leak the paper's rule allows); TT-pairs with the texels
-//!   that have a PT list, counted with a second SAT. Triangles seen edge-on by the light
-//!   shadow nothing and get no pairs.
+//!   ([`pairs`] measures the light leaks the paper's rule allows), so a silhouette facet's
+//!   list is sized by its rectangle (the SAT count only classifies). TT-pairs with the texels
+//!   that have a PT list, counted with a second SAT over each row's span of the triangle's
+//!   footprint. Triangles seen edge-on by the light shadow nothing and get no pairs.
 //! - **Half-planes** ([`screen`], [`visibility`]): each of the triangle's edges with the light
 //!   spans a world plane; the fourth is the triangle's plane (its intersection line with the
 //!   facet), always used when it cuts the pixel. The paper's side rule (Fig. 6b) becomes the
@@ -114,8 +115,10 @@
 //! - **Spot lights**: the shadow offset is measured perpendicular to the caster's plane.
 //! - **Transparency**: casters are opaque (the run record says so when the scene has
 //!   semi-transparent ones).
-//! - **Memory**: about 200 bytes per silhouette pixel (facet, footprint, masks), 8 bytes per
-//!   PT- and TT-pair, `(R + 1)^2` words per SAT and three `R^2` maps.
+//! - **Memory**: about 400 bytes per silhouette pixel (facet, footprint, rectangle, masks),
+//!   8 bytes per PT- and TT-pair (16 while they are built), `(R + 1)^2` words per SAT, two
+//!   depth maps, the mask map and the memo of hidden depths (`R^2` each), and the lookup
+//!   table (131 072 masks).
 
 pub mod coverage;
 pub mod facets;
