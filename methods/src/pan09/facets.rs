@@ -299,22 +299,15 @@ pub fn classify_facets(
             pixels.push(k);
         }
     }
-    let kept: Vec<(Facet, Footprint, [u32; 4])> = pixels
+    // Built again and written straight into the three lists (an indexed unzip, no copy).
+    let (facets, (footprints, rects)): (Vec<_>, (Vec<_>, Vec<_>)) = pixels
         .par_iter()
         .map(|&k| {
             let pf = facet_of(k).expect("classified as a silhouette facet");
             let rect = rect_of(&pf).expect("classified as a silhouette facet");
-            (pf.facet, pf.footprint, rect)
+            (pf.facet, (pf.footprint, rect))
         })
-        .collect();
-    let mut facets = Vec::with_capacity(kept.len());
-    let mut footprints = Vec::with_capacity(kept.len());
-    let mut rects = Vec::with_capacity(kept.len());
-    for (f, fp, r) in kept {
-        facets.push(f);
-        footprints.push(fp);
-        rects.push(r);
-    }
+        .unzip();
     Facets { class, facets, footprints, rects }
 }
 
