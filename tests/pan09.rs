@@ -369,7 +369,6 @@ fn stages_counters_and_the_skipped_validity_mask() {
         names,
         [
             STAGE_LIGHT_DEPTH_MAP,
-            STAGE_CORNER_DEPTH_MAP,
             STAGE_EDGE_ADJACENCY,
             STAGE_SILHOUETTE_EDGES,
             STAGE_SILHOUETTE_MASK,

@@ -11,16 +11,15 @@
 //! **Hidden silhouettes.** "If the depth value stored in the depth map is smaller, then all
 //! silhouette edges in this texel are occluded by triangles closer to the light source". A
 //! texel's single centre sample cannot tell that soundly: an edge can be visible in a corner
-//! of the texel that the centre's surface does not cover. We compare against five samples of
-//! the nearest caster, the texel centre (the light depth map) and its four corners (a second
-//! map rendered at the corners, [`super::STAGE_CORNER_DEPTH_MAP`]): the edge is hidden in the
-//! texel when its nearest point inside the texel lies farther from the light than every one
-//! of the five surfaces, each by more than the shared depth tolerance
-//! ([`crate::depth_test::DepthTester::tolerance`] with a reach of one texel per axis, the
-//! farthest a point of the texel lies from a corner sample). A visible edge crossing the
-//! texel separates some sample from the others, and the surface seen there lies at or beyond
-//! the edge, so it keeps the texel marked; texels on the map's last row or column lack corner
-//! samples and are never hidden.
+//! of the texel that the centre's surface does not cover. We compare against the depth map's
+//! nine samples around the texel (its centre and its eight neighbours' centres): the edge is
+//! hidden in the texel when its nearest point inside the texel lies farther from the light
+//! than every one of the nine surfaces, each by more than the shared depth tolerance
+//! ([`crate::depth_test::DepthTester::tolerance`] with a reach of 1.5 texels per axis, the
+//! farthest a point of the texel lies from a neighbour's centre). A visible edge crossing the
+//! texel has samples on both sides, and the surface seen on its far side lies at or beyond
+//! the edge, so it keeps the texel marked; texels on the map's border lack neighbours and are
+//! never hidden.
 
 use super::footprint::clip_segment;
 use crate::depth_map::LightDepthMap;
@@ -34,49 +33,55 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 /// Widening of every texel, in texels, when testing whether an edge touches it.
 pub const EDGE_MARGIN: f64 = 1e-7;
 
-/// The depth beyond which a silhouette edge is hidden in a texel: the largest of its five
-/// samples' depth plus tolerance (`f64::INFINITY` where some sample sees no caster or is
-/// missing). Computed on demand for the texels edges touch, and remembered.
+/// The depth beyond which a silhouette edge is hidden in a texel: the largest of its nine
+/// samples' depth plus tolerance (`f64::INFINITY` where some sample sees no caster or lies
+/// off the map). Computed on demand for the texels edges touch, and remembered.
 pub struct HiddenDepths<'a> {
     geometry: &'a Geometry,
-    centres: &'a LightDepthMap,
-    corners: &'a LightDepthMap,
+    map: &'a LightDepthMap,
     tester: &'a DepthTester,
-    /// `f64` bits per texel; [`UNKNOWN`] until computed.
+    /// Depth plus tolerance per texel, `f64` bits; [`UNKNOWN`] until computed.
+    reach: Vec<AtomicU64>,
+    /// Hidden depth per texel, `f64` bits; [`UNKNOWN`] until computed.
     memo: Vec<AtomicU64>,
 }
 
-/// Marks a texel whose hidden depth is not computed yet (a NaN no computation yields).
+/// Marks a value not computed yet (a NaN no computation yields).
 const UNKNOWN: u64 = 0x7ff8_dead_beef_0001;
 
+/// Reach of the tolerance: the farthest a point of a texel lies from a neighbour's centre.
+const REACH: f64 = 1.5;
+
 impl<'a> HiddenDepths<'a> {
-    /// The hidden depths of the maps `centres` (texel centres) and `corners` (texel corners:
-    /// the same map's image shifted by half a texel up-left), with the tolerances of `tester`.
-    pub fn new(
-        geometry: &'a Geometry,
-        centres: &'a LightDepthMap,
-        corners: &'a LightDepthMap,
-        tester: &'a DepthTester,
-    ) -> Self {
-        let n = centres.res as usize * centres.res as usize;
-        let memo = (0..n).map(|_| AtomicU64::new(UNKNOWN)).collect();
-        Self { geometry, centres, corners, tester, memo }
+    /// The hidden depths of `map`, with the tolerances of `tester`.
+    pub fn new(geometry: &'a Geometry, map: &'a LightDepthMap, tester: &'a DepthTester) -> Self {
+        let n = map.res as usize * map.res as usize;
+        let unknown = || (0..n).map(|_| AtomicU64::new(UNKNOWN)).collect();
+        Self { geometry, map, tester, reach: unknown(), memo: unknown() }
     }
 
-    /// Depth plus tolerance of sample `k` of `map`.
-    fn reach(&self, map: &LightDepthMap, k: usize) -> f64 {
+    /// Depth plus tolerance of the sample of texel `k`.
+    fn reach(&self, k: usize) -> f64 {
+        let known = self.reach[k].load(Ordering::Relaxed);
+        if known != UNKNOWN {
+            return f64::from_bits(known);
+        }
+        let map = self.map;
         let res = map.res as usize;
         let (z, t) = (map.depth[k], map.triangle[k]);
-        if t == NO_TRIANGLE || !z.is_finite() {
-            return f64::INFINITY;
-        }
-        let xy = DVec2::new((k % res) as f64 + 0.5, (k / res) as f64 + 0.5) + map.shift;
-        let [a, b, c] = self.geometry.corners(t as usize);
-        let normal = (b - a).cross(c - a).normalize_or_zero();
-        match self.tester.receiver(map.projector.ray(xy).at(z), normal) {
-            Some(r) => z + self.tester.tolerance(&r, DVec2::ONE),
-            None => f64::INFINITY,
-        }
+        let d = if t == NO_TRIANGLE || !z.is_finite() {
+            f64::INFINITY
+        } else {
+            let xy = DVec2::new((k % res) as f64 + 0.5, (k / res) as f64 + 0.5) + map.shift;
+            let [a, b, c] = self.geometry.corners(t as usize);
+            let normal = (b - a).cross(c - a).normalize_or_zero();
+            match self.tester.receiver(map.projector.ray(xy).at(z), normal) {
+                Some(r) => z + self.tester.tolerance(&r, DVec2::splat(REACH)),
+                None => f64::INFINITY,
+            }
+        };
+        self.reach[k].store(d.to_bits(), Ordering::Relaxed);
+        d
     }
 
     /// The hidden depth of texel `k`.
@@ -85,15 +90,15 @@ impl<'a> HiddenDepths<'a> {
         if known != UNKNOWN {
             return f64::from_bits(known);
         }
-        let res = self.centres.res as usize;
+        let res = self.map.res as usize;
         let (x, y) = (k % res, k / res);
-        let d = if x + 1 >= res || y + 1 >= res {
+        let d = if x == 0 || y == 0 || x + 1 >= res || y + 1 >= res {
             f64::INFINITY
         } else {
-            [k, k + 1, k + res, k + res + 1]
-                .into_iter()
-                .map(|c| self.reach(self.corners, c))
-                .fold(self.reach(self.centres, k), f64::max)
+            (y - 1..=y + 1)
+                .flat_map(|j| (x - 1..=x + 1).map(move |i| j * res + i))
+                .map(|c| self.reach(c))
+                .fold(f64::NEG_INFINITY, f64::max)
         };
         self.memo[k].store(d.to_bits(), Ordering::Relaxed);
         d

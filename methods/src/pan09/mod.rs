@@ -15,7 +15,6 @@
 //! | stage | constant | module |
 //! |---|---|---|
 //! | light depth map | [`STAGE_LIGHT_DEPTH_MAP`] | [`crate::depth_map`] |
-//! | light depth map at texel corners | [`STAGE_CORNER_DEPTH_MAP`] | [`mask_map`] |
 //! | edge adjacency (per scene) | [`STAGE_EDGE_ADJACENCY`] | [`silhouette`] |
 //! | silhouette extraction | [`STAGE_SILHOUETTE_EDGES`] | [`silhouette`] |
 //! | silhouette mask map | [`STAGE_SILHOUETTE_MASK`] | [`mask_map`] |
@@ -29,7 +28,7 @@
 //! | occlusion ratio | [`STAGE_OCCLUSION_RATIO`] | here |
 //!
 //! Table 1's three times are sums of these ([`TABLE1`], [`table1_times`]): "Create silhouette
-//! mask map" (section 3.2: both depth maps, silhouette extraction, mask map, SAT), "Create
+//! mask map" (section 3.2: depth map, silhouette extraction, mask map, SAT), "Create
 //! PT-pairs and TT-pairs" (section 3.3: facets, PT-pairs, TT-pairs) and "Shadow calculation"
 //! (section 3.4: depth test, visibility evaluation, validity mask, occlusion ratio). The camera
 //! G-buffer (the frame's) and the edge adjacency (a per-scene precomputation) are not part of
@@ -82,10 +81,10 @@
 //!   and the light); non-manifold edges and edges of faces seen edge-on are silhouettes.
 //! - **Conservative rasterization** of silhouette edges ([`mask_map`]): every texel whose
 //!   closed square meets the edge, widened by `1e-7` texel.
-//! - **Hidden silhouettes** ([`mask_map`]): compared against five depth samples (texel centre
-//!   and corners, the corners from a second depth map), not the centre alone, with the shared
-//!   depth tolerance over one texel; an edge is hidden only when all five surfaces lie in front
-//!   of its nearest point in the texel.
+//! - **Hidden silhouettes** ([`mask_map`]): compared against the depth map's nine samples
+//!   around the texel (its centre and its neighbours'), not the centre alone, with the shared
+//!   depth tolerance over 1.5 texels; an edge is hidden only when all nine surfaces lie in
+//!   front of its nearest point in the texel.
 //! - **SAT** ([`sat`]): `(R + 1)^2` `u32` sums with a zero first row and column; rectangles
 //!   inclusive.
 //! - **Facets** ([`facets`]): the pixel square seen on the tangent plane of the G-buffer's
@@ -116,8 +115,8 @@
 //! - **Transparency**: casters are opaque (the run record says so when the scene has
 //!   semi-transparent ones).
 //! - **Memory**: about 400 bytes per silhouette pixel (facet, footprint, rectangle, masks),
-//!   8 bytes per PT- and TT-pair (16 while they are built), `(R + 1)^2` words per SAT, two
-//!   depth maps, the mask map and the memo of hidden depths (`R^2` each), and the lookup
+//!   8 bytes per PT- and TT-pair (16 while they are built), `(R + 1)^2` words per SAT, the
+//!   depth map, the mask map and the memos of hidden depths (`R^2` each), and the lookup
 //!   table (131 072 masks).
 
 pub mod coverage;
@@ -145,7 +144,6 @@ use crate::{
 };
 use coverage::{Coverage, ExactCoverage, TableCoverage};
 use facets::{Facets, PixelClass};
-use glam::DVec2;
 use instrumentation::{Counters, Recorder, Stages};
 use lut::LookupTable;
 use mask::Mask;
@@ -158,8 +156,6 @@ use std::fmt;
 use std::str::FromStr;
 use std::sync::Arc;
 
-/// Name of the stage that renders the light depth map at the texel corners.
-pub const STAGE_CORNER_DEPTH_MAP: &str = "light depth map at texel corners";
 /// Name of the stage that builds the casters' edge adjacency.
 pub const STAGE_EDGE_ADJACENCY: &str = "edge adjacency";
 /// Name of the stage that finds the silhouette edges.
@@ -185,13 +181,7 @@ pub const STAGE_OCCLUSION_RATIO: &str = "occlusion ratio";
 pub const TABLE1: [(&str, &[&str]); 3] = [
     (
         "Create silhouette mask map",
-        &[
-            STAGE_LIGHT_DEPTH_MAP,
-            STAGE_CORNER_DEPTH_MAP,
-            STAGE_SILHOUETTE_EDGES,
-            STAGE_SILHOUETTE_MASK,
-            STAGE_SAT,
-        ],
+        &[STAGE_LIGHT_DEPTH_MAP, STAGE_SILHOUETTE_EDGES, STAGE_SILHOUETTE_MASK, STAGE_SAT],
     ),
     ("Create PT-pairs and TT-pairs", &[STAGE_FACETS, STAGE_PT_PAIRS, STAGE_TT_PAIRS]),
     (
@@ -411,13 +401,11 @@ impl Pan09 {
         })
     }
 
-    /// The stages that do not depend on the mask width: depth maps, silhouettes, mask map,
+    /// The stages that do not depend on the mask width: depth map, silhouettes, mask map,
     /// SAT, facets, depth test, PT- and TT-pairs.
     fn prepare(&self, frame: &Frame<'_>, rec: &mut Recorder) -> Prepared {
         let res = self.options.map.map_res;
         let map = frame.light_depth_map(res, rec);
-        let corners =
-            frame.jittered_light_depth_map(res, DVec2::splat(-0.5), STAGE_CORNER_DEPTH_MAP, rec);
         let light = map.projector;
         let tester = DepthTester::new(&self.options.map, light, frame.light_depth_range(&light));
         let geometry = &frame.geometry;
@@ -429,7 +417,7 @@ impl Pan09 {
             silhouette::silhouette_edges(geometry, &adjacency, model)
         });
         let mask = rec.stages.time(STAGE_SILHOUETTE_MASK, || {
-            let hidden = mask_map::HiddenDepths::new(geometry, &map, &corners, &tester);
+            let hidden = mask_map::HiddenDepths::new(geometry, &map, &tester);
             mask_map::silhouette_mask(&edges, &light, res, |k| hidden.get(k))
         });
         let sat = rec.stages.time(STAGE_SAT, || sat::SummedAreaTable::new(&mask, res));
