@@ -350,11 +350,6 @@ impl Pan09 {
         Ok(Self { options, pattern, tables })
     }
 
-    /// The options.
-    pub fn options(&self) -> &Pan09Options {
-        &self.options
-    }
-
     /// Runs the method and also returns every pixel's sub-sample masks.
     pub fn run_masks(
         &self,

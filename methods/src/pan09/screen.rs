@@ -64,12 +64,6 @@ impl HalfPlane {
             Crossing::Split
         }
     }
-
-    /// The complement (the line's other closed side).
-    #[inline]
-    pub fn flipped(&self) -> Self {
-        Self { g0: -self.g0, gx: -self.gx, gy: -self.gy }
-    }
 }
 
 /// The affine camera ray `origin(p) + t dir(p)` of a projector, with `p` in image
@@ -162,7 +156,7 @@ impl WorldPlane {
     }
 
     /// The signed value `N·X - c` at world point `x`.
-    #[inline]
+    #[cfg(test)]
     pub fn value(&self, x: DVec3) -> f64 {
         self.n.dot(x) - self.c
     }
@@ -229,7 +223,7 @@ impl FacetMap {
 
     /// The ray parameter (the camera depth) where the ray through pixel-local point `u` meets
     /// the tangent plane.
-    #[inline]
+    #[cfg(test)]
     pub fn depth_at(&self, u: DVec2) -> f64 {
         let [a0, ax, ay] = self.a;
         let [bx, by] = self.b;
@@ -237,7 +231,7 @@ impl FacetMap {
     }
 
     /// The world point of the facet seen through pixel-local point `u`.
-    #[inline]
+    #[cfg(test)]
     pub fn point_at(&self, camera: &CameraBasis, u: DVec2) -> DVec3 {
         let origin = self.origin + camera.ox * u.x + camera.oy * u.y;
         let dir = self.dir + camera.dx * u.x + camera.dy * u.y;
