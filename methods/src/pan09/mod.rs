@@ -295,11 +295,21 @@ impl Pan09Options {
 }
 
 /// The lookup table at the mask width of the rate.
-#[derive(Debug)]
 enum Tables {
     W32(LookupTable<u32>),
     W64(LookupTable<u64>),
     W128(LookupTable<u128>),
+}
+
+impl fmt::Debug for Tables {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let bits = match self {
+            Tables::W32(_) => 32,
+            Tables::W64(_) => 64,
+            Tables::W128(_) => 128,
+        };
+        write!(f, "LookupTable<u{bits}>({} x {} masks)", lut::DIRECTION_BINS, lut::DISTANCE_BINS)
+    }
 }
 
 /// Per-sub-sample results of a run, for comparisons sample by sample: bit `s` of a pixel's
