@@ -8,7 +8,9 @@ use analysis::{error_image, Metrics};
 use anyhow::Context;
 use clap::{Parser, Subcommand, ValueEnum};
 use instrumentation::{Recorder, RunRecord};
-use methods::{pattern::PatternKind, Frame, MethodOptions, ShadowMethod, Visibility};
+use methods::{
+    pan09::VisibilityMode, pattern::PatternKind, Frame, MethodOptions, ShadowMethod, Visibility,
+};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -74,6 +76,24 @@ impl From<Pattern> for PatternKind {
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum Visibility09 {
+    /// The paper's precomputed lookup table of quantized half-planes (sub-samples within
+    /// 1/128 pixel of a blocker's edge may flip).
+    Table,
+    /// Each half-plane tested against each sub-sample in f64.
+    Exact,
+}
+
+impl From<Visibility09> for VisibilityMode {
+    fn from(v: Visibility09) -> Self {
+        match v {
+            Visibility09::Table => VisibilityMode::Table,
+            Visibility09::Exact => VisibilityMode::Exact,
+        }
+    }
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum ReferenceName {
     /// Exact lit area per pixel on the planar receiver (pixels whose square sees it).
     Exact,
@@ -110,21 +130,25 @@ struct RenderArgs {
     /// Method: `sm` (standard shadow map); `pcf-reeves` (stochastic PCF of the pixel's
     /// footprint, see `--rate`, `--seed`); `pcf-bs-2x2`, `pcf-bs-fast-2x2`, `pcf-bs-fast-4x4`
     /// (Brabec & Seidel's packed PCF, see `--depth-bits`); `pcf-gems16`, `pcf-gems4` (GPU
-    /// Gems' 4x4-region PCF); `spsm`, `spsm-f32` (sub-pixel shadow maps with packed or f32
-    /// texels, see `--rate`, `--derivative-power`); or a reference run as a method: `exact`,
-    /// `raytrace` (see `--rate`, `--pattern`).
+    /// Gems' 4x4-region PCF); `afsm`, `afsm-ss` (alias-free shadow maps, the latter at
+    /// `--rate` sub-samples); `pan09` (Pan et al.'s sub-pixel antialiased shadow maps, see
+    /// `--rate`, `--pattern`, `--map-res`, `--visibility`); `spsm`, `spsm-f32` (sub-pixel
+    /// shadow maps with packed or f32 texels, see `--rate`, `--derivative-power`); or a
+    /// reference run as a method: `exact`, `raytrace` (see `--rate`, `--pattern`).
     #[arg(long)]
     method: String,
     /// Sub-samples per pixel for methods that supersample and for `raytrace`:
-    /// 1, 4, 8, 16, 32, 64, 128 (up to 1024 for `raytrace`); default 1. For `pcf-reeves`, the
-    /// jittered samples per pixel footprint (same values); default 16. For `spsm`, the
-    /// sub-samples of uncertain pixels (1: no antialiasing, the default).
+    /// 1, 4, 8, 16, 32, 64, 128 (up to 1024 for `raytrace`); default 1 (32 for `afsm-ss` and
+    /// `pan09`). For `pcf-reeves`, the jittered samples per pixel footprint (same values);
+    /// default 16. For `spsm`, the sub-samples of uncertain pixels (1: no antialiasing, the
+    /// default).
     #[arg(long, value_name = "N")]
     rate: Option<u32>,
     /// Sub-sample pattern, shared by every method at equal rate; default grid.
     #[arg(long, value_enum)]
     pattern: Option<Pattern>,
-    /// Shadow map resolution R (the map is R x R texels); default 1024.
+    /// Shadow map resolution R (the map is R x R texels); default 1024 (512 for `pan09`, the
+    /// paper's).
     #[arg(long, value_name = "R")]
     map_res: Option<u32>,
     /// Constant depth bias as a fraction of the scene's light depth range; default 1e-5
@@ -150,6 +174,10 @@ struct RenderArgs {
     /// default 5.
     #[arg(long, value_name = "N")]
     derivative_power: Option<u32>,
+    /// How `pan09` turns a blocker's half-planes into sub-sample masks: `table` (the paper's
+    /// precomputed lookup table, the default) or `exact` (every sub-sample tested in f64).
+    #[arg(long, value_enum)]
+    visibility: Option<Visibility09>,
     /// Image width in pixels; default: the scene's.
     #[arg(long, value_name = "W")]
     width: Option<u32>,
@@ -271,6 +299,7 @@ fn job(a: &RenderArgs) -> Result<Job, Failure> {
         depth_bits: a.depth_bits,
         seed: a.seed,
         derivative_power: a.derivative_power,
+        visibility: a.visibility.map(VisibilityMode::from),
     };
     let technique = analysis::registry::technique(&a.method, &options).map_err(input)?;
     let params = technique.params();
@@ -281,6 +310,7 @@ fn job(a: &RenderArgs) -> Result<Job, Failure> {
         ("--depth-bits", a.depth_bits.is_some(), "depth_bits"),
         ("--seed", a.seed.is_some(), "seed"),
         ("--derivative-power", a.derivative_power.is_some(), "derivative_power"),
+        ("--visibility", a.visibility.is_some(), "visibility"),
     ] {
         if given && !params.contains_key(key) {
             eprintln!("note: {} does not use {flag}; ignored", technique.name());

@@ -19,6 +19,7 @@ const MAP_METHODS: &[&str] = &[
     "pcf-bs-fast-4x4",
     "pcf-gems16",
     "pcf-gems4",
+    "pan09",
 ];
 
 fn run_method<'s>(

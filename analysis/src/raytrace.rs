@@ -21,6 +21,9 @@
 //! transparency the values are exactly `k / N`. `evaluated` is true where every sub-sample hit
 //! a surface. With transparency, `transmittance` is the per-pixel mean RGB transmittance.
 //!
+//! [`RayTrace::sample_image`] returns every sub-sample's hit triangle and light instead, for
+//! comparisons sample by sample.
+//!
 //! Stages: [`STAGE_BVH_BUILD`] ("BVH build": one obvhs CWBVH over all triangles for camera rays
 //! and, when some triangle does not cast shadows, a second one over the casters) and
 //! [`STAGE_RAY_TRACING`] ("ray tracing", rayon over rows). Counter: `rays_traced` = camera rays
@@ -333,31 +336,39 @@ enum LightSource {
     At(DVec3),
 }
 
-/// One row of results.
-struct Row {
-    lit: Vec<f64>,
-    evaluated: Vec<bool>,
-    transmittance: Vec<f64>,
+/// What one sub-sample's rays found.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct SampleHit {
+    /// The triangle the camera ray hit, `None` for background.
+    triangle: Option<u32>,
+    /// Light reaching the hit point (1 for background).
+    light: f64,
+    /// Rays traced (camera ray, and the shadow ray when it hit).
     rays: u64,
 }
 
-impl Reference for RayTrace {
-    fn name(&self) -> &'static str {
-        "raytrace"
-    }
+/// Everything the rays of one frame share: acceleration structures, light, camera set-up.
+struct Tracer<'a> {
+    frame: &'a Frame<'a>,
+    pattern: &'a SamplePattern,
+    camera_accel: Accel,
+    /// The casters' BVH, when some triangle does not cast shadows (else the camera's).
+    caster_accel: Option<Accel>,
+    light: LightSource,
+    shadow_tmin: f64,
+    /// Camera rays start this far along their direction (orthographic cameras start behind
+    /// the scene), and accept hits from `camera_tmin`.
+    start_shift: f64,
+    camera_tmin: f64,
+}
 
-    fn params(&self) -> serde_json::Map<String, serde_json::Value> {
-        let mut m = serde_json::Map::new();
-        m.insert("rate".into(), self.pattern.rate().into());
-        m.insert("pattern".into(), self.pattern.kind().name().into());
-        m
-    }
-
-    fn evaluate(
-        &self,
-        frame: &Frame<'_>,
+impl<'a> Tracer<'a> {
+    /// Builds the BVHs (stage [`STAGE_BVH_BUILD`]) and the ray set-up for `frame`.
+    fn new(
+        frame: &'a Frame<'a>,
+        pattern: &'a SamplePattern,
         rec: &mut Recorder,
-    ) -> Result<ReferenceImage, ReferenceError> {
+    ) -> Result<Self, ReferenceError> {
         let light = match frame.scene.light {
             Light::Directional { direction } => {
                 let towards = -direction.normalize_or_zero();
@@ -384,7 +395,6 @@ impl Reference for RayTrace {
         let diagonal = (hi - lo).length();
         let largest = lo.abs().max(hi.abs()).max_element();
         let pad = (BOX_PADDING * diagonal + 8.0 * f64::from(f32::EPSILON) * largest).max(1e-30);
-        let shadow_tmin = SHADOW_RAY_OFFSET * diagonal;
         let transparency = frame.effects.transparency;
         let objects = &frame.scene.objects;
         let pass = |t: usize| {
@@ -402,7 +412,6 @@ impl Reference for RayTrace {
                 .then(|| Accel::build(geometry, |t| frame.is_caster(t), pass, pad));
             (all, casters)
         });
-        let caster_accel = caster_accel.as_ref().unwrap_or(&camera_accel);
 
         // Camera rays: perspective from depth `near`; orthographic from behind the scene.
         let camera = &frame.camera;
@@ -422,10 +431,133 @@ impl Reference for RayTrace {
                 (nearest.min(0.0) - diagonal.max(1.0) * 1e-3, 0.0)
             }
         };
+        Ok(Self {
+            frame,
+            pattern,
+            camera_accel,
+            caster_accel,
+            light,
+            shadow_tmin: SHADOW_RAY_OFFSET * diagonal,
+            start_shift,
+            camera_tmin,
+        })
+    }
 
+    /// The camera ray and the shadow ray of sub-sample `s` of pixel `(i, j)`.
+    fn sample(&self, i: u32, j: u32, s: usize) -> SampleHit {
+        let r = self.frame.camera.ray(self.pattern.point(i, j, s));
+        let hit =
+            TraceRay::new(r.origin + self.start_shift * r.direction, r.direction).and_then(|ray| {
+                self.camera_accel
+                    .closest(&ray, self.camera_tmin, f64::INFINITY)
+                    .map(|(t, id)| (ray.at(t), id))
+            });
+        let Some((p, id)) = hit else {
+            return SampleHit { triangle: None, light: 1.0, rays: 1 };
+        };
+        let (dir, tmax) = match self.light {
+            LightSource::Towards(d) => (d, f64::INFINITY),
+            LightSource::At(q) => {
+                let v = q - p;
+                let dist = v.length();
+                (v / dist, dist)
+            }
+        };
+        let casters = self.caster_accel.as_ref().unwrap_or(&self.camera_accel);
+        let light = match TraceRay::new(p, dir) {
+            Some(ray) if tmax > self.shadow_tmin => {
+                casters.transmittance(&ray, self.shadow_tmin, tmax, id)
+            }
+            // The point is at the light (or the ray is degenerate): lit.
+            _ => 1.0,
+        };
+        SampleHit { triangle: Some(id), light, rays: 2 }
+    }
+}
+
+/// One row of results.
+struct Row {
+    lit: Vec<f64>,
+    evaluated: Vec<bool>,
+    rays: u64,
+}
+
+/// Every sub-sample's result, for comparisons sample by sample: entry `pixel * rate + s` is
+/// sub-sample `s` of pixel `pixel` (row-major).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SampleImage {
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Sub-samples per pixel.
+    pub rate: u32,
+    /// The triangle each sub-sample's camera ray hit ([`methods::raster::NO_TRIANGLE`] for
+    /// background).
+    pub triangle: Vec<u32>,
+    /// Light reaching each sub-sample's hit point: 0 or 1 without transparency, the
+    /// transmittance with it; 1 for background.
+    pub light: Vec<f64>,
+}
+
+impl RayTrace {
+    /// Traces every sub-sample of `frame` and returns each one's hit and light (stages and
+    /// counters as [`Reference::evaluate`]).
+    pub fn sample_image(
+        &self,
+        frame: &Frame<'_>,
+        rec: &mut Recorder,
+    ) -> Result<SampleImage, ReferenceError> {
+        let tracer = Tracer::new(frame, &self.pattern, rec)?;
         let (w, h) = (frame.width(), frame.height());
-        let pattern = &self.pattern;
-        let rate = pattern.rate() as usize;
+        let rate = self.pattern.rate() as usize;
+        let rows: Vec<(Vec<u32>, Vec<f64>, u64)> = rec.stages.time(STAGE_RAY_TRACING, || {
+            (0..h)
+                .into_par_iter()
+                .map(|j| {
+                    let mut row = (Vec::with_capacity(w as usize * rate), Vec::new(), 0);
+                    for i in 0..w {
+                        for s in 0..rate {
+                            let hit = tracer.sample(i, j, s);
+                            row.0.push(hit.triangle.unwrap_or(methods::raster::NO_TRIANGLE));
+                            row.1.push(hit.light);
+                            row.2 += hit.rays;
+                        }
+                    }
+                    row
+                })
+                .collect()
+        });
+        rec.counters.rays_traced += rows.iter().map(|r| r.2).sum::<u64>();
+        let (mut triangle, mut light) = (Vec::new(), Vec::new());
+        for (t, l, _) in rows {
+            triangle.extend(t);
+            light.extend(l);
+        }
+        Ok(SampleImage { width: w, height: h, rate: rate as u32, triangle, light })
+    }
+}
+
+impl Reference for RayTrace {
+    fn name(&self) -> &'static str {
+        "raytrace"
+    }
+
+    fn params(&self) -> serde_json::Map<String, serde_json::Value> {
+        let mut m = serde_json::Map::new();
+        m.insert("rate".into(), self.pattern.rate().into());
+        m.insert("pattern".into(), self.pattern.kind().name().into());
+        m
+    }
+
+    fn evaluate(
+        &self,
+        frame: &Frame<'_>,
+        rec: &mut Recorder,
+    ) -> Result<ReferenceImage, ReferenceError> {
+        let tracer = Tracer::new(frame, &self.pattern, rec)?;
+        let (w, h) = (frame.width(), frame.height());
+        let rate = self.pattern.rate() as usize;
         let rows: Vec<Row> = rec.stages.time(STAGE_RAY_TRACING, || {
             (0..h)
                 .into_par_iter()
@@ -433,48 +565,18 @@ impl Reference for RayTrace {
                     let mut row = Row {
                         lit: Vec::with_capacity(w as usize),
                         evaluated: Vec::with_capacity(w as usize),
-                        transmittance: Vec::with_capacity(w as usize),
                         rays: 0,
                     };
                     for i in 0..w {
                         let (mut sum, mut all_hit) = (0.0f64, true);
                         for s in 0..rate {
-                            let r = camera.ray(pattern.point(i, j, s));
-                            row.rays += 1;
-                            let hit =
-                                TraceRay::new(r.origin + start_shift * r.direction, r.direction)
-                                    .and_then(|ray| {
-                                        camera_accel
-                                            .closest(&ray, camera_tmin, f64::INFINITY)
-                                            .map(|(t, id)| (ray.at(t), id))
-                                    });
-                            let Some((p, id)) = hit else {
-                                all_hit = false;
-                                sum += 1.0;
-                                continue;
-                            };
-                            row.rays += 1;
-                            let (dir, tmax) = match light {
-                                LightSource::Towards(d) => (d, f64::INFINITY),
-                                LightSource::At(q) => {
-                                    let v = q - p;
-                                    let dist = v.length();
-                                    (v / dist, dist)
-                                }
-                            };
-                            let seen = match TraceRay::new(p, dir) {
-                                Some(ray) if tmax > shadow_tmin => {
-                                    caster_accel.transmittance(&ray, shadow_tmin, tmax, id)
-                                }
-                                // The point is at the light (or the ray is degenerate): lit.
-                                _ => 1.0,
-                            };
-                            sum += seen;
+                            let hit = tracer.sample(i, j, s);
+                            row.rays += hit.rays;
+                            all_hit &= hit.triangle.is_some();
+                            sum += hit.light;
                         }
-                        let value = (sum / rate as f64).clamp(0.0, 1.0);
-                        row.lit.push(value);
+                        row.lit.push((sum / rate as f64).clamp(0.0, 1.0));
                         row.evaluated.push(all_hit);
-                        row.transmittance.push(value);
                     }
                     row
                 })
@@ -484,20 +586,14 @@ impl Reference for RayTrace {
         let rays: u64 = rows.iter().map(|r| r.rays).sum();
         rec.counters.rays_traced += rays;
         let n = (w as usize) * (h as usize);
-        let (mut lit, mut evaluated, mut trans) =
-            (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
+        let (mut lit, mut evaluated) = (Vec::with_capacity(n), Vec::with_capacity(n));
         for row in rows {
             lit.extend(row.lit);
             evaluated.extend(row.evaluated);
-            trans.extend(row.transmittance.into_iter().map(|t| [t; 3]));
         }
-        Ok(ReferenceImage {
-            width: w,
-            height: h,
-            lit,
-            evaluated,
-            transmittance: transparency.then_some(trans),
-        })
+        let transmittance =
+            frame.effects.transparency.then(|| lit.iter().map(|&t| [t; 3]).collect());
+        Ok(ReferenceImage { width: w, height: h, lit, evaluated, transmittance })
     }
 }
 

@@ -5,8 +5,9 @@
 //! (sub-pixel sample patterns), [`frame`] (a scene at one resolution). Techniques, one module
 //! each: [`sm`] (standard shadow map), [`pcf_reeves`] (Reeves et al.'s stochastic PCF),
 //! [`pcf_bs`] (Brabec and Seidel's packed PCF), [`pcf_gems`] (GPU Gems' 4x4-region PCF),
-//! [`afsm`] (alias-free shadow maps, `afsm` and `afsm-ss`), [`spsm`] (Lecocq et al.'s
-//! sub-pixel shadow maps). Every technique implements [`method::ShadowMethod`];
+//! [`afsm`] (alias-free shadow maps, `afsm` and `afsm-ss`), [`pan09`] (Pan et al.'s fast
+//! sub-pixel antialiased shadow maps), [`spsm`] (Lecocq et al.'s sub-pixel shadow maps).
+//! Every technique implements [`method::ShadowMethod`];
 //! [`registry`] finds them by name.
 
 pub mod afsm;
@@ -15,6 +16,7 @@ pub mod depth_test;
 pub mod frame;
 pub mod gbuffer;
 pub mod method;
+pub mod pan09;
 pub mod pattern;
 pub mod pcf_bs;
 pub mod pcf_gems;

@@ -4,6 +4,7 @@ use crate::{
     afsm::{AfsmOptions, AliasFreeShadowMap},
     depth_test::MapOptions,
     method::{MethodError, ShadowMethod},
+    pan09::{Pan09, Pan09Options, VisibilityMode},
     pattern::PatternKind,
     pcf_bs::{BrabecSeidelPcf, BsOptions, Variant, DEFAULT_DEPTH_BITS},
     pcf_gems::{GemsPcf, GemsSamples},
@@ -36,6 +37,11 @@ pub const METHODS: &[(&str, &str)] = &[
          pixels with --rate (Lecocq et al. 2014)",
     ),
     ("spsm-f32", "sub-pixel shadow map with unpacked f32 texels (Lecocq et al. 2014)"),
+    (
+        "pan09",
+        "fast sub-pixel antialiased shadow maps: silhouette mask map, facets, half-plane bitmask \
+         lookup table, --rate sub-samples (default 32) (Pan et al. 2009)",
+    ),
 ];
 
 /// Options shared by the methods; `None` takes the method's documented default.
@@ -59,6 +65,8 @@ pub struct MethodOptions {
     pub seed: Option<u64>,
     /// Exponent of the derivative code `x^n` (`--derivative-power`), for packed SPSM texels.
     pub derivative_power: Option<u32>,
+    /// How `pan09` turns half-planes into sub-sample masks (`--visibility`).
+    pub visibility: Option<VisibilityMode>,
 }
 
 /// The map options given, with `defaults` for those not given; validated.
@@ -131,6 +139,16 @@ pub fn method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMetho
             };
             o.validate()?;
             Ok(Box::new(Spsm { options: o }))
+        }
+        "pan09" => {
+            let d = Pan09Options::default();
+            let o = Pan09Options {
+                map: map_options(options, d.map)?,
+                rate: options.rate.unwrap_or(d.rate),
+                pattern: options.pattern.unwrap_or(d.pattern),
+                visibility: options.visibility.unwrap_or(d.visibility),
+            };
+            Ok(Box::new(Pan09::new(o)?))
         }
         _ => Err(MethodError::InvalidOption {
             option: "--method",

@@ -243,7 +243,7 @@ impl AliasFreeShadowMap {
 
 /// The diagonal of the bounding box of the finite positions (as the ray-traced reference
 /// measures the scene).
-fn scene_diagonal(geometry: &Geometry) -> f64 {
+pub(crate) fn scene_diagonal(geometry: &Geometry) -> f64 {
     let (lo, hi) =
         geometry.positions.iter().filter(|p| p.is_finite()).fold(
             (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),

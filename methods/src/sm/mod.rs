@@ -16,7 +16,8 @@
 //! opacity < 1 are treated as opaque (the run record says so when the scene has transparency).
 
 use crate::{
-    depth_test::{filter_pixels, texel_at, DepthTester, MapOptions, PixelResult},
+    depth_map::LightDepthMap,
+    depth_test::{filter_pixels, texel_at, DepthTester, MapOptions, PixelResult, Receiver},
     frame::Frame,
     method::{MethodError, ShadowMethod, Visibility},
 };
@@ -28,6 +29,20 @@ pub const STAGE_DEPTH_TEST: &str = "depth test";
 
 /// Reach of one nearest-texel lookup: the texel centre is at most half a texel away per axis.
 pub const NEAREST_REACH: DVec2 = DVec2::splat(0.5);
+
+/// The standard depth test of one surface point: the texel the point falls in is compared
+/// once, shadowed when `map depth < point depth - tolerance` with the reach of one
+/// nearest-texel lookup; points outside the map are lit. (`pan09` runs the same test on its
+/// non-silhouette pixels.)
+#[inline]
+pub fn depth_test(map: &LightDepthMap, tester: &DepthTester, r: &Receiver) -> PixelResult {
+    let Some((x, y)) = texel_at(r.xy, map.res) else {
+        return PixelResult { lit: 1.0, ..Default::default() };
+    };
+    let stored = map.depth[y * map.res as usize + x];
+    let shadowed = stored < r.depth - tester.tolerance(r, NEAREST_REACH);
+    PixelResult { lit: if shadowed { 0.0 } else { 1.0 }, compares: 1, bilinear_lookups: 0 }
+}
 
 /// The standard shadow map.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -54,18 +69,7 @@ impl ShadowMethod for StandardShadowMap {
         let tester =
             DepthTester::new(&self.options, map.projector, frame.light_depth_range(&map.projector));
         let (lit, counters) = rec.stages.time(STAGE_DEPTH_TEST, || {
-            filter_pixels(frame, &tester, |_, _, r| {
-                let Some((x, y)) = texel_at(r.xy, map.res) else {
-                    return PixelResult { lit: 1.0, ..Default::default() };
-                };
-                let stored = map.depth[y * map.res as usize + x];
-                let shadowed = stored < r.depth - tester.tolerance(r, NEAREST_REACH);
-                PixelResult {
-                    lit: if shadowed { 0.0 } else { 1.0 },
-                    compares: 1,
-                    bilinear_lookups: 0,
-                }
-            })
+            filter_pixels(frame, &tester, |_, _, r| depth_test(&map, &tester, r))
         });
         rec.counters.merge(&counters);
         Ok(Visibility { width: frame.width(), height: frame.height(), lit, transmittance: None })
