@@ -14,38 +14,12 @@
 
 use instrumentation::{Counters, Recorder};
 use methods::{
-    pan09::{table1_times, Pan09, Pan09Options, TABLE1},
+    pan09::{table1_times, Pan09, Pan09Options, PAPER_TABLE1, TABLE1},
     Frame, ShadowMethod,
 };
 
 const WIDTH: u32 = 800;
 const HEIGHT: u32 = 600;
-
-/// Our scene, its sample rate, and the paper's row for the same kind of scene (Table 1,
-/// NVIDIA GTX 280): name, triangles, silhouette texels, silhouette pixels, visibility
-/// evaluations, rate, the three times in ms, FPS.
-const SCENES: [(&str, u32, Option<[&str; 9]>); 5] = [
-    (
-        "cage",
-        128,
-        Some(["Cage", "59780", "37646", "53576", "2915995", "128", "4.2", "10.0", "18.9"]),
-    ),
-    (
-        "plant",
-        32,
-        Some(["Plant", "20926", "15263", "59692", "1446287", "32", "2.1", "6.2", "10.8"]),
-    ),
-    ("spheres", 32, None),
-    (
-        "bunny-plane",
-        32,
-        Some(["Bunny", "69473", "3254", "18523", "609901", "32", "2.1", "6.3", "6.8"]),
-    ),
-    ("bumpy", 32, None),
-];
-
-/// The paper's frames per second for the rows above (whole frame, GTX 280).
-const PAPER_FPS: [&str; 5] = ["28", "50", "–", "61", "–"];
 
 struct Measured {
     name: &'static str,
@@ -122,9 +96,9 @@ fn main() {
         .filter(|&r| r > 0)
         .unwrap_or(5);
     let mut rows = Vec::new();
-    for (i, (name, rate, paper)) in SCENES.iter().enumerate() {
-        match measure(name, *rate, runs) {
-            Ok(Some(m)) => rows.push((m, *paper, PAPER_FPS[i])),
+    for (name, rate, paper) in PAPER_TABLE1 {
+        match measure(name, rate, runs) {
+            Ok(Some(m)) => rows.push((m, paper, paper.map_or("–", |p| p[9]))),
             Ok(None) => {}
             Err(e) => {
                 eprintln!("{name}: {e}");

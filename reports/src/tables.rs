@@ -5,7 +5,7 @@
 //!
 //! ```toml
 //! [[table]]
-//! paper = "aila-laine-table1"   # or "lecocq-table1", "lecocq-table2"
+//! paper = "aila-laine-table1"   # or "pan-table1", "lecocq-table1", "lecocq-table2"
 //! scenes = ["random-1k", "random-10k"]   # optional: default, the table's own scenes
 //! width = 1024                           # optional: default, the paper's frame
 //! height = 768
@@ -21,6 +21,10 @@
 //! - `lecocq-table1`: Lecocq et al. 2014, Table 1: `sm` and `spsm` with 1K and 2K maps at
 //!   1920 x 1080 on three models (Spheres 12K, YeahRight 155K, City 2.3M polygons; our stand-ins
 //!   `spheres`, `bunny-plane`, `random-1m`). Paper: NVIDIA GeForce GTX 580.
+//! - `pan-table1`: Pan et al. 2009, Table 1: `pan09` (map 512, the paper's sample rates) on
+//!   `cage`, `plant`, `spheres`, `bunny-plane`, `bumpy` at 800 x 600: triangles, silhouette
+//!   texels and pixels, visibility evaluations, the three stage times and their total, beside
+//!   the paper's Cage, Plant and Bunny. Paper: NVIDIA GeForce GTX 280.
 //! - `lecocq-table2`: Lecocq et al. 2014, Table 2: `sm` and `spsm` at maps 512 .. 4096 on one
 //!   model (YeahRight; our stand-in `bunny-plane`) at 1920 x 1080, with the overhead.
 //!
@@ -29,7 +33,7 @@
 
 use crate::timing::{time_method, StageTimes, Timed};
 use instrumentation::Recorder;
-use methods::{Frame, MethodOptions};
+use methods::{pan09::PAPER_TABLE1 as PAN_TABLE1, Frame, MethodOptions};
 use serde::{Deserialize, Serialize};
 
 /// A paper's table that a report can reproduce.
@@ -42,6 +46,8 @@ pub enum PaperTable {
     LecocqTable1,
     /// Lecocq et al. 2014, Table 2 (SM and SPSM times against map size).
     LecocqTable2,
+    /// Pan et al. 2009, Table 1 (statistics of the test scenes and `pan09`'s stage times).
+    PanTable1,
 }
 
 /// A `[[table]]` entry of a suite.
@@ -85,6 +91,7 @@ impl PaperTable {
             Self::AilaLaineTable1 => "aila-laine-table1",
             Self::LecocqTable1 => "lecocq-table1",
             Self::LecocqTable2 => "lecocq-table2",
+            Self::PanTable1 => "pan-table1",
         }
     }
 
@@ -94,6 +101,7 @@ impl PaperTable {
             Self::AilaLaineTable1 => &["random-1k", "random-10k", "random-100k", "random-1m"],
             Self::LecocqTable1 => &["spheres", "bunny-plane", "random-1m"],
             Self::LecocqTable2 => &["bunny-plane"],
+            Self::PanTable1 => &["cage", "plant", "spheres", "bunny-plane", "bumpy"],
         }
     }
 
@@ -102,6 +110,7 @@ impl PaperTable {
         match self {
             Self::AilaLaineTable1 => (1024, 768),
             Self::LecocqTable1 | Self::LecocqTable2 => (1920, 1080),
+            Self::PanTable1 => (800, 600),
         }
     }
 
@@ -109,14 +118,19 @@ impl PaperTable {
         match self {
             Self::AilaLaineTable1 => "1.6 GHz Mobile Pentium 4 (CPU)",
             Self::LecocqTable1 | Self::LecocqTable2 => "NVIDIA GeForce GTX 580 (GPU)",
+            Self::PanTable1 => "NVIDIA GeForce GTX 280 (GPU) with a 3.0 GHz CPU",
         }
     }
 
-    /// The method runs the table makes on each scene.
-    fn runs(self) -> Vec<(&'static str, MethodOptions)> {
+    /// The method runs the table makes on `scene`.
+    fn runs(self, scene: &str) -> Vec<(&'static str, MethodOptions)> {
         let map =
             |method, res| (method, MethodOptions { map_res: Some(res), ..Default::default() });
         match self {
+            Self::PanTable1 => {
+                let rate = Some(pan_rate(scene));
+                vec![("pan09", MethodOptions { map_res: Some(512), rate, ..Default::default() })]
+            }
             Self::AilaLaineTable1 => vec![("afsm", MethodOptions::default())],
             Self::LecocqTable1 => {
                 vec![map("sm", 1024), map("sm", 2048), map("spsm", 1024), map("spsm", 2048)]
@@ -131,7 +145,7 @@ impl PaperTable {
 
 /// Method runs a table makes, for progress bars.
 pub fn table_run_count(spec: &TableSpec) -> u64 {
-    (scenes_of(spec).len() * spec.paper.runs().len()) as u64
+    scenes_of(spec).iter().map(|s| spec.paper.runs(s).len() as u64).sum()
 }
 
 fn scenes_of(spec: &TableSpec) -> Vec<String> {
@@ -164,9 +178,9 @@ pub fn run_table(
     let paper = spec.paper;
     let (pw, ph) = paper.paper_frame();
     let (w, h) = if spec.width == 0 { (pw, ph) } else { (spec.width, spec.height) };
-    let runs = paper.runs();
     let mut measured = Vec::new();
     for name in scenes_of(spec) {
+        let runs = paper.runs(&name);
         let scene = match scenes::load(&name) {
             Ok(s) => s,
             Err(e) => {
@@ -207,11 +221,13 @@ pub fn run_table(
         PaperTable::AilaLaineTable1 => aila_laine(&measured, &mut notes),
         PaperTable::LecocqTable1 => lecocq1(&measured, &mut notes),
         PaperTable::LecocqTable2 => lecocq2(&measured, &mut notes),
+        PaperTable::PanTable1 => pan1(&measured, &mut notes),
     };
     let title = match paper {
         PaperTable::AilaLaineTable1 => "Aila & Laine 2004, Table 1: alias-free shadow maps",
         PaperTable::LecocqTable1 => "Lecocq et al. 2014, Table 1: SM and SPSM times (ms)",
         PaperTable::LecocqTable2 => "Lecocq et al. 2014, Table 2: SPSM overhead against map size",
+        PaperTable::PanTable1 => "Pan et al. 2009, Table 1: statistics of the test scenes",
     };
     Table {
         paper,
@@ -391,6 +407,68 @@ fn lecocq2(measured: &[SceneRuns], notes: &mut Vec<String>) -> (Vec<String>, Vec
     (header, rows)
 }
 
+/// The sample rate Pan et al.'s Table 1 runs `scene` at: the paper's for the kinds of scene it
+/// lists, 32 elsewhere.
+fn pan_rate(scene: &str) -> u32 {
+    PAN_TABLE1.iter().find(|(n, ..)| *n == scene).map_or(32, |r| r.1)
+}
+
+fn pan1(measured: &[SceneRuns], notes: &mut Vec<String>) -> (Vec<String>, Vec<Vec<String>>) {
+    use methods::pan09::TABLE1;
+    notes.push(
+        "pan09 in table mode with a 512x512 map, at the paper's rate for the scenes it lists \
+         (our cage, plant and bunny-plane beside its Cage, Plant and Bunny) and 32 elsewhere. \
+         The three times group our stages as methods::pan09::TABLE1 does (each the sum of its \
+         stages' medians); the camera G-buffer and the per-scene edge adjacency are not in them."
+            .into(),
+    );
+    let mut header = ["scene (paper's)", "triangles", "silhouette texels", "silhouette pixels"]
+        .map(String::from)
+        .to_vec();
+    header.push("visibility evaluations".into());
+    header.push("sample rate".into());
+    header.extend(TABLE1.iter().map(|(name, _)| format!("{name} (ms)")));
+    header.push("total (ms)".into());
+    let rows = measured
+        .iter()
+        .map(|s| {
+            let paper = PAN_TABLE1.iter().find(|(n, ..)| *n == s.name).and_then(|r| r.2);
+            let beside = |ours: String, k: usize| match paper {
+                Some(p) => format!("{ours} / {}", p[k]),
+                None => ours,
+            };
+            let t = s.runs.first().and_then(Option::as_ref);
+            let c = |name| t.and_then(|t| counter(t, name)).map_or("–".into(), |v| v.to_string());
+            let groups: Vec<Option<f64>> = TABLE1
+                .iter()
+                .map(|(_, names)| {
+                    t.map(|t| names.iter().filter_map(|n| stage_ms(&t.stages, n)).sum::<f64>())
+                })
+                .collect();
+            let total = groups.iter().copied().sum::<Option<f64>>();
+            let paper_total =
+                paper.map(|p| p[6..9].iter().filter_map(|v| v.parse::<f64>().ok()).sum::<f64>());
+            let mut cells = vec![
+                format!("{} ({})", s.name, paper.map_or("–", |p| p[0])),
+                beside(s.triangles.to_string(), 1),
+                beside(c("silhouette_texels"), 2),
+                beside(c("silhouette_pixels"), 3),
+                beside(c("visibility_evaluations"), 4),
+                beside(pan_rate(&s.name).to_string(), 5),
+            ];
+            for (k, g) in groups.iter().enumerate() {
+                cells.push(beside(ms(*g), 6 + k));
+            }
+            cells.push(match paper_total {
+                Some(p) => format!("{} / {p:.1}", ms(total)),
+                None => ms(total),
+            });
+            cells
+        })
+        .collect();
+    (header, rows)
+}
+
 /// The table as Markdown, with its title, the paper's hardware and the notes.
 pub fn markdown(t: &Table) -> String {
     let mut s = format!("### {}\n\nPaper's figures measured on: {}.", t.title, t.paper_hardware);
@@ -455,13 +533,23 @@ mod tests {
 
     #[test]
     fn every_table_has_its_scenes_and_runs() {
-        for p in [PaperTable::AilaLaineTable1, PaperTable::LecocqTable1, PaperTable::LecocqTable2] {
+        for p in [
+            PaperTable::AilaLaineTable1,
+            PaperTable::PanTable1,
+            PaperTable::LecocqTable1,
+            PaperTable::LecocqTable2,
+        ] {
             let spec = TableSpec { paper: p, scenes: vec![], width: 0, height: 0 };
-            assert_eq!(table_run_count(&spec) as usize, p.default_scenes().len() * p.runs().len());
+            let runs: usize = p.default_scenes().iter().map(|s| p.runs(s).len()).sum();
+            assert_eq!(table_run_count(&spec) as usize, runs);
             assert!(!p.hardware().is_empty());
         }
+        // Pan et al.'s rates: 128 for the cage, 32 for the plant and elsewhere.
+        assert_eq!(PaperTable::PanTable1.runs("cage")[0].1.rate, Some(128));
+        assert_eq!(PaperTable::PanTable1.runs("plant")[0].1.rate, Some(32));
+        assert_eq!(PaperTable::PanTable1.runs("city")[0].1.rate, Some(32));
         // Lecocq's Table 2 alternates sm and spsm per map size, as its rows read them.
-        let runs = PaperTable::LecocqTable2.runs();
+        let runs = PaperTable::LecocqTable2.runs("bunny-plane");
         assert_eq!(runs.len(), 2 * LECOCQ2.len());
         for (k, (res, ..)) in LECOCQ2.iter().enumerate() {
             assert_eq!((runs[2 * k].0, runs[2 * k].1.map_res), ("sm", Some(*res)));
