@@ -66,6 +66,21 @@ use std::str::FromStr;
 /// rates 256, 512 and 1024.
 pub const RATES: &[u32] = &[1, 4, 8, 16, 32, 64, 128, 256, 512, 1024];
 
+/// Highest sample rate of the techniques (DESIGN.md: masks of at most 128 bits); the higher
+/// [`RATES`] are the references'.
+pub const MAX_METHOD_RATE: u32 = 128;
+
+/// The error for a `rate` that is not one of [`RATES`] up to `max`, listing those.
+fn unsupported_rate(rate: u32, max: u32) -> MethodError {
+    MethodError::InvalidOption {
+        option: "--rate",
+        message: format!(
+            "unsupported sample rate {rate}; available: {}",
+            RATES.iter().filter(|&&r| r <= max).map(u32::to_string).collect::<Vec<_>>().join(", ")
+        ),
+    }
+}
+
 /// The shape of a sample pattern (`--pattern`).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -171,17 +186,21 @@ fn rotated_rows(n: u32) -> Vec<u32> {
 }
 
 impl SamplePattern {
+    /// The pattern of `rate` samples for a technique: as [`SamplePattern::new`], with `rate` at
+    /// most [`MAX_METHOD_RATE`] (otherwise `MethodError::InvalidOption` naming `--rate` and
+    /// listing the rates a technique takes).
+    pub fn for_method(rate: u32, kind: PatternKind) -> Result<Self, MethodError> {
+        if rate > MAX_METHOD_RATE {
+            return Err(unsupported_rate(rate, MAX_METHOD_RATE));
+        }
+        Self::new(rate, kind)
+    }
+
     /// The pattern of `rate` samples of the given kind; `rate` must be one of [`RATES`]
     /// (otherwise `MethodError::InvalidOption` naming `--rate`).
     pub fn new(rate: u32, kind: PatternKind) -> Result<Self, MethodError> {
         let Some((nx, ny)) = grid_dims(rate) else {
-            return Err(MethodError::InvalidOption {
-                option: "--rate",
-                message: format!(
-                    "unsupported sample rate {rate}; available: {}",
-                    RATES.iter().map(u32::to_string).collect::<Vec<_>>().join(", ")
-                ),
-            });
+            return Err(unsupported_rate(rate, u32::MAX));
         };
         let offsets: Vec<DVec2> = match kind {
             PatternKind::Grid => {
@@ -391,6 +410,20 @@ mod tests {
                     }
                     other => panic!("rate {rate}: {other:?}"),
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn methods_take_rates_up_to_128() {
+        assert!(SamplePattern::for_method(MAX_METHOD_RATE, PatternKind::Grid).is_ok());
+        for rate in [256, 1024] {
+            match SamplePattern::for_method(rate, PatternKind::Rotated) {
+                Err(MethodError::InvalidOption { option, message }) => {
+                    assert_eq!(option, "--rate");
+                    assert!(message.ends_with("available: 1, 4, 8, 16, 32, 64, 128"), "{message}");
+                }
+                other => panic!("rate {rate}: {other:?}"),
             }
         }
     }

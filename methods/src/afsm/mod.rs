@@ -88,7 +88,7 @@ pub mod samples;
 use crate::{
     frame::Frame,
     method::{MethodError, ShadowMethod, Visibility},
-    pattern::{PatternKind, SamplePattern, RATES},
+    pattern::{PatternKind, SamplePattern},
     raster::rasterize_nearest_at,
 };
 use blockers::{rasterize_blockers, Culling, Shade};
@@ -135,9 +135,6 @@ pub const LIGHT_IMAGE_RES: u32 = 1024;
 /// Default sub-samples per pixel of `afsm-ss`.
 pub const DEFAULT_SS_RATE: u32 = 32;
 
-/// Highest sub-sample rate (the methods' rates of the shared pattern).
-pub const MAX_RATE: u32 = 128;
-
 /// Name of the stage that renders the camera G-buffer at sub-sample `s`.
 pub fn gbuffer_stage(s: usize) -> String {
     format!("{STAGE_GBUFFER_SUBSAMPLE} (sub-sample {s})")
@@ -150,7 +147,7 @@ pub struct AfsmOptions {
     /// (`--leaf-size`, at least 2). Default 64, the paper's.
     pub leaf_size: u32,
     /// Sub-samples per pixel (`--rate`): 1 for `afsm`; for `afsm-ss` one of the pattern's
-    /// rates up to [`MAX_RATE`], default [`DEFAULT_SS_RATE`].
+    /// rates up to [`MAX_METHOD_RATE`](crate::pattern::MAX_METHOD_RATE), default [`DEFAULT_SS_RATE`].
     pub rate: u32,
     /// Sub-sample pattern (`--pattern`). Default grid.
     pub pattern: PatternKind,
@@ -187,22 +184,7 @@ impl AfsmOptions {
                 message: format!("must be in 2..=1048576, got {}", self.leaf_size),
             });
         }
-        if self.rate > MAX_RATE {
-            return Err(MethodError::InvalidOption {
-                option: "--rate",
-                message: format!(
-                    "unsupported sample rate {}; available: {}",
-                    self.rate,
-                    RATES
-                        .iter()
-                        .filter(|&&r| r <= MAX_RATE)
-                        .map(u32::to_string)
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
-            });
-        }
-        SamplePattern::new(self.rate, self.pattern).map(|_| ())
+        SamplePattern::for_method(self.rate, self.pattern).map(|_| ())
     }
 }
 

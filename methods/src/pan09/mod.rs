@@ -140,7 +140,7 @@ use crate::{
     depth_test::{DepthTester, MapOptions},
     frame::Frame,
     method::{MethodError, ShadowMethod, Visibility},
-    pattern::{PatternKind, SamplePattern, RATES},
+    pattern::{PatternKind, SamplePattern},
 };
 use coverage::{Coverage, ExactCoverage, TableCoverage};
 use facets::{Facets, PixelClass};
@@ -226,8 +226,6 @@ pub fn table1_times(stages: &Stages) -> [f64; 3] {
 pub const DEFAULT_RATE: u32 = 32;
 /// Default map resolution (the paper's, Table 1).
 pub const DEFAULT_MAP_RES: u32 = 512;
-/// Highest sub-sample rate (128-bit masks).
-pub const MAX_RATE: u32 = 128;
 
 /// How half-planes become sub-sample masks (`--visibility`).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -300,22 +298,7 @@ impl Pan09Options {
     /// Checks the options; errors name the command-line flag.
     pub fn validate(&self) -> Result<(), MethodError> {
         self.map.validate()?;
-        if self.rate > MAX_RATE {
-            return Err(MethodError::InvalidOption {
-                option: "--rate",
-                message: format!(
-                    "unsupported sample rate {}; available: {}",
-                    self.rate,
-                    RATES
-                        .iter()
-                        .filter(|&&r| r <= MAX_RATE)
-                        .map(u32::to_string)
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
-            });
-        }
-        SamplePattern::new(self.rate, self.pattern).map(|_| ())
+        SamplePattern::for_method(self.rate, self.pattern).map(|_| ())
     }
 }
 

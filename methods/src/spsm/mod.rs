@@ -125,9 +125,6 @@ pub const STAGE_RECOVERY: &str = "silhouette recovery";
 /// Name of stage 6.
 pub const STAGE_ANTIALIASING: &str = "antialiasing";
 
-/// Largest sub-sample rate of the antialiasing stage.
-pub const MAX_RATE: u32 = 128;
-
 /// Options of the sub-pixel shadow map.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SpsmOptions {
@@ -173,16 +170,7 @@ impl SpsmOptions {
                 ),
             });
         }
-        if self.rate > MAX_RATE {
-            return Err(MethodError::InvalidOption {
-                option: "--rate",
-                message: format!(
-                    "spsm antialiases with at most {MAX_RATE} samples, got {}",
-                    self.rate
-                ),
-            });
-        }
-        SamplePattern::new(self.rate, self.pattern)
+        SamplePattern::for_method(self.rate, self.pattern)
     }
 }
 
