@@ -3,7 +3,8 @@
 //! [`Counters`] is a plain struct of `u64`: methods keep one copy per thread (or per rayon
 //! task) and sum them with [`Counters::merge`]; no string map is touched in a hot loop. A
 //! counter a method does not use stays 0. [`Stages`] times each pipeline stage under its own
-//! name and lists the stages a scene did not call for as skipped.
+//! name and lists the stages a scene did not call for as skipped. [`cpu_model`] names the
+//! CPU that times were taken on.
 
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
@@ -179,6 +180,19 @@ pub struct RunRecord {
     pub notes: Vec<String>,
     /// Sum of the stage times, milliseconds.
     pub total_ms: f64,
+}
+
+/// The CPU's model name, from `/proc/cpuinfo` where there is one, for labelling times.
+pub fn cpu_model() -> String {
+    std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|s| s.trim().to_owned())
+        })
+        .unwrap_or_else(|| "unknown CPU".to_owned())
 }
 
 #[cfg(test)]

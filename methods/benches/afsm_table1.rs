@@ -8,6 +8,8 @@
 //!
 //! `cargo bench -p shadowbench-methods --bench afsm_table1` prints the Markdown table.
 
+mod common;
+
 use instrumentation::{Counters, Recorder};
 use methods::{
     afsm::{
@@ -30,18 +32,6 @@ struct Measured {
     counters: Counters,
     /// Median ms of transformation, BSP construction, rasterization, and of their sum.
     ms: [f64; 4],
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n == 0 {
-        f64::NAN
-    } else if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
 }
 
 fn measure(name: &str, runs: usize) -> Result<Measured, String> {
@@ -68,7 +58,7 @@ fn measure(name: &str, runs: usize) -> Result<Measured, String> {
         triangles: scene.triangle_count(),
         samples: samples.count(),
         counters,
-        ms: times.map(median),
+        ms: times.map(common::median),
     })
 }
 
@@ -91,24 +81,8 @@ fn short(n: u64) -> String {
     }
 }
 
-fn cpu_model() -> String {
-    std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|m| m.trim().to_owned())
-        })
-        .unwrap_or_else(|| "unknown CPU".into())
-}
-
 fn main() {
-    let runs = std::env::var("SHADOWBENCH_BENCH_RUNS")
-        .ok()
-        .and_then(|v| v.parse::<usize>().ok())
-        .filter(|&r| r > 0)
-        .unwrap_or(5);
+    let runs = common::runs(5);
     let mut measured = Vec::new();
     for name in SCENES {
         match measure(name, runs) {
@@ -122,7 +96,7 @@ fn main() {
     println!(
         "afsm, {WIDTH}x{HEIGHT}, {} on {} threads; median of {runs} runs after one warm-up \
          (paper: 1.6 GHz Mobile Pentium 4). Times in ms.\n",
-        cpu_model(),
+        instrumentation::cpu_model(),
         rayon::current_num_threads()
     );
     let mut header = String::from("| |");

@@ -17,6 +17,8 @@
 //!
 //! `cargo bench -p shadowbench-methods --bench pan09_fig10` prints the Markdown table.
 
+mod common;
+
 use instrumentation::Recorder;
 use methods::{
     afsm::{AfsmOptions, AliasFreeShadowMap},
@@ -28,18 +30,6 @@ const WIDTH: u32 = 800;
 const HEIGHT: u32 = 600;
 const RATES: [u32; 7] = [1, 4, 8, 16, 32, 64, 128];
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n == 0 {
-        f64::NAN
-    } else if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
 /// Median total stage time of `runs` runs after one warm-up.
 fn time(method: &dyn ShadowMethod, frame: &Frame<'_>, runs: usize) -> Result<f64, String> {
     let mut ms = Vec::new();
@@ -50,27 +40,7 @@ fn time(method: &dyn ShadowMethod, frame: &Frame<'_>, runs: usize) -> Result<f64
             ms.push(rec.stages.total_ms());
         }
     }
-    Ok(median(ms))
-}
-
-fn runs(default: usize) -> usize {
-    std::env::var("SHADOWBENCH_BENCH_RUNS")
-        .ok()
-        .and_then(|v| v.parse::<usize>().ok())
-        .filter(|&r| r > 0)
-        .unwrap_or(default)
-}
-
-fn cpu_model() -> String {
-    std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|m| m.trim().to_owned())
-        })
-        .unwrap_or_else(|| "unknown CPU".into())
+    Ok(common::median(ms))
 }
 
 fn main() -> Result<(), String> {
@@ -86,10 +56,10 @@ fn main() -> Result<(), String> {
     for rate in RATES {
         let pan = Pan09::new(Pan09Options { rate, ..Pan09Options::default() })
             .map_err(|e| e.to_string())?;
-        let ours = time(&pan, &frame, runs(5))?;
+        let ours = time(&pan, &frame, common::runs(5))?;
         let ss =
             AliasFreeShadowMap::supersampled(AfsmOptions { rate, ..AfsmOptions::supersampled() });
-        let theirs = time(&ss, &frame, runs(3))?;
+        let theirs = time(&ss, &frame, common::runs(3))?;
         eprintln!("rate {rate}: pan09 {ours:.1} ms, afsm-ss {theirs:.1} ms");
         rows.push((rate, ours, theirs));
     }
@@ -98,7 +68,7 @@ fn main() -> Result<(), String> {
          threads; medians after one warm-up. Paper: pterosaur scene, NVIDIA GTX 280, ours vs \
          GPU alias-free shadow maps [SEA08] + supersampling (no 128x: framebuffer limit).\n",
         scene.name,
-        cpu_model(),
+        instrumentation::cpu_model(),
         rayon::current_num_threads()
     );
     println!("| Sub-samples | pan09 (ms) | afsm-ss (ms) | afsm-ss / pan09 |");

@@ -12,6 +12,8 @@
 //!
 //! `cargo bench -p shadowbench-methods --bench pan09_table1` prints the Markdown table.
 
+mod common;
+
 use instrumentation::{Counters, Recorder};
 use methods::{
     pan09::{table1_times, Pan09, Pan09Options, PAPER_TABLE1, TABLE1},
@@ -28,18 +30,6 @@ struct Measured {
     counters: Counters,
     /// Median ms of the three Table 1 times and of their sum.
     ms: [f64; 4],
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n == 0 {
-        f64::NAN
-    } else if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
 }
 
 fn measure(name: &'static str, rate: u32, runs: usize) -> Result<Option<Measured>, String> {
@@ -73,28 +63,12 @@ fn measure(name: &'static str, rate: u32, runs: usize) -> Result<Option<Measured
         triangles: scene.triangle_count(),
         rate,
         counters,
-        ms: times.map(median),
+        ms: times.map(common::median),
     }))
 }
 
-fn cpu_model() -> String {
-    std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|m| m.trim().to_owned())
-        })
-        .unwrap_or_else(|| "unknown CPU".into())
-}
-
 fn main() {
-    let runs = std::env::var("SHADOWBENCH_BENCH_RUNS")
-        .ok()
-        .and_then(|v| v.parse::<usize>().ok())
-        .filter(|&r| r > 0)
-        .unwrap_or(5);
+    let runs = common::runs(5);
     let mut rows = Vec::new();
     for (name, rate, paper) in PAPER_TABLE1 {
         match measure(name, rate, runs) {
@@ -110,7 +84,7 @@ fn main() {
         "pan09 (table mode), {WIDTH}x{HEIGHT}, map 512x512, {} on {} threads; median of {runs} \
          runs after one warm-up. Paper: NVIDIA GTX 280 with a 3.0 GHz CPU (CUDA), its scenes \
          (Cage, Plant, Bunny) beside ours of the same kind. Times in ms.\n",
-        cpu_model(),
+        instrumentation::cpu_model(),
         rayon::current_num_threads()
     );
     println!(

@@ -4,9 +4,12 @@
 //! `cargo bench -p shadowbench-methods --bench spsm_table2 [-- SCENE [RUNS]]`; the scene
 //! defaults to `bunny-plane` (75k triangles; the paper used YeahRight, 155k), or `spheres`
 //! when the model is missing. Each configuration runs once to warm up, then `RUNS` times
-//! (default 5); the median of the method's own time (the sum of its stages: for `sm` the light
-//! depth map and the depth test, for `spsm` all of its stages) is reported. The camera
+//! (default `SHADOWBENCH_BENCH_RUNS`, else 5); the median of the method's own time (the sum
+//! of its stages: for `sm` the light depth map and the depth test, for `spsm` all of its
+//! stages) is reported. The camera
 //! G-buffer, shared by both, is timed apart: the paper's times include scene rendering.
+
+mod common;
 
 use instrumentation::Recorder;
 use methods::{method, Frame, MethodOptions};
@@ -19,33 +22,12 @@ const PAPER: [(u32, f64, f64, f64); 4] = [
     (4096, 14.2, 18.1, 27.0),
 ];
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
-fn cpu_model() -> String {
-    std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|m| m.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown CPU".into())
-}
-
 fn main() {
     // `cargo bench` passes `--bench`; everything else is ours.
     let args: Vec<String> = std::env::args().skip(1).filter(|a| !a.starts_with("--")).collect();
     let requested = args.first().cloned();
-    let runs: usize = args.get(1).and_then(|r| r.parse().ok()).unwrap_or(5).max(1);
+    let runs: usize =
+        args.get(1).and_then(|r| r.parse().ok()).unwrap_or_else(|| common::runs(5)).max(1);
     let scene = match requested.as_deref().map_or_else(|| scenes::load("bunny-plane"), scenes::load)
     {
         Ok(s) => s,
@@ -67,7 +49,7 @@ fn main() {
         "Table 2: {} ({} triangles) at {w}x{h}; {}, {} threads; warm-up 1 run, median of {runs}",
         scene.name,
         scene.triangle_count(),
-        cpu_model(),
+        instrumentation::cpu_model(),
         rayon::current_num_threads()
     );
     println!("camera G-buffer (shared, not included below): {:.1} ms", gbuffer.stages.total_ms());
@@ -98,8 +80,8 @@ fn main() {
                 }
             }
             let stages: Vec<String> =
-                stages.into_iter().map(|(n, v)| format!("{n} {:.1}", median(v))).collect();
-            (median(totals), stages.join(", "), uncertain)
+                stages.into_iter().map(|(n, v)| format!("{n} {:.1}", common::median(v))).collect();
+            (common::median(totals), stages.join(", "), uncertain)
         };
         let (sm, _, _) = time("sm");
         let (spsm, stages, uncertain) = time("spsm");

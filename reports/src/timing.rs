@@ -111,17 +111,8 @@ pub struct Machine {
 impl Machine {
     /// Reads the current machine.
     pub fn current() -> Self {
-        let cpu = std::fs::read_to_string("/proc/cpuinfo")
-            .ok()
-            .and_then(|t| {
-                t.lines()
-                    .find(|l| l.starts_with("model name"))
-                    .and_then(|l| l.split(':').nth(1))
-                    .map(|s| s.trim().to_owned())
-            })
-            .unwrap_or_else(|| "unknown CPU".to_owned());
         Self {
-            cpu,
+            cpu: instrumentation::cpu_model(),
             cores: std::thread::available_parallelism().map_or(1, |n| n.get()),
             threads: rayon::current_num_threads(),
             gpu: None,
