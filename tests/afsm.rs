@@ -1,7 +1,10 @@
 //! Alias-free shadow maps (`afsm`, `afsm-ss`) against the ray-traced reference at the same
 //! sample points, semi-transparent casters, the two culling tests, determinism and options.
 
+mod common;
+
 use analysis::{raytrace::RayTrace, raytrace::SHADOW_RAY_OFFSET, Reference, ReferenceImage};
+use common::load_builtin;
 use glam::{DVec2, DVec3};
 use instrumentation::Recorder;
 use methods::{
@@ -14,19 +17,7 @@ use methods::{
     Frame,
 };
 use robust::{orient2d, Coord};
-use scenes::{registry::BUILTINS, Scene, SceneError};
-
-/// The built-in scene `name`, or `None` (with the reason printed) when its model is missing.
-fn load(name: &str) -> Option<Scene> {
-    match scenes::load(name) {
-        Ok(scene) => Some(scene),
-        Err(e @ SceneError::ModelMissing { .. }) => {
-            eprintln!("skipping {name}: {e}");
-            None
-        }
-        Err(e) => panic!("{name}: {e}"),
-    }
-}
+use scenes::registry::BUILTINS;
 
 fn run(m: &AliasFreeShadowMap, frame: &Frame<'_>) -> (Visibility, Recorder) {
     let mut rec = Recorder::default();
@@ -90,7 +81,7 @@ fn afsm_equals_raytrace_at_pixel_centres_on_every_opaque_builtin() {
     let m = AliasFreeShadowMap::pixel_centres(AfsmOptions::default());
     let mut compared = 0;
     for (name, _) in BUILTINS {
-        let Some(scene) = load(name) else { continue };
+        let Some(scene) = load_builtin(name) else { continue };
         if scene.effects().transparency {
             eprintln!("{name}: has transparency, compared by the transmittance test");
             continue;

@@ -6,6 +6,7 @@
 mod common;
 
 use analysis::raytrace::{RayTrace, SampleImage};
+use common::load_builtin;
 use glam::DVec3;
 use instrumentation::Recorder;
 use methods::{
@@ -17,20 +18,8 @@ use methods::{
 use scenes::{
     generators::PlaneParams,
     scene_file::{ObjectDesc, SceneDesc, Shape, Transform},
-    Camera, Light, Material, Scene, SceneError,
+    Camera, Light, Material, Scene,
 };
-
-/// The built-in scene `name`, or `None` (with the reason printed) when its model is missing.
-fn load(name: &str) -> Option<Scene> {
-    match scenes::load(name) {
-        Ok(scene) => Some(scene),
-        Err(e @ SceneError::ModelMissing { .. }) => {
-            eprintln!("skipping {name}: {e}");
-            None
-        }
-        Err(e) => panic!("{name}: {e}"),
-    }
-}
 
 fn pan09(rate: u32, pattern: PatternKind, visibility: VisibilityMode) -> Pan09 {
     Pan09::new(Pan09Options { rate, pattern, visibility, ..Pan09Options::default() })
@@ -91,7 +80,7 @@ fn compare_on_plane(frame: &Frame<'_>, masks: &SubsampleMasks, truth: &SampleIma
 #[test]
 fn exact_mode_equals_raytrace_sub_sample_for_sub_sample_on_planar_receivers() {
     for name in ["plane-square", "cage", "random-10k", "plant", "bunny-plane", "spheres"] {
-        let Some(scene) = load(name) else { continue };
+        let Some(scene) = load_builtin(name) else { continue };
         let frame = Frame::new(&scene, 160, 120, &mut Recorder::default());
         for (rate, kind) in
             [(32, PatternKind::Grid), (32, PatternKind::Rotated), (128, PatternKind::Grid)]
@@ -130,7 +119,7 @@ fn run_named(name: &str, frame: &Frame<'_>, options: MethodOptions) -> Visibilit
 #[test]
 fn non_silhouette_pixels_are_sm_and_silhouette_pixels_at_rate_1_are_afsm() {
     for name in ["plane-square", "cage", "spheres", "spot-spheres", "grazing", "bunny-plane"] {
-        let Some(scene) = load(name) else { continue };
+        let Some(scene) = load_builtin(name) else { continue };
         let frame = Frame::new(&scene, 160, 120, &mut Recorder::default());
         let sm =
             run_named("sm", &frame, MethodOptions { map_res: Some(512), ..Default::default() });
@@ -163,7 +152,7 @@ fn non_silhouette_pixels_are_sm_and_silhouette_pixels_at_rate_1_are_afsm() {
 #[test]
 fn table_mode_flips_only_sub_samples_near_an_edge() {
     for name in ["plane-square", "cage", "random-10k", "plant"] {
-        let Some(scene) = load(name) else { continue };
+        let Some(scene) = load_builtin(name) else { continue };
         let frame = Frame::new(&scene, 160, 120, &mut Recorder::default());
         for rate in [32, 128] {
             let (exact_v, exact, _) =
@@ -361,7 +350,7 @@ fn exact_hard_cases_edge_on_facets_intersecting_casters_grazing_light() {
 #[test]
 fn stages_counters_and_the_skipped_validity_mask() {
     use methods::pan09::*;
-    let planar = load("plane-square").expect("built-in");
+    let planar = load_builtin("plane-square").expect("built-in");
     let frame = Frame::new(&planar, 96, 72, &mut Recorder::default());
     let (v, masks, rec) = run_masks(&Pan09::new(Pan09Options::default()).expect("valid"), &frame);
     let names: Vec<&str> = rec.stages.stages.iter().map(|s| s.name.as_str()).collect();
@@ -400,7 +389,7 @@ fn stages_counters_and_the_skipped_validity_mask() {
     assert!(c.boundary_pixels > 10);
     assert!(silhouette.iter().all(|&k| masks.valid[k] == u128::from(u32::MAX)));
 
-    let curved = load("cage").expect("built-in");
+    let curved = load_builtin("cage").expect("built-in");
     let frame = Frame::new(&curved, 96, 72, &mut Recorder::default());
     let (_, _, rec) = run_masks(&Pan09::new(Pan09Options::default()).expect("valid"), &frame);
     assert!(rec.stages.stages.iter().any(|s| s.name == STAGE_VALIDITY));
@@ -410,7 +399,7 @@ fn stages_counters_and_the_skipped_validity_mask() {
 
 #[test]
 fn validity_mask_on_the_bumpy_receiver_fig_9() {
-    let Some(scene) = load("bumpy") else { return };
+    let Some(scene) = load_builtin("bumpy") else { return };
     let frame = Frame::new(&scene, 200, 150, &mut Recorder::default());
     let (v, masks, rec) = run_masks(&pan09(32, PatternKind::Grid, VisibilityMode::Table), &frame);
     let c = rec.counters;
@@ -432,7 +421,7 @@ fn validity_mask_on_the_bumpy_receiver_fig_9() {
 #[test]
 fn results_and_counters_do_not_depend_on_the_thread_count() {
     for name in ["cage", "spot-spheres"] {
-        let scene = load(name).expect("built-in");
+        let scene = load_builtin(name).expect("built-in");
         let frame = Frame::new(&scene, 96, 72, &mut Recorder::default());
         let m = pan09(32, PatternKind::Rotated, VisibilityMode::Table);
         let (many, masks_many, rec_many) = run_masks(&m, &frame);

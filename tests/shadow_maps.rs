@@ -1,14 +1,12 @@
 //! Every shadow-map method (`sm` and the PCF variants) end to end: no acne on lit planes at the
 //! documented valid biases, finite results in [0, 1] on hard cases; `sm`'s binary output.
 
+mod common;
+
 use glam::DVec3;
 use instrumentation::Recorder;
 use methods::{method, Frame, MethodOptions};
-use scenes::{
-    generators::PlaneParams,
-    scene_file::{ObjectDesc, SceneDesc, Shape},
-    Camera, Light, Material, Scene,
-};
+use scenes::{Light, Scene};
 
 /// Every method that looks up a light depth map.
 const MAP_METHODS: &[&str] = &[
@@ -43,31 +41,6 @@ fn run(
     (frame, v, rec)
 }
 
-fn lone_plane(light: Light) -> Scene {
-    SceneDesc {
-        name: Some("lone-plane".into()),
-        resolution: [96, 72],
-        camera: Camera::Perspective {
-            eye: DVec3::new(0.0, 5.0, 9.0),
-            target: DVec3::ZERO,
-            up: DVec3::Y,
-            fov_y_deg: 50.0,
-            near: 0.01,
-        },
-        light,
-        effects: Default::default(),
-        objects: vec![ObjectDesc {
-            name: None,
-            shape: Shape::Plane(PlaneParams { size: 12.0, subdivisions: 7 }),
-            transform: Default::default(),
-            material: Material::default(),
-            casts_shadows: true,
-        }],
-    }
-    .resolve("lone-plane", std::path::Path::new("test"), std::path::Path::new("."))
-    .expect("valid scene")
-}
-
 #[test]
 fn a_lit_plane_stays_fully_lit_at_every_valid_bias() {
     let lights = [
@@ -76,7 +49,7 @@ fn a_lit_plane_stays_fully_lit_at_every_valid_bias() {
         Light::Spot { position: DVec3::new(2.0, 6.0, 1.0), target: DVec3::ZERO, fov_deg: 120.0 },
     ];
     for light in lights {
-        let scene = lone_plane(light.clone());
+        let scene = common::lone_plane(light.clone());
         let frame = Frame::new(&scene, 96, 72, &mut Recorder::default());
         for &name in MAP_METHODS {
             // Depth precisions: only the depth-as-colour maps quantize.
@@ -115,7 +88,7 @@ fn a_lit_plane_stays_fully_lit_at_every_valid_bias() {
 #[test]
 fn without_slope_bias_a_tilted_light_shows_acne() {
     // The bias bound is not vacuous: below the valid range, the same plane self-shadows.
-    let scene = lone_plane(Light::Directional { direction: DVec3::new(1.0, -0.5, 0.3) });
+    let scene = common::lone_plane(Light::Directional { direction: DVec3::new(1.0, -0.5, 0.3) });
     let frame = Frame::new(&scene, 96, 72, &mut Recorder::default());
     for &name in MAP_METHODS {
         let options = MethodOptions {

@@ -14,11 +14,7 @@ use methods::{
     spsm::{self, class_image, quantize::DerivativeCode, PixelClass, Spsm, SpsmOptions},
     Frame, MethodError, MethodOptions, Visibility,
 };
-use scenes::{
-    generators::PlaneParams,
-    scene_file::{ObjectDesc, SceneDesc, Shape},
-    Camera, Light, Material, Scene,
-};
+use scenes::Light;
 
 fn run(name: &str, frame: &Frame<'_>, options: MethodOptions) -> (Visibility, Recorder) {
     let mut rec = Recorder::default();
@@ -132,31 +128,6 @@ fn quantization_decode_tables_are_monotone_and_odd() {
     }
 }
 
-fn lone_plane(light: Light) -> Scene {
-    SceneDesc {
-        name: Some("lone-plane".into()),
-        resolution: [96, 72],
-        camera: Camera::Perspective {
-            eye: DVec3::new(0.0, 5.0, 9.0),
-            target: DVec3::ZERO,
-            up: DVec3::Y,
-            fov_y_deg: 50.0,
-            near: 0.01,
-        },
-        light,
-        effects: Default::default(),
-        objects: vec![ObjectDesc {
-            name: None,
-            shape: Shape::Plane(PlaneParams { size: 12.0, subdivisions: 7 }),
-            transform: Default::default(),
-            material: Material::default(),
-            casts_shadows: true,
-        }],
-    }
-    .resolve("lone-plane", std::path::Path::new("test"), std::path::Path::new("."))
-    .expect("valid scene")
-}
-
 #[test]
 fn exact_a_lit_plane_stays_fully_lit_without_slope_bias() {
     // Equation 1 evaluates the stored plane at the point: no slope-scaled bias is needed,
@@ -167,7 +138,7 @@ fn exact_a_lit_plane_stays_fully_lit_without_slope_bias() {
         Light::Spot { position: DVec3::new(2.0, 6.0, 1.0), target: DVec3::ZERO, fov_deg: 120.0 },
     ];
     for light in lights {
-        let scene = lone_plane(light.clone());
+        let scene = common::lone_plane(light.clone());
         let frame = Frame::new(&scene, 96, 72, &mut Recorder::default());
         for name in ["spsm", "spsm-f32"] {
             for map_res in [64, 256, 1024] {
