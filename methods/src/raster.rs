@@ -288,12 +288,13 @@ pub fn rasterize_nearest_at(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use scenes::projection::{look_basis, ProjectionKind};
 
     /// An orthographic projector looking down -z whose image x,y equal world x and -y + h,
-    /// so world coordinates are pixel coordinates.
+    /// so world coordinates are pixel coordinates; depth is `10 - z`. The light or camera of
+    /// the kernels' unit tests.
     pub(crate) fn pixel_projector(w: u32, h: u32) -> Projector {
         let (right, up, forward) = look_basis(-DVec3::Z, DVec3::Y);
         Projector {

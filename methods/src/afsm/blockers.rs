@@ -534,25 +534,9 @@ pub fn rasterize_blockers<S: Shade>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::raster::NO_TRIANGLE;
+    use crate::raster::{tests::pixel_projector, NO_TRIANGLE};
     use proptest::prelude::*;
     use scenes::projection::look_basis;
-
-    /// An orthographic light looking down -z whose image x, y are world x and `h - y`, with
-    /// light depth `10 - z`.
-    fn ortho(w: f64, h: f64) -> Projector {
-        let (right, up, forward) = look_basis(-DVec3::Z, DVec3::Y);
-        Projector {
-            origin: DVec3::new(w / 2.0, h / 2.0, 10.0),
-            right,
-            up,
-            forward,
-            kind: ProjectionKind::Orthographic { half_width: w / 2.0, half_height: h / 2.0 },
-            near: f64::NEG_INFINITY,
-            width: w,
-            height: h,
-        }
-    }
 
     /// A spot light above the square `[0, 16]^2` at height 12, looking straight down.
     fn spot() -> Projector {
@@ -627,7 +611,7 @@ mod tests {
             perspective in any::<bool>(),
         ) {
             let g = geometry(&tris);
-            let light = if perspective { spot() } else { ortho(16.0, 16.0) };
+            let light = if perspective { spot() } else { pixel_projector(16, 16) };
             let samples: Vec<Sample> = raw
                 .iter()
                 .enumerate()
@@ -664,7 +648,7 @@ mod tests {
             perspective in any::<bool>(),
         ) {
             let g = geometry(&[t]);
-            let light = if perspective { spot() } else { ortho(16.0, 16.0) };
+            let light = if perspective { spot() } else { pixel_projector(16, 16) };
             let Some(b) = Blocker::new(&g, 0, &light) else { return Ok(()) };
             let Some((p, _)) = light.project(DVec3::new(f64::from(p.0) / 4.0, 16.0 - f64::from(p.1) / 4.0, 0.0)) else {
                 return Ok(())
@@ -686,7 +670,7 @@ mod tests {
             perspective in any::<bool>(),
         ) {
             let g = geometry(&[t]);
-            let light = if perspective { spot() } else { ortho(16.0, 16.0) };
+            let light = if perspective { spot() } else { pixel_projector(16, 16) };
             let Some(b) = Blocker::new(&g, 0, &light) else { return Ok(()) };
             let xy = DVec2::new(q.0, q.1);
             if !b.covers(xy) {
@@ -712,7 +696,7 @@ mod tests {
             [(5.0, 5.0, 5.0), (6.0, 5.0, 5.0), (6.0, 6.0, 5.0)],
         ];
         let g = geometry(&tris);
-        let light = ortho(16.0, 16.0);
+        let light = pixel_projector(16, 16);
         let samples: Vec<Sample> = (0..64 * 64)
             .map(|i| {
                 let (x, y) = ((i % 64) as f64 / 4.0 + 0.125, (i / 64) as f64 / 4.0 + 0.125);

@@ -203,24 +203,7 @@ pub fn silhouette_mask(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use scenes::projection::{look_basis, ProjectionKind};
-
-    /// An orthographic light looking down -z over `[0, res]^2`: image x = world x,
-    /// image y = res - world y, depth = 10 - z.
-    fn light(res: u32) -> scenes::Projector {
-        let h = f64::from(res) / 2.0;
-        let (right, up, forward) = look_basis(-DVec3::Z, DVec3::Y);
-        scenes::Projector {
-            origin: DVec3::new(h, h, 10.0),
-            right,
-            up,
-            forward,
-            kind: ProjectionKind::Orthographic { half_width: h, half_height: h },
-            near: f64::NEG_INFINITY,
-            width: f64::from(res),
-            height: f64::from(res),
-        }
-    }
+    use crate::raster::tests::pixel_projector;
 
     fn marked(mask: &[bool], res: usize) -> Vec<(usize, usize)> {
         (0..mask.len()).filter(|&k| mask[k]).map(|k| (k % res, k / res)).collect()
@@ -232,7 +215,7 @@ mod tests {
         let never = vec![f64::INFINITY; 64];
         // A diagonal through texel corners touches the texels sharing those corners.
         let edge = [DVec3::new(1.0, 7.0, 0.0), DVec3::new(3.0, 5.0, 0.0)]; // image (1,1)-(3,3)
-        let m = silhouette_mask(&[edge], &light(res), res, |k| never[k]);
+        let m = silhouette_mask(&[edge], &pixel_projector(res, res), res, |k| never[k]);
         let mut got = marked(&m, 8);
         got.sort();
         let mut want = vec![(0, 0), (1, 1), (2, 2), (3, 3), (0, 1), (1, 0), (1, 2), (2, 1)];
@@ -241,7 +224,10 @@ mod tests {
         assert_eq!(got, want);
         // A short edge inside one texel marks only it.
         let edge = [DVec3::new(4.2, 3.3, 0.0), DVec3::new(4.7, 3.6, 0.0)];
-        assert_eq!(marked(&silhouette_mask(&[edge], &light(res), res, |k| never[k]), 8), [(4, 4)]);
+        assert_eq!(
+            marked(&silhouette_mask(&[edge], &pixel_projector(res, res), res, |k| never[k]), 8),
+            [(4, 4)]
+        );
     }
 
     #[test]
@@ -252,7 +238,7 @@ mod tests {
         let mut hidden = vec![f64::INFINITY; 64];
         hidden[4 * 8 + 2] = 5.0;
         hidden[4 * 8 + 3] = 8.5;
-        let m = silhouette_mask(&[edge], &light(res), res, |k| hidden[k]);
+        let m = silhouette_mask(&[edge], &pixel_projector(res, res), res, |k| hidden[k]);
         assert!(!m[4 * 8 + 2], "hidden behind a surface 3 units nearer");
         assert!(m[4 * 8 + 3], "a surface behind the edge hides nothing");
         assert_eq!(m.iter().filter(|&&b| b).count(), 7);

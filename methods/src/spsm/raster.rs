@@ -282,27 +282,10 @@ pub fn rasterize_conservative(
 }
 
 #[cfg(test)]
-pub(crate) mod tests {
+mod tests {
     use super::*;
+    use crate::raster::tests::pixel_projector;
     use glam::DVec3;
-    use scenes::projection::{look_basis, ProjectionKind};
-
-    /// An orthographic projector looking down -z whose image x, y are world x and `h - y`:
-    /// world coordinates are texel coordinates; depth is `10 - z`.
-    pub(crate) fn texel_projector(res: u32) -> Projector {
-        let (right, up, forward) = look_basis(-DVec3::Z, DVec3::Y);
-        let r = f64::from(res);
-        Projector {
-            origin: DVec3::new(r / 2.0, r / 2.0, 10.0),
-            right,
-            up,
-            forward,
-            kind: ProjectionKind::Orthographic { half_width: r / 2.0, half_height: r / 2.0 },
-            near: f64::NEG_INFINITY,
-            width: r,
-            height: r,
-        }
-    }
 
     /// Geometry from triangles given in texel coordinates `(x, y, depth)`.
     pub(crate) fn geometry(tris: &[[[f64; 3]; 3]], res: u32) -> Geometry {
@@ -319,7 +302,7 @@ pub(crate) mod tests {
     }
 
     pub(crate) fn space(res: u32) -> LightSpace {
-        LightSpace::new(&texel_projector(res), (0.0, 20.0))
+        LightSpace::new(&pixel_projector(res, res), (0.0, 20.0))
     }
 
     fn raster(tris: &[[[f64; 3]; 3]], res: u32) -> (ConservativeMap, Counters) {
@@ -327,7 +310,7 @@ pub(crate) mod tests {
         let m = rasterize_conservative(
             &geometry(tris, res),
             |_| true,
-            &texel_projector(res),
+            &pixel_projector(res, res),
             &space(res),
             &mut c,
         );
