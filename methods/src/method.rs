@@ -30,6 +30,9 @@ pub enum MethodError {
     /// The method does not apply to this scene (bad input).
     #[error("{0}")]
     NotApplicable(String),
+    /// The GPU path could not run (no adapter, or a device failure).
+    #[error(transparent)]
+    Gpu(#[from] crate::gpu::GpuError),
 }
 
 /// A shadow technique.

@@ -1,0 +1,356 @@
+//! The headless wgpu device every GPU kernel runs on: adapter choice, buffers, compute
+//! dispatch, read-back and stage timing.
+//!
+//! Adapter choice: `SHADOWBENCH_GPU_BACKEND` (`vulkan`, `gl`, `metal`, `dx12`; a comma list
+//! is allowed) restricts the backends; otherwise every backend built in is asked. Among the
+//! adapters that have 64-bit floats in shaders, a real GPU (discrete, then integrated, then
+//! virtual) comes before a software rasterizer such as Mesa's llvmpipe (lavapipe), which is
+//! taken only when there is nothing else. `SHADOWBENCH_GPU_ADAPTER` picks the first adapter
+//! whose name contains the given text instead.
+//!
+//! Stage times: with `TIMESTAMP_QUERY` and `TIMESTAMP_QUERY_INSIDE_ENCODERS` a stage's time is
+//! the difference of two timestamps written around its passes on the GPU; otherwise it is the
+//! wall-clock time from submission to completion. [`GpuContext::timing`] names which one the
+//! run record gets.
+
+use super::GpuError;
+use bytemuck::Pod;
+use instrumentation::Recorder;
+use std::{sync::OnceLock, time::Instant};
+use wgpu::util::DeviceExt;
+
+/// Environment variable restricting the wgpu backends asked for an adapter.
+pub const BACKEND_ENV: &str = "SHADOWBENCH_GPU_BACKEND";
+/// Environment variable choosing an adapter by (part of) its name.
+pub const ADAPTER_ENV: &str = "SHADOWBENCH_GPU_ADAPTER";
+
+/// How stage times are taken on this adapter.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Timing {
+    /// GPU timestamps written before and after each stage's passes.
+    TimestampQueries,
+    /// Wall-clock time from submitting a stage to its completion.
+    SubmitAndWait,
+}
+
+impl Timing {
+    /// The name written into run records.
+    pub fn name(self) -> &'static str {
+        match self {
+            Timing::TimestampQueries => "timestamp queries",
+            Timing::SubmitAndWait => "submit and wait",
+        }
+    }
+}
+
+/// A wgpu device and queue with the workbench's helpers.
+#[derive(Debug)]
+pub struct GpuContext {
+    /// The device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    /// What the adapter says about itself.
+    pub info: wgpu::AdapterInfo,
+    /// How stage times are taken.
+    pub timing: Timing,
+    /// Timestamp ticks to nanoseconds.
+    period_ns: f64,
+    /// Query set of two timestamps, when [`Timing::TimestampQueries`].
+    queries: Option<wgpu::QuerySet>,
+}
+
+/// Ranks an adapter: real GPUs first, software rasterizers last.
+fn rank(info: &wgpu::AdapterInfo) -> u8 {
+    match info.device_type {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Other => 3,
+        wgpu::DeviceType::Cpu => 4,
+    }
+}
+
+/// The backends `SHADOWBENCH_GPU_BACKEND` allows, or every backend built in.
+fn backends() -> Result<wgpu::Backends, GpuError> {
+    match std::env::var(BACKEND_ENV) {
+        Ok(list) => {
+            let b = wgpu::Backends::from_comma_list(&list);
+            if b.is_empty() {
+                return Err(GpuError::BadBackend(list));
+            }
+            Ok(b)
+        }
+        Err(_) => Ok(wgpu::Backends::all()),
+    }
+}
+
+impl GpuContext {
+    /// The process's shared context, created on first use.
+    pub fn shared() -> Result<&'static GpuContext, GpuError> {
+        static CONTEXT: OnceLock<Result<GpuContext, GpuError>> = OnceLock::new();
+        CONTEXT.get_or_init(GpuContext::new).as_ref().map_err(Clone::clone)
+    }
+
+    /// Opens the adapter chosen as the module doc says.
+    pub fn new() -> Result<Self, GpuError> {
+        let backends = backends()?;
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+        desc.backends = backends;
+        let instance = wgpu::Instance::new(desc);
+        let adapters = pollster::block_on(instance.enumerate_adapters(backends));
+        if adapters.is_empty() {
+            return Err(GpuError::NoAdapter { backends: format!("{backends:?}") });
+        }
+        let names: Vec<String> = adapters
+            .iter()
+            .map(|a| {
+                let i = a.get_info();
+                format!("{} ({:?})", i.name, i.backend)
+            })
+            .collect();
+        let mut usable: Vec<wgpu::Adapter> = adapters
+            .into_iter()
+            .filter(|a| a.features().contains(wgpu::Features::SHADER_F64))
+            .collect();
+        if let Ok(want) = std::env::var(ADAPTER_ENV) {
+            usable.retain(|a| a.get_info().name.contains(&want));
+        }
+        usable.sort_by_key(|a| rank(&a.get_info()));
+        let Some(adapter) = usable.into_iter().next() else {
+            return Err(GpuError::NoF64Adapter { adapters: names.join(", ") });
+        };
+        let timestamps =
+            wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
+        let has_timestamps = adapter.features().contains(timestamps);
+        let mut required_features = wgpu::Features::SHADER_F64;
+        if has_timestamps {
+            required_features |= timestamps;
+        }
+        let alimits = adapter.limits();
+        let required_limits = wgpu::Limits {
+            max_storage_buffers_per_shader_stage: alimits.max_storage_buffers_per_shader_stage,
+            max_storage_buffer_binding_size: alimits.max_storage_buffer_binding_size,
+            max_buffer_size: alimits.max_buffer_size,
+            max_compute_workgroups_per_dimension: alimits.max_compute_workgroups_per_dimension,
+            ..wgpu::Limits::default()
+        };
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("shadowbench"),
+            required_features,
+            required_limits,
+            ..Default::default()
+        }))
+        .map_err(|e| GpuError::Device(e.to_string()))?;
+        let queries = has_timestamps.then(|| {
+            device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("stage timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2,
+            })
+        });
+        let timing = if has_timestamps { Timing::TimestampQueries } else { Timing::SubmitAndWait };
+        let period_ns = f64::from(queue.get_timestamp_period());
+        Ok(Self { device, queue, info: adapter.get_info(), timing, period_ns, queries })
+    }
+
+    /// The adapter as the run record names it, e.g. `llvmpipe (LLVM 15.0.6, 256 bits) via Vulkan`.
+    pub fn adapter_name(&self) -> String {
+        format!("{} via {:?}", self.info.name, self.info.backend)
+    }
+
+    /// Whether the adapter is a software rasterizer (no GPU).
+    pub fn is_software(&self) -> bool {
+        self.info.device_type == wgpu::DeviceType::Cpu
+    }
+
+    /// Writes the adapter and the timing method into a run's notes.
+    pub fn describe(&self, rec: &mut Recorder) {
+        rec.notes.push(format!(
+            "GPU: {}; stage times by {}",
+            self.adapter_name(),
+            self.timing.name()
+        ));
+    }
+
+    /// A compute pipeline from WGSL `source`, entry point `entry`, bind group 0 laid out from
+    /// the shader.
+    pub fn pipeline(&self, label: &str, source: &str, entry: &str) -> wgpu::ComputePipeline {
+        let module = self.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(label),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        });
+        self.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(label),
+            layout: None,
+            module: &module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        })
+    }
+
+    /// A storage buffer holding `data` (at least 4 bytes, so empty inputs bind).
+    pub fn upload<T: Pod>(&self, label: &str, data: &[T]) -> wgpu::Buffer {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        let padded;
+        let contents = if bytes.len() < 4 {
+            padded = [0u8; 4];
+            &padded[..]
+        } else {
+            bytes
+        };
+        self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+        })
+    }
+
+    /// A uniform buffer holding `value`.
+    pub fn uniform<T: Pod>(&self, label: &str, value: &T) -> wgpu::Buffer {
+        self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: bytemuck::bytes_of(value),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        })
+    }
+
+    /// A zeroed storage buffer of `len` elements of `T` (at least 4 bytes).
+    pub fn zeroed<T: Pod>(&self, label: &str, len: usize) -> wgpu::Buffer {
+        let size = (std::mem::size_of::<T>() * len).max(4) as u64;
+        self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: size.next_multiple_of(4),
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    }
+
+    /// A bind group for group 0 of `pipeline` with `buffers` at bindings 0, 1, 2, ...
+    pub fn bind(&self, pipeline: &wgpu::ComputePipeline, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
+        let entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: None,
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &entries,
+        })
+    }
+
+    /// Records one compute dispatch of `pipeline` over `groups` workgroups (x, y, z), split
+    /// along y and z when x exceeds the adapter's per-dimension limit is the caller's concern.
+    pub fn dispatch(
+        encoder: &mut wgpu::CommandEncoder,
+        pipeline: &wgpu::ComputePipeline,
+        bind: &wgpu::BindGroup,
+        groups: (u32, u32, u32),
+    ) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: None,
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, bind, &[]);
+        pass.dispatch_workgroups(groups.0, groups.1, groups.2);
+    }
+
+    /// Workgroups `(x, y, 1)` covering `n` invocations of a 1D kernel of `size` threads per
+    /// group; kernels rebuild the index as `gid.x + gid.y * (groups.x * size)`.
+    pub fn groups_1d(n: usize, size: u32) -> (u32, u32, u32) {
+        let groups = (n as u64).div_ceil(u64::from(size)).max(1);
+        const MAX: u64 = 65535;
+        if groups <= MAX {
+            (groups as u32, 1, 1)
+        } else {
+            (MAX as u32, groups.div_ceil(MAX) as u32, 1)
+        }
+    }
+
+    /// Runs the stage `name`: `record` records its passes into one encoder, which is submitted
+    /// and waited for; the stage's time goes into `rec` as the module doc says.
+    pub fn stage<T>(
+        &self,
+        rec: &mut Recorder,
+        name: &str,
+        record: impl FnOnce(&mut wgpu::CommandEncoder) -> T,
+    ) -> Result<T, GpuError> {
+        let start = Instant::now();
+        let mut encoder =
+            self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(name) });
+        if let Some(q) = &self.queries {
+            encoder.write_timestamp(q, 0);
+        }
+        let out = record(&mut encoder);
+        let resolve = self.queries.as_ref().map(|q| {
+            encoder.write_timestamp(q, 1);
+            let buf = self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamps"),
+                size: 16,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            encoder.resolve_query_set(q, 0..2, &buf, 0);
+            buf
+        });
+        self.queue.submit([encoder.finish()]);
+        self.wait()?;
+        let wall_ms = start.elapsed().as_secs_f64() * 1e3;
+        let ms = match resolve {
+            Some(buf) => {
+                let t: Vec<u64> = self.read(&buf)?;
+                (t[1].saturating_sub(t[0])) as f64 * self.period_ns * 1e-6
+            }
+            None => wall_ms,
+        };
+        rec.stages.stages.push(instrumentation::Stage { name: name.to_owned(), ms });
+        Ok(out)
+    }
+
+    /// Blocks until all submitted work is done.
+    pub fn wait(&self) -> Result<(), GpuError> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| GpuError::Device(e.to_string()))
+    }
+
+    /// Copies `buffer` back to the CPU as elements of `T`.
+    pub fn read<T: Pod>(&self, buffer: &wgpu::Buffer) -> Result<Vec<T>, GpuError> {
+        let size = buffer.size();
+        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("read-back"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+        self.queue.submit([encoder.finish()]);
+        let slice = staging.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.wait()?;
+        rx.recv()
+            .map_err(|e| GpuError::Device(e.to_string()))?
+            .map_err(|e| GpuError::Device(e.to_string()))?;
+        let data = slice.get_mapped_range().map_err(|e| GpuError::Device(e.to_string()))?;
+        let n = data.len() / std::mem::size_of::<T>();
+        let out = bytemuck::cast_slice::<u8, T>(&data[..n * std::mem::size_of::<T>()]).to_vec();
+        drop(data);
+        staging.unmap();
+        Ok(out)
+    }
+}

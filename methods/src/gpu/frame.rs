@@ -1,0 +1,126 @@
+//! What the kernels read: the frame's triangles, its camera G-buffer and the light depth map,
+//! in storage buffers (`f64` where the CPU holds `f64`).
+//!
+//! Layouts (WGSL side in `common.wgsl`): a projector is 18 `f64` ([`projector_data`]);
+//! triangles are 9 `f64` each (three corners), casters one `u32` each (1 casts); the G-buffer
+//! holds per pixel the triangle id (`NO_TRIANGLE` for background), position and unit normal
+//! (3 `f64` each); the depth map per texel the depth (`f64`, infinity where no caster) and the
+//! triangle id.
+
+use super::{GpuContext, GpuError};
+use crate::{depth_map::LightDepthMap, frame::Frame, gbuffer::GBuffer};
+use scenes::projection::{ProjectionKind, Projector};
+
+/// WGSL shared by the kernels: the projector in `f64`.
+pub const COMMON_WGSL: &str = include_str!("common.wgsl");
+
+/// A projector as the 18 `f64` that `proj_load` in `common.wgsl` reads.
+pub fn projector_data(p: &Projector) -> [f64; 18] {
+    let (kind, a, b) = match p.kind {
+        ProjectionKind::Orthographic { half_width, half_height } => (0.0, half_width, half_height),
+        ProjectionKind::Perspective { tan_half_x, tan_half_y } => (1.0, tan_half_x, tan_half_y),
+    };
+    [
+        p.origin.x, p.origin.y, p.origin.z, p.right.x, p.right.y, p.right.z, p.up.x, p.up.y,
+        p.up.z, p.forward.x, p.forward.y, p.forward.z, kind, a, b, p.near, p.width, p.height,
+    ]
+}
+
+/// The frame's geometry and camera G-buffer on the GPU.
+#[derive(Debug)]
+pub struct GpuFrame {
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Number of triangles.
+    pub triangles: u32,
+    /// Corners, 9 `f64` per triangle.
+    pub corners: wgpu::Buffer,
+    /// 1 where the triangle casts shadows, one `u32` per triangle.
+    pub casters: wgpu::Buffer,
+    /// Camera projector, 18 `f64`.
+    pub camera: wgpu::Buffer,
+    /// G-buffer: triangle id per pixel.
+    pub triangle: wgpu::Buffer,
+    /// G-buffer: world position per pixel, 3 `f64`.
+    pub position: wgpu::Buffer,
+    /// G-buffer: unit face normal per pixel, 3 `f64`.
+    pub normal: wgpu::Buffer,
+}
+
+/// Corners of every triangle, 9 `f64` each.
+pub fn corner_data(frame: &Frame<'_>) -> Vec<f64> {
+    let g = &frame.geometry;
+    let mut out = Vec::with_capacity(g.triangles.len() * 9);
+    for t in 0..g.triangles.len() {
+        for c in g.corners(t) {
+            out.extend_from_slice(&[c.x, c.y, c.z]);
+        }
+    }
+    out
+}
+
+impl GpuFrame {
+    /// Uploads the frame's geometry and `gbuffer` (the CPU's, for parity; or one read back).
+    pub fn upload(ctx: &GpuContext, frame: &Frame<'_>, gbuffer: &GBuffer) -> Self {
+        let n = frame.geometry.triangles.len();
+        let casters: Vec<u32> = (0..n).map(|t| u32::from(frame.is_caster(t))).collect();
+        let flat = |v: &[glam::DVec3]| -> Vec<f64> { v.iter().flat_map(|p| p.to_array()).collect() };
+        Self {
+            width: gbuffer.width,
+            height: gbuffer.height,
+            triangles: n as u32,
+            corners: ctx.upload("corners", &corner_data(frame)),
+            casters: ctx.upload("casters", &casters),
+            camera: ctx.upload("camera", &projector_data(&frame.camera)),
+            triangle: ctx.upload("gbuffer triangle", &gbuffer.triangle),
+            position: ctx.upload("gbuffer position", &flat(&gbuffer.position)),
+            normal: ctx.upload("gbuffer normal", &flat(&gbuffer.normal)),
+        }
+    }
+
+    /// Number of pixels.
+    pub fn pixels(&self) -> usize {
+        self.width as usize * self.height as usize
+    }
+}
+
+/// A light depth map on the GPU.
+#[derive(Debug)]
+pub struct GpuDepthMap {
+    /// The light's projector onto the map (CPU side).
+    pub projector: Projector,
+    /// Map resolution.
+    pub res: u32,
+    /// Light projector, 18 `f64`.
+    pub light: wgpu::Buffer,
+    /// Depth per texel (`f64`, infinity where no caster).
+    pub depth: wgpu::Buffer,
+    /// Caster triangle per texel.
+    pub triangle: wgpu::Buffer,
+}
+
+impl GpuDepthMap {
+    /// Uploads a map made on the CPU (for parity tests and for maps the GPU does not render).
+    pub fn upload(ctx: &GpuContext, map: &LightDepthMap) -> Self {
+        Self {
+            projector: map.projector,
+            res: map.res,
+            light: ctx.upload("light", &projector_data(&map.projector)),
+            depth: ctx.upload("map depth", &map.depth),
+            triangle: ctx.upload("map triangle", &map.triangle),
+        }
+    }
+
+    /// Reads the map back.
+    pub fn read(&self, ctx: &GpuContext) -> Result<LightDepthMap, GpuError> {
+        Ok(LightDepthMap {
+            projector: self.projector,
+            res: self.res,
+            shift: glam::DVec2::ZERO,
+            depth: ctx.read(&self.depth)?,
+            triangle: ctx.read(&self.triangle)?,
+        })
+    }
+}

@@ -1,0 +1,97 @@
+//! The GPU path: the techniques as wgpu render and compute passes, each kernel checked against
+//! its CPU twin (the CPU method of the same name, with the same stage names and counters).
+//!
+//! # Precision
+//!
+//! Every decision the CPU methods make in `f64` (where a point falls in a map, a depth
+//! comparison against the bias, which side of an edge a sample lies on) is made by the kernels
+//! in `f64` too, with the same operations in the same order, so that a kernel given the same
+//! input as its twin gives the same answer bit for bit. The adapter must therefore have 64-bit
+//! floats in shaders (wgpu's `SHADER_F64`: Vulkan and DX12 on desktop GPUs, Mesa's lavapipe);
+//! [`GpuContext::new`] says so by name when it has not. Exact predicates the CPU evaluates
+//! adaptively (orientation tests near zero) are filtered on the GPU with a forward error bound;
+//! the few tests the filter cannot decide go back to the CPU twin, and the run's counters say
+//! how many.
+//!
+//! # What runs where
+//!
+//! `--device gpu` (see [`crate::registry`]) runs a technique's GPU kernels on the adapter
+//! [`GpuContext`] chooses; `--device cpu` (the default) its CPU twin.
+
+mod context;
+pub mod frame;
+
+pub use context::{GpuContext, Timing, ADAPTER_ENV, BACKEND_ENV};
+pub use frame::{GpuDepthMap, GpuFrame, COMMON_WGSL};
+
+/// Why the GPU path could not run (no adapter, or an adapter that lacks what it needs).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum GpuError {
+    /// No adapter at all.
+    #[error(
+        "no GPU adapter found (backends asked: {backends}); install a GPU driver or Mesa's \
+         software rasterizer (Debian: mesa-vulkan-drivers libvulkan1), or run with --device cpu"
+    )]
+    NoAdapter {
+        /// The backends asked.
+        backends: String,
+    },
+    /// Adapters exist, but none has 64-bit floats in shaders.
+    #[error(
+        "no GPU adapter with 64-bit floats in shaders (wgpu SHADER_F64), which the GPU kernels \
+         need to match the CPU methods; adapters found: {adapters}. Try \
+         SHADOWBENCH_GPU_BACKEND=vulkan, or run with --device cpu"
+    )]
+    NoF64Adapter {
+        /// The adapters found.
+        adapters: String,
+    },
+    /// `SHADOWBENCH_GPU_BACKEND` names no backend.
+    #[error("SHADOWBENCH_GPU_BACKEND={0:?} names no wgpu backend (vulkan, gl, metal, dx12)")]
+    BadBackend(String),
+    /// The device failed (internal failure).
+    #[error("GPU device: {0}")]
+    Device(String),
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `a * b + c` in f64, on the GPU, must round twice as the CPU does: a fused multiply-add
+    /// would break the bit-for-bit parity the kernels promise.
+    #[test]
+    fn f64_arithmetic_rounds_as_on_the_cpu() {
+        let Ok(ctx) = GpuContext::shared() else {
+            eprintln!("no GPU adapter: skipped");
+            return;
+        };
+        let src = r#"
+@group(0) @binding(0) var<storage, read_write> v: array<f64>;
+@compute @workgroup_size(1)
+fn main() {
+    let a = v[0]; let b = v[1]; let c = v[2];
+    v[3] = a * b + c;
+    v[4] = sqrt(a);
+    v[5] = a / b;
+    v[6] = floor(c * 1000.0lf);
+}
+"#;
+        eprintln!("adapter: {}, timing: {}", ctx.adapter_name(), ctx.timing.name());
+        let p = ctx.pipeline("probe", src, "main");
+        let a = 1.0 + f64::EPSILON;
+        let b = 1.0 - f64::EPSILON / 2.0;
+        let c = -1.0;
+        let buf = ctx.upload("v", &[a, b, c, 0.0, 0.0, 0.0, 0.0]);
+        let bind = ctx.bind(&p, &[&buf]);
+        let mut rec = instrumentation::Recorder::default();
+        ctx.stage(&mut rec, "probe", |e| GpuContext::dispatch(e, &p, &bind, (1, 1, 1)))
+            .expect("probe runs");
+        let v: Vec<f64> = ctx.read(&buf).expect("read back");
+        assert_eq!(v[3].to_bits(), (a * b + c).to_bits(), "fused: {:e} vs {:e}", v[3], a * b + c);
+        assert_eq!(v[4].to_bits(), a.sqrt().to_bits());
+        assert_eq!(v[5].to_bits(), (a / b).to_bits());
+        assert_eq!(v[6], (c * 1000.0f64).floor());
+        assert_eq!(rec.stages.stages.len(), 1);
+    }
+}
