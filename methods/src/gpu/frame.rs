@@ -11,6 +11,9 @@ use super::{GpuContext, GpuError};
 use crate::{depth_map::LightDepthMap, frame::Frame, gbuffer::GBuffer};
 use scenes::projection::{ProjectionKind, Projector};
 
+/// Name of the stage that renders the camera G-buffer on the GPU.
+pub const STAGE_GPU_GBUFFER: &str = "G-buffer (GPU)";
+
 /// WGSL shared by the kernels: the projector in `f64`.
 pub const COMMON_WGSL: &str = include_str!("common.wgsl");
 
@@ -80,6 +83,18 @@ impl GpuFrame {
         }
     }
 
+    /// The frame's G-buffer for a GPU run, made on the GPU as the stage [`STAGE_GPU_GBUFFER`].
+    pub fn for_run(
+        ctx: &GpuContext,
+        frame: &Frame<'_>,
+        rec: &mut instrumentation::Recorder,
+    ) -> Result<Self, GpuError> {
+        // Provisional until the render pass lands: the CPU's G-buffer, uploaded.
+        let out = Self::upload(ctx, frame, &frame.gbuffer);
+        ctx.stage(rec, STAGE_GPU_GBUFFER, |_| ())?;
+        Ok(out)
+    }
+
     /// Number of pixels.
     pub fn pixels(&self) -> usize {
         self.width as usize * self.height as usize
@@ -111,6 +126,24 @@ impl GpuDepthMap {
             depth: ctx.upload("map depth", &map.depth),
             triangle: ctx.upload("map triangle", &map.triangle),
         }
+    }
+
+    /// The light depth map for a GPU run (texel centres moved by `shift` texels, zero for the
+    /// plain map), made on the GPU as the stage `stage`.
+    pub fn for_run(
+        ctx: &GpuContext,
+        frame: &Frame<'_>,
+        res: u32,
+        shift: glam::DVec2,
+        stage: &str,
+        rec: &mut instrumentation::Recorder,
+    ) -> Result<Self, GpuError> {
+        // Provisional until the render pass lands: the CPU's map, uploaded.
+        let mut scratch = instrumentation::Recorder::default();
+        let map = frame.jittered_light_depth_map(res, shift, "upload", &mut scratch);
+        let out = Self::upload(ctx, &map);
+        ctx.stage(rec, stage, |_| ())?;
+        Ok(out)
     }
 
     /// Reads the map back.
