@@ -9,7 +9,8 @@ use anyhow::Context;
 use clap::{Parser, Subcommand, ValueEnum};
 use instrumentation::{Recorder, RunRecord};
 use methods::{
-    pan09::VisibilityMode, pattern::PatternKind, Frame, MethodOptions, ShadowMethod, Visibility,
+    pan09::VisibilityMode, pattern::PatternKind, registry::Device, Frame, MethodOptions,
+    ShadowMethod, Visibility,
 };
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -94,6 +95,25 @@ impl From<Visibility09> for VisibilityMode {
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum DeviceArg {
+    /// The CPU methods.
+    Cpu,
+    /// The GPU kernels (wgpu; a real GPU first, Mesa's llvmpipe when there is none;
+    /// SHADOWBENCH_GPU_BACKEND=vulkan|gl|metal|dx12 restricts the backends,
+    /// SHADOWBENCH_GPU_ADAPTER=TEXT picks an adapter by name).
+    Gpu,
+}
+
+impl From<DeviceArg> for Device {
+    fn from(d: DeviceArg) -> Self {
+        match d {
+            DeviceArg::Cpu => Device::Cpu,
+            DeviceArg::Gpu => Device::Gpu,
+        }
+    }
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum ReferenceName {
     /// Exact lit area per pixel on the planar receiver (pixels whose square sees it).
     Exact,
@@ -111,14 +131,6 @@ struct CompareArgs {
     /// Sub-samples per pixel of the `raytrace` reference (1, 4, 8, ..., 1024); default 256.
     #[arg(long, value_name = "N")]
     ref_rate: Option<u32>,
-}
-
-#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-enum Device {
-    /// The CPU implementation (rayon over all cores).
-    Cpu,
-    /// The GPU implementation (not available yet).
-    Gpu,
 }
 
 #[derive(clap::Args)]
@@ -178,15 +190,16 @@ struct RenderArgs {
     /// precomputed lookup table, the default) or `exact` (every sub-sample tested in f64).
     #[arg(long, value_enum)]
     visibility: Option<Visibility09>,
+    /// Where the method runs: `cpu` (default) or `gpu` (kernels for sm, the pcf-* methods,
+    /// afsm and pan09; the run record names the adapter and how stage times were taken).
+    #[arg(long, value_enum, default_value_t = DeviceArg::Cpu)]
+    device: DeviceArg,
     /// Image width in pixels; default: the scene's.
     #[arg(long, value_name = "W")]
     width: Option<u32>,
     /// Image height in pixels; default: the scene's.
     #[arg(long, value_name = "H")]
     height: Option<u32>,
-    /// Where the method runs.
-    #[arg(long, value_enum, default_value_t = Device::Cpu)]
-    device: Device,
     /// Output folder; default `shadowbench-out/SCENE-METHOD`.
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
@@ -283,11 +296,6 @@ struct Job {
 }
 
 fn job(a: &RenderArgs) -> Result<Job, Failure> {
-    if a.device == Device::Gpu {
-        return Err(input(anyhow::anyhow!(
-            "--device gpu: the GPU path is not available yet; use --device cpu"
-        )));
-    }
     let scene = scenes::load(&a.scene).map_err(|e| input(anyhow::anyhow!("--scene: {e}")))?;
     let options = MethodOptions {
         map_res: a.map_res,
@@ -300,6 +308,7 @@ fn job(a: &RenderArgs) -> Result<Job, Failure> {
         seed: a.seed,
         derivative_power: a.derivative_power,
         visibility: a.visibility.map(VisibilityMode::from),
+        device: a.device.into(),
     };
     let technique = analysis::registry::technique(&a.method, &options).map_err(input)?;
     let params = technique.params();

@@ -144,11 +144,23 @@ fn render_takes_a_mesh_file_as_scene() {
 }
 
 #[test]
-fn gpu_device_is_refused_with_a_clear_message_until_it_exists() {
-    let o =
-        shadowbench(&["render", "--scene", "plane-square", "--method", "sm", "--device", "gpu"]);
+fn gpu_device_names_the_methods_it_has_kernels_for() {
+    let o = shadowbench(&[
+        "render",
+        "--scene",
+        "plane-square",
+        "--method",
+        "spsm",
+        "--device",
+        "gpu",
+        "--width",
+        "16",
+        "--height",
+        "12",
+    ]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(stderr(&o).contains("--device gpu"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--device"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no GPU kernels"), "{}", stderr(&o));
 }
 
 #[test]

@@ -88,6 +88,12 @@ pub fn technique(
     options: &MethodOptions,
 ) -> Result<Box<dyn ShadowMethod>, MethodError> {
     if REFERENCES.iter().any(|(n, _)| *n == name) {
+        if options.device != methods::registry::Device::Cpu {
+            return Err(MethodError::InvalidOption {
+                option: "--device",
+                message: format!("the reference `{name}` runs on the CPU only"),
+            });
+        }
         let r = reference(name, options.rate.unwrap_or(1), options.pattern.unwrap_or_default())
             .map_err(|e| match e {
                 ReferenceError::InvalidOption { message, .. } => {

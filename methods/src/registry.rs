@@ -44,6 +44,27 @@ pub const METHODS: &[(&str, &str)] = &[
     ),
 ];
 
+/// Where a method runs (`--device`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Device {
+    /// The CPU methods (default).
+    #[default]
+    Cpu,
+    /// The GPU kernels ([`crate::gpu`]), for the methods in [`GPU_METHODS`].
+    Gpu,
+}
+
+impl Device {
+    /// The name, as on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Device::Cpu => "cpu",
+            Device::Gpu => "gpu",
+        }
+    }
+}
+
 /// Options shared by the methods; `None` takes the method's documented default.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct MethodOptions {
@@ -67,6 +88,8 @@ pub struct MethodOptions {
     pub derivative_power: Option<u32>,
     /// How `pan09` turns half-planes into sub-sample masks (`--visibility`).
     pub visibility: Option<VisibilityMode>,
+    /// Where the method runs (`--device`); default the CPU.
+    pub device: Device,
 }
 
 /// The map options given, with `defaults` for those not given; validated.
@@ -81,8 +104,31 @@ fn map_options(options: &MethodOptions, d: MapOptions) -> Result<MapOptions, Met
     Ok(o)
 }
 
-/// The method called `name`, configured by `options` and validated.
+/// The method called `name`, configured by `options` and validated, on `options.device`.
 pub fn method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMethod>, MethodError> {
+    let cpu = cpu_method(name, options)?;
+    match options.device {
+        Device::Cpu => Ok(cpu),
+        Device::Gpu => gpu_method(name, options),
+    }
+}
+
+/// The GPU kernels of `name`, configured as [`cpu_method`] configures its twin.
+fn gpu_method(name: &str, _options: &MethodOptions) -> Result<Box<dyn ShadowMethod>, MethodError> {
+    Err(MethodError::InvalidOption {
+        option: "--device",
+        message: format!(
+            "`{name}` has no GPU kernels; methods with GPU kernels: {}",
+            GPU_METHODS.join(", ")
+        ),
+    })
+}
+
+/// The methods that have GPU kernels (`--device gpu`).
+pub const GPU_METHODS: &[&str] = &[];
+
+/// The CPU method called `name`, configured by `options` and validated.
+fn cpu_method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMethod>, MethodError> {
     let bs = |variant: Variant| -> Result<Box<dyn ShadowMethod>, MethodError> {
         let depth_bits = options.depth_bits.unwrap_or(DEFAULT_DEPTH_BITS);
         let d = BsOptions::with_depth_bits(depth_bits);

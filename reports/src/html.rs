@@ -98,6 +98,26 @@ pub fn index_html(report: &Report, plots: &[PlotFile]) -> String {
         }
         s.push_str("</table>\n");
     }
+    let pairs = crate::devices::pairs(&report.rows);
+    if !pairs.is_empty() {
+        let _ = writeln!(
+            s,
+            "<h2 id=\"devices\">CPU and GPU</h2>\n<p>The same method and parameters on both \
+             devices; GPU: {}.</p>",
+            escape(report.machine.gpu.as_deref().unwrap_or("none"))
+        );
+        let head: Vec<String> =
+            crate::devices::COLUMNS.iter().map(|c| format!("<th>{}</th>", escape(c))).collect();
+        let _ = writeln!(s, "<table><tr>{}</tr>", head.concat());
+        for p in &pairs {
+            let cells: Vec<String> = crate::devices::cells(p)
+                .iter()
+                .map(|c| format!("<td>{}</td>", escape(c)))
+                .collect();
+            let _ = writeln!(s, "<tr>{}</tr>", cells.concat());
+        }
+        s.push_str("</table>\n");
+    }
     if !report.tables.is_empty() {
         s.push_str("<h2 id=\"tables\">The papers' tables</h2>\n");
         for t in &report.tables {

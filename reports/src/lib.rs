@@ -4,6 +4,7 @@
 //! [`write`] as JSON, CSV, Markdown tables and EXR images; the papers' tables are measured by
 //! [`tables`].
 
+pub mod devices;
 pub mod grids;
 pub mod html;
 pub mod output;

@@ -88,6 +88,10 @@ pub struct RunSpec {
     /// Depth precisions (`pcf-bs-*`).
     #[serde(default)]
     pub depth_bits: Vec<u32>,
+    /// Devices to run on (`cpu`, `gpu`); default the CPU only. With both, the report shows
+    /// CPU and GPU times side by side.
+    #[serde(default)]
+    pub device: Vec<methods::registry::Device>,
 }
 
 /// One panel of an image grid: a method and its parameters.

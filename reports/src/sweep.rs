@@ -13,7 +13,7 @@ use crate::tables::{run_table, table_run_count, Table};
 use crate::timing::{time_method, Machine, StageTimes, Summary};
 use analysis::{error_image, flip::flip_mean, Metrics, ReferenceImage};
 use instrumentation::{Counters, Recorder};
-use methods::{Frame, MethodOptions, Visibility};
+use methods::{registry::Device, Frame, MethodOptions, Visibility};
 use serde::{Deserialize, Serialize};
 
 /// One method with one parameter combination on one scene.
@@ -131,7 +131,17 @@ pub fn expand(spec: &RunSpec) -> Vec<MethodOptions> {
     for map_res in or_default(&spec.map_res) {
         for rate in or_default(&spec.rate) {
             for depth_bits in or_default(&spec.depth_bits) {
-                out.push(MethodOptions { map_res, rate, depth_bits, ..Default::default() });
+                let devices =
+                    if spec.device.is_empty() { &[Device::Cpu][..] } else { &spec.device };
+                for &device in devices {
+                    out.push(MethodOptions {
+                        map_res,
+                        rate,
+                        depth_bits,
+                        device,
+                        ..Default::default()
+                    });
+                }
             }
         }
     }
@@ -322,6 +332,10 @@ pub fn run_suite(
                         }
                     };
                 let v = timed.visibility;
+                if options.device == Device::Gpu && report.machine.gpu.is_none() {
+                    report.machine.gpu =
+                        methods::gpu::GpuContext::shared().ok().map(|c| c.adapter_name());
+                }
                 report.rows.push(Row {
                     scene: scene.name.clone(),
                     method: technique.name().to_owned(),

@@ -102,7 +102,7 @@ pub struct Machine {
     pub cores: usize,
     /// Worker threads of the parallel runtime.
     pub threads: usize,
-    /// GPU adapter, when a GPU path ran (none yet: every method here runs on the CPU).
+    /// GPU adapter, when a method ran on the GPU (`device = ["gpu"]`).
     pub gpu: Option<String>,
     /// Operating system and architecture.
     pub os: String,

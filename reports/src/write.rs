@@ -17,7 +17,7 @@ fn param(row: &Row, key: &str) -> String {
 
 /// A short label of the row's parameters, e.g. `map_res=1024 rate=16`.
 pub fn param_label(row: &Row) -> String {
-    ["map_res", "rate", "depth_bits", "pattern"]
+    ["map_res", "rate", "depth_bits", "pattern", "device"]
         .iter()
         .filter(|k| row.params.contains_key(**k))
         .map(|k| format!("{k}={}", param(row, k)))
@@ -40,6 +40,7 @@ pub const CSV_COLUMNS: &[&str] = &[
     "rate",
     "depth_bits",
     "pattern",
+    "device",
     "width",
     "height",
     "reference",
@@ -75,6 +76,7 @@ pub fn csv(report: &Report) -> String {
             param(r, "rate"),
             param(r, "depth_bits"),
             param(r, "pattern"),
+            if crate::devices::is_gpu(r) { "gpu" } else { "cpu" }.to_owned(),
             r.width.to_string(),
             r.height.to_string(),
             r.reference.clone(),
@@ -185,6 +187,15 @@ pub fn markdown(report: &Report) -> String {
         for r in report.rows.iter().filter(|r| r.scene == sc.scene) {
             let _ = writeln!(s, "| {} |", run_cells(r).join(" | "));
         }
+    }
+    let side_by_side = crate::devices::markdown(&report.rows);
+    if !side_by_side.is_empty() {
+        let _ = writeln!(
+            s,
+            "\n## CPU and GPU\n\nThe same method and parameters on both devices; GPU: {}.\n",
+            m.gpu.as_deref().unwrap_or("none")
+        );
+        s.push_str(&side_by_side);
     }
     if !report.tables.is_empty() {
         let _ = writeln!(s, "\n## The papers' tables\n");

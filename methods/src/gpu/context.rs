@@ -232,7 +232,11 @@ impl GpuContext {
     }
 
     /// A bind group for group 0 of `pipeline` with `buffers` at bindings 0, 1, 2, ...
-    pub fn bind(&self, pipeline: &wgpu::ComputePipeline, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
+    pub fn bind(
+        &self,
+        pipeline: &wgpu::ComputePipeline,
+        buffers: &[&wgpu::Buffer],
+    ) -> wgpu::BindGroup {
         let entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
             .iter()
             .enumerate()
@@ -286,8 +290,9 @@ impl GpuContext {
         record: impl FnOnce(&mut wgpu::CommandEncoder) -> T,
     ) -> Result<T, GpuError> {
         let start = Instant::now();
-        let mut encoder =
-            self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(name) });
+        let mut encoder = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(name) });
         if let Some(q) = &self.queries {
             encoder.write_timestamp(q, 0);
         }

@@ -24,8 +24,24 @@ pub fn projector_data(p: &Projector) -> [f64; 18] {
         ProjectionKind::Perspective { tan_half_x, tan_half_y } => (1.0, tan_half_x, tan_half_y),
     };
     [
-        p.origin.x, p.origin.y, p.origin.z, p.right.x, p.right.y, p.right.z, p.up.x, p.up.y,
-        p.up.z, p.forward.x, p.forward.y, p.forward.z, kind, a, b, p.near, p.width, p.height,
+        p.origin.x,
+        p.origin.y,
+        p.origin.z,
+        p.right.x,
+        p.right.y,
+        p.right.z,
+        p.up.x,
+        p.up.y,
+        p.up.z,
+        p.forward.x,
+        p.forward.y,
+        p.forward.z,
+        kind,
+        a,
+        b,
+        p.near,
+        p.width,
+        p.height,
     ]
 }
 
@@ -69,7 +85,8 @@ impl GpuFrame {
     pub fn upload(ctx: &GpuContext, frame: &Frame<'_>, gbuffer: &GBuffer) -> Self {
         let n = frame.geometry.triangles.len();
         let casters: Vec<u32> = (0..n).map(|t| u32::from(frame.is_caster(t))).collect();
-        let flat = |v: &[glam::DVec3]| -> Vec<f64> { v.iter().flat_map(|p| p.to_array()).collect() };
+        let flat =
+            |v: &[glam::DVec3]| -> Vec<f64> { v.iter().flat_map(|p| p.to_array()).collect() };
         Self {
             width: gbuffer.width,
             height: gbuffer.height,

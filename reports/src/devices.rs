@@ -1,0 +1,91 @@
+//! CPU and GPU side by side: the runs of a suite that ran the same method with the same
+//! parameters on both devices (`device = ["cpu", "gpu"]` in a `[[run]]`), paired.
+
+use crate::sweep::Row;
+use std::fmt::Write as _;
+
+/// One method run on both devices.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DevicePair<'a> {
+    /// The CPU run.
+    pub cpu: &'a Row,
+    /// The GPU run.
+    pub gpu: &'a Row,
+}
+
+impl DevicePair<'_> {
+    /// CPU time over GPU time (medians).
+    pub fn speedup(&self) -> f64 {
+        self.cpu.total_ms.median / self.gpu.total_ms.median
+    }
+}
+
+/// Whether a row ran on the GPU (its parameters say `"device": "gpu"`).
+pub fn is_gpu(row: &Row) -> bool {
+    row.params.get("device").and_then(|d| d.as_str()) == Some("gpu")
+}
+
+/// The parameters without the device.
+fn key(row: &Row) -> (String, String, String) {
+    let mut p = row.params.clone();
+    p.remove("device");
+    (row.scene.clone(), row.method.clone(), serde_json::Value::Object(p).to_string())
+}
+
+/// Every GPU row with the CPU row of the same scene, method and parameters, in report order.
+pub fn pairs(rows: &[Row]) -> Vec<DevicePair<'_>> {
+    rows.iter()
+        .filter(|r| is_gpu(r))
+        .filter_map(|gpu| {
+            let k = key(gpu);
+            rows.iter().find(|r| !is_gpu(r) && key(r) == k).map(|cpu| DevicePair { cpu, gpu })
+        })
+        .collect()
+}
+
+/// The header of the side-by-side table.
+pub const COLUMNS: [&str; 8] = [
+    "scene",
+    "method",
+    "parameters",
+    "CPU ms",
+    "GPU ms",
+    "CPU / GPU",
+    "CPU mean error",
+    "GPU mean error",
+];
+
+/// The cells of one pair.
+pub fn cells(p: &DevicePair<'_>) -> [String; 8] {
+    let mut params = p.cpu.params.clone();
+    params.remove("device");
+    let params: Vec<String> = params.iter().map(|(k, v)| format!("{k}={v}")).collect();
+    let ms = |r: &Row| {
+        format!("{:.2} [{:.2}, {:.2}]", r.total_ms.median, r.total_ms.min, r.total_ms.max)
+    };
+    [
+        p.cpu.scene.clone(),
+        p.cpu.method.clone(),
+        params.join(" "),
+        ms(p.cpu),
+        ms(p.gpu),
+        format!("{:.2}", p.speedup()),
+        format!("{:.5}", p.cpu.metrics.mean_abs_error),
+        format!("{:.5}", p.gpu.metrics.mean_abs_error),
+    ]
+}
+
+/// The side-by-side table in Markdown, empty when no method ran on both devices.
+pub fn markdown(rows: &[Row]) -> String {
+    let pairs = pairs(rows);
+    let mut s = String::new();
+    if pairs.is_empty() {
+        return s;
+    }
+    let _ = writeln!(s, "| {} |", COLUMNS.join(" | "));
+    let _ = writeln!(s, "|{}", "---|".repeat(COLUMNS.len()));
+    for p in &pairs {
+        let _ = writeln!(s, "| {} |", cells(p).join(" | "));
+    }
+    s
+}
