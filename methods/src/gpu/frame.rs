@@ -7,7 +7,10 @@
 //! (3 `f64` each); the depth map per texel the depth (`f64`, infinity where no caster) and the
 //! triangle id.
 
-use super::{GpuContext, GpuError};
+use super::{
+    raster::{rasterize, RasterJob},
+    GpuContext, GpuError,
+};
 use crate::{depth_map::LightDepthMap, frame::Frame, gbuffer::GBuffer};
 use scenes::projection::{ProjectionKind, Projector};
 
@@ -106,10 +109,52 @@ impl GpuFrame {
         frame: &Frame<'_>,
         rec: &mut instrumentation::Recorder,
     ) -> Result<Self, GpuError> {
-        // Provisional until the render pass lands: the CPU's G-buffer, uploaded.
-        let out = Self::upload(ctx, frame, &frame.gbuffer);
-        ctx.stage(rec, STAGE_GPU_GBUFFER, |_| ())?;
-        Ok(out)
+        let n = frame.geometry.triangles.len();
+        let casters: Vec<u32> = (0..n).map(|t| u32::from(frame.is_caster(t))).collect();
+        let corners = ctx.upload("corners", &corner_data(frame));
+        let casters = ctx.upload("casters", &casters);
+        let job = RasterJob {
+            projector: &frame.camera,
+            casters_only: false,
+            shift: glam::DVec2::ZERO,
+            gbuffer: true,
+        };
+        let r = rasterize(ctx, frame, &corners, &casters, job, STAGE_GPU_GBUFFER, rec)?;
+        Ok(Self {
+            width: frame.width(),
+            height: frame.height(),
+            triangles: n as u32,
+            corners,
+            casters,
+            camera: ctx.upload("camera", &projector_data(&frame.camera)),
+            triangle: r.triangle,
+            position: r.position,
+            normal: r.normal,
+        })
+    }
+
+    /// Reads the G-buffer back (depth is not kept on the GPU: infinity where no surface,
+    /// else the depth along the camera's axis of the position).
+    pub fn read_gbuffer(&self, ctx: &GpuContext, camera: &Projector) -> Result<GBuffer, GpuError> {
+        let triangle: Vec<u32> = ctx.read(&self.triangle)?;
+        let vec3 = |v: Vec<f64>| -> Vec<glam::DVec3> {
+            v.chunks_exact(3).map(|c| glam::DVec3::new(c[0], c[1], c[2])).collect()
+        };
+        let position = vec3(ctx.read(&self.position)?);
+        let normal = vec3(ctx.read(&self.normal)?);
+        let depth =
+            triangle
+                .iter()
+                .zip(&position)
+                .map(|(&t, &p)| {
+                    if t == crate::raster::NO_TRIANGLE {
+                        f64::INFINITY
+                    } else {
+                        camera.depth_of(p)
+                    }
+                })
+                .collect();
+        Ok(GBuffer { width: self.width, height: self.height, triangle, depth, position, normal })
     }
 
     /// Number of pixels.
@@ -125,6 +170,8 @@ pub struct GpuDepthMap {
     pub projector: Projector,
     /// Map resolution.
     pub res: u32,
+    /// Where the samples lie: texel `(i, j)` holds the depth at `(i + 0.5, j + 0.5) + shift`.
+    pub shift: glam::DVec2,
     /// Light projector, 18 `f64`.
     pub light: wgpu::Buffer,
     /// Depth per texel (`f64`, infinity where no caster).
@@ -139,6 +186,7 @@ impl GpuDepthMap {
         Self {
             projector: map.projector,
             res: map.res,
+            shift: map.shift,
             light: ctx.upload("light", &projector_data(&map.projector)),
             depth: ctx.upload("map depth", &map.depth),
             triangle: ctx.upload("map triangle", &map.triangle),
@@ -155,12 +203,21 @@ impl GpuDepthMap {
         stage: &str,
         rec: &mut instrumentation::Recorder,
     ) -> Result<Self, GpuError> {
-        // Provisional until the render pass lands: the CPU's map, uploaded.
-        let mut scratch = instrumentation::Recorder::default();
-        let map = frame.jittered_light_depth_map(res, shift, "upload", &mut scratch);
-        let out = Self::upload(ctx, &map);
-        ctx.stage(rec, stage, |_| ())?;
-        Ok(out)
+        let n = frame.geometry.triangles.len();
+        let casters: Vec<u32> = (0..n).map(|t| u32::from(frame.is_caster(t))).collect();
+        let corners = ctx.upload("corners", &corner_data(frame));
+        let casters = ctx.upload("casters", &casters);
+        let projector = frame.light_projector(res);
+        let job = RasterJob { projector: &projector, casters_only: true, shift, gbuffer: false };
+        let r = rasterize(ctx, frame, &corners, &casters, job, stage, rec)?;
+        Ok(Self {
+            projector,
+            res,
+            shift,
+            light: ctx.upload("light", &projector_data(&projector)),
+            depth: r.depth,
+            triangle: r.triangle,
+        })
     }
 
     /// Reads the map back.
@@ -168,7 +225,7 @@ impl GpuDepthMap {
         Ok(LightDepthMap {
             projector: self.projector,
             res: self.res,
-            shift: glam::DVec2::ZERO,
+            shift: self.shift,
             depth: ctx.read(&self.depth)?,
             triangle: ctx.read(&self.triangle)?,
         })
