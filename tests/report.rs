@@ -15,6 +15,7 @@ scenes = ["plane-square", "hairball", "no-such-scene"]
 [[run]]
 method = "sm"
 map_res = [64, 128]
+device = ["cpu", "gpu"]
 
 [[run]]
 method = "pcf-bs-fast-2x2"
@@ -48,7 +49,7 @@ fn a_suite_file_writes_tables_that_parse_back() {
         serde_json::from_str(&std::fs::read_to_string(out.join("runs.json")).expect("runs.json"))
             .expect("valid JSON");
     let rows = json["rows"].as_array().expect("rows");
-    assert_eq!(rows.len(), 2 * 4, "two scenes, four combinations");
+    assert_eq!(rows.len(), 2 * 6, "two scenes, six combinations");
     for r in rows {
         let mean = r["metrics"]["mean_abs_error"].as_f64().expect("metric");
         assert!((0.0..=1.0).contains(&mean));
@@ -58,7 +59,7 @@ fn a_suite_file_writes_tables_that_parse_back() {
         assert!(!r["stages"].as_array().expect("stages").is_empty());
     }
     let by_scene = |s: &str| rows.iter().filter(|r| r["scene"] == s).count();
-    assert_eq!((by_scene("plane-square"), by_scene("hairball")), (4, 4));
+    assert_eq!((by_scene("plane-square"), by_scene("hairball")), (6, 6));
     // Exact where it applies, ray traced where the scene has transparency.
     let reference =
         |s: &str| rows.iter().find(|r| r["scene"] == s).expect("row")["reference"].clone();
@@ -89,6 +90,13 @@ fn a_suite_file_writes_tables_that_parse_back() {
 
     let md = std::fs::read_to_string(out.join("report.md")).expect("report.md");
     assert!(md.contains("## plane-square") && md.contains("pcf-bs-fast-2x2"), "{md}");
+    // CPU and GPU side by side: each sm run on both devices, paired, the adapter named.
+    let devices: Vec<&str> = lines.iter().map(|l| l[col("device")]).collect();
+    assert_eq!(devices.iter().filter(|d| **d == "gpu").count(), 4, "{devices:?}");
+    assert!(json["machine"]["gpu"].as_str().is_some_and(|g| !g.is_empty()), "{}", json["machine"]);
+    let side = md.split("## CPU and GPU").nth(1).expect("a CPU and GPU section");
+    let pairs = side.lines().filter(|l| l.starts_with("| plane-square | sm ")).count();
+    assert_eq!(pairs, 2, "{side}");
     let grids = json["grids"].as_array().expect("grids");
     assert_eq!(grids.len(), 1);
     let grid = image::open(out.join(grids[0]["png"].as_str().expect("path"))).expect("a PNG");
