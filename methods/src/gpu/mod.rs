@@ -20,6 +20,8 @@
 
 mod context;
 pub mod frame;
+pub mod pcf;
+pub mod sm;
 
 pub use context::{GpuContext, Timing, ADAPTER_ENV, BACKEND_ENV};
 pub use frame::{GpuDepthMap, GpuFrame, COMMON_WGSL};
