@@ -53,7 +53,7 @@ struct Filtered {
 }
 
 // pcf_reeves::filter.
-fn filter(r: Receiver, fp: Footprint, pixel: u32) -> Filtered {
+fn reeves_filter(r: Receiver, fp: Footprint, pixel: u32) -> Filtered {
     let nx = params.grid_x;
     let ny = params.grid_y;
     let reach = max(r.xy - fp.lo, fp.hi - r.xy) + vec2<f64>(0.5lf);
@@ -97,7 +97,7 @@ fn main(
             let r = receiver(lp, p, n, params.max_slope);
             if r.ok {
                 let fp = footprint(proj_load(camera), lp, k % params.width, k / params.width, p, n, r.xy);
-                let f = filter(r, fp, k);
+                let f = reeves_filter(r, fp, k);
                 v = f.lit;
                 compares = f.compares;
             }
