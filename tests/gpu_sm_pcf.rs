@@ -72,13 +72,9 @@ fn map_options(map_res: u32) -> MapOptions {
 }
 
 /// The CPU's map, the tester the CPU method builds for it, and both uploaded.
-fn uploaded(
-    frame: &Frame<'_>,
-    options: &MapOptions,
-) -> (GpuFrame, GpuDepthMap, DepthTester) {
+fn uploaded(frame: &Frame<'_>, options: &MapOptions) -> (GpuFrame, GpuDepthMap, DepthTester) {
     let map = frame.light_depth_map(options.map_res, &mut Recorder::default());
-    let tester =
-        DepthTester::new(options, map.projector, frame.light_depth_range(&map.projector));
+    let tester = DepthTester::new(options, map.projector, frame.light_depth_range(&map.projector));
     (GpuFrame::upload(ctx(), frame, &frame.gbuffer), GpuDepthMap::upload(ctx(), &map), tester)
 }
 
@@ -148,11 +144,8 @@ fn gpu_parity_pcf_bs_matches_the_cpu_per_pixel() {
                 let projector = frame.light_projector(256);
                 let (near, far) = frame.light_depth_bounds(&projector);
                 let code = GpuDepthCode::new(depth_bits, near, far).expect("valid bits");
-                let tester = DepthTester::new(
-                    &options.map,
-                    projector,
-                    frame.light_depth_range(&projector),
-                );
+                let tester =
+                    DepthTester::new(&options.map, projector, frame.light_depth_range(&projector));
                 let gframe = GpuFrame::upload(ctx(), frame, &frame.gbuffer);
                 let mut rec = Recorder::default();
                 let (lit, counters) = if variant == Variant::Stratified2x2 {
@@ -212,10 +205,16 @@ fn gpu_methods_run_end_to_end_with_the_twins_stages() {
         assert_eq!((v.width, v.height), (WIDTH, HEIGHT));
         assert_eq!(v.lit.len(), (WIDTH * HEIGHT) as usize);
         assert!(v.lit.iter().all(|l| l.is_finite() && (0.0..=1.0).contains(l)), "{}", gpu.name());
-        assert!(rec.notes.iter().any(|n| n.starts_with("GPU: ")), "{}: {:?}", gpu.name(), rec.notes);
+        assert!(
+            rec.notes.iter().any(|n| n.starts_with("GPU: ")),
+            "{}: {:?}",
+            gpu.name(),
+            rec.notes
+        );
         let mut cpu_rec = Recorder::default();
         cpu.run(&frame, &mut cpu_rec).expect("the CPU method runs");
-        let names = |r: &Recorder| r.stages.stages.iter().map(|s| s.name.clone()).collect::<Vec<_>>();
+        let names =
+            |r: &Recorder| r.stages.stages.iter().map(|s| s.name.clone()).collect::<Vec<_>>();
         let mut want = vec![methods::gpu::frame::STAGE_GPU_GBUFFER.to_owned()];
         want.extend(names(&cpu_rec));
         assert_eq!(names(&rec), want, "{}", gpu.name());

@@ -231,7 +231,12 @@ impl<'a> ShadowTest<'a> {
 }
 
 /// The uniform parameters of the Brabec and Seidel kernels.
-fn bs_params(frame: &GpuFrame, map: &GpuDepthMap, tester: &DepthTester, code: &GpuDepthCode) -> Params {
+fn bs_params(
+    frame: &GpuFrame,
+    map: &GpuDepthMap,
+    tester: &DepthTester,
+    code: &GpuDepthCode,
+) -> Params {
     Params {
         code_near: code.near,
         code_span: code.span,
@@ -272,7 +277,8 @@ pub fn bs_stratified(
     let params = Params { side: res, ..bs_params(frame, maps[0], tester, code) };
     let uniform = ctx.uniform("texel packing", &params);
     let packed = ctx.zeroed::<[u32; 4]>("packed", texels);
-    let buffers = [&uniform, &maps[0].depth, &maps[1].depth, &maps[2].depth, &maps[3].depth, &packed];
+    let buffers =
+        [&uniform, &maps[0].depth, &maps[1].depth, &maps[2].depth, &maps[3].depth, &packed];
     map_kernel(ctx, ("texel packing", BS_PACK_WGSL), &buffers, texels, "texel packing", rec)?;
     let test = ShadowTest::new(ctx, frame, &maps[0].light, Variant::Stratified2x2, &params);
     test.pass(&packed, "depth test", rec)?;
@@ -323,7 +329,10 @@ pub fn bs_fast(
         let (packing, testing) = if passes.len() == 1 {
             ("texel packing".to_owned(), "depth test".to_owned())
         } else {
-            (format!("texel packing (pass {})", pass + 1), format!("depth test (pass {})", pass + 1))
+            (
+                format!("texel packing (pass {})", pass + 1),
+                format!("depth test (pass {})", pass + 1),
+            )
         };
         let pack_params = Params { side, offset_x: ox as i32, offset_y: oy as i32, ..params };
         let pack_uniform = ctx.uniform("texel packing", &pack_params);

@@ -101,11 +101,7 @@ pub(super) fn counters_buffer(ctx: &GpuContext) -> wgpu::Buffer {
 pub(super) fn read_counters(ctx: &GpuContext, buf: &wgpu::Buffer) -> Result<Counters, GpuError> {
     let w: Vec<u32> = ctx.read(buf)?;
     let word = |i: usize| u64::from(w[i]) | u64::from(w[i + 1]) << 32;
-    Ok(Counters {
-        shadow_map_lookups: word(0),
-        bilinear_lookups: word(2),
-        ..Default::default()
-    })
+    Ok(Counters { shadow_map_lookups: word(0), bilinear_lookups: word(2), ..Default::default() })
 }
 
 /// The stage [`STAGE_DEPTH_TEST`] on the GPU: the standard depth test of every pixel of
