@@ -114,27 +114,69 @@ pub fn method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMetho
 }
 
 /// The GPU kernels of `name`, configured as [`cpu_method`] configures its twin.
-fn gpu_method(name: &str, _options: &MethodOptions) -> Result<Box<dyn ShadowMethod>, MethodError> {
-    Err(MethodError::InvalidOption {
-        option: "--device",
-        message: format!(
-            "`{name}` has no GPU kernels; methods with GPU kernels: {}",
-            GPU_METHODS.join(", ")
-        ),
-    })
+fn gpu_method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMethod>, MethodError> {
+    use crate::gpu::{pcf::GpuPcf, sm::GpuShadowMap};
+    let map = || map_options(options, MapOptions::default());
+    let bs = |variant: Variant| -> Result<Box<dyn ShadowMethod>, MethodError> {
+        Ok(Box::new(GpuPcf::BrabecSeidel { options: bs_options(options)?, variant }))
+    };
+    let gems = |samples: GemsSamples| -> Result<Box<dyn ShadowMethod>, MethodError> {
+        Ok(Box::new(GpuPcf::Gems { options: map()?, samples }))
+    };
+    match name {
+        "sm" => Ok(Box::new(GpuShadowMap { options: map()? })),
+        "pcf-reeves" => Ok(Box::new(GpuPcf::Reeves { options: reeves_options(options)? })),
+        "pcf-bs-2x2" => bs(Variant::Stratified2x2),
+        "pcf-bs-fast-2x2" => bs(Variant::Fast2x2),
+        "pcf-bs-fast-4x4" => bs(Variant::Fast4x4),
+        "pcf-gems16" => gems(GemsSamples::Sixteen),
+        "pcf-gems4" => gems(GemsSamples::FourDithered),
+        _ => Err(MethodError::InvalidOption {
+            option: "--device",
+            message: format!(
+                "`{name}` has no GPU kernels; methods with GPU kernels: {}",
+                GPU_METHODS.join(", ")
+            ),
+        }),
+    }
+}
+
+/// Reeves et al.'s options from the shared ones, validated.
+fn reeves_options(options: &MethodOptions) -> Result<ReevesOptions, MethodError> {
+    let d = ReevesOptions::default();
+    let o = ReevesOptions {
+        map: map_options(options, d.map)?,
+        samples: options.rate.unwrap_or(d.samples),
+        seed: options.seed.unwrap_or(d.seed),
+    };
+    o.validate()?;
+    Ok(o)
+}
+
+/// Brabec and Seidel's options from the shared ones, validated.
+fn bs_options(options: &MethodOptions) -> Result<BsOptions, MethodError> {
+    let depth_bits = options.depth_bits.unwrap_or(DEFAULT_DEPTH_BITS);
+    let d = BsOptions::with_depth_bits(depth_bits);
+    let o = BsOptions { map: map_options(options, d.map)?, depth_bits };
+    o.validate()?;
+    Ok(o)
 }
 
 /// The methods that have GPU kernels (`--device gpu`).
-pub const GPU_METHODS: &[&str] = &[];
+pub const GPU_METHODS: &[&str] = &[
+    "sm",
+    "pcf-reeves",
+    "pcf-bs-2x2",
+    "pcf-bs-fast-2x2",
+    "pcf-bs-fast-4x4",
+    "pcf-gems16",
+    "pcf-gems4",
+];
 
 /// The CPU method called `name`, configured by `options` and validated.
 fn cpu_method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMethod>, MethodError> {
     let bs = |variant: Variant| -> Result<Box<dyn ShadowMethod>, MethodError> {
-        let depth_bits = options.depth_bits.unwrap_or(DEFAULT_DEPTH_BITS);
-        let d = BsOptions::with_depth_bits(depth_bits);
-        let o = BsOptions { map: map_options(options, d.map)?, depth_bits };
-        o.validate()?;
-        Ok(Box::new(BrabecSeidelPcf { options: o, variant }))
+        Ok(Box::new(BrabecSeidelPcf { options: bs_options(options)?, variant }))
     };
     let gems = |samples: GemsSamples| -> Result<Box<dyn ShadowMethod>, MethodError> {
         Ok(Box::new(GemsPcf { options: map_options(options, MapOptions::default())?, samples }))
@@ -143,16 +185,7 @@ fn cpu_method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMetho
         "sm" => Ok(Box::new(StandardShadowMap {
             options: map_options(options, MapOptions::default())?,
         })),
-        "pcf-reeves" => {
-            let d = ReevesOptions::default();
-            let o = ReevesOptions {
-                map: map_options(options, d.map)?,
-                samples: options.rate.unwrap_or(d.samples),
-                seed: options.seed.unwrap_or(d.seed),
-            };
-            o.validate()?;
-            Ok(Box::new(ReevesPcf { options: o }))
-        }
+        "pcf-reeves" => Ok(Box::new(ReevesPcf { options: reeves_options(options)? })),
         "pcf-bs-2x2" => bs(Variant::Stratified2x2),
         "pcf-bs-fast-2x2" => bs(Variant::Fast2x2),
         "pcf-bs-fast-4x4" => bs(Variant::Fast4x4),

@@ -20,7 +20,9 @@
 
 mod context;
 pub mod frame;
+pub mod pcf;
 pub mod raster;
+pub mod sm;
 
 pub use context::{GpuContext, Timing, ADAPTER_ENV, BACKEND_ENV};
 pub use frame::{GpuDepthMap, GpuFrame, COMMON_WGSL};
