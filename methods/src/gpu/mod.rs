@@ -19,6 +19,7 @@
 //! [`GpuContext`] chooses; `--device cpu` (the default) its CPU twin.
 
 mod context;
+pub mod afsm;
 pub mod frame;
 
 pub use context::{GpuContext, Timing, ADAPTER_ENV, BACKEND_ENV};
