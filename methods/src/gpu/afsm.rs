@@ -83,8 +83,11 @@ pub fn grid_size(pixels: usize) -> u32 {
 }
 
 const WG: u32 = 64;
-/// `f64` per triangle record of `setup.wgsl`.
-const BLK_F: usize = 20;
+/// `f64` per triangle of `setup.wgsl`'s outline records (4 corners and the bounding box).
+const BLK_OUTLINE: usize = 12;
+/// `f64` per triangle of `setup.wgsl`'s plane records (depth function and range); the
+/// records are split so that each buffer stays within the adapter's binding size limit.
+const BLK_PLANE: usize = 8;
 /// `u32` per triangle record of `setup.wgsl`.
 const BLK_U: usize = 5;
 
@@ -180,13 +183,24 @@ pub fn shade(
     let setup = ctx.pipeline("afsm setup", &wgsl(include_str!("afsm/setup.wgsl"), true), "setup");
     let args_pipe = ctx.pipeline("afsm args", include_str!("afsm/args.wgsl"), "args_main");
     let test = ctx.pipeline("afsm test", &wgsl(include_str!("afsm/test.wgsl"), false), "test");
-    let blk_f = ctx.zeroed::<f64>("afsm blockers f64", BLK_F * triangles);
+    let blk_outline = ctx.zeroed::<f64>("afsm blocker outlines", BLK_OUTLINE * triangles);
+    let blk_plane = ctx.zeroed::<f64>("afsm blocker planes", BLK_PLANE * triangles);
     let blk_u = ctx.zeroed::<u32>("afsm blockers u32", BLK_U * triangles);
     let items = ctx.zeroed::<u32>("afsm items", triangles + 1);
     let items_total = ctx.zeroed::<u32>("afsm items total", 1);
     let bind_setup = ctx.bind(
         &setup,
-        &[&light_buf, &fparams, &uparams, &gpu.corners, &gpu.casters, &blk_f, &blk_u, &items],
+        &[
+            &light_buf,
+            &fparams,
+            &uparams,
+            &gpu.corners,
+            &gpu.casters,
+            &blk_outline,
+            &blk_plane,
+            &blk_u,
+            &items,
+        ],
     );
     let items_scan = scan.prepare(ctx, &items, triangles + 1, &items_total);
     let args = ctx.device.create_buffer(&wgpu::BufferDescriptor {
@@ -197,8 +211,18 @@ pub fn shade(
     });
     let bind_args = ctx.bind(&args_pipe, &[&uparams, &items, &args]);
     let shadow = ctx.zeroed::<u32>("afsm shadow", pixels);
-    let test_inputs =
-        [&fparams, &uparams, &items, &blk_f, &blk_u, &cell_start, &izb_f, &izb_u, &shadow];
+    let test_inputs = [
+        &fparams,
+        &uparams,
+        &items,
+        &blk_outline,
+        &blk_plane,
+        &blk_u,
+        &cell_start,
+        &izb_f,
+        &izb_u,
+        &shadow,
+    ];
     let test_bufs = TestBuffers::new(ctx, capacity);
     let bind_test = test_bufs.bind(ctx, &test, test_inputs);
     let indirect = |e: &mut wgpu::CommandEncoder, bind: &wgpu::BindGroup| {
@@ -284,12 +308,12 @@ impl TestBuffers {
         }
     }
 
-    /// The bind group of `test.wgsl`: its first nine buffers, then these.
+    /// The bind group of `test.wgsl`: its first ten buffers, then these.
     fn bind(
         &self,
         ctx: &GpuContext,
         test: &wgpu::ComputePipeline,
-        first: [&wgpu::Buffer; 9],
+        first: [&wgpu::Buffer; 10],
     ) -> wgpu::BindGroup {
         let mut all = first.to_vec();
         all.extend([&self.counters, &self.und_f, &self.und_u]);

@@ -11,14 +11,17 @@
 @group(0) @binding(2) var<storage, read> uparams: array<u32>;
 @group(0) @binding(3) var<storage, read> corners: array<f64>;
 @group(0) @binding(4) var<storage, read> casters: array<u32>;
-// Per triangle, BLK_F f64: outline (4 corners), lo, hi, num (3), den (3), dmin, dmax.
-@group(0) @binding(5) var<storage, read_write> blk_f: array<f64>;
+// Per triangle, BLK_OUTLINE f64: outline (4 corners), lo, hi.
+@group(0) @binding(5) var<storage, read_write> blk_outline: array<f64>;
+// Per triangle, BLK_PLANE f64: num (3), den (3), dmin, dmax.
+@group(0) @binding(6) var<storage, read_write> blk_plane: array<f64>;
 // Per triangle, BLK_U u32: corners | ORIENTATION_UNDECIDED, cell range x0, y0, x1, y1.
-@group(0) @binding(6) var<storage, read_write> blk_u: array<u32>;
+@group(0) @binding(7) var<storage, read_write> blk_u: array<u32>;
 // Per triangle, the number of grid cells it visits (0: it casts nothing).
-@group(0) @binding(7) var<storage, read_write> items: array<u32>;
+@group(0) @binding(8) var<storage, read_write> items: array<u32>;
 
-const BLK_F: u32 = 20u;
+const BLK_OUTLINE: u32 = 12u;
+const BLK_PLANE: u32 = 8u;
 const BLK_U: u32 = 5u;
 const ORIENTATION_UNDECIDED: u32 = 256u;
 
@@ -183,21 +186,22 @@ fn setup(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
             -2.0lf * nu * p.b / p.height,
         );
     }
-    let f = BLK_F * t;
+    let o = BLK_OUTLINE * t;
     for (var i = 0u; i < 4u; i = i + 1u) {
-        blk_f[f + 2u * i] = outline[i].x;
-        blk_f[f + 2u * i + 1u] = outline[i].y;
+        blk_outline[o + 2u * i] = outline[i].x;
+        blk_outline[o + 2u * i + 1u] = outline[i].y;
     }
-    blk_f[f + 8u] = lo.x;
-    blk_f[f + 9u] = lo.y;
-    blk_f[f + 10u] = hi.x;
-    blk_f[f + 11u] = hi.y;
+    blk_outline[o + 8u] = lo.x;
+    blk_outline[o + 9u] = lo.y;
+    blk_outline[o + 10u] = hi.x;
+    blk_outline[o + 11u] = hi.y;
+    let f = BLK_PLANE * t;
     for (var i = 0u; i < 3u; i = i + 1u) {
-        blk_f[f + 12u + i] = num[i];
-        blk_f[f + 15u + i] = den[i];
+        blk_plane[f + i] = num[i];
+        blk_plane[f + 3u + i] = den[i];
     }
-    blk_f[f + 18u] = dmin;
-    blk_f[f + 19u] = dmax;
+    blk_plane[f + 6u] = dmin;
+    blk_plane[f + 7u] = dmax;
     let g = uparams[1];
     let x0 = cell_axis(lo.x, fparams[1], g);
     let y0 = cell_axis(lo.y, fparams[2], g);

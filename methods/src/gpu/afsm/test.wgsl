@@ -10,21 +10,24 @@
 // [pixels, grid, triangles]
 @group(0) @binding(1) var<storage, read> uparams: array<u32>;
 @group(0) @binding(2) var<storage, read> item_start: array<u32>;
-@group(0) @binding(3) var<storage, read> blk_f: array<f64>;
-@group(0) @binding(4) var<storage, read> blk_u: array<u32>;
-@group(0) @binding(5) var<storage, read> cell_start: array<u32>;
-@group(0) @binding(6) var<storage, read> izb_f: array<f64>;
-@group(0) @binding(7) var<storage, read> izb_u: array<u32>;
+// The triangle records of setup.wgsl.
+@group(0) @binding(3) var<storage, read> blk_outline: array<f64>;
+@group(0) @binding(4) var<storage, read> blk_plane: array<f64>;
+@group(0) @binding(5) var<storage, read> blk_u: array<u32>;
+@group(0) @binding(6) var<storage, read> cell_start: array<u32>;
+@group(0) @binding(7) var<storage, read> izb_f: array<f64>;
+@group(0) @binding(8) var<storage, read> izb_u: array<u32>;
 // Per pixel: 1 when shadowed.
-@group(0) @binding(8) var<storage, read_write> shadow: array<atomic<u32>>;
+@group(0) @binding(9) var<storage, read_write> shadow: array<atomic<u32>>;
 // [tests (low word), tests (high word), undecided pairs]
-@group(0) @binding(9) var<storage, read_write> counters: array<atomic<u32>>;
+@group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>>;
 // Undecided pairs (as many as the list holds): 3 f64 (x, y, threshold) and 3 u32 (pixel, sample
 // triangle, caster triangle) each.
-@group(0) @binding(10) var<storage, read_write> und_f: array<f64>;
-@group(0) @binding(11) var<storage, read_write> und_u: array<u32>;
+@group(0) @binding(11) var<storage, read_write> und_f: array<f64>;
+@group(0) @binding(12) var<storage, read_write> und_u: array<u32>;
 
-const BLK_F: u32 = 20u;
+const BLK_OUTLINE: u32 = 12u;
+const BLK_PLANE: u32 = 8u;
 const BLK_U: u32 = 5u;
 const ORIENTATION_UNDECIDED: u32 = 256u;
 
@@ -71,22 +74,23 @@ fn test(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     let x0 = blk_u[u + 1u];
     let width = blk_u[u + 3u] - x0 + 1u;
     let cell = (blk_u[u + 2u] + local / width) * uparams[1] + x0 + local % width;
-    let f = BLK_F * t;
+    let o = BLK_OUTLINE * t;
     var outline: array<vec2<f64>, 5>;
     for (var e = 0u; e < count; e = e + 1u) {
-        outline[e] = vec2<f64>(blk_f[f + 2u * e], blk_f[f + 2u * e + 1u]);
+        outline[e] = vec2<f64>(blk_outline[o + 2u * e], blk_outline[o + 2u * e + 1u]);
     }
     outline[count] = outline[0];
-    let lo = vec2<f64>(blk_f[f + 8u], blk_f[f + 9u]);
-    let hi = vec2<f64>(blk_f[f + 10u], blk_f[f + 11u]);
-    let n0 = blk_f[f + 12u];
-    let n1 = blk_f[f + 13u];
-    let n2 = blk_f[f + 14u];
-    let d0 = blk_f[f + 15u];
-    let d1 = blk_f[f + 16u];
-    let d2 = blk_f[f + 17u];
-    let dmin = blk_f[f + 18u];
-    let dmax = blk_f[f + 19u];
+    let lo = vec2<f64>(blk_outline[o + 8u], blk_outline[o + 9u]);
+    let hi = vec2<f64>(blk_outline[o + 10u], blk_outline[o + 11u]);
+    let f = BLK_PLANE * t;
+    let n0 = blk_plane[f];
+    let n1 = blk_plane[f + 1u];
+    let n2 = blk_plane[f + 2u];
+    let d0 = blk_plane[f + 3u];
+    let d1 = blk_plane[f + 4u];
+    let d2 = blk_plane[f + 5u];
+    let dmin = blk_plane[f + 6u];
+    let dmax = blk_plane[f + 7u];
     var tested = 0u;
     let end = cell_start[cell + 1u];
     for (var k = cell_start[cell]; k < end; k = k + 1u) {
