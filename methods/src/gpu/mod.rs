@@ -18,8 +18,8 @@
 //! `--device gpu` (see [`crate::registry`]) runs a technique's GPU kernels on the adapter
 //! [`GpuContext`] chooses; `--device cpu` (the default) its CPU twin.
 
-mod context;
 pub mod afsm;
+mod context;
 pub mod frame;
 
 pub use context::{GpuContext, Timing, ADAPTER_ENV, BACKEND_ENV};
