@@ -18,6 +18,7 @@
 //! `--device gpu` (see [`crate::registry`]) runs a technique's GPU kernels on the adapter
 //! [`GpuContext`] chooses; `--device cpu` (the default) its CPU twin.
 
+pub mod afsm;
 mod context;
 pub mod frame;
 pub mod pcf;

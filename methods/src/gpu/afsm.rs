@@ -1,0 +1,368 @@
+//! `afsm` on the GPU: the alias-free shadow map (Aila and Laine 2004, "Alias-Free Shadow
+//! Maps", EGSR 2004, sections 3 and 5; `../shared/papers/`) as an irregular z-buffer, the
+//! form GPU versions of the technique take: the sampling points are binned into a regular
+//! grid of light-space cells instead of the paper's 2D BSP, and each caster triangle visits
+//! the cells its light-space bounding box covers.
+//!
+//! Stages (each one GPU submission, timed by [`GpuContext::stage`]):
+//!
+//! - [`STAGE_TRANSFORMATION`] (`transform.wgsl`): every pixel centre's G-buffer surface point
+//!   moved to the light's image plane with its shadow threshold depth, as
+//!   [`afsm::samples::transform_samples`] does at rate 1, in `f64`.
+//! - [`STAGE_IZB`] (`izb.wgsl`, `scan.wgsl`): the samples binned into a [`grid_size`] square
+//!   grid over the light image: per-cell counts by `atomicAdd` (which also gives each sample
+//!   its rank in its cell), an exclusive scan of the counts, and a scatter into one sample
+//!   array in which each cell's samples are contiguous.
+//! - [`STAGE_RASTERIZATION`] (`setup.wgsl`, `scan.wgsl`, `args.wgsl`, `test.wgsl`): each
+//!   caster triangle is set up as [`afsm::blockers::Blocker::new`] does (in `f64`, the same
+//!   operations in the same order), the number of cells its bounding box covers is scanned
+//!   over the triangles, and one invocation per (triangle, cell) item, dispatched indirectly,
+//!   tests the cell's samples with the CPU's predicate
+//!   ([`Blocker::shadows`](afsm::blockers::Blocker::shadows)): inside the bounding box,
+//!   not the sample's own triangle, the caster's plane depth (clamped to its corners' range)
+//!   in front of the sample's threshold, and inside the outline by `orient2d` with the
+//!   top-left rule. A covered sample's pixel is marked by `atomicOr`.
+//! - [`STAGE_UNDECIDED`]: `orient2d` is the robust crate's filter (its first stage, with the
+//!   same error bound [`ORIENT2D_FILTER_BOUND`]); where it decides, it returns what the CPU's
+//!   `orient2d` returns. The (sample, triangle) pairs it cannot decide (an edge test, or the
+//!   triangle's winding) are appended to an undecided list (atomic counter) and resolved on
+//!   the CPU by `Blocker::new(..).shadows(..)` itself. The depth comparison needs no such
+//!   care: its operands are computed bit for bit as on the CPU.
+//!
+//! The result is therefore the CPU `afsm`'s, pixel for pixel.
+//!
+//! # Choices
+//!
+//! - **Grid.** [`grid_size`]: a square grid over the light image (`LIGHT_IMAGE_RES` square,
+//!   to which the light's projector is fitted, so every surface point falls in it; points
+//!   outside are clamped to the border cells), about [`PIXELS_PER_CELL`] pixels of the image
+//!   per cell (35 x 35 cells at 160 x 120, 222 x 222 at 1024 x 768). The samples fill only
+//!   part of the light image, so the cells they occupy hold more than that on average.
+//! - **Footprint.** A triangle visits every cell its bounding box touches (conservative);
+//!   the per-sample bounding-box test then admits exactly the samples the CPU's leaves test.
+//! - **Culling.** Neither of the CPU's cullings runs (they never change a pixel); the
+//!   options are accepted and recorded as the CPU's are.
+//! - **Counters.** `sampling_points_tested` counts the samples inside a triangle's bounding
+//!   box in the cells it visits, as the CPU counts them in its leaves (less the dark samples
+//!   the CPU's occlusion culling skips), summed by `atomicAdd` on the GPU. The undecided
+//!   pairs are counted in a note of the run record.
+//! - **Transparency.** Semi-transparent casters attenuate in triangle order on the CPU; the
+//!   GPU path takes opaque casters only and reports scenes with `transparency` as not
+//!   applicable.
+
+use super::{frame::projector_data, GpuContext, GpuError, GpuFrame, COMMON_WGSL};
+use crate::{
+    afsm::{
+        self, blockers::Blocker, samples::Sample, AfsmOptions, AliasFreeShadowMap, LIGHT_IMAGE_RES,
+        SHADOW_OFFSET, STAGE_RASTERIZATION, STAGE_TRANSFORMATION,
+    },
+    frame::Frame,
+    method::{MethodError, ShadowMethod, Visibility},
+};
+use instrumentation::Recorder;
+
+mod scan;
+
+/// Name of the stage that bins the samples into the grid.
+pub const STAGE_IZB: &str = "IZB construction";
+/// Name of the stage that resolves the undecided pairs on the CPU.
+pub const STAGE_UNDECIDED: &str = "undecided tests (CPU)";
+
+/// Pixels of the light image per grid cell (see [`grid_size`]).
+pub const PIXELS_PER_CELL: u32 = 16;
+
+/// The error bound of the robust crate's `orient2d` filter (its `THETA`): the sign of
+/// `det` is certain when `|det| >= THETA * |detleft + detright|`.
+pub const ORIENT2D_FILTER_BOUND: f64 = 3.3306690621773722e-16;
+
+/// Cells per side of the grid for an image of `pixels` pixels: `ceil(sqrt(pixels / 16))`,
+/// in `1..=4096`.
+pub fn grid_size(pixels: usize) -> u32 {
+    let cells = (pixels as f64 / f64::from(PIXELS_PER_CELL)).sqrt().ceil();
+    cells.clamp(1.0, 4096.0) as u32
+}
+
+const WG: u32 = 64;
+/// `f64` per triangle of `setup.wgsl`'s outline records (4 corners and the bounding box).
+const BLK_OUTLINE: usize = 12;
+/// `f64` per triangle of `setup.wgsl`'s plane records (depth function and range); the
+/// records are split so that each buffer stays within the adapter's binding size limit.
+const BLK_PLANE: usize = 8;
+/// `u32` per triangle record of `setup.wgsl`.
+const BLK_U: usize = 5;
+
+/// The alias-free shadow map on the GPU (`afsm` with `--device gpu`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct GpuAfsm {
+    /// The CPU `afsm`'s options (rate 1; the culling switches have no effect here).
+    pub options: AfsmOptions,
+}
+
+/// What [`shade`] returns.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AfsmGpuOutput {
+    /// Per pixel, 1 lit, 0 shadowed.
+    pub lit: Vec<f32>,
+    /// (Sample, triangle) pairs the GPU's filter could not decide, resolved on the CPU.
+    pub undecided: u64,
+    /// Cells per side of the grid.
+    pub grid: u32,
+}
+
+/// The kernels of `afsm` for `frame` with its G-buffer and geometry in `gpu`: the light per
+/// pixel; adds `sampling_points_tested` to `rec`'s counters and a note with the grid and the
+/// undecided pairs. `frame` supplies the light, the scene's size (for the shadow offset) and
+/// the triangles for the CPU's resolution of undecided pairs.
+pub fn shade(
+    ctx: &GpuContext,
+    gpu: &GpuFrame,
+    frame: &Frame<'_>,
+    rec: &mut Recorder,
+) -> Result<AfsmGpuOutput, MethodError> {
+    let light = frame.light_projector(LIGHT_IMAGE_RES);
+    let offset = SHADOW_OFFSET * afsm::scene_diagonal(&frame.geometry);
+    let pixels = gpu.pixels();
+    let grid = grid_size(pixels);
+    let triangles = gpu.triangles as usize;
+    let cells = grid as usize * grid as usize;
+    let capacity = pixels.max(4096);
+    let wgsl = |src: &str, grid_fn: bool| {
+        let g = if grid_fn { include_str!("afsm/grid.wgsl") } else { "" };
+        format!("{COMMON_WGSL}{g}{src}")
+    };
+    let light_buf = ctx.upload("afsm light", &projector_data(&light));
+    let fparams = ctx.upload(
+        "afsm fparams",
+        &[
+            offset,
+            f64::from(grid) / light.width,
+            f64::from(grid) / light.height,
+            ORIENT2D_FILTER_BOUND,
+        ],
+    );
+    let uparams = ctx.upload("afsm uparams", &[pixels as u32, grid, gpu.triangles]);
+    let scan = scan::Scan::new(ctx);
+
+    // Transformation of samples.
+    let transform = ctx.pipeline(
+        "afsm transform",
+        &wgsl(include_str!("afsm/transform.wgsl"), false),
+        "transform",
+    );
+    let sample_f = ctx.zeroed::<f64>("afsm sample xyz", 3 * pixels);
+    let sample_tri = ctx.zeroed::<u32>("afsm sample triangle", pixels);
+    let bind = ctx.bind(
+        &transform,
+        &[&light_buf, &fparams, &uparams, &gpu.triangle, &gpu.position, &sample_f, &sample_tri],
+    );
+    ctx.stage(rec, STAGE_TRANSFORMATION, |e| {
+        GpuContext::dispatch(e, &transform, &bind, GpuContext::groups_1d(pixels, WG));
+    })?;
+
+    // IZB construction.
+    let izb_src = wgsl(include_str!("afsm/izb.wgsl"), true);
+    let count = ctx.pipeline("afsm count", &izb_src, "count");
+    let scatter = ctx.pipeline("afsm scatter", &izb_src, "scatter");
+    let slot = ctx.zeroed::<u32>("afsm slot", 2 * pixels);
+    let cell_start = ctx.zeroed::<u32>("afsm cells", cells + 1);
+    let samples = ctx.zeroed::<u32>("afsm samples", 1);
+    let izb_f = ctx.zeroed::<f64>("afsm izb xyz", 3 * pixels);
+    let izb_u = ctx.zeroed::<u32>("afsm izb ids", 2 * pixels);
+    let izb_bufs = [&fparams, &uparams, &sample_f, &sample_tri, &slot, &cell_start, &izb_f, &izb_u];
+    let bind_count = ctx.bind(&count, &izb_bufs);
+    let bind_scatter = ctx.bind(&scatter, &izb_bufs);
+    let cell_scan = scan.prepare(ctx, &cell_start, cells + 1, &samples);
+    ctx.stage(rec, STAGE_IZB, |e| {
+        let groups = GpuContext::groups_1d(pixels, WG);
+        GpuContext::dispatch(e, &count, &bind_count, groups);
+        cell_scan.record(e);
+        GpuContext::dispatch(e, &scatter, &bind_scatter, groups);
+    })?;
+
+    // Rasterization of blockers.
+    let setup = ctx.pipeline("afsm setup", &wgsl(include_str!("afsm/setup.wgsl"), true), "setup");
+    let args_pipe = ctx.pipeline("afsm args", include_str!("afsm/args.wgsl"), "args_main");
+    let test = ctx.pipeline("afsm test", &wgsl(include_str!("afsm/test.wgsl"), false), "test");
+    let blk_outline = ctx.zeroed::<f64>("afsm blocker outlines", BLK_OUTLINE * triangles);
+    let blk_plane = ctx.zeroed::<f64>("afsm blocker planes", BLK_PLANE * triangles);
+    let blk_u = ctx.zeroed::<u32>("afsm blockers u32", BLK_U * triangles);
+    let items = ctx.zeroed::<u32>("afsm items", triangles + 1);
+    let items_total = ctx.zeroed::<u32>("afsm items total", 1);
+    let bind_setup = ctx.bind(
+        &setup,
+        &[
+            &light_buf,
+            &fparams,
+            &uparams,
+            &gpu.corners,
+            &gpu.casters,
+            &blk_outline,
+            &blk_plane,
+            &blk_u,
+            &items,
+        ],
+    );
+    let items_scan = scan.prepare(ctx, &items, triangles + 1, &items_total);
+    let args = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("afsm test dispatch"),
+        size: 12,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
+        mapped_at_creation: false,
+    });
+    let bind_args = ctx.bind(&args_pipe, &[&uparams, &items, &args]);
+    let shadow = ctx.zeroed::<u32>("afsm shadow", pixels);
+    let test_inputs = [
+        &fparams,
+        &uparams,
+        &items,
+        &blk_outline,
+        &blk_plane,
+        &blk_u,
+        &cell_start,
+        &izb_f,
+        &izb_u,
+        &shadow,
+    ];
+    let test_bufs = TestBuffers::new(ctx, capacity);
+    let bind_test = test_bufs.bind(ctx, &test, test_inputs);
+    let indirect = |e: &mut wgpu::CommandEncoder, bind: &wgpu::BindGroup| {
+        let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: None,
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&test);
+        pass.set_bind_group(0, bind, &[]);
+        pass.dispatch_workgroups_indirect(&args, 0);
+    };
+    ctx.stage(rec, STAGE_RASTERIZATION, |e| {
+        GpuContext::dispatch(e, &setup, &bind_setup, GpuContext::groups_1d(triangles, WG));
+        items_scan.record(e);
+        GpuContext::dispatch(e, &args_pipe, &bind_args, (1, 1, 1));
+        indirect(e, &bind_test);
+    })?;
+    let (mut tested, mut undecided) = test_bufs.counts(ctx)?;
+    let mut pairs = test_bufs;
+    if undecided > capacity {
+        // The list overflowed: the sample tests again with room for every pair (marking a
+        // shadowed pixel twice changes nothing), timed as part of the same stage.
+        pairs = TestBuffers::new(ctx, undecided);
+        let bind = pairs.bind(ctx, &test, test_inputs);
+        ctx.stage(rec, STAGE_RASTERIZATION, |e| indirect(e, &bind))?;
+        if let Some(again) = rec.stages.stages.pop() {
+            if let Some(first) = rec.stages.stages.iter_mut().rev().find(|s| s.name == again.name) {
+                first.ms += again.ms;
+            }
+        }
+        (tested, undecided) = pairs.counts(ctx)?;
+    }
+    let mut shadowed: Vec<u32> = ctx.read(&shadow)?;
+    shadowed.truncate(pixels);
+
+    // Undecided tests (CPU).
+    let (pf, pu): (Vec<f64>, Vec<u32>) = if undecided > 0 {
+        (ctx.read(&pairs.und_f)?, ctx.read(&pairs.und_u)?)
+    } else {
+        (Vec::new(), Vec::new())
+    };
+    rec.stages.time(STAGE_UNDECIDED, || {
+        for k in 0..undecided {
+            let (pixel, t) = (pu[3 * k] as usize, pu[3 * k + 2] as usize);
+            let s = Sample {
+                x: pf[3 * k],
+                y: pf[3 * k + 1],
+                zt: pf[3 * k + 2],
+                id: pixel as u32,
+                tri: pu[3 * k + 1],
+            };
+            if Blocker::new(&frame.geometry, t, &light).is_some_and(|b| b.shadows(&s)) {
+                shadowed[pixel] = 1;
+            }
+        }
+    });
+    rec.counters.sampling_points_tested += tested;
+    rec.notes.push(format!(
+        "afsm (GPU): {grid} x {grid} grid cells over the light image; {undecided} undecided \
+         (sample, triangle) pairs resolved on the CPU"
+    ));
+    let lit = shadowed.iter().map(|&s| if s == 0 { 1.0 } else { 0.0 }).collect();
+    Ok(AfsmGpuOutput { lit, undecided: undecided as u64, grid })
+}
+
+/// The counters and the undecided list of the sample tests.
+struct TestBuffers {
+    /// Tests (low and high word) and undecided pairs.
+    counters: wgpu::Buffer,
+    /// Undecided pairs: light image x, y and threshold depth.
+    und_f: wgpu::Buffer,
+    /// Undecided pairs: pixel, sample triangle, caster triangle.
+    und_u: wgpu::Buffer,
+}
+
+impl TestBuffers {
+    /// Zeroed counters and a list with room for `capacity` pairs.
+    fn new(ctx: &GpuContext, capacity: usize) -> Self {
+        Self {
+            counters: ctx.zeroed::<u32>("afsm counters", 3),
+            und_f: ctx.zeroed::<f64>("afsm undecided xyz", 3 * capacity),
+            und_u: ctx.zeroed::<u32>("afsm undecided ids", 3 * capacity),
+        }
+    }
+
+    /// The bind group of `test.wgsl`: its first ten buffers, then these.
+    fn bind(
+        &self,
+        ctx: &GpuContext,
+        test: &wgpu::ComputePipeline,
+        first: [&wgpu::Buffer; 10],
+    ) -> wgpu::BindGroup {
+        let mut all = first.to_vec();
+        all.extend([&self.counters, &self.und_f, &self.und_u]);
+        ctx.bind(test, &all)
+    }
+
+    /// The tests made and the undecided pairs found.
+    fn counts(&self, ctx: &GpuContext) -> Result<(u64, usize), GpuError> {
+        let c: Vec<u32> = ctx.read(&self.counters)?;
+        Ok((u64::from(c[0]) | u64::from(c[1]) << 32, c[2] as usize))
+    }
+}
+
+impl GpuAfsm {
+    /// The CPU method with the same options.
+    fn twin(&self) -> AliasFreeShadowMap {
+        AliasFreeShadowMap::pixel_centres(self.options)
+    }
+}
+
+impl ShadowMethod for GpuAfsm {
+    fn name(&self) -> &'static str {
+        self.twin().name()
+    }
+
+    fn params(&self) -> serde_json::Map<String, serde_json::Value> {
+        let mut m = self.twin().params();
+        m.insert("device".into(), "gpu".into());
+        m
+    }
+
+    fn run(&self, frame: &Frame<'_>, rec: &mut Recorder) -> Result<Visibility, MethodError> {
+        self.twin().validate()?;
+        if frame.effects.transparency {
+            return Err(MethodError::NotApplicable(
+                "afsm on the GPU takes opaque casters only: semi-transparent casters attenuate \
+                 in triangle order (run it with --device cpu)"
+                    .into(),
+            ));
+        }
+        let ctx = GpuContext::shared()?;
+        ctx.describe(rec);
+        let gpu = GpuFrame::for_run(ctx, frame, rec)?;
+        let out = shade(ctx, &gpu, frame, rec)?;
+        Ok(Visibility {
+            width: frame.width(),
+            height: frame.height(),
+            lit: out.lit,
+            transmittance: None,
+        })
+    }
+}

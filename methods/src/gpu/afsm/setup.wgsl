@@ -1,0 +1,221 @@
+// Stage "rasterization of blockers", triangle setup (afsm::blockers::Blocker::new, mirrored
+// in f64 with the CPU's operations in its order): the light's projection of each caster
+// triangle (clipped at a spot light's near plane), wound positively, its bounding box, depth
+// range and plane depth function, and the grid cells its bounding box covers. Appended to
+// common.wgsl and grid.wgsl.
+
+@group(0) @binding(0) var<storage, read> light_data: array<f64, 18>;
+// [offset, cell scale x, cell scale y, orient2d filter bound]
+@group(0) @binding(1) var<storage, read> fparams: array<f64>;
+// [pixels, grid, triangles]
+@group(0) @binding(2) var<storage, read> uparams: array<u32>;
+@group(0) @binding(3) var<storage, read> corners: array<f64>;
+@group(0) @binding(4) var<storage, read> casters: array<u32>;
+// Per triangle, BLK_OUTLINE f64: outline (4 corners), lo, hi.
+@group(0) @binding(5) var<storage, read_write> blk_outline: array<f64>;
+// Per triangle, BLK_PLANE f64: num (3), den (3), dmin, dmax.
+@group(0) @binding(6) var<storage, read_write> blk_plane: array<f64>;
+// Per triangle, BLK_U u32: corners | ORIENTATION_UNDECIDED, cell range x0, y0, x1, y1.
+@group(0) @binding(7) var<storage, read_write> blk_u: array<u32>;
+// Per triangle, the number of grid cells it visits (0: it casts nothing).
+@group(0) @binding(8) var<storage, read_write> items: array<u32>;
+
+const BLK_OUTLINE: u32 = 12u;
+const BLK_PLANE: u32 = 8u;
+const BLK_U: u32 = 5u;
+const ORIENTATION_UNDECIDED: u32 = 256u;
+
+fn corner(t: u32, i: u32) -> vec3<f64> {
+    let b = 9u * t + 3u * i;
+    return vec3<f64>(corners[b], corners[b + 1u], corners[b + 2u]);
+}
+
+// glam's DVec3::cross.
+fn cross_glam(a: vec3<f64>, b: vec3<f64>) -> vec3<f64> {
+    return vec3<f64>(a.y * b.z - b.y * a.z, a.z * b.x - b.z * a.x, a.x * b.y - b.x * a.y);
+}
+
+// Lexicographic (x, y, z) < as Rust's tuple comparison.
+fn lex_less(a: vec3<f64>, b: vec3<f64>) -> bool {
+    if a.x != b.x {
+        return a.x < b.x;
+    }
+    if a.y != b.y {
+        return a.y < b.y;
+    }
+    return a.z < b.z;
+}
+
+// orient2d's filter (the robust crate's first stage): 1 or -1 when the sign of det is
+// certain (and then det is the value orient2d returns), 0 when det is certainly 0, 2 when
+// the filter cannot decide.
+fn orient_filter(a: vec2<f64>, b: vec2<f64>, c: vec2<f64>) -> i32 {
+    let detleft = (a.x - c.x) * (b.y - c.y);
+    let detright = (a.y - c.y) * (b.x - c.x);
+    let det = detleft - detright;
+    let errbound = fparams[3] * abs(detleft + detright);
+    if det >= errbound || -det >= errbound {
+        if det > 0.0lf {
+            return 1;
+        }
+        if det < 0.0lf {
+            return -1;
+        }
+        return 0;
+    }
+    return 2;
+}
+
+@compute @workgroup_size(64)
+fn setup(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let t = gid.x + gid.y * (nwg.x * 64u);
+    if t >= uparams[2] {
+        return;
+    }
+    items[t] = 0u;
+    if casters[t] == 0u {
+        return;
+    }
+    var c = array<vec3<f64>, 3>(corner(t, 0u), corner(t, 1u), corner(t, 2u));
+    let normal = cross_glam(c[1] - c[0], c[2] - c[0]);
+    if (normal.x == 0.0lf && normal.y == 0.0lf && normal.z == 0.0lf)
+        || !(is_finite64(normal.x) && is_finite64(normal.y) && is_finite64(normal.z)) {
+        return;
+    }
+    let p = proj_load(light_data);
+    var world: array<vec3<f64>, 4>;
+    var count = 3u;
+    if p.kind == 1u {
+        // raster::clip_near.
+        var d: array<f64, 3>;
+        for (var i = 0u; i < 3u; i = i + 1u) {
+            d[i] = dot3(c[i] - p.origin, p.forward);
+        }
+        count = 0u;
+        for (var i = 0u; i < 3u; i = i + 1u) {
+            let j = (i + 1u) % 3u;
+            let in_i = d[i] >= p.near;
+            if in_i {
+                world[count] = c[i];
+                count = count + 1u;
+            }
+            if in_i != (d[j] >= p.near) {
+                var pp = c[j];
+                var dp = d[j];
+                var q = c[i];
+                var dq = d[i];
+                if lex_less(c[i], c[j]) {
+                    pp = c[i];
+                    dp = d[i];
+                    q = c[j];
+                    dq = d[j];
+                }
+                let s = (p.near - dp) / (dq - dp);
+                world[count] = pp + (q - pp) * s;
+                count = count + 1u;
+            }
+        }
+    } else {
+        world[0] = c[0];
+        world[1] = c[1];
+        world[2] = c[2];
+    }
+    if count < 3u {
+        return;
+    }
+    var outline: array<vec2<f64>, 4>;
+    var depth: array<f64, 4>;
+    for (var i = 0u; i < count; i = i + 1u) {
+        let r = proj_unclipped(p, world[i]);
+        if !(is_finite64(r.x) && is_finite64(r.y)) {
+            return;
+        }
+        outline[i] = r.xy;
+        depth[i] = r.z;
+    }
+    var dmin = depth[0];
+    var dmax = depth[0];
+    for (var i = 1u; i < count; i = i + 1u) {
+        dmin = min(dmin, depth[i]);
+        dmax = max(dmax, depth[i]);
+    }
+    if !(is_finite64(dmin) && is_finite64(dmax)) {
+        return;
+    }
+    // The first fan triangle of non-zero orientation gives the winding.
+    var orientation = 0;
+    for (var i = 1u; i + 1u < count; i = i + 1u) {
+        orientation = orient_filter(outline[0], outline[i], outline[i + 1u]);
+        if orientation != 0 {
+            break;
+        }
+    }
+    if orientation == 0 {
+        return;
+    }
+    if orientation == -1 {
+        for (var i = 0u; i < count / 2u; i = i + 1u) {
+            let s = outline[i];
+            outline[i] = outline[count - 1u - i];
+            outline[count - 1u - i] = s;
+        }
+    }
+    var lo = outline[0];
+    var hi = outline[0];
+    for (var i = 1u; i < count; i = i + 1u) {
+        lo = min(lo, outline[i]);
+        hi = max(hi, outline[i]);
+    }
+    let offset = dot3(normal, c[0]);
+    let nr = dot3(normal, p.right);
+    let nu = dot3(normal, p.up);
+    let nf = dot3(normal, p.forward);
+    let no = dot3(normal, p.origin);
+    var num = array<f64, 3>(offset - no, 0.0lf, 0.0lf);
+    var den = array<f64, 3>(nf, 0.0lf, 0.0lf);
+    if p.kind == 0u {
+        num = array<f64, 3>(
+            offset - no + nr * p.a - nu * p.b,
+            -2.0lf * nr * p.a / p.width,
+            2.0lf * nu * p.b / p.height,
+        );
+    } else {
+        den = array<f64, 3>(
+            nf - nr * p.a + nu * p.b,
+            2.0lf * nr * p.a / p.width,
+            -2.0lf * nu * p.b / p.height,
+        );
+    }
+    let o = BLK_OUTLINE * t;
+    for (var i = 0u; i < 4u; i = i + 1u) {
+        blk_outline[o + 2u * i] = outline[i].x;
+        blk_outline[o + 2u * i + 1u] = outline[i].y;
+    }
+    blk_outline[o + 8u] = lo.x;
+    blk_outline[o + 9u] = lo.y;
+    blk_outline[o + 10u] = hi.x;
+    blk_outline[o + 11u] = hi.y;
+    let f = BLK_PLANE * t;
+    for (var i = 0u; i < 3u; i = i + 1u) {
+        blk_plane[f + i] = num[i];
+        blk_plane[f + 3u + i] = den[i];
+    }
+    blk_plane[f + 6u] = dmin;
+    blk_plane[f + 7u] = dmax;
+    let g = uparams[1];
+    let x0 = cell_axis(lo.x, fparams[1], g);
+    let y0 = cell_axis(lo.y, fparams[2], g);
+    let x1 = cell_axis(hi.x, fparams[1], g);
+    let y1 = cell_axis(hi.y, fparams[2], g);
+    var flags = count;
+    if orientation == 2 {
+        flags = flags | ORIENTATION_UNDECIDED;
+    }
+    let u = BLK_U * t;
+    blk_u[u] = flags;
+    blk_u[u + 1u] = x0;
+    blk_u[u + 2u] = y0;
+    blk_u[u + 3u] = x1;
+    blk_u[u + 4u] = y1;
+    items[t] = (x1 - x0 + 1u) * (y1 - y0 + 1u);
+}

@@ -1,0 +1,153 @@
+// Stage "rasterization of blockers", sample tests: one invocation per (triangle, grid cell)
+// item tests every sample of the cell with the CPU's predicate
+// (afsm::blockers::Blocker::shadows): inside the triangle's bounding box (counted as a test),
+// not on the triangle itself, caster depth in front of the sample's threshold, and inside the
+// outline by orient2d with the top-left rule. Pairs the orient2d filter cannot decide go to
+// the undecided list for the CPU. Appended to common.wgsl.
+
+// [offset, cell scale x, cell scale y, orient2d filter bound]
+@group(0) @binding(0) var<storage, read> fparams: array<f64>;
+// [pixels, grid, triangles]
+@group(0) @binding(1) var<storage, read> uparams: array<u32>;
+@group(0) @binding(2) var<storage, read> item_start: array<u32>;
+// The triangle records of setup.wgsl.
+@group(0) @binding(3) var<storage, read> blk_outline: array<f64>;
+@group(0) @binding(4) var<storage, read> blk_plane: array<f64>;
+@group(0) @binding(5) var<storage, read> blk_u: array<u32>;
+@group(0) @binding(6) var<storage, read> cell_start: array<u32>;
+@group(0) @binding(7) var<storage, read> izb_f: array<f64>;
+@group(0) @binding(8) var<storage, read> izb_u: array<u32>;
+// Per pixel: 1 when shadowed.
+@group(0) @binding(9) var<storage, read_write> shadow: array<atomic<u32>>;
+// [tests (low word), tests (high word), undecided pairs]
+@group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>>;
+// Undecided pairs (as many as the list holds): 3 f64 (x, y, threshold) and 3 u32 (pixel, sample
+// triangle, caster triangle) each.
+@group(0) @binding(11) var<storage, read_write> und_f: array<f64>;
+@group(0) @binding(12) var<storage, read_write> und_u: array<u32>;
+
+const BLK_OUTLINE: u32 = 12u;
+const BLK_PLANE: u32 = 8u;
+const BLK_U: u32 = 5u;
+const ORIENTATION_UNDECIDED: u32 = 256u;
+
+// raster::inside_edge with orient2d's filter: 0 outside, 1 inside, 2 undecided.
+fn inside_edge(a: vec2<f64>, b: vec2<f64>, p: vec2<f64>) -> u32 {
+    let detleft = (a.x - p.x) * (b.y - p.y);
+    let detright = (a.y - p.y) * (b.x - p.x);
+    let det = detleft - detright;
+    let errbound = fparams[3] * abs(detleft + detright);
+    if !(det >= errbound || -det >= errbound) {
+        return 2u;
+    }
+    if det != 0.0lf {
+        return select(0u, 1u, det > 0.0lf);
+    }
+    let d = b - a;
+    return select(0u, 1u, d.y < 0.0lf || (d.y == 0.0lf && d.x > 0.0lf));
+}
+
+@compute @workgroup_size(64)
+fn test(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = gid.x + gid.y * (nwg.x * 64u);
+    let triangles = uparams[2];
+    if i >= item_start[triangles] {
+        return;
+    }
+    // The triangle: the last with item_start[t] <= i.
+    var lo_t = 0u;
+    var hi_t = triangles;
+    while hi_t - lo_t > 1u {
+        let mid = (lo_t + hi_t) / 2u;
+        if item_start[mid] <= i {
+            lo_t = mid;
+        } else {
+            hi_t = mid;
+        }
+    }
+    let t = lo_t;
+    let local = i - item_start[t];
+    let u = BLK_U * t;
+    let flags = blk_u[u];
+    let count = flags & 255u;
+    let undecided_triangle = (flags & ORIENTATION_UNDECIDED) != 0u;
+    let x0 = blk_u[u + 1u];
+    let width = blk_u[u + 3u] - x0 + 1u;
+    let cell = (blk_u[u + 2u] + local / width) * uparams[1] + x0 + local % width;
+    let o = BLK_OUTLINE * t;
+    var outline: array<vec2<f64>, 5>;
+    for (var e = 0u; e < count; e = e + 1u) {
+        outline[e] = vec2<f64>(blk_outline[o + 2u * e], blk_outline[o + 2u * e + 1u]);
+    }
+    outline[count] = outline[0];
+    let lo = vec2<f64>(blk_outline[o + 8u], blk_outline[o + 9u]);
+    let hi = vec2<f64>(blk_outline[o + 10u], blk_outline[o + 11u]);
+    let f = BLK_PLANE * t;
+    let n0 = blk_plane[f];
+    let n1 = blk_plane[f + 1u];
+    let n2 = blk_plane[f + 2u];
+    let d0 = blk_plane[f + 3u];
+    let d1 = blk_plane[f + 4u];
+    let d2 = blk_plane[f + 5u];
+    let dmin = blk_plane[f + 6u];
+    let dmax = blk_plane[f + 7u];
+    var tested = 0u;
+    let end = cell_start[cell + 1u];
+    for (var k = cell_start[cell]; k < end; k = k + 1u) {
+        let x = izb_f[3u * k];
+        let y = izb_f[3u * k + 1u];
+        if !(x >= lo.x && x <= hi.x && y >= lo.y && y <= hi.y) {
+            continue;
+        }
+        tested = tested + 1u;
+        let tri = izb_u[2u * k + 1u];
+        if tri == t {
+            continue;
+        }
+        // Blocker::depth_at.
+        var depth = (n0 + n1 * x + n2 * y) / (d0 + d1 * x + d2 * y);
+        if is_finite64(depth) {
+            depth = clamp(depth, dmin, dmax);
+        } else {
+            depth = dmin;
+        }
+        let zt = izb_f[3u * k + 2u];
+        if !(depth < zt) {
+            continue;
+        }
+        var inside = 1u;
+        if undecided_triangle {
+            inside = 2u;
+        } else {
+            let q = vec2<f64>(x, y);
+            for (var e = 0u; e < count; e = e + 1u) {
+                let s = inside_edge(outline[e], outline[e + 1u], q);
+                if s == 0u {
+                    inside = 0u;
+                    break;
+                }
+                inside = max(inside, s);
+            }
+        }
+        let pixel = izb_u[2u * k];
+        if inside == 1u {
+            atomicOr(&shadow[pixel], 1u);
+        } else if inside == 2u {
+            let at = atomicAdd(&counters[2], 1u);
+            if at < arrayLength(&und_u) / 3u {
+                und_f[3u * at] = x;
+                und_f[3u * at + 1u] = y;
+                und_f[3u * at + 2u] = zt;
+                und_u[3u * at] = pixel;
+                und_u[3u * at + 1u] = tri;
+                und_u[3u * at + 2u] = t;
+            }
+        }
+    }
+    if tested > 0u {
+        let old = atomicAdd(&counters[0], tested);
+        if old > 0xffffffffu - tested {
+            atomicAdd(&counters[1], 1u);
+        }
+    }
+}
