@@ -131,6 +131,7 @@ fn gpu_method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMetho
         "pcf-bs-fast-4x4" => bs(Variant::Fast4x4),
         "pcf-gems16" => gems(GemsSamples::Sixteen),
         "pcf-gems4" => gems(GemsSamples::FourDithered),
+        "afsm" => Ok(Box::new(crate::gpu::afsm::GpuAfsm { options: AfsmOptions::default() })),
         _ => Err(MethodError::InvalidOption {
             option: "--device",
             message: format!(
@@ -171,6 +172,7 @@ pub const GPU_METHODS: &[&str] = &[
     "pcf-bs-fast-4x4",
     "pcf-gems16",
     "pcf-gems4",
+    "afsm",
 ];
 
 /// The CPU method called `name`, configured by `options` and validated.
