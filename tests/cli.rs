@@ -144,6 +144,41 @@ fn render_takes_a_mesh_file_as_scene() {
 }
 
 #[test]
+fn render_on_the_gpu_names_the_adapter_and_the_timing_in_run_json() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("gpu");
+    let o = shadowbench(&[
+        "render",
+        "--scene",
+        "cage",
+        "--method",
+        "afsm",
+        "--device",
+        "gpu",
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--out",
+        out.to_str().expect("utf-8"),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let run: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).expect("read"))
+            .expect("JSON");
+    assert_eq!(run["params"]["device"], "gpu");
+    let notes = run["notes"].to_string();
+    assert!(notes.contains("GPU: ") && notes.contains("stage times by"), "{notes}");
+    let stages: Vec<&str> = run["stages"]
+        .as_array()
+        .expect("stages")
+        .iter()
+        .filter_map(|s| s["name"].as_str())
+        .collect();
+    assert!(stages.contains(&"G-buffer (GPU)") && stages.contains(&"rasterization of blockers"));
+}
+
+#[test]
 fn gpu_device_names_the_methods_it_has_kernels_for() {
     let o = shadowbench(&[
         "render",
