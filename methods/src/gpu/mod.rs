@@ -20,6 +20,7 @@
 
 mod context;
 pub mod frame;
+pub mod pan09;
 
 pub use context::{GpuContext, Timing, ADAPTER_ENV, BACKEND_ENV};
 pub use frame::{GpuDepthMap, GpuFrame, COMMON_WGSL};
