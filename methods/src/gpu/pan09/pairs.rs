@@ -90,6 +90,7 @@ pub(super) fn triangle_texel_pairs(
     let by_texel = ctx.upload("tt dims", &[texels as u32, res]);
     let by_triangle = ctx.upload("tt dims", &[triangles, res]);
     let ph: Vec<wgpu::Buffer> = (0..4).map(|_| ctx.zeroed::<u32>("-", 1)).collect();
+    let rows = ctx.zeroed::<u32>("tt rows", 2 * triangles as usize);
     let part1 = |d: &wgpu::Buffer, bsat: &wgpu::Buffer, pipeline: &wgpu::ComputePipeline| {
         ctx.bind(
             pipeline,
@@ -107,6 +108,7 @@ pub(super) fn triangle_texel_pairs(
                 &ph[1],
                 &ph[2],
                 &run.counters,
+                &rows,
             ],
         )
     };
@@ -119,6 +121,7 @@ pub(super) fn triangle_texel_pairs(
         (scan::record(ctx, k, e, &counts, triangles + 1), bsat)
     })?;
     let emitted = read_word(ctx, &sums, chunks)?;
+    let tallest = read_counters(ctx, &run.counters)?[slot::MAX_ROWS];
     let keys = ctx.zeroed::<u32>("tt keys", 2 * emitted as usize);
     let flags = ctx.zeroed::<u32>("tt flags", emitted as usize + 1);
     let tt = ctx.zeroed::<u32>("tt pairs", 2 * emitted as usize);
@@ -140,6 +143,7 @@ pub(super) fn triangle_texel_pairs(
                 &flags,
                 &tt,
                 &run.counters,
+                &rows,
             ],
         )
     };
@@ -147,8 +151,7 @@ pub(super) fn triangle_texel_pairs(
     let test = part2(&by_key, &k.tt_test);
     let compact = part2(&by_key, &k.tt_compact);
     run.stage(rec, STAGE_TT_PAIRS, |e| {
-        let rows = (triangles.div_ceil(64), res, 1);
-        GpuContext::dispatch(e, &k.tt_emit, &emit, rows);
+        GpuContext::dispatch(e, &k.tt_emit, &emit, (triangles.div_ceil(64), tallest.max(1), 1));
         let g = GpuContext::groups_1d(emitted as usize, 64);
         GpuContext::dispatch(e, &k.tt_test, &test, g);
         scan::record(ctx, k, e, &flags, emitted + 1);

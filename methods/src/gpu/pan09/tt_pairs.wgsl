@@ -20,6 +20,7 @@
 @group(0) @binding(10) var<storage, read_write> flags: array<u32>;
 @group(0) @binding(11) var<storage, read_write> tt: array<u32>;
 @group(0) @binding(12) var<storage, read_write> counters: array<atomic<u32>>;
+@group(0) @binding(13) var<storage, read_write> rows: array<u32>;
 
 fn bind_all() {
     _ = P[0];
@@ -34,6 +35,7 @@ fn bind_all() {
     _ = arrayLength(&flags);
     _ = arrayLength(&tt);
     _ = atomicLoad(&counters[0]);
+    _ = arrayLength(&rows);
 }
 
 fn corner(t: u32, i: u32) -> vec3<f64> {
@@ -105,9 +107,14 @@ fn count(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         }
     }
     counts[t] = c;
+    if c > 0u {
+        rows[2u * t] = r.r.y;
+        rows[2u * t + 1u] = r.r.w;
+        atomicMax(&counters[C_MAX_ROWS], r.r.w - r.r.y + 1u);
+    }
 }
 
-// One invocation per triangle (x) and row of its rectangle (y): the row's keys go after those
+// One invocation per triangle (x) and row of its rectangle (y, up to the tallest rectangle): the row's keys go after those
 // of the rows above it (counted with the busy texels' SAT, as `count` does). Rows are split
 // over invocations so that no invocation loops over a whole rectangle.
 @compute @workgroup_size(64)
@@ -117,11 +124,11 @@ fn emit(@builtin(global_invocation_id) gid: vec3<u32>) {
     if t >= dims[0] { return; }
     var slot = counts[t];
     if counts[t + 1u] == slot { return; }
+    let y = rows[2u * t] + gid.y;
+    if y > rows[2u * t + 1u] { return; }
     let s = setup();
     let f = triangle_footprint(s, t);
     let r = texel_rect(f, s.res);
-    let y = r.r.y + gid.y;
-    if y > r.r.w { return; }
     let span = row_texels(f, y, s.res, s.inf);
     if !span.ok { return; }
     for (var above = r.r.y; above < y; above++) {
