@@ -132,6 +132,7 @@ fn gpu_method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMetho
         "pcf-gems16" => gems(GemsSamples::Sixteen),
         "pcf-gems4" => gems(GemsSamples::FourDithered),
         "afsm" => Ok(Box::new(crate::gpu::afsm::GpuAfsm { options: AfsmOptions::default() })),
+        "pan09" => Ok(Box::new(crate::gpu::pan09::GpuPan09::new(pan09_options(options)?)?)),
         _ => Err(MethodError::InvalidOption {
             option: "--device",
             message: format!(
@@ -154,6 +155,17 @@ fn reeves_options(options: &MethodOptions) -> Result<ReevesOptions, MethodError>
     Ok(o)
 }
 
+/// Pan et al.'s options from the shared ones.
+fn pan09_options(options: &MethodOptions) -> Result<Pan09Options, MethodError> {
+    let d = Pan09Options::default();
+    Ok(Pan09Options {
+        map: map_options(options, d.map)?,
+        rate: options.rate.unwrap_or(d.rate),
+        pattern: options.pattern.unwrap_or(d.pattern),
+        visibility: options.visibility.unwrap_or(d.visibility),
+    })
+}
+
 /// Brabec and Seidel's options from the shared ones, validated.
 fn bs_options(options: &MethodOptions) -> Result<BsOptions, MethodError> {
     let depth_bits = options.depth_bits.unwrap_or(DEFAULT_DEPTH_BITS);
@@ -173,6 +185,7 @@ pub const GPU_METHODS: &[&str] = &[
     "pcf-gems16",
     "pcf-gems4",
     "afsm",
+    "pan09",
 ];
 
 /// The CPU method called `name`, configured by `options` and validated.
@@ -221,16 +234,7 @@ fn cpu_method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMetho
             o.validate()?;
             Ok(Box::new(Spsm { options: o }))
         }
-        "pan09" => {
-            let d = Pan09Options::default();
-            let o = Pan09Options {
-                map: map_options(options, d.map)?,
-                rate: options.rate.unwrap_or(d.rate),
-                pattern: options.pattern.unwrap_or(d.pattern),
-                visibility: options.visibility.unwrap_or(d.visibility),
-            };
-            Ok(Box::new(Pan09::new(o)?))
-        }
+        "pan09" => Ok(Box::new(Pan09::new(pan09_options(options)?)?)),
         _ => Err(MethodError::InvalidOption {
             option: "--method",
             message: format!(

@@ -30,6 +30,7 @@
 pub mod afsm;
 mod context;
 pub mod frame;
+pub mod pan09;
 pub mod pcf;
 pub mod raster;
 pub mod sm;

@@ -130,12 +130,12 @@ fn clip(poly: &[DVec2], h: &HalfPlane, out: &mut [DVec2; MAX_CORNERS]) -> usize 
 /// costs three affine evaluations and a division.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LightPlanes {
-    x: WorldPlane,
-    y: WorldPlane,
+    pub(crate) x: WorldPlane,
+    pub(crate) y: WorldPlane,
     /// The depth plane of a spot light; `None` for directional lights (denominator `a(u)`).
-    w: Option<WorldPlane>,
+    pub(crate) w: Option<WorldPlane>,
     /// A spot light's near plane (points in front of it project).
-    near: Option<WorldPlane>,
+    pub(crate) near: Option<WorldPlane>,
 }
 
 impl LightPlanes {

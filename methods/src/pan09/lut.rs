@@ -113,6 +113,11 @@ impl<M: Mask> LookupTable<M> {
         Self { masks }
     }
 
+    /// Every entry, in [`index`] order (uploaded as is by the GPU path).
+    pub(crate) fn masks(&self) -> &[M] {
+        &self.masks
+    }
+
     /// The samples covered by a half-plane whose line meets the pixel square.
     #[inline(always)]
     pub fn lookup(&self, h: &HalfPlane) -> M {

@@ -135,10 +135,10 @@ pub struct WorldPlane {
     pub n: DVec3,
     /// Offset `c`.
     pub c: f64,
-    n_ox: f64,
-    n_oy: f64,
-    n_dx: f64,
-    n_dy: f64,
+    pub(crate) n_ox: f64,
+    pub(crate) n_oy: f64,
+    pub(crate) n_dx: f64,
+    pub(crate) n_dy: f64,
 }
 
 impl WorldPlane {
