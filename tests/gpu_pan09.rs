@@ -165,19 +165,3 @@ fn gpu_run_is_the_shadow_method_end_to_end() {
         assert!(rec.stages.stages.iter().any(|s| s.name == stage), "stage {stage}");
     }
 }
-
-/// Stage times at the paper's size (800 x 600, map 512, rate 32; Pan et al.: 22 ms on a GTX
-/// 280). Slow on a software rasterizer: run with `--ignored`.
-#[test]
-#[ignore]
-fn gpu_stage_times_bunny_plane_800x600() {
-    let Some(scene) = load_builtin("bunny-plane") else { return };
-    let frame = Frame::new(&scene, 800, 600, &mut Recorder::default());
-    let gpu = GpuPan09::new(options(32, 512, VisibilityMode::Table)).expect("valid");
-    let mut rec = Recorder::default();
-    gpu.run(&frame, &mut rec).expect("runs");
-    for s in &rec.stages.stages {
-        eprintln!("{:>28}: {:10.2} ms", s.name, s.ms);
-    }
-    eprintln!("counters: {:?}", rec.counters);
-}
