@@ -89,8 +89,9 @@ pub(super) fn triangle_texel_pairs(
     let counts = ctx.zeroed::<u32>("tt counts", triangles as usize + 1);
     let by_texel = ctx.upload("tt dims", &[texels as u32, res]);
     let by_triangle = ctx.upload("tt dims", &[triangles, res]);
-    let ph: Vec<wgpu::Buffer> = (0..4).map(|_| ctx.zeroed::<u32>("-", 1)).collect();
-    let rows = ctx.zeroed::<u32>("tt rows", 2 * triangles as usize);
+    let rows = ctx.zeroed::<u32>("tt rows", triangles as usize);
+    let row_off = ctx.zeroed::<u32>("tt row items", triangles as usize + 1);
+    let ph: Vec<wgpu::Buffer> = (0..5).map(|_| ctx.zeroed::<u32>("-", 1)).collect();
     let part1 = |d: &wgpu::Buffer, bsat: &wgpu::Buffer, pipeline: &wgpu::ComputePipeline| {
         ctx.bind(
             pipeline,
@@ -109,19 +110,24 @@ pub(super) fn triangle_texel_pairs(
                 &ph[2],
                 &run.counters,
                 &rows,
+                &row_off,
+                &ph[4],
             ],
         )
     };
     let mark = part1(&by_texel, &ph[3], &k.tt_busy);
-    let ((sums, chunks), bsat) = run.stage(rec, STAGE_TT_PAIRS, |e| {
+    let ((sums, chunks), (row_sums, row_chunks), bsat) = run.stage(rec, STAGE_TT_PAIRS, |e| {
         GpuContext::dispatch(e, &k.tt_busy, &mark, GpuContext::groups_1d(texels, 64));
         let bsat = super::sat::record(ctx, k, e, &busy, res);
         let count = part1(&by_triangle, &bsat, &k.tt_count);
         GpuContext::dispatch(e, &k.tt_count, &count, GpuContext::groups_1d(triangles as usize, 64));
-        (scan::record(ctx, k, e, &counts, triangles + 1), bsat)
+        let keys = scan::record(ctx, k, e, &counts, triangles + 1);
+        (keys, scan::record(ctx, k, e, &row_off, triangles + 1), bsat)
     })?;
     let emitted = read_word(ctx, &sums, chunks)?;
-    let tallest = read_counters(ctx, &run.counters)?[slot::MAX_ROWS];
+    let items = read_word(ctx, &row_sums, row_chunks)?;
+    let row_keys = ctx.zeroed::<u32>("tt row keys", items as usize + 1);
+    let by_item = ctx.upload("tt dims", &[items, triangles.max(1)]);
     let keys = ctx.zeroed::<u32>("tt keys", 2 * emitted as usize);
     let flags = ctx.zeroed::<u32>("tt flags", emitted as usize + 1);
     let tt = ctx.zeroed::<u32>("tt pairs", 2 * emitted as usize);
@@ -144,14 +150,20 @@ pub(super) fn triangle_texel_pairs(
                 &tt,
                 &run.counters,
                 &rows,
+                &row_off,
+                &row_keys,
             ],
         )
     };
-    let emit = part2(&by_triangle, &k.tt_emit);
+    let count_rows = part2(&by_item, &k.tt_count_rows);
+    let emit = part2(&by_item, &k.tt_emit);
     let test = part2(&by_key, &k.tt_test);
     let compact = part2(&by_key, &k.tt_compact);
     run.stage(rec, STAGE_TT_PAIRS, |e| {
-        GpuContext::dispatch(e, &k.tt_emit, &emit, (triangles.div_ceil(64), tallest.max(1), 1));
+        let per_item = GpuContext::groups_1d(items as usize, 64);
+        GpuContext::dispatch(e, &k.tt_count_rows, &count_rows, per_item);
+        scan::record(ctx, k, e, &row_keys, items + 1);
+        GpuContext::dispatch(e, &k.tt_emit, &emit, per_item);
         let g = GpuContext::groups_1d(emitted as usize, 64);
         GpuContext::dispatch(e, &k.tt_test, &test, g);
         scan::record(ctx, k, e, &flags, emitted + 1);

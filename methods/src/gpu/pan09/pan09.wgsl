@@ -464,4 +464,3 @@ const C_CANDIDATES: u32 = 7u;
 const C_VALID_SAMPLES: u32 = 8u;
 const C_BOUNDARY: u32 = 9u;
 const C_EVALUATION_BOUND: u32 = 10u;
-const C_MAX_ROWS: u32 = 11u;

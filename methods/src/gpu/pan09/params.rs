@@ -45,10 +45,8 @@ pub(super) mod slot {
     pub const BOUNDARY: usize = 9;
     /// The TT-pairs' PT-list lengths summed (a bound on the evaluations).
     pub const EVALUATION_BOUND: usize = 10;
-    /// Rows of the tallest TT rectangle with busy texels.
-    pub const MAX_ROWS: usize = 11;
     /// Slots in all.
-    pub const COUNT: usize = 12;
+    pub const COUNT: usize = 11;
 }
 
 /// Mask words per pixel at `rate` sub-samples (32 per word, 1, 2 or 4).

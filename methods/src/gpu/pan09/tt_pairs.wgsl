@@ -1,7 +1,8 @@
 // Stage "triangle-texel pairs" (pairs::triangle_texel_pairs): `busy` marks the texels with a
 // PT list (their SAT is built next), `count` sizes each caster's busy texels over its
-// footprint's row spans (scanned into write offsets afterwards), `emit` writes a (texel,
-// triangle) key per busy texel of the spans, `test` keeps the keys whose texel the footprint
+// footprint's row spans and its rows (both scanned afterwards: the rows into row items),
+// `count_rows` sizes each row item (scanned into write offsets), `emit` writes a (texel,
+// triangle) key per busy texel of a row item's span, `test` keeps the keys whose texel the footprint
 // touches (flags scanned into compacted positions afterwards) and `compact` writes the kept
 // pairs in triangle order. The CPU sorts them by PT-list length for load balance; every pair
 // ORs into masks (and notes validity candidates that are ANDed), so the order changes no
@@ -20,7 +21,12 @@
 @group(0) @binding(10) var<storage, read_write> flags: array<u32>;
 @group(0) @binding(11) var<storage, read_write> tt: array<u32>;
 @group(0) @binding(12) var<storage, read_write> counters: array<atomic<u32>>;
+// First row of each triangle's rectangle.
 @group(0) @binding(13) var<storage, read_write> rows: array<u32>;
+// Rows of each triangle's rectangle that hold keys (0 for none), scanned into each triangle's
+// first row item; then the keys of each row item, scanned into its first key's slot.
+@group(0) @binding(14) var<storage, read_write> row_off: array<u32>;
+@group(0) @binding(15) var<storage, read_write> row_keys: array<u32>;
 
 fn bind_all() {
     _ = P[0];
@@ -36,6 +42,8 @@ fn bind_all() {
     _ = arrayLength(&tt);
     _ = atomicLoad(&counters[0]);
     _ = arrayLength(&rows);
+    _ = arrayLength(&row_off);
+    _ = arrayLength(&row_keys);
 }
 
 fn corner(t: u32, i: u32) -> vec3<f64> {
@@ -91,6 +99,7 @@ fn count(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     let t = flat_index(gid, groups);
     if t >= dims[0] { return; }
     counts[t] = 0u;
+    row_off[t] = 0u;
     if casters[t] == 0u { return; }
     let s = setup();
     let f = triangle_footprint(s, t);
@@ -99,46 +108,66 @@ fn count(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     if !r.ok { return; }
     var c = 0u;
     for (var y = r.r.y; y <= r.r.w; y++) {
-        let span = row_texels(f, y, s.res, s.inf);
-        if span.ok {
-            let a = span.x.x;
-            let b = span.x.y;
-            c += bsat_at(s.res, b + 1u, y + 1u) + bsat_at(s.res, a, y) - bsat_at(s.res, a, y + 1u) - bsat_at(s.res, b + 1u, y);
-        }
+        c += row_key_count(f, y, s.res, s.inf);
     }
     counts[t] = c;
     if c > 0u {
-        rows[2u * t] = r.r.y;
-        rows[2u * t + 1u] = r.r.w;
-        atomicMax(&counters[C_MAX_ROWS], r.r.w - r.r.y + 1u);
+        rows[t] = r.r.y;
+        row_off[t] = r.r.w - r.r.y + 1u;
     }
 }
 
-// One invocation per triangle (x) and row of its rectangle (y, up to the tallest rectangle): the row's keys go after those
-// of the rows above it (counted with the busy texels' SAT, as `count` does). Rows are split
-// over invocations so that no invocation loops over a whole rectangle.
-@compute @workgroup_size(64)
-fn emit(@builtin(global_invocation_id) gid: vec3<u32>) {
-    bind_all();
-    let t = gid.x;
-    if t >= dims[0] { return; }
-    var slot = counts[t];
-    if counts[t + 1u] == slot { return; }
-    let y = rows[2u * t] + gid.y;
-    if y > rows[2u * t + 1u] { return; }
-    let s = setup();
-    let f = triangle_footprint(s, t);
-    let r = texel_rect(f, s.res);
-    let span = row_texels(f, y, s.res, s.inf);
-    if !span.ok { return; }
-    for (var above = r.r.y; above < y; above++) {
-        let sa = row_texels(f, above, s.res, s.inf);
-        if sa.ok {
-            let a = sa.x.x;
-            let b = sa.x.y;
-            slot += bsat_at(s.res, b + 1u, above + 1u) + bsat_at(s.res, a, above) - bsat_at(s.res, a, above + 1u) - bsat_at(s.res, b + 1u, above);
+// The triangle of row item `j`: the last triangle whose first row item is at most `j`
+// (triangles without rows take no items). dims[1] holds the number of triangles.
+fn item_triangle(j: u32) -> u32 {
+    var lo = 0u;
+    var hi = dims[1] - 1u;
+    while lo < hi {
+        let mid = (lo + hi + 1u) / 2u;
+        if row_off[mid] <= j {
+            lo = mid;
+        } else {
+            hi = mid - 1u;
         }
     }
+    return lo;
+}
+
+// Keys of one busy row span (counted with the busy texels' SAT, as `count` does).
+fn row_key_count(f: Footprint, y: u32, res: u32, inf: f64) -> u32 {
+    let span = row_texels(f, y, res, inf);
+    if !span.ok { return 0u; }
+    let a = span.x.x;
+    let b = span.x.y;
+    return bsat_at(res, b + 1u, y + 1u) + bsat_at(res, a, y) - bsat_at(res, a, y + 1u) - bsat_at(res, b + 1u, y);
+}
+
+// One invocation per row item (dims[0] items): its key count.
+@compute @workgroup_size(64)
+fn count_rows(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    bind_all();
+    let j = flat_index(gid, groups);
+    if j >= dims[0] { return; }
+    let t = item_triangle(j);
+    let y = rows[t] + (j - row_off[t]);
+    let s = setup();
+    row_keys[j] = row_key_count(triangle_footprint(s, t), y, s.res, s.inf);
+}
+
+// One invocation per row item (dims[0] items): the row's keys, from its scanned first slot,
+// so keys come in triangle order and, within a triangle, row by row.
+@compute @workgroup_size(64)
+fn emit(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    bind_all();
+    let j = flat_index(gid, groups);
+    if j >= dims[0] { return; }
+    var slot = row_keys[j];
+    if row_keys[j + 1u] == slot { return; }
+    let t = item_triangle(j);
+    let y = rows[t] + (j - row_off[t]);
+    let s = setup();
+    let span = row_texels(triangle_footprint(s, t), y, s.res, s.inf);
+    if !span.ok { return; }
     for (var x = span.x.x; x <= span.x.y; x++) {
         let k = y * s.res + x;
         if busy[k] != 0u {
