@@ -391,11 +391,16 @@ mod tests {
             map_res: vec![256, 512],
             rate: vec![],
             depth_bits: vec![8, 12, 32],
+            device: vec![],
         };
         let all = expand(&spec);
         assert_eq!(all.len(), 6);
-        assert!(all.iter().all(|o| o.rate.is_none()));
+        assert!(all.iter().all(|o| o.rate.is_none() && o.device == Device::Cpu));
         assert_eq!(all[5].map_res, Some(512));
         assert_eq!(all[5].depth_bits, Some(32));
+        let both = expand(&RunSpec { device: vec![Device::Cpu, Device::Gpu], ..spec });
+        assert_eq!(both.len(), 12);
+        assert_eq!((both[0].device, both[1].device), (Device::Cpu, Device::Gpu));
+        assert_eq!(both[0].depth_bits, both[1].depth_bits);
     }
 }
