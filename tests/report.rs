@@ -95,8 +95,16 @@ fn a_suite_file_writes_tables_that_parse_back() {
     assert_eq!(devices.iter().filter(|d| **d == "gpu").count(), 4, "{devices:?}");
     assert!(json["machine"]["gpu"].as_str().is_some_and(|g| !g.is_empty()), "{}", json["machine"]);
     let side = md.split("## CPU and GPU").nth(1).expect("a CPU and GPU section");
-    let pairs = side.lines().filter(|l| l.starts_with("| plane-square | sm ")).count();
-    assert_eq!(pairs, 2, "{side}");
+    let pairs: Vec<&str> = side.lines().filter(|l| l.starts_with("| plane-square | sm ")).collect();
+    assert_eq!(pairs.len(), 2, "{side}");
+    for l in pairs {
+        let cells: Vec<&str> = l.split(" | ").collect();
+        let median =
+            |c: &str| -> f64 { c.split_whitespace().next().expect("a time").parse().expect("ms") };
+        // GPU time with its G-buffer, then without it; the ratio sets CPU against the latter.
+        let (with, without) = (median(cells[4]), median(cells[5]));
+        assert!(0.0 < without && without <= with, "{l}");
+    }
     let grids = json["grids"].as_array().expect("grids");
     assert_eq!(grids.len(), 1);
     let grid = image::open(out.join(grids[0]["png"].as_str().expect("path"))).expect("a PNG");
