@@ -41,17 +41,14 @@ fn compare(name: &str) -> Option<(usize, usize, usize)> {
             let counters = usize::from(rec.counters != cpu_rec.counters);
             let shadowed = cpu.lit.iter().filter(|&&l| l < 1.0).count();
             let c = &rec.counters;
-            let classify_ms = rec
-                .stages
-                .stages
-                .iter()
-                .find(|s| s.name == methods::spsm::STAGE_CLASSIFICATION)
-                .map_or(f64::NAN, |s| s.ms);
+            let ms = |name: &str| {
+                rec.stages.stages.iter().find(|s| s.name == name).map_or(f64::NAN, |s| s.ms)
+            };
             eprintln!(
                 "{name} {} rate {rate}: {differing} differing pixels, {classes} differing \
                  classes, counters {}, {} handed back; {shadowed} shadowed; lit {} shadowed \
-                 {} neighbourhood {} uncertain {} recovered {} lookups {} antialiased {}; \
-                 classification {classify_ms:.2} ms",
+                 {} neighbourhood {} uncertain {} corrected {} recovered {} lookups {} \
+                 antialiased {}; classification {:.2} ms, consistent min depth {:.2} ms",
                 texel.name(),
                 if counters == 0 { "equal" } else { "DIFFER" },
                 out.handed_back,
@@ -59,9 +56,12 @@ fn compare(name: &str) -> Option<(usize, usize, usize)> {
                 c.shadowed_by_one_lookup,
                 c.shadowed_by_neighbourhood,
                 c.uncertain_pixels,
+                c.depth_corrected_texels,
                 c.recovered_pixels,
                 c.shadow_map_lookups,
                 c.antialiased_samples,
+                ms(methods::spsm::STAGE_CLASSIFICATION),
+                ms(methods::spsm::STAGE_CONSISTENT_DEPTH),
             );
             if counters != 0 {
                 eprintln!("GPU {:?}\nCPU {:?}", rec.counters, cpu_rec.counters);

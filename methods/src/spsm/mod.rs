@@ -249,9 +249,24 @@ pub(crate) fn finish(
         depth::consistent_depths(lookup.map, &centres)
     });
     rec.counters.depth_corrected_texels += corrected;
+    recover_and_antialias(o, frame, lookup, sample_pattern, uncertain, &consistent, lit, rec);
+}
 
+/// Stages 5 and 6: silhouette recovery and antialiasing of the `uncertain` pixels, with the
+/// consistent minimum depths of stage 4.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn recover_and_antialias(
+    o: &SpsmOptions,
+    frame: &Frame<'_>,
+    lookup: &classify::Lookup<'_>,
+    sample_pattern: &SamplePattern,
+    uncertain: &[classify::UncertainPixel],
+    consistent: &depth::ConsistentDepths,
+    lit: &mut [f32],
+    rec: &mut Recorder,
+) {
     let (silhouettes, counters) = rec.stages.time(STAGE_RECOVERY, || {
-        recover::recover_pixels(frame, lookup, &consistent, uncertain, lit)
+        recover::recover_pixels(frame, lookup, consistent, uncertain, lit)
     });
     rec.counters.merge(&counters);
 

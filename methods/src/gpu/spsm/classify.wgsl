@@ -1,28 +1,9 @@
 // spsm classification (Lecocq et al. 2014, section 4.1, Algorithm 1), one thread a pixel:
 // spsm::classify::Lookup::classify with the texels decoded as spsm::texel decodes them, in f64
-// with the CPU's operations in the CPU's order. Needs common.wgsl before it.
+// with the CPU's operations in the CPU's order. Needs common.wgsl and texel.wgsl before it.
 //
 // The CPU's orient2d is exact (robust crate); here its f64 filter decides when the CPU's does
 // (then both return the same f64 determinant) and the pixel is handed back (class 5) otherwise.
-
-struct Params {
-    constant: f64,
-    z_lo: f64,
-    depth_step: f64,
-    vertex_step: f64,
-    half_res: f64,
-    half_ulp: f64,
-    size_x: f64,
-    size_y: f64,
-    pixels: u32,
-    res: u32,
-    perspective: u32,
-    packed: u32,
-    pad0: u32,
-    pad1: u32,
-    pad2: u32,
-    pad3: u32,
-}
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> light: array<f64, 18>;
@@ -39,21 +20,7 @@ struct Params {
 // handed back.
 @group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>, 8>;
 
-const THETA: f64 = 3.3306690621773722e-16lf;
-const MIN_POSITIVE: f64 = 2.2250738585072014e-308lf;
-
 var<private> undecided: bool;
-
-struct Tri {
-    v: array<vec2<f64>, 3>,
-    centre: vec2<f64>,
-    z: f64,
-    dz: vec2<f64>,
-    err_z: f64,
-    err_dz: vec2<f64>,
-    err_v: f64,
-    ok: bool,
-}
 
 struct MapPoint {
     xy: vec2<f64>,
@@ -83,83 +50,6 @@ fn space_z(d: f64) -> f64 {
         return -1.0lf / d;
     }
     return d;
-}
-
-fn slope_scale(z: f64) -> vec2<f64> {
-    if params.perspective == 1u {
-        let m = max(-z, MIN_POSITIVE);
-        return vec2<f64>(params.size_x * m, params.size_y * m);
-    }
-    return vec2<f64>(params.size_x, params.size_y);
-}
-
-fn vertex_at(code: u32) -> f64 {
-    return f64(code) * params.vertex_step - params.half_res;
-}
-
-fn f32_word(k: u32) -> f64 {
-    return f64(bitcast<f32>(texels[k]));
-}
-
-// SpsmMap::get.
-fn texel_tri(x: i32, y: i32) -> Tri {
-    var t: Tri;
-    t.ok = false;
-    let r = i32(params.res);
-    if x < 0 || y < 0 || x >= r || y >= r {
-        return t;
-    }
-    let k = u32(y * r + x);
-    t.centre = vec2<f64>(f64(x) + 0.5lf, f64(y) + 0.5lf);
-    if params.packed == 1u {
-        let w0 = texels[4u * k];
-        let w1 = texels[4u * k + 1u];
-        let w2 = texels[4u * k + 2u];
-        let w3 = texels[4u * k + 3u];
-        if w0 == 0xffffffffu && w1 == 0xffffffffu && w2 == 0xffffffffu && w3 == 0xffffffffu {
-            return t;
-        }
-        t.v[0] = vec2<f64>(vertex_at(w0 & 0xffffu), vertex_at(w0 >> 16u));
-        t.v[1] = vec2<f64>(vertex_at(w1 & 0xffffu), vertex_at(w1 >> 16u));
-        t.v[2] = vec2<f64>(vertex_at(w2 & 0xffffu), vertex_at(w2 >> 16u));
-        let step = params.depth_step;
-        t.z = params.z_lo + f64(w3 >> 16u) * step;
-        let qx = (w3 >> 8u) & 0xffu;
-        let qy = w3 & 0xffu;
-        let s = slope_scale(t.z);
-        t.dz = vec2<f64>(tables[qx] * s.x, tables[qy] * s.y);
-        t.err_z = 0.5lf * step;
-        t.err_dz = vec2<f64>(tables[256u + qx] * s.x, tables[256u + qy] * s.y);
-        t.err_v = 0.5lf * params.vertex_step;
-    } else {
-        let b = 9u * k;
-        let z = f32_word(b + 6u);
-        if z != z {
-            return t;
-        }
-        t.v[0] = vec2<f64>(f32_word(b), f32_word(b + 1u));
-        t.v[1] = vec2<f64>(f32_word(b + 2u), f32_word(b + 3u));
-        t.v[2] = vec2<f64>(f32_word(b + 4u), f32_word(b + 5u));
-        t.z = z;
-        t.dz = vec2<f64>(f32_word(b + 7u), f32_word(b + 8u));
-        var largest = 0.0lf;
-        for (var i = 0; i < 3; i++) {
-            largest = max(largest, max(abs(t.v[i].x), abs(t.v[i].y)));
-        }
-        t.err_z = abs(z) * params.half_ulp;
-        t.err_dz = vec2<f64>(abs(t.dz.x) * params.half_ulp, abs(t.dz.y) * params.half_ulp);
-        t.err_v = largest * params.half_ulp;
-    }
-    t.ok = true;
-    return t;
-}
-
-fn depth_at(t: Tri, q: vec2<f64>) -> f64 {
-    return t.z + ((q.x - t.centre.x) * t.dz.x + (q.y - t.centre.y) * t.dz.y);
-}
-
-fn error_at(t: Tri, q: vec2<f64>) -> f64 {
-    return t.err_z + (abs(q.x - t.centre.x) * t.err_dz.x + abs(q.y - t.centre.y) * t.err_dz.y);
 }
 
 // Tri::contains_within (undecided orientations end it, flagged).

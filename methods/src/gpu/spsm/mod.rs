@@ -9,13 +9,20 @@
 //! 3. **classification** (section 4.1, Algorithm 1): on the GPU ([`classify`]), one thread a
 //!    pixel, decoding the packed or `f32` texels in `f64` as the twin does; pixels whose exact
 //!    containment test the `f64` filter cannot decide are handed back to the twin's code.
-//! 4. **consistent min depth**, 5. **silhouette recovery**, 6. **antialiasing** (section 4,
-//!    4.2 and 5): on the CPU, by the twin's code, for the uncertain pixels only.
+//! 4. **consistent min depth** (section 4, Fig. 9): on the GPU ([`depth`]), for the texels
+//!    around the uncertain pixels, as the twin.
+//! 5. **silhouette recovery**, 6. **antialiasing** (sections 4.2 and 5): on the CPU, by the
+//!    twin's code, for the uncertain pixels only.
+//!
+//! The texels reach the kernels as stored ([`texel`]).
 //!
 //! The run's G-buffer is the GPU's ([`GpuFrame::for_run`]), read back for the CPU stages.
-//! Counters as the twin's; those of classification are counted on the GPU with atomics.
+//! Counters as the twin's; those of classification and consistent min depth are counted on the
+//! GPU with atomics.
 
 pub mod classify;
+pub mod depth;
+pub mod texel;
 
 use crate::{
     frame::Frame,
@@ -49,7 +56,8 @@ pub fn shade(
     let sample_pattern = options.validate()?;
     let (map, tester, space) = spsm::build_map(options, frame, rec);
     let lookup = spsm::classify::Lookup { map: &map, tester, space };
-    let mut c = classify::classify(ctx, gframe, frame, &lookup, rec)?;
+    let texels = texel::GpuTexels::upload(ctx, &lookup);
+    let mut c = classify::classify(ctx, gframe, frame, &lookup, &texels, rec)?;
     rec.counters.merge(&c.counters);
     if c.handed_back > 0 {
         rec.notes.push(format!(
@@ -57,7 +65,18 @@ pub fn shade(
             c.handed_back
         ));
     }
-    spsm::finish(options, frame, &lookup, &sample_pattern, &c.uncertain, &mut c.lit, rec);
+    let (consistent, corrected) = depth::consistent_depths(ctx, &texels, &c.uncertain, rec)?;
+    rec.counters.depth_corrected_texels += corrected;
+    spsm::recover_and_antialias(
+        options,
+        frame,
+        &lookup,
+        &sample_pattern,
+        &c.uncertain,
+        &consistent,
+        &mut c.lit,
+        rec,
+    );
     let visibility = Visibility {
         width: frame.width(),
         height: frame.height(),
@@ -67,7 +86,7 @@ pub fn shade(
     Ok(Shaded { visibility, classes: c.classes, handed_back: c.handed_back })
 }
 
-/// The sub-pixel shadow map with classification on the GPU; the twin of [`Spsm`].
+/// The sub-pixel shadow map with classification and consistent min depth on the GPU; the twin of [`Spsm`].
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct GpuSpsm {
     /// Options, as the twin's.
