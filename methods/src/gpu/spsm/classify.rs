@@ -82,6 +82,7 @@ pub fn classify(
             &gframe.position,
             &gframe.normal,
             &texels.texels,
+            &texels.planes,
             &texels.tables,
             &result,
             &counters,

@@ -10,15 +10,16 @@
 @group(0) @binding(2) var<storage, read> g_triangle: array<u32>;
 @group(0) @binding(3) var<storage, read> g_position: array<f64>;
 @group(0) @binding(4) var<storage, read> g_normal: array<f64>;
-// Packed: 4 words a texel. F32: 9 words a texel (v0.x v0.y v1.x v1.y v2.x v2.y z dz.x dz.y).
+// The texels (texel.wgsl).
 @group(0) @binding(5) var<storage, read> texels: array<u32>;
+@group(0) @binding(6) var<storage, read> planes: array<u32>;
 // [0, 256): decoded slopes; [256, 512): their error bounds; [512, 768): encode thresholds.
-@group(0) @binding(6) var<storage, read> tables: array<f64>;
+@group(0) @binding(7) var<storage, read> tables: array<f64>;
 // Per pixel: class, texel.
-@group(0) @binding(7) var<storage, read_write> result: array<u32>;
+@group(0) @binding(8) var<storage, read_write> result: array<u32>;
 // lit by one lookup, shadowed by one lookup, by the neighbourhood, uncertain, lookups,
 // handed back.
-@group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>, 8>;
+@group(0) @binding(9) var<storage, read_write> counters: array<atomic<u32>, 8>;
 
 var<private> undecided: bool;
 

@@ -46,8 +46,10 @@ pub fn consistent_depths(
     let depths = ctx.zeroed::<f64>("spsm consistent depths", n);
     let counters = ctx.zeroed::<u32>("spsm depth counters", 8);
     let mark_bind = ctx.bind(&mark, &[&uniform, &centre_buf, &marks]);
-    let depth_bind =
-        ctx.bind(&depth, &[&uniform, &texels.texels, &texels.tables, &marks, &depths, &counters]);
+    let depth_bind = ctx.bind(
+        &depth,
+        &[&uniform, &texels.texels, &texels.planes, &texels.tables, &marks, &depths, &counters],
+    );
     ctx.stage(rec, STAGE_CONSISTENT_DEPTH, |e| {
         if !centres.is_empty() {
             GpuContext::dispatch(e, &mark, &mark_bind, GpuContext::groups_1d(centres.len(), 64));

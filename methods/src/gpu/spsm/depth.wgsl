@@ -7,11 +7,12 @@
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> texels: array<u32>;
-@group(0) @binding(2) var<storage, read> tables: array<f64>;
+@group(0) @binding(2) var<storage, read> planes: array<u32>;
+@group(0) @binding(3) var<storage, read> tables: array<f64>;
 // 0: not read by recovery; 1: marked; the pass writes 2 where the texel is empty.
-@group(0) @binding(3) var<storage, read_write> marks: array<u32>;
-@group(0) @binding(4) var<storage, read_write> depth: array<f64>;
-@group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>, 8>;
+@group(0) @binding(4) var<storage, read_write> marks: array<u32>;
+@group(0) @binding(5) var<storage, read_write> depth: array<f64>;
+@group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 8>;
 
 fn conservative_depth(t: Tri, x: f64, y: f64) -> f64 {
     var cx = x + 1.0lf;

@@ -7,7 +7,8 @@
 @group(0) @binding(2) var<storage, read_write> marks: array<atomic<u32>>;
 // texel.wgsl's decoding reads these; this pass does not (they stay out of its layout).
 @group(0) @binding(3) var<storage, read> texels: array<u32>;
-@group(0) @binding(4) var<storage, read> tables: array<f64>;
+@group(0) @binding(4) var<storage, read> planes: array<u32>;
+@group(0) @binding(5) var<storage, read> tables: array<f64>;
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {

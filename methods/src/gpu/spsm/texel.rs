@@ -1,6 +1,7 @@
-//! The twin's map on the GPU: its texels as stored (four words a packed texel, nine `f32`
-//! bits an `f32` texel), the derivative code's decode, error and encode tables, and the
-//! parameters the kernels decode them with (`texel.wgsl`, [`SpsmMap::get`]'s twin).
+//! The twin's map on the GPU: its texels as stored (four words a packed texel; an `f32`
+//! texel's nine `f32` bits in two buffers, each within the binding size limit), the
+//! derivative code's decode, error and encode tables, and the parameters the kernels decode
+//! them with (`texel.wgsl`, the twin of [`SpsmMap::get`]).
 
 use crate::{
     gpu::GpuContext,
@@ -73,8 +74,12 @@ pub fn encode_thresholds(code: &DerivativeCode) -> [f64; 256] {
 pub struct GpuTexels {
     /// The kernels' parameters (`pixels` and `count` set per kernel).
     pub(super) params: Params,
-    /// The texels, as stored.
+    /// The texels as stored: four words a packed texel, or the six `f32` vertex
+    /// coordinates of an `f32` texel.
     pub texels: wgpu::Buffer,
+    /// The depth and derivatives of each `f32` texel (three `f32`); one unused word for
+    /// packed texels.
+    pub planes: wgpu::Buffer,
     /// Decode `[0, 256)`, error `[256, 512)` and encode thresholds `[512, 768)` of the
     /// derivative code (zeros for `f32` texels).
     pub tables: wgpu::Buffer,
@@ -100,7 +105,7 @@ impl GpuTexels {
             ..Default::default()
         };
         let mut tables = vec![0.0f64; 768];
-        let words: Vec<u32> = match &map.texels {
+        let (words, planes): (Vec<u32>, Vec<u32>) = match &map.texels {
             Texels::Packed(t, p) => {
                 params.packed = 1;
                 params.z_lo = p.space.z_lo;
@@ -112,19 +117,22 @@ impl GpuTexels {
                     tables[256 + usize::from(q)] = p.code.error(q);
                 }
                 tables[512..].copy_from_slice(&encode_thresholds(&p.code));
-                t.iter().flatten().copied().collect()
+                (t.iter().flatten().copied().collect(), vec![0])
             }
-            Texels::F32(t) => t
-                .iter()
-                .flat_map(|x| {
-                    let [a, b, c] = x.v;
-                    [a[0], a[1], b[0], b[1], c[0], c[1], x.z, x.dz[0], x.dz[1]].map(f32::to_bits)
-                })
-                .collect(),
+            Texels::F32(t) => (
+                t.iter()
+                    .flat_map(|x| {
+                        let [a, b, c] = x.v;
+                        [a[0], a[1], b[0], b[1], c[0], c[1]].map(f32::to_bits)
+                    })
+                    .collect(),
+                t.iter().flat_map(|x| [x.z, x.dz[0], x.dz[1]].map(f32::to_bits)).collect(),
+            ),
         };
         Self {
             params,
             texels: ctx.upload("spsm texels", &words),
+            planes: ctx.upload("spsm texel planes", &planes),
             tables: ctx.upload("spsm tables", &tables),
         }
     }

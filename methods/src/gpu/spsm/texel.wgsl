@@ -1,6 +1,8 @@
 // spsm texels: the Params of the per-pixel and per-texel kernels, and SpsmMap::get (packed
 // texels through the uploaded decode tables, f32 texels widened). Needs common.wgsl before it
-// and, after it, the bindings `params`, `texels` and `tables`.
+// and, after it, the bindings `params`, `texels`, `planes` and `tables`. Packed texels: four
+// words each in `texels`. F32 texels: the vertices' six f32 bits in `texels`, the depth and
+// derivatives' three in `planes` (two buffers keep each within the binding size limit).
 
 struct Params {
     constant: f64,
@@ -51,6 +53,10 @@ fn f32_word(k: u32) -> f64 {
     return f64(bitcast<f32>(texels[k]));
 }
 
+fn f32_plane(k: u32) -> f64 {
+    return f64(bitcast<f32>(planes[k]));
+}
+
 // SpsmMap::get.
 fn texel_tri(x: i32, y: i32) -> Tri {
     var t: Tri;
@@ -82,16 +88,16 @@ fn texel_tri(x: i32, y: i32) -> Tri {
         t.err_dz = vec2<f64>(tables[256u + qx] * s.x, tables[256u + qy] * s.y);
         t.err_v = 0.5lf * params.vertex_step;
     } else {
-        let b = 9u * k;
-        let z = f32_word(b + 6u);
+        let z = f32_plane(3u * k);
         if z != z {
             return t;
         }
+        let b = 6u * k;
         t.v[0] = vec2<f64>(f32_word(b), f32_word(b + 1u));
         t.v[1] = vec2<f64>(f32_word(b + 2u), f32_word(b + 3u));
         t.v[2] = vec2<f64>(f32_word(b + 4u), f32_word(b + 5u));
         t.z = z;
-        t.dz = vec2<f64>(f32_word(b + 7u), f32_word(b + 8u));
+        t.dz = vec2<f64>(f32_plane(3u * k + 1u), f32_plane(3u * k + 2u));
         var largest = 0.0lf;
         for (var i = 0; i < 3; i++) {
             largest = max(largest, max(abs(t.v[i].x), abs(t.v[i].y)));
