@@ -34,6 +34,7 @@ pub mod pan09;
 pub mod pcf;
 pub mod raster;
 pub mod sm;
+pub mod spsm;
 
 pub use context::{GpuContext, Timing, ADAPTER_ENV, BACKEND_ENV};
 pub use frame::{GpuDepthMap, GpuFrame, COMMON_WGSL};

@@ -84,6 +84,12 @@ pub struct ConsistentDepths {
 }
 
 impl ConsistentDepths {
+    /// The depths of the texels `index` (ascending, no repeats), one each.
+    pub(crate) fn from_parts(index: Vec<u32>, depth: Vec<f32>) -> Self {
+        debug_assert_eq!(index.len(), depth.len());
+        Self { index, depth }
+    }
+
     /// The stored consistent minimum depth of texel `k`, if it was computed.
     #[inline]
     pub fn get(&self, k: u32) -> Option<f64> {

@@ -200,6 +200,86 @@ pub fn class_image(classes: &[PixelClass], lit: &[f32]) -> Vec<[u8; 3]> {
         .collect()
 }
 
+/// Stages 1 and 2: the map of `frame` under options `o`, the bias rule and the map's space.
+pub(crate) fn build_map(
+    o: &SpsmOptions,
+    frame: &Frame<'_>,
+    rec: &mut Recorder,
+) -> (texel::SpsmMap, DepthTester, texel::LightSpace) {
+    let projector = frame.light_projector(o.map.map_res);
+    let space = texel::LightSpace::new(&projector, frame.light_depth_bounds(&projector));
+    let tester = DepthTester::new(&o.map, projector, frame.light_depth_range(&projector));
+
+    let raster = rec.stages.time(STAGE_RASTER, || {
+        raster::rasterize_conservative(
+            &frame.geometry,
+            |t| frame.is_caster(t),
+            &projector,
+            &space,
+            &mut rec.counters,
+        )
+    });
+    let (map, packed, clamped) = rec
+        .stages
+        .time(STAGE_PACKING, || texel::pack_map(&raster, space, o.texel, o.derivative_power));
+    drop(raster);
+    rec.counters.packed_texels += packed;
+    if clamped > 0 {
+        rec.notes.push(format!(
+            "{clamped} packed texels hold a vertex outside the 16-bit range [-R/2, 3R/2] \
+             (clamped)"
+        ));
+    }
+    (map, tester, space)
+}
+
+/// Stages 4 to 6 after classification: consistent min depth, silhouette recovery and
+/// antialiasing of the `uncertain` pixels, deciding their values in `lit`.
+pub(crate) fn finish(
+    o: &SpsmOptions,
+    frame: &Frame<'_>,
+    lookup: &classify::Lookup<'_>,
+    sample_pattern: &SamplePattern,
+    uncertain: &[classify::UncertainPixel],
+    lit: &mut [f32],
+    rec: &mut Recorder,
+) {
+    let (consistent, corrected) = rec.stages.time(STAGE_CONSISTENT_DEPTH, || {
+        let centres: Vec<u32> = uncertain.iter().map(|u| u.texel).collect();
+        depth::consistent_depths(lookup.map, &centres)
+    });
+    rec.counters.depth_corrected_texels += corrected;
+    recover_and_antialias(o, frame, lookup, sample_pattern, uncertain, &consistent, lit, rec);
+}
+
+/// Stages 5 and 6: silhouette recovery and antialiasing of the `uncertain` pixels, with the
+/// consistent minimum depths of stage 4.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn recover_and_antialias(
+    o: &SpsmOptions,
+    frame: &Frame<'_>,
+    lookup: &classify::Lookup<'_>,
+    sample_pattern: &SamplePattern,
+    uncertain: &[classify::UncertainPixel],
+    consistent: &depth::ConsistentDepths,
+    lit: &mut [f32],
+    rec: &mut Recorder,
+) {
+    let (silhouettes, counters) = rec.stages.time(STAGE_RECOVERY, || {
+        recover::recover_pixels(frame, lookup, consistent, uncertain, lit)
+    });
+    rec.counters.merge(&counters);
+
+    if o.rate > 1 {
+        let counters = rec.stages.time(STAGE_ANTIALIASING, || {
+            antialias::antialias_pixels(frame, lookup, sample_pattern, uncertain, &silhouettes, lit)
+        });
+        rec.counters.merge(&counters);
+    } else {
+        rec.stages.skip(STAGE_ANTIALIASING);
+    }
+}
+
 impl Spsm {
     /// Runs the method and also returns each pixel's class (Fig. 14).
     pub fn run_classified(
@@ -212,61 +292,12 @@ impl Spsm {
             rec.notes.push(format!("{} treats semi-transparent casters as opaque", self.name()));
         }
         let o = &self.options;
-        let projector = frame.light_projector(o.map.map_res);
-        let space = texel::LightSpace::new(&projector, frame.light_depth_bounds(&projector));
-        let tester = DepthTester::new(&o.map, projector, frame.light_depth_range(&projector));
-
-        let raster = rec.stages.time(STAGE_RASTER, || {
-            raster::rasterize_conservative(
-                &frame.geometry,
-                |t| frame.is_caster(t),
-                &projector,
-                &space,
-                &mut rec.counters,
-            )
-        });
-        let (map, packed, clamped) = rec
-            .stages
-            .time(STAGE_PACKING, || texel::pack_map(&raster, space, o.texel, o.derivative_power));
-        drop(raster);
-        rec.counters.packed_texels += packed;
-        if clamped > 0 {
-            rec.notes.push(format!(
-                "{clamped} packed texels hold a vertex outside the 16-bit range [-R/2, 3R/2] \
-                 (clamped)"
-            ));
-        }
+        let (map, tester, space) = build_map(o, frame, rec);
         let lookup = classify::Lookup { map: &map, tester, space };
         let (classes, mut lit, uncertain, counters) =
             rec.stages.time(STAGE_CLASSIFICATION, || classify::classify_pixels(frame, &lookup));
         rec.counters.merge(&counters);
-
-        let (consistent, corrected) = rec.stages.time(STAGE_CONSISTENT_DEPTH, || {
-            let centres: Vec<u32> = uncertain.iter().map(|u| u.texel).collect();
-            depth::consistent_depths(&map, &centres)
-        });
-        rec.counters.depth_corrected_texels += corrected;
-
-        let (silhouettes, counters) = rec.stages.time(STAGE_RECOVERY, || {
-            recover::recover_pixels(frame, &lookup, &consistent, &uncertain, &mut lit)
-        });
-        rec.counters.merge(&counters);
-
-        if o.rate > 1 {
-            let counters = rec.stages.time(STAGE_ANTIALIASING, || {
-                antialias::antialias_pixels(
-                    frame,
-                    &lookup,
-                    &sample_pattern,
-                    &uncertain,
-                    &silhouettes,
-                    &mut lit,
-                )
-            });
-            rec.counters.merge(&counters);
-        } else {
-            rec.stages.skip(STAGE_ANTIALIASING);
-        }
+        finish(o, frame, &lookup, &sample_pattern, &uncertain, &mut lit, rec);
         let vis =
             Visibility { width: frame.width(), height: frame.height(), lit, transmittance: None };
         Ok((vis, classes))

@@ -1,0 +1,139 @@
+//! The twin's map on the GPU: its texels as stored (four words a packed texel; an `f32`
+//! texel's nine `f32` bits in two buffers, each within the binding size limit), the
+//! derivative code's decode, error and encode tables, and the parameters the kernels decode
+//! them with (`texel.wgsl`, the twin of [`SpsmMap::get`]).
+
+use crate::{
+    gpu::GpuContext,
+    spsm::{
+        classify::Lookup,
+        quantize::DerivativeCode,
+        texel::{SpsmMap, Texels},
+    },
+};
+use bytemuck::{Pod, Zeroable};
+
+/// WGSL of the texel decoding (needs `COMMON_WGSL` before it).
+pub(super) const TEXEL_WGSL: &str = include_str!("texel.wgsl");
+
+/// The kernels' uniform parameters; the WGSL `Params` of `texel.wgsl`, field for field.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, Pod, Zeroable)]
+pub(super) struct Params {
+    pub constant: f64,
+    pub z_lo: f64,
+    pub depth_step: f64,
+    pub vertex_step: f64,
+    pub half_res: f64,
+    pub half_ulp: f64,
+    pub size_x: f64,
+    pub size_y: f64,
+    pub pixels: u32,
+    pub res: u32,
+    pub perspective: u32,
+    pub packed: u32,
+    pub count: u32,
+    pub pad: [u32; 3],
+}
+
+/// The order-preserving map of the non-NaN `f64`s onto the integers.
+fn key(s: f64) -> i128 {
+    let b = s.to_bits() as i64;
+    i128::from(if b < 0 { b ^ i64::MAX } else { b })
+}
+
+/// The inverse of [`key`].
+fn from_key(k: i128) -> f64 {
+    let k = k as i64;
+    f64::from_bits((if k < 0 { k ^ i64::MAX } else { k }) as u64)
+}
+
+/// For each code `c` in 1 to 254, the smallest `f64` slope `code` encodes to `c` or above
+/// (index 0 and 255 are unused): [`DerivativeCode::encode`] is non-decreasing, so a slope's
+/// code is the number of thresholds at or below it.
+pub fn encode_thresholds(code: &DerivativeCode) -> [f64; 256] {
+    let mut t = [f64::NEG_INFINITY; 256];
+    t[255] = f64::INFINITY;
+    for (c, slot) in t.iter_mut().enumerate().take(255).skip(1) {
+        let (mut lo, mut hi) = (key(f64::NEG_INFINITY), key(f64::INFINITY));
+        while hi - lo > 1 {
+            let mid = lo + (hi - lo) / 2;
+            if usize::from(code.encode(from_key(mid))) >= c {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        *slot = from_key(hi);
+    }
+    t
+}
+
+/// The map's texels and tables on the GPU.
+#[derive(Debug)]
+pub struct GpuTexels {
+    /// The kernels' parameters (`pixels` and `count` set per kernel).
+    pub(super) params: Params,
+    /// The texels as stored: four words a packed texel, or the six `f32` vertex
+    /// coordinates of an `f32` texel.
+    pub texels: wgpu::Buffer,
+    /// The depth and derivatives of each `f32` texel (three `f32`); one unused word for
+    /// packed texels.
+    pub planes: wgpu::Buffer,
+    /// Decode `[0, 256)`, error `[256, 512)` and encode thresholds `[512, 768)` of the
+    /// derivative code (zeros for `f32` texels).
+    pub tables: wgpu::Buffer,
+}
+
+impl GpuTexels {
+    /// Uploads `lookup`'s map.
+    pub fn upload(ctx: &GpuContext, lookup: &Lookup<'_>) -> Self {
+        let map: &SpsmMap = lookup.map;
+        let space = map.space;
+        let size = space.texel_world_size(1.0);
+        let mut params = Params {
+            constant: lookup.tester.constant,
+            z_lo: space.z_lo,
+            depth_step: space.depth_step(),
+            vertex_step: space.vertex_step(),
+            half_res: 0.5 * f64::from(space.res),
+            half_ulp: f64::from(f32::EPSILON) * 0.5,
+            size_x: size.x,
+            size_y: size.y,
+            res: map.res,
+            perspective: u32::from(space.perspective),
+            ..Default::default()
+        };
+        let mut tables = vec![0.0f64; 768];
+        let (words, planes): (Vec<u32>, Vec<u32>) = match &map.texels {
+            Texels::Packed(t, p) => {
+                params.packed = 1;
+                params.z_lo = p.space.z_lo;
+                params.depth_step = p.space.depth_step();
+                params.vertex_step = p.space.vertex_step();
+                params.half_res = 0.5 * f64::from(p.space.res);
+                for q in 0..=255u8 {
+                    tables[usize::from(q)] = p.code.decode(q);
+                    tables[256 + usize::from(q)] = p.code.error(q);
+                }
+                tables[512..].copy_from_slice(&encode_thresholds(&p.code));
+                (t.iter().flatten().copied().collect(), vec![0])
+            }
+            Texels::F32(t) => (
+                t.iter()
+                    .flat_map(|x| {
+                        let [a, b, c] = x.v;
+                        [a[0], a[1], b[0], b[1], c[0], c[1]].map(f32::to_bits)
+                    })
+                    .collect(),
+                t.iter().flat_map(|x| [x.z, x.dz[0], x.dz[1]].map(f32::to_bits)).collect(),
+            ),
+        };
+        Self {
+            params,
+            texels: ctx.upload("spsm texels", &words),
+            planes: ctx.upload("spsm texel planes", &planes),
+            tables: ctx.upload("spsm tables", &tables),
+        }
+    }
+}

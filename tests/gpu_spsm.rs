@@ -1,0 +1,143 @@
+//! `spsm` and `spsm-f32` on the GPU against the CPU twin, pixel for pixel and counter for
+//! counter, with the CPU's own G-buffer uploaded, at rate 1 and 16; and one end-to-end run.
+
+mod common;
+
+use common::load_builtin;
+use instrumentation::Recorder;
+use methods::{
+    gpu::{spsm as gpu_spsm, GpuContext, GpuFrame},
+    spsm::{Spsm, SpsmOptions, TexelFormat},
+    Frame, ShadowMethod,
+};
+
+fn options(texel: TexelFormat, rate: u32) -> SpsmOptions {
+    let mut o = SpsmOptions { texel, rate, ..SpsmOptions::default() };
+    o.map.map_res = 512;
+    o
+}
+
+/// GPU and CPU `spsm` on `name` at 160 x 120, map 512, both texel formats, rate 1 and 16:
+/// the differing pixels, classes and counters summed over the four runs (`None` when the
+/// scene's model is missing).
+fn compare(name: &str) -> Option<(usize, usize, usize)> {
+    let scene = load_builtin(name)?;
+    let frame = Frame::new(&scene, 160, 120, &mut Recorder::default());
+    let ctx = GpuContext::shared().expect("a GPU adapter (Mesa's lavapipe on CI)");
+    let gpu = GpuFrame::upload(ctx, &frame, &frame.gbuffer);
+    let mut total = (0, 0, 0);
+    for texel in [TexelFormat::Packed, TexelFormat::F32] {
+        for rate in [1, 16] {
+            let o = options(texel, rate);
+            let mut cpu_rec = Recorder::default();
+            let (cpu, cpu_classes) =
+                Spsm { options: o }.run_classified(&frame, &mut cpu_rec).expect("CPU spsm runs");
+            let mut rec = Recorder::default();
+            let out = gpu_spsm::shade(ctx, &gpu, &frame, &o, &mut rec).expect("GPU spsm runs");
+            let lit = &out.visibility.lit;
+            assert_eq!(lit.len(), cpu.lit.len());
+            let differing = lit.iter().zip(&cpu.lit).filter(|(g, c)| g != c).count();
+            let classes = out.classes.iter().zip(&cpu_classes).filter(|(g, c)| g != c).count();
+            let counters = usize::from(rec.counters != cpu_rec.counters);
+            let shadowed = cpu.lit.iter().filter(|&&l| l < 1.0).count();
+            let c = &rec.counters;
+            let ms = |name: &str| {
+                rec.stages.stages.iter().find(|s| s.name == name).map_or(f64::NAN, |s| s.ms)
+            };
+            eprintln!(
+                "{name} {} rate {rate}: {differing} differing pixels, {classes} differing \
+                 classes, counters {}, {} handed back; {shadowed} shadowed; lit {} shadowed \
+                 {} neighbourhood {} uncertain {} corrected {} recovered {} lookups {} \
+                 antialiased {}; classification {:.2} ms, consistent min depth {:.2} ms",
+                texel.name(),
+                if counters == 0 { "equal" } else { "DIFFER" },
+                out.handed_back,
+                c.lit_by_one_lookup,
+                c.shadowed_by_one_lookup,
+                c.shadowed_by_neighbourhood,
+                c.uncertain_pixels,
+                c.depth_corrected_texels,
+                c.recovered_pixels,
+                c.shadow_map_lookups,
+                c.antialiased_samples,
+                ms(methods::spsm::STAGE_CLASSIFICATION),
+                ms(methods::spsm::STAGE_CONSISTENT_DEPTH),
+            );
+            if counters != 0 {
+                eprintln!("GPU {:?}\nCPU {:?}", rec.counters, cpu_rec.counters);
+            }
+            assert!(shadowed > 0, "{name}: no shadow at all");
+            total = (total.0 + differing, total.1 + classes, total.2 + counters);
+        }
+    }
+    Some(total)
+}
+
+fn assert_parity(name: &str) {
+    match compare(name) {
+        Some((differing, classes, counters)) => {
+            assert_eq!(
+                (differing, classes, counters),
+                (0, 0, 0),
+                "{name}: differing pixels, classes, counter sets against the CPU spsm"
+            );
+        }
+        None => eprintln!("{name}: skipped (model missing)"),
+    }
+}
+
+#[test]
+fn gpu_parity_plane_square() {
+    assert_parity("plane-square");
+}
+
+#[test]
+fn gpu_parity_cage() {
+    assert_parity("cage");
+}
+
+#[test]
+fn gpu_parity_random_10k() {
+    assert_parity("random-10k");
+}
+
+#[test]
+fn gpu_parity_bumpy() {
+    assert_parity("bumpy");
+}
+
+#[test]
+fn gpu_spsm_runs_end_to_end() {
+    let scene = scenes::load("plane-square").expect("built-in");
+    let frame = Frame::new(&scene, 160, 120, &mut Recorder::default());
+    for texel in [TexelFormat::Packed, TexelFormat::F32] {
+        let o = options(texel, 16);
+        let m = gpu_spsm::GpuSpsm { options: o };
+        let cpu = Spsm { options: o };
+        assert_eq!(m.name(), cpu.name());
+        let mut want = cpu.params();
+        want.insert("device".into(), "gpu".into());
+        assert_eq!(m.params(), want);
+        let mut rec = Recorder::default();
+        let v = m.run(&frame, &mut rec).expect("GPU spsm runs");
+        assert_eq!(v.lit.len(), 160 * 120);
+        assert!(v.lit.iter().all(|l| l.is_finite() && (0.0..=1.0).contains(l)));
+        assert!(v.lit.contains(&0.0) && v.lit.contains(&1.0));
+        let stages: Vec<&str> = rec.stages.stages.iter().map(|s| s.name.as_str()).collect();
+        for stage in [
+            methods::spsm::STAGE_RASTER,
+            methods::spsm::STAGE_PACKING,
+            methods::spsm::STAGE_CLASSIFICATION,
+            methods::spsm::STAGE_CONSISTENT_DEPTH,
+            methods::spsm::STAGE_RECOVERY,
+            methods::spsm::STAGE_ANTIALIASING,
+        ] {
+            assert!(stages.contains(&stage), "stage {stage} missing from {stages:?}");
+        }
+        let c = &rec.counters;
+        assert!(c.packed_texels > 0 && c.shadow_map_lookups > 0 && c.uncertain_pixels > 0);
+        let cpu_v = cpu.run(&frame, &mut Recorder::default()).expect("CPU spsm runs");
+        let differing = v.lit.iter().zip(&cpu_v.lit).filter(|(g, c)| g != c).count();
+        eprintln!("end to end {}: {differing} pixels differ from the CPU's run", texel.name());
+    }
+}
