@@ -191,7 +191,8 @@ struct RenderArgs {
     #[arg(long, value_enum)]
     visibility: Option<Visibility09>,
     /// Where the method runs: `cpu` (default) or `gpu` (kernels for sm, the pcf-* methods,
-    /// afsm and pan09; the run record names the adapter and how stage times were taken).
+    /// afsm, pan09, and spsm's classification and depth stages; the run record names the
+    /// adapter and how stage times were taken).
     #[arg(long, value_enum, default_value_t = DeviceArg::Cpu)]
     device: DeviceArg,
     /// Image width in pixels; default: the scene's.

@@ -133,6 +133,9 @@ fn gpu_method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMetho
         "pcf-gems4" => gems(GemsSamples::FourDithered),
         "afsm" => Ok(Box::new(crate::gpu::afsm::GpuAfsm { options: AfsmOptions::default() })),
         "pan09" => Ok(Box::new(crate::gpu::pan09::GpuPan09::new(pan09_options(options)?)?)),
+        "spsm" | "spsm-f32" => {
+            Ok(Box::new(crate::gpu::spsm::GpuSpsm { options: spsm_options(name, options)? }))
+        }
         _ => Err(MethodError::InvalidOption {
             option: "--device",
             message: format!(
@@ -150,6 +153,20 @@ fn reeves_options(options: &MethodOptions) -> Result<ReevesOptions, MethodError>
         map: map_options(options, d.map)?,
         samples: options.rate.unwrap_or(d.samples),
         seed: options.seed.unwrap_or(d.seed),
+    };
+    o.validate()?;
+    Ok(o)
+}
+
+/// Lecocq et al.'s options for `spsm` or `spsm-f32` from the shared ones, validated.
+fn spsm_options(name: &str, options: &MethodOptions) -> Result<SpsmOptions, MethodError> {
+    let d = SpsmOptions::default();
+    let o = SpsmOptions {
+        map: map_options(options, d.map)?,
+        texel: if name == "spsm" { TexelFormat::Packed } else { TexelFormat::F32 },
+        derivative_power: options.derivative_power.unwrap_or(d.derivative_power),
+        rate: options.rate.unwrap_or(d.rate),
+        pattern: options.pattern.unwrap_or(d.pattern),
     };
     o.validate()?;
     Ok(o)
@@ -186,6 +203,8 @@ pub const GPU_METHODS: &[&str] = &[
     "pcf-gems4",
     "afsm",
     "pan09",
+    "spsm",
+    "spsm-f32",
 ];
 
 /// The CPU method called `name`, configured by `options` and validated.
@@ -222,18 +241,7 @@ fn cpu_method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMetho
             m.validate()?;
             Ok(Box::new(m))
         }
-        "spsm" | "spsm-f32" => {
-            let d = SpsmOptions::default();
-            let o = SpsmOptions {
-                map: map_options(options, d.map)?,
-                texel: if name == "spsm" { TexelFormat::Packed } else { TexelFormat::F32 },
-                derivative_power: options.derivative_power.unwrap_or(d.derivative_power),
-                rate: options.rate.unwrap_or(d.rate),
-                pattern: options.pattern.unwrap_or(d.pattern),
-            };
-            o.validate()?;
-            Ok(Box::new(Spsm { options: o }))
-        }
+        "spsm" | "spsm-f32" => Ok(Box::new(Spsm { options: spsm_options(name, options)? })),
         "pan09" => Ok(Box::new(Pan09::new(pan09_options(options)?)?)),
         _ => Err(MethodError::InvalidOption {
             option: "--method",

@@ -57,6 +57,11 @@ pub fn shade(
     let (map, tester, space) = spsm::build_map(options, frame, rec);
     let lookup = spsm::classify::Lookup { map: &map, tester, space };
     let texels = texel::GpuTexels::upload(ctx, &lookup);
+    rec.notes.push(
+        "spsm on the GPU: classification and consistent min depth run on the GPU; conservative \
+         rasterization, packing, silhouette recovery and antialiasing run the CPU twin's code"
+            .into(),
+    );
     let mut c = classify::classify(ctx, gframe, frame, &lookup, &texels, rec)?;
     rec.counters.merge(&c.counters);
     if c.handed_back > 0 {
