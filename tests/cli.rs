@@ -185,7 +185,7 @@ fn gpu_device_names_the_methods_it_has_kernels_for() {
         "--scene",
         "plane-square",
         "--method",
-        "spsm",
+        "afsm-ss",
         "--device",
         "gpu",
         "--width",
