@@ -42,25 +42,6 @@ fn corner(t: u32, i: u32) -> vec3<f64> {
     return vec3<f64>(corners[k], corners[k + 1u], corners[k + 2u]);
 }
 
-fn cross3(a: vec3<f64>, b: vec3<f64>) -> vec3<f64> {
-    return vec3<f64>(a.y * b.z - b.y * a.z, a.z * b.x - b.z * a.x, a.x * b.y - b.x * a.y);
-}
-
-// glam's normalize_or_zero.
-fn normalize_or_zero(v: vec3<f64>) -> vec3<f64> {
-    let rcp = 1.0lf / sqrt(dot3(v, v));
-    if is_finite64(rcp) && rcp > 0.0lf {
-        return v * rcp;
-    }
-    return vec3<f64>(0.0lf, 0.0lf, 0.0lf);
-}
-
-fn lex_less(a: vec3<f64>, b: vec3<f64>) -> bool {
-    if a.x != b.x { return a.x < b.x; }
-    if a.y != b.y { return a.y < b.y; }
-    return a.z < b.z;
-}
-
 fn index(gid: vec3<u32>, groups: vec3<u32>) -> u32 {
     return gid.x + gid.y * (groups.x * 64u);
 }
@@ -78,37 +59,19 @@ fn setup(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     let offset = dot3(n, c0);
     var dmin = 1.7976931348623157e308lf;
     var dmax = -dmin;
-    var cs = array<vec3<f64>, 3>(c0, c1, c2);
+    let cs = array<vec3<f64>, 3>(c0, c1, c2);
+    var w: Clipped;
     if p.kind == 1u {
-        // methods::raster::clip_near, corner by corner.
-        for (var i = 0u; i < 3u; i++) {
-            let j = (i + 1u) % 3u;
-            let pi = cs[i];
-            let pj = cs[j];
-            let di = dot3(pi - p.origin, p.forward);
-            let dj = dot3(pj - p.origin, p.forward);
-            let in_i = di >= p.near;
-            if in_i {
-                let d = proj_unclipped(p, pi).z;
-                dmin = min(dmin, d);
-                dmax = max(dmax, d);
-            }
-            if in_i != (dj >= p.near) {
-                var a = pi; var da = di; var b = pj; var db = dj;
-                if !lex_less(pi, pj) { a = pj; da = dj; b = pi; db = di; }
-                let s = (p.near - da) / (db - da);
-                let q = a + (b - a) * s;
-                let d = proj_unclipped(p, q).z;
-                dmin = min(dmin, d);
-                dmax = max(dmax, d);
-            }
-        }
+        let d = array<f64, 3>(proj_depth_of(p, c0), proj_depth_of(p, c1), proj_depth_of(p, c2));
+        w = clip_near(cs, d, p.near);
     } else {
-        for (var i = 0u; i < 3u; i++) {
-            let d = proj_unclipped(p, cs[i]).z;
-            dmin = min(dmin, d);
-            dmax = max(dmax, d);
-        }
+        w.p = array<vec3<f64>, 4>(c0, c1, c2, c0);
+        w.n = 3u;
+    }
+    for (var i = 0u; i < w.n; i++) {
+        let d = proj_unclipped(p, w.p[i]).z;
+        dmin = min(dmin, d);
+        dmax = max(dmax, d);
     }
     planes[6u * t] = n.x;
     planes[6u * t + 1u] = n.y;

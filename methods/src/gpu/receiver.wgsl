@@ -38,21 +38,6 @@ struct Params {
     pad1: u32,
 }
 
-// Projector::ray(xy): origin and direction (parameterised by depth).
-struct Ray {
-    origin: vec3<f64>,
-    direction: vec3<f64>,
-}
-
-fn proj_ray(p: Proj, xy: vec2<f64>) -> Ray {
-    let sx = 2.0lf * xy.x / p.width - 1.0lf;
-    let sy = 1.0lf - 2.0lf * xy.y / p.height;
-    if p.kind == 1u {
-        return Ray(p.origin, p.forward + p.right * (sx * p.a) + p.up * (sy * p.b));
-    }
-    return Ray(p.origin + p.right * (sx * p.a) + p.up * (sy * p.b), p.forward);
-}
-
 // One ratio |n·axis| / |n·dir| of depth_test::depth_slope, clamped to max_slope.
 fn slope_ratio(n: vec3<f64>, axis: vec3<f64>, n_dir: f64, max_slope: f64) -> f64 {
     let r = abs(dot3(n, axis)) / n_dir;

@@ -30,22 +30,6 @@ fn corner(t: u32, i: u32) -> vec3<f64> {
     return vec3<f64>(corners[b], corners[b + 1u], corners[b + 2u]);
 }
 
-// glam's DVec3::cross.
-fn cross_glam(a: vec3<f64>, b: vec3<f64>) -> vec3<f64> {
-    return vec3<f64>(a.y * b.z - b.y * a.z, a.z * b.x - b.z * a.x, a.x * b.y - b.x * a.y);
-}
-
-// Lexicographic (x, y, z) < as Rust's tuple comparison.
-fn lex_less(a: vec3<f64>, b: vec3<f64>) -> bool {
-    if a.x != b.x {
-        return a.x < b.x;
-    }
-    if a.y != b.y {
-        return a.y < b.y;
-    }
-    return a.z < b.z;
-}
-
 // orient2d's filter (the robust crate's first stage): 1 or -1 when the sign of det is
 // certain (and then det is the value orient2d returns), 0 when det is certainly 0, 2 when
 // the filter cannot decide.
@@ -77,7 +61,7 @@ fn setup(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         return;
     }
     var c = array<vec3<f64>, 3>(corner(t, 0u), corner(t, 1u), corner(t, 2u));
-    let normal = cross_glam(c[1] - c[0], c[2] - c[0]);
+    let normal = cross3(c[1] - c[0], c[2] - c[0]);
     if (normal.x == 0.0lf && normal.y == 0.0lf && normal.z == 0.0lf)
         || !(is_finite64(normal.x) && is_finite64(normal.y) && is_finite64(normal.z)) {
         return;
@@ -86,35 +70,10 @@ fn setup(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     var world: array<vec3<f64>, 4>;
     var count = 3u;
     if p.kind == 1u {
-        // raster::clip_near.
-        var d: array<f64, 3>;
-        for (var i = 0u; i < 3u; i = i + 1u) {
-            d[i] = dot3(c[i] - p.origin, p.forward);
-        }
-        count = 0u;
-        for (var i = 0u; i < 3u; i = i + 1u) {
-            let j = (i + 1u) % 3u;
-            let in_i = d[i] >= p.near;
-            if in_i {
-                world[count] = c[i];
-                count = count + 1u;
-            }
-            if in_i != (d[j] >= p.near) {
-                var pp = c[j];
-                var dp = d[j];
-                var q = c[i];
-                var dq = d[i];
-                if lex_less(c[i], c[j]) {
-                    pp = c[i];
-                    dp = d[i];
-                    q = c[j];
-                    dq = d[j];
-                }
-                let s = (p.near - dp) / (dq - dp);
-                world[count] = pp + (q - pp) * s;
-                count = count + 1u;
-            }
-        }
+        let d = array<f64, 3>(proj_depth_of(p, c[0]), proj_depth_of(p, c[1]), proj_depth_of(p, c[2]));
+        let w = clip_near(c, d, p.near);
+        world = w.p;
+        count = w.n;
     } else {
         world[0] = c[0];
         world[1] = c[1];

@@ -29,7 +29,7 @@ fn reach(s: Setup, k: u32) -> f64 {
     let a = corner(t, 0u);
     let normal = normalize_or_zero(cross3(corner(t, 1u) - a, corner(t, 2u) - a));
     let ray = proj_ray(s.light, xy);
-    let r = receiver(s, ray.origin + z * ray.dir, normal);
+    let r = receiver(s, ray.origin + z * ray.direction, normal);
     if !r.ok { return s.inf; }
     return z + (s.constant + s.slope_bias * (1.5lf * r.slope.x + 1.5lf * r.slope.y));
 }

@@ -41,10 +41,6 @@ fn sgn64(x: f64) -> f64 {
     return 1.0lf;
 }
 
-fn cross3(a: vec3<f64>, b: vec3<f64>) -> vec3<f64> {
-    return vec3<f64>(a.y * b.z - b.y * a.z, a.z * b.x - b.z * a.x, a.x * b.y - b.x * a.y);
-}
-
 fn len3(a: vec3<f64>) -> f64 {
     return sqrt(dot3(a, a));
 }
@@ -59,77 +55,6 @@ fn finite2(a: vec2<f64>) -> bool {
 
 fn perp_dot(a: vec2<f64>, b: vec2<f64>) -> f64 {
     return a.x * b.y - a.y * b.x;
-}
-
-// glam's normalize_or_zero.
-fn normalize_or_zero(a: vec3<f64>) -> vec3<f64> {
-    let rcp = 1.0lf / len3(a);
-    if is_finite64(rcp) && rcp > 0.0lf { return a * rcp; }
-    return vec3<f64>(0.0lf, 0.0lf, 0.0lf);
-}
-
-// Projector::ray.
-struct Ray {
-    origin: vec3<f64>,
-    dir: vec3<f64>,
-}
-
-fn proj_ray(p: Proj, xy: vec2<f64>) -> Ray {
-    let sx = 2.0lf * xy.x / p.width - 1.0lf;
-    let sy = 1.0lf - 2.0lf * xy.y / p.height;
-    if p.kind == 1u {
-        return Ray(p.origin, p.forward + p.right * (sx * p.a) + p.up * (sy * p.b));
-    }
-    return Ray(p.origin + p.right * (sx * p.a) + p.up * (sy * p.b), p.forward);
-}
-
-fn proj_depth_of(p: Proj, x: vec3<f64>) -> f64 {
-    return dot3(x - p.origin, p.forward);
-}
-
-// raster::clip_near: the polygon of `c` on the near side kept, at most 4 corners.
-struct Clipped {
-    p: array<vec3<f64>, 4>,
-    n: u32,
-}
-
-fn lex_less(a: vec3<f64>, b: vec3<f64>) -> bool {
-    if a.x != b.x { return a.x < b.x; }
-    if a.y != b.y { return a.y < b.y; }
-    return a.z < b.z;
-}
-
-fn clip_near(c: array<vec3<f64>, 3>, d: array<f64, 3>, near: f64) -> Clipped {
-    var out: Clipped;
-    out.n = 0u;
-    for (var i = 0u; i < 3u; i++) {
-        let j = (i + 1u) % 3u;
-        let pi = c[i];
-        let pj = c[j];
-        let di = d[i];
-        let dj = d[j];
-        let in_i = di >= near;
-        if in_i {
-            out.p[out.n] = pi;
-            out.n += 1u;
-        }
-        if in_i != (dj >= near) {
-            var p = pj;
-            var dp = dj;
-            var q = pi;
-            var dq = di;
-            if lex_less(pi, pj) {
-                p = pi;
-                dp = di;
-                q = pj;
-                dq = dj;
-            }
-            let t = (near - dp) / (dq - dp);
-            out.p[out.n] = p + (q - p) * t;
-            out.n += 1u;
-        }
-    }
-    return out;
 }
 
 // The light of a projector (silhouette::LightModel): kind 0 towards `v`, 1 at `v`.

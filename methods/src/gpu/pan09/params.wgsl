@@ -91,7 +91,7 @@ fn receiver(s: Setup, position: vec3<f64>, normal: vec3<f64>) -> Receiver {
     if !r.ok { return r; }
     r.xy = q.xy;
     r.depth = q.z;
-    let dir = proj_ray(s.light, r.xy).dir;
+    let dir = proj_ray(s.light, r.xy).direction;
     let n_dir = abs(dot3(normal, dir));
     var rx = abs(dot3(normal, s.light.right)) / n_dir;
     var ry = abs(dot3(normal, s.light.up)) / n_dir;
