@@ -61,8 +61,6 @@ use crate::{
 };
 use instrumentation::Recorder;
 
-mod scan;
-
 /// Name of the stage that bins the samples into the grid.
 pub const STAGE_IZB: &str = "IZB construction";
 /// Name of the stage that resolves the undecided pairs on the CPU.
@@ -141,7 +139,7 @@ pub fn shade(
         ],
     );
     let uparams = ctx.upload("afsm uparams", &[pixels as u32, grid, gpu.triangles]);
-    let scan = scan::Scan::new(ctx);
+    let scan = super::scan::Scan::new(ctx);
 
     // Transformation of samples.
     let transform = ctx.pipeline(

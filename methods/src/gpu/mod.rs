@@ -33,6 +33,7 @@ pub mod frame;
 pub mod pan09;
 pub mod pcf;
 pub mod raster;
+mod scan;
 pub mod sm;
 pub mod spsm;
 

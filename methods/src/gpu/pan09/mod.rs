@@ -81,9 +81,7 @@ const FACET_RECORD: &str = include_str!("facet_record.wgsl");
 /// The compiled kernels.
 #[derive(Debug)]
 struct Kernels {
-    scan_chunks: wgpu::ComputePipeline,
-    scan_totals: wgpu::ComputePipeline,
-    scan_add: wgpu::ComputePipeline,
+    scan: crate::gpu::scan::Scan,
     silhouette: wgpu::ComputePipeline,
     mask_map: wgpu::ComputePipeline,
     sat_rows: wgpu::ComputePipeline,
@@ -114,7 +112,6 @@ impl Kernels {
                 .chain(parts.iter().copied())
                 .collect()
         };
-        let scan = with(&[include_str!("scan.wgsl")]);
         let sat = with(&[include_str!("sat.wgsl")]);
         let silhouette = with(&[PARAMS, include_str!("silhouette.wgsl")]);
         let mask_map = with(&[PARAMS, include_str!("mask_map.wgsl")]);
@@ -127,9 +124,7 @@ impl Kernels {
         let ratio = with(&[PARAMS, COVERAGE, FACET_RECORD, include_str!("ratio.wgsl")]);
         let p = |label: &str, src: &str, entry: &str| ctx.pipeline(label, src, entry);
         Self {
-            scan_chunks: p("pan09 scan chunks", &scan, "chunks"),
-            scan_totals: p("pan09 scan totals", &scan, "totals"),
-            scan_add: p("pan09 scan add", &scan, "add"),
+            scan: crate::gpu::scan::Scan::new(ctx),
             silhouette: p("pan09 silhouette", &silhouette, "main"),
             mask_map: p("pan09 mask map", &mask_map, "main"),
             sat_rows: p("pan09 sat rows", &sat, "rows"),
@@ -197,13 +192,9 @@ fn read_counters(ctx: &GpuContext, counters: &wgpu::Buffer) -> Result<Vec<u32>, 
     ctx.read(counters)
 }
 
-/// Word `index` of `buffer`.
-fn read_word(ctx: &GpuContext, buffer: &wgpu::Buffer, index: u32) -> Result<u32, GpuError> {
-    let one = ctx.zeroed::<u32>("word", 1);
-    let mut encoder = ctx.device.create_command_encoder(&Default::default());
-    encoder.copy_buffer_to_buffer(buffer, u64::from(index) * 4, &one, 0, 4);
-    ctx.queue.submit([encoder.finish()]);
-    Ok(ctx.read::<u32>(&one)?[0])
+/// The one word of a scan's total.
+fn read_total(ctx: &GpuContext, total: &wgpu::Buffer) -> Result<u32, GpuError> {
+    Ok(ctx.read::<u32>(total)?[0])
 }
 
 /// `pan09` on the GPU (`--device gpu`); see the module doc.

@@ -3,7 +3,7 @@
 //! [`crate::pan09::pairs`] describes; each stage is submitted in two parts around the read
 //! of the number of keys emitted (which sizes the key buffers), timed together.
 
-use super::{facets::Facets, params::slot, read_counters, read_word, scan, Kernels, Run};
+use super::{facets::Facets, params::slot, read_counters, read_total, scan, Kernels, Run};
 use crate::gpu::{GpuContext, GpuError};
 use crate::pan09::{STAGE_PT_PAIRS, STAGE_TT_PAIRS};
 use instrumentation::Recorder;
@@ -34,11 +34,11 @@ pub(super) fn pixel_texel_pairs(
         &k.pt_count,
         &[&dims, &facets.ff, &facets.fu, &counts, &ph[0], &ph[1], &ph[2], &ph[3], &ph[4], &ph[5]],
     );
-    let (sums, chunks) = run.stage(rec, STAGE_PT_PAIRS, |e| {
+    let total = run.stage(rec, STAGE_PT_PAIRS, |e| {
         GpuContext::dispatch(e, &k.pt_count, &bind, GpuContext::groups_1d(n as usize, 64));
         scan::record(ctx, k, e, &counts, n + 1)
     })?;
-    let emitted = read_word(ctx, &sums, chunks)?;
+    let emitted = read_total(ctx, &total)?;
     let keys = ctx.zeroed::<u32>("pt keys", 2 * emitted as usize);
     let flags = ctx.zeroed::<u32>("pt flags", emitted as usize);
     let offsets = ctx.zeroed::<u32>("pt offsets", texels + 1);
@@ -116,7 +116,7 @@ pub(super) fn triangle_texel_pairs(
         )
     };
     let mark = part1(&by_texel, &ph[3], &k.tt_busy);
-    let ((sums, chunks), (row_sums, row_chunks), bsat) = run.stage(rec, STAGE_TT_PAIRS, |e| {
+    let (keys_total, rows_total, bsat) = run.stage(rec, STAGE_TT_PAIRS, |e| {
         GpuContext::dispatch(e, &k.tt_busy, &mark, GpuContext::groups_1d(texels, 64));
         let bsat = super::sat::record(ctx, k, e, &busy, res);
         let count = part1(&by_triangle, &bsat, &k.tt_count);
@@ -124,8 +124,8 @@ pub(super) fn triangle_texel_pairs(
         let keys = scan::record(ctx, k, e, &counts, triangles + 1);
         (keys, scan::record(ctx, k, e, &row_off, triangles + 1), bsat)
     })?;
-    let emitted = read_word(ctx, &sums, chunks)?;
-    let items = read_word(ctx, &row_sums, row_chunks)?;
+    let emitted = read_total(ctx, &keys_total)?;
+    let items = read_total(ctx, &rows_total)?;
     let row_keys = ctx.zeroed::<u32>("tt row keys", items as usize + 1);
     let by_item = ctx.upload("tt dims", &[items, triangles.max(1)]);
     let keys = ctx.zeroed::<u32>("tt keys", 2 * emitted as usize);

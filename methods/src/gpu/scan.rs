@@ -1,5 +1,6 @@
 //! Exclusive prefix sum of a `u32` buffer on the GPU (`scan.wgsl`): per block of 256, over
-//! the block sums in one workgroup, then each block's offset added.
+//! the block sums in one workgroup, then each block's offset added. Shared by the kernels
+//! that build lists by count, scan and scatter (afsm's irregular z-buffer, pan09's pairs).
 
 use crate::gpu::GpuContext;
 
@@ -7,14 +8,15 @@ use crate::gpu::GpuContext;
 const BLOCK: u32 = 256;
 
 /// The three scan pipelines.
-pub(super) struct Scan {
+#[derive(Debug)]
+pub(crate) struct Scan {
     blocks: wgpu::ComputePipeline,
     sums: wgpu::ComputePipeline,
     add: wgpu::ComputePipeline,
 }
 
 /// A scan of one buffer, bound and ready to record.
-pub(super) struct PreparedScan<'a> {
+pub(crate) struct PreparedScan<'a> {
     scan: &'a Scan,
     groups: (u32, u32, u32),
     /// One bind group per kernel (auto layouts are not shared between pipelines).
@@ -23,7 +25,7 @@ pub(super) struct PreparedScan<'a> {
 
 impl Scan {
     /// Compiles the kernels.
-    pub(super) fn new(ctx: &GpuContext) -> Self {
+    pub(crate) fn new(ctx: &GpuContext) -> Self {
         let src = include_str!("scan.wgsl");
         Self {
             blocks: ctx.pipeline("scan blocks", src, "scan_blocks"),
@@ -34,7 +36,7 @@ impl Scan {
 
     /// Binds the scan of the first `n` elements of `data` in place; `total` (one `u32`)
     /// receives their sum.
-    pub(super) fn prepare<'a>(
+    pub(crate) fn prepare<'a>(
         &'a self,
         ctx: &GpuContext,
         data: &wgpu::Buffer,
@@ -52,7 +54,7 @@ impl Scan {
 
 impl PreparedScan<'_> {
     /// Records the three passes.
-    pub(super) fn record(&self, encoder: &mut wgpu::CommandEncoder) {
+    pub(crate) fn record(&self, encoder: &mut wgpu::CommandEncoder) {
         let [blocks, sums, add] = &self.binds;
         GpuContext::dispatch(encoder, &self.scan.blocks, blocks, self.groups);
         GpuContext::dispatch(encoder, &self.scan.sums, sums, (1, 1, 1));
