@@ -2,9 +2,11 @@
 //! procedural generators, mesh loaders, and the effects a scene calls for.
 
 pub mod camera;
+pub mod direction;
 pub mod generators;
 pub mod io;
 pub mod light;
+pub mod limits;
 pub mod mesh;
 pub mod projection;
 pub mod scene;
