@@ -385,7 +385,11 @@ fn run(
         stages: rec.stages.stages,
         skipped_stages: rec.stages.skipped,
         notes: rec.notes,
+        warnings: rec.warnings,
     };
+    for w in &record.warnings {
+        eprintln!("warning: {w}");
+    }
     Ok((visibility, record))
 }
 

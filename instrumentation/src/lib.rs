@@ -152,6 +152,9 @@ pub struct Recorder {
     pub stages: Stages,
     /// Remarks a method makes about the run (e.g. "casters treated as opaque").
     pub notes: Vec<String>,
+    /// Conditions under which the result is not to be trusted as usual (e.g. a bias rule
+    /// outside its valid range); written to `run.json` and printed by the CLI.
+    pub warnings: Vec<String>,
 }
 
 /// The run record written as `run.json`.
@@ -178,6 +181,9 @@ pub struct RunRecord {
     /// Remarks about the run.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub notes: Vec<String>,
+    /// Conditions under which the result is not to be trusted as usual (empty when none).
+    #[serde(default)]
+    pub warnings: Vec<String>,
     /// Sum of the stage times, milliseconds.
     pub total_ms: f64,
 }
