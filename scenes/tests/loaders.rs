@@ -122,11 +122,12 @@ fn binary_ply_errors_name_the_element_and_byte() {
     let vertex = 13; // bytes per vertex record
     let face = 13; // bytes per face record
 
-    let msg = fails("truncated.ply", &bytes[..body + 8 * vertex + 5 * face + 6], None);
+    let end = body + 8 * vertex + 5 * face + 6;
+    let msg = fails("truncated.ply", &bytes[..end], None);
     assert!(
-        msg.contains("face 5")
-            && msg.contains(&format!("byte {}", body + 8 * vertex + 5 * face))
-            && msg.contains("truncated"),
+        msg.contains("element `face`")
+            && msg.contains(&format!("from byte {}", body + 8 * vertex))
+            && msg.contains(&format!("ends at byte {end}, after at most 5 of them")),
         "{msg}"
     );
     let msg = fails("no-note.ply", &bytes[..bytes.len() - 3], None);
@@ -272,6 +273,76 @@ fn structural_errors_name_the_line() {
     assert!(msg.contains("no `face` element"), "{msg}");
     fails("magic.ply", with_line(PLY, 1, "ply2"), Some(1));
     fails("header.off", with_line(OFF, 1, "OFFF"), Some(1));
+}
+
+/// `text` with a byte-order mark (if `bom`) and every LF replaced by `end`.
+fn recode(text: &str, bom: bool, end: &str) -> Vec<u8> {
+    let mut bytes = if bom { b"\xEF\xBB\xBF".to_vec() } else { Vec::new() };
+    bytes.extend(text.replace('\n', end).into_bytes());
+    bytes
+}
+
+#[test]
+fn text_formats_accept_a_byte_order_mark_and_every_line_end() {
+    for name in ["cube.obj", "cube.off", "cube.ply"] {
+        let text = std::fs::read_to_string(data(name)).expect("read");
+        for (bom, end) in
+            [(true, "\n"), (false, "\r\n"), (false, "\r"), (true, "\r\n"), (true, "\r")]
+        {
+            let mesh = load_as(name, recode(&text, bom, end));
+            assert_eq!(mesh.expect(name), cube(), "{name}, BOM {bom}, line end {end:?}");
+        }
+    }
+    // Line numbers count CR-only and CRLF lines alike, after a byte-order mark.
+    for end in ["\r", "\r\n"] {
+        let bad = |text: String| recode(&text, true, end);
+        fails("bom.obj", bad(with_line(OBJ, 3, "v 0 x 0")), Some(3));
+        fails("bom.off", bad(with_line(OFF, 5, "0 x 0")), Some(5));
+        fails("bom.ply", bad(with_line(PLY, 12, "0 x 0")), Some(12));
+        fails("bom-header.ply", bad(with_line(PLY, 4, "property real x")), Some(4));
+        fails("cut.off", bad(OFF.replace("3 0 1 2\n", "")), Some(5));
+    }
+}
+
+#[test]
+fn a_ply_element_that_ends_early_is_named_where_it_ends() {
+    // The header declares 10 vertices; the file holds 3 and then the face.
+    let msg = fails("vertices.ply", PLY.replace("vertex 3", "vertex 10"), Some(13));
+    assert!(msg.contains("element `vertex` ends early, after 3 of the 10"), "{msg}");
+    // Two faces declared, one present: the file ends in the face element.
+    let msg = fails("faces.ply", PLY.replace("face 1", "face 2"), Some(13));
+    assert!(msg.contains("element `face` ends early, after 1 of the 2"), "{msg}");
+    // Blank lines do not count as records.
+    let msg = fails("blank.ply", PLY.replace("vertex 3", "vertex 4") + "\n\n", Some(13));
+    assert!(msg.contains("element `vertex` ends early, after 3 of the 4"), "{msg}");
+
+    // Binary: 8 vertices of 13 bytes and 12 faces of 13 bytes follow the header.
+    let bytes = binary_cube();
+    let body = bytes.windows(11).position(|w| w == b"end_header\n").expect("header") + 11;
+    let declare = |from: &str, to: &str| {
+        let header = String::from_utf8_lossy(&bytes[..body]).replace(from, to);
+        [header.as_bytes(), &bytes[body..]].concat()
+    };
+    let msg = fails("faces.ply", declare("face 12", "face 19"), None);
+    let faces = body + 8 * 13;
+    assert!(
+        msg.contains(&format!(
+            "in element `face`: line 9 declares 19 records of at least 13 bytes each from byte \
+             {faces}, and the file ends at byte {}, after at most 12 of them",
+            bytes.len()
+        )),
+        "{msg}"
+    );
+    let msg = fails("vertices.ply", declare("vertex 8", "vertex 30"), None);
+    let (body, size) = (body + 1, bytes.len() + 1); // one more digit in the header
+    assert!(
+        msg.contains(&format!(
+            "in element `vertex`: line 4 declares 30 records of 13 bytes each from byte {body}, \
+             and the file ends at byte {size}, after at most {} of them",
+            (size - body) / 13
+        )),
+        "{msg}"
+    );
 }
 
 #[test]

@@ -2,7 +2,9 @@
 //! `.ply`, any case).
 //!
 //! Every loader returns a validated [`Mesh`] in `f64`: polygons are fan-triangulated
-//! (`v0 vk vk+1`), and normals, texture coordinates, colours and materials are ignored. Bad
+//! (`v0 vk vk+1`), and normals, texture coordinates, colours and materials are ignored. The text
+//! formats (OBJ, OFF, the PLY header and ASCII body) accept a leading UTF-8 byte-order mark and
+//! lines ended by LF, CRLF or a CR alone (old Mac OS), counted alike in messages. Bad
 //! input is a [`LoadError::Parse`] naming the file and, where there is one, the 1-based line
 //! (for binary PLY, the element index and byte offset instead); a file that cannot be read is a
 //! [`LoadError::Io`]. Non-finite coordinates and out-of-range indices are caught by the parsers
@@ -162,10 +164,53 @@ pub fn load_mesh_from_bytes(
     Ok(mesh)
 }
 
-/// Number of lines in `text` as [`str::lines`] counts them: the line an unexpected end of file
-/// is reported on.
+/// The UTF-8 byte-order mark some editors put at the start of a text file.
+const BOM: &[u8] = b"\xEF\xBB\xBF";
+
+/// `bytes` without a leading byte-order mark.
+fn strip_bom(bytes: &[u8]) -> &[u8] {
+    bytes.strip_prefix(BOM).unwrap_or(bytes)
+}
+
+/// The text of a text-format file: without a leading byte-order mark, invalid UTF-8 replaced
+/// (it can only be in comments or malformed numbers, which are named as such).
+fn text(bytes: &[u8]) -> std::borrow::Cow<'_, str> {
+    String::from_utf8_lossy(strip_bom(bytes))
+}
+
+/// The lines of `text`, each ended by LF, CRLF or a CR alone, without their ends. As with
+/// [`str::lines`], a final line end does not start another line.
+fn lines(text: &str) -> Lines<'_> {
+    Lines { rest: text }
+}
+
+/// Iterator of [`lines`].
+#[derive(Debug, Clone)]
+struct Lines<'a> {
+    rest: &'a str,
+}
+
+impl<'a> Iterator for Lines<'a> {
+    type Item = &'a str;
+
+    fn next(&mut self) -> Option<&'a str> {
+        if self.rest.is_empty() {
+            return None;
+        }
+        let Some(end) = self.rest.find(['\r', '\n']) else {
+            return Some(std::mem::take(&mut self.rest));
+        };
+        let line = &self.rest[..end];
+        let terminator = if self.rest[end..].starts_with("\r\n") { 2 } else { 1 };
+        self.rest = &self.rest[end + terminator..];
+        Some(line)
+    }
+}
+
+/// Number of lines in `text` as [`lines`] counts them: the line an unexpected end of file is
+/// reported on.
 fn last_line(text: &str) -> usize {
-    text.lines().count()
+    lines(text).count()
 }
 
 /// Parses a coordinate, rejecting what is not a number and what is not finite.
@@ -182,5 +227,29 @@ fn coordinate(token: &str, line: usize) -> Result<f64, Syntax> {
 fn fan(polygon: &[u32], triangles: &mut Vec<[u32; 3]>) {
     if let Some((&first, rest)) = polygon.split_first() {
         triangles.extend(rest.windows(2).map(|w| [first, w[0], w[1]]));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lines_end_with_lf_crlf_or_cr() {
+        fn split(text: &str) -> Vec<&str> {
+            lines(text).collect()
+        }
+        assert_eq!(split("a\nb\r\nc\rd"), ["a", "b", "c", "d"]);
+        assert_eq!(split("a\r\rb\r\n\nc\n"), ["a", "", "b", "", "c"]);
+        assert_eq!(split("a\r"), ["a"]);
+        assert!(split("").is_empty());
+        assert_eq!(last_line("v 1\rv 2\r\rf 1 2 3\r"), 4);
+    }
+
+    #[test]
+    fn a_byte_order_mark_is_not_text() {
+        assert_eq!(text(b"\xEF\xBB\xBFv 0 0 0"), "v 0 0 0");
+        assert_eq!(text(b"v 0 0 0"), "v 0 0 0");
+        assert_eq!(strip_bom(b"\xEF\xBB"), b"\xEF\xBB");
     }
 }

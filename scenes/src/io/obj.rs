@@ -14,19 +14,19 @@
 //! zero or out-of-range position index, a face with fewer than 3 vertices. Only `v` and `f`
 //! lines, reduced to positions and position indices, are handed to `tobj`.
 
-use super::{coordinate, Syntax};
+use super::{coordinate, lines, text, Syntax};
 use crate::mesh::Mesh;
 use glam::DVec3;
 
 /// Parses an OBJ file (not yet validated as a mesh).
 pub(crate) fn parse(bytes: &[u8]) -> Result<Mesh, Syntax> {
-    let text = String::from_utf8_lossy(bytes);
-    let total = text.lines().filter(|line| words(line).next() == Some("v")).count();
+    let text = text(bytes);
+    let total = lines(&text).filter(|line| words(line).next() == Some("v")).count();
 
     // The geometry, checked, for tobj; other lines become blank so that line numbers stay.
     let mut geometry = String::with_capacity(text.len());
     let mut defined = 0;
-    for (i, line) in text.lines().enumerate() {
+    for (i, line) in lines(&text).enumerate() {
         let line_no = i + 1;
         let mut words = words(line);
         match words.next() {

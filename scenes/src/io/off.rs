@@ -16,16 +16,16 @@
 //! announces, an index out of range, a file that ends early. `4OFF`, `nOFF` (other dimensions)
 //! and `OFF BINARY` are not supported and say so.
 
-use super::{coordinate, fan, last_line, Syntax};
+use super::{coordinate, fan, last_line, lines, text, Syntax};
 use crate::mesh::Mesh;
 use glam::DVec3;
 
 /// Parses an OFF file (not yet validated as a mesh).
 pub(crate) fn parse(bytes: &[u8]) -> Result<Mesh, Syntax> {
-    let text = String::from_utf8_lossy(bytes);
+    let text = text(bytes);
     let end = last_line(&text);
     // Content lines: 1-based number and the tokens before any comment.
-    let mut lines = text.lines().enumerate().filter_map(|(i, line)| {
+    let mut lines = lines(&text).enumerate().filter_map(|(i, line)| {
         let content = line.split('#').next().unwrap_or("");
         let mut tokens = content.split_whitespace().peekable();
         tokens.peek()?;

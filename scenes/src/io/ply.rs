@@ -17,7 +17,7 @@
 //! element, truncated data, malformed or non-finite number, face with fewer than 3 vertices,
 //! index out of range.
 
-use super::{fan, last_line, Syntax};
+use super::{fan, last_line, lines, strip_bom, Syntax};
 use crate::mesh::Mesh;
 use glam::DVec3;
 
@@ -28,11 +28,13 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<Mesh, Syntax> {
     match header.encoding {
         Encoding::Ascii => {
             let body = String::from_utf8_lossy(bytes.get(header.body..).unwrap_or_default());
-            let end = header.lines + last_line(&body);
+            let data = lines(&body).filter(|line| !line.trim().is_empty()).count();
+            let records = header.records();
             let mut reader = Ascii {
-                lines: body.lines().enumerate(),
+                lines: lines(&body).enumerate(),
                 first: header.lines + 1,
-                end,
+                end: header.lines + last_line(&body),
+                short: (data < records).then_some((data, records)),
                 line: 0,
                 tokens: "".split_whitespace(),
                 record: Record::default(),
@@ -40,11 +42,13 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<Mesh, Syntax> {
             read_body(&mut reader, &header, &plan, bytes.len())
         }
         Encoding::Binary { big_endian } => {
+            check_size(&header, &plan, bytes.len())?;
             let mut reader = Binary {
                 data: bytes,
                 pos: header.body,
                 big_endian,
                 start: header.body,
+                count: 0,
                 record: Record::default(),
             };
             read_body(&mut reader, &header, &plan, bytes.len())
@@ -134,7 +138,15 @@ struct Header {
 
 impl Header {
     fn parse(bytes: &[u8]) -> Result<Self, Syntax> {
-        let (mut pos, mut line) = (0, 0);
+        let (mut pos, mut line) = (bytes.len() - strip_bom(bytes).len(), 0);
+        // Every header line ends as the first does: with LF (CRLF: the CR is white space) or
+        // with a CR alone. The body of a binary file starts right after `end_header`'s end, so
+        // the two cannot be mixed.
+        let first_end = bytes[pos..].iter().position(|&b| b == b'\r' || b == b'\n');
+        let end = match first_end.map(|n| (bytes[pos + n], bytes.get(pos + n + 1))) {
+            Some((b'\r', next)) if next != Some(&b'\n') => b'\r',
+            _ => b'\n',
+        };
         let mut encoding = None;
         let mut elements: Vec<Element> = Vec::new();
         loop {
@@ -144,7 +156,7 @@ impl Header {
                     _ => Syntax::at(line, "the header ends without `end_header`"),
                 });
             };
-            let (raw, next) = match rest.iter().position(|&b| b == b'\n') {
+            let (raw, next) = match rest.iter().position(|&b| b == end) {
                 Some(n) => (&rest[..n], pos + n + 1),
                 None => (rest, bytes.len()),
             };
@@ -225,6 +237,14 @@ impl Header {
         let encoding =
             encoding.ok_or_else(|| Syntax::at(line, "the header has no `format` line"))?;
         Ok(Self { encoding, elements, body: pos, lines: line })
+    }
+
+    /// Number of records the body must hold (elements without properties have no data).
+    fn records(&self) -> usize {
+        self.elements
+            .iter()
+            .filter(|e| !e.properties.is_empty())
+            .fold(0, |n, e| n.saturating_add(e.count))
     }
 }
 
@@ -312,8 +332,8 @@ impl Record {
 
 /// A PLY body, ASCII or binary, read one value at a time.
 trait Body {
-    /// Starts record `index` of `count` of `element`.
-    fn begin(&mut self, element: &str, index: usize, count: usize) -> Result<(), Syntax>;
+    /// Starts record `index` of `element`.
+    fn begin(&mut self, element: &Element, index: usize) -> Result<(), Syntax>;
     /// Reads a value (integer types are exact in `f64`).
     fn read(&mut self, ty: Scalar) -> Result<f64, Syntax>;
     /// Skips `n` values of type `ty`.
@@ -322,6 +342,66 @@ trait Body {
     fn end(&mut self) -> Result<(), Syntax>;
     /// A complaint about the current record.
     fn error(&self, message: &str) -> Syntax;
+    /// What to report when record `index` of `element` fails with `error`: the error itself,
+    /// unless the body shows that the element ends early.
+    fn ends_early(&self, _element: &Element, _index: usize, error: Syntax) -> Syntax {
+        error
+    }
+}
+
+/// Refuses a binary body too short for the smallest records its header declares (every list
+/// empty, but 3 indices per face), before anything is read: the message names the first element
+/// that cannot fit, where it starts and how many of its records fit. Where an earlier element
+/// has lists, its records may be longer: the start is then the earliest possible.
+fn check_size(header: &Header, plan: &Plan, size: usize) -> Result<(), Syntax> {
+    let (mut offset, mut exact) = (header.body, true);
+    for (e, element) in header.elements.iter().enumerate() {
+        let (mut least, mut fixed) = (0, true);
+        for (p, property) in element.properties.iter().enumerate() {
+            least += match property.kind {
+                Kind::Scalar(ty) => ty.size(),
+                Kind::List(count, item) => {
+                    fixed = false;
+                    let items = if (e, p) == (plan.face, plan.indices) { 3 } else { 0 };
+                    count.size() + items * item.size()
+                }
+            };
+        }
+        let room = size.saturating_sub(offset);
+        match element.count.checked_mul(least) {
+            Some(need) if need <= room => {
+                offset += need;
+                exact &= fixed;
+            }
+            _ => {
+                let (bytes, from) = match (fixed, exact) {
+                    (true, true) => ("", ""),
+                    (false, true) => ("at least ", ""),
+                    (true, false) => ("", " at the earliest"),
+                    (false, false) => ("at least ", " at the earliest"),
+                };
+                return Err(Syntax::whole(format!(
+                    "the file ends early, in element `{}`: line {} declares {} records of \
+                     {bytes}{least} bytes each from byte {offset}{from}, and the file ends at \
+                     byte {size}, after at most {} of them",
+                    element.name,
+                    element.line,
+                    element.count,
+                    room / least,
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The mesh as it is read.
+#[derive(Debug, Default)]
+struct Builder {
+    positions: Vec<DVec3>,
+    triangles: Vec<[u32; 3]>,
+    /// The face being read.
+    polygon: Vec<u32>,
 }
 
 /// Reads every element of `header` from `body` (`size` bytes in all).
@@ -331,84 +411,102 @@ fn read_body(
     plan: &Plan,
     size: usize,
 ) -> Result<Mesh, Syntax> {
-    let nv = plan.vertex_count;
     // Each vertex value takes a byte at least: a lying count cannot reserve more than that.
     let values = header.elements[plan.vertex].properties.len().max(1);
-    let mut positions = Vec::with_capacity(nv.min(size / values));
-    let mut triangles = Vec::new();
-    let mut polygon = Vec::new();
+    let mut mesh = Builder {
+        positions: Vec::with_capacity(plan.vertex_count.min(size / values)),
+        ..Builder::default()
+    };
     for (e, element) in header.elements.iter().enumerate() {
         if element.properties.is_empty() {
             continue; // records without data
         }
         for i in 0..element.count {
-            body.begin(&element.name, i, element.count)?;
-            let mut xyz = [0.0; 3];
-            for (p, property) in element.properties.iter().enumerate() {
-                match property.kind {
-                    Kind::Scalar(ty) => {
-                        let value = body.read(ty)?;
-                        if e == plan.vertex {
-                            if let Some(axis) = plan.xyz.iter().position(|&q| q == p) {
-                                xyz[axis] = value;
-                            }
-                        }
-                    }
-                    Kind::List(count, item) => {
-                        let n = body.read(count)?;
-                        if n < 0.0 {
-                            return Err(body.error(&format!("negative list length {n}")));
-                        }
-                        let n = n as usize;
-                        if e != plan.face || p != plan.indices {
-                            body.skip(item, n)?;
-                            continue;
-                        }
-                        if n < 3 {
-                            let message = format!("{n} vertices; a face needs at least 3");
-                            return Err(body.error(&message));
-                        }
-                        polygon.clear();
-                        for _ in 0..n {
-                            let v = body.read(item)?;
-                            if v < 0.0 || v >= nv as f64 {
-                                return Err(body.error(&format!(
-                                    "vertex index {v} out of range: the file has {nv} vertices"
-                                )));
-                            }
-                            polygon.push(v as u32);
-                        }
-                        fan(&polygon, &mut triangles);
-                    }
-                }
-            }
-            if e == plan.vertex {
-                if !xyz.iter().all(|c| c.is_finite()) {
-                    return Err(body.error(&format!("non-finite coordinate {xyz:?}")));
-                }
-                positions.push(DVec3::from_array(xyz));
-            }
-            body.end()?;
+            body.begin(element, i)?;
+            read_record(body, e, element, plan, &mut mesh)
+                .map_err(|error| body.ends_early(element, i, error))?;
         }
     }
-    Ok(Mesh { positions, triangles })
+    Ok(Mesh { positions: mesh.positions, triangles: mesh.triangles })
+}
+
+/// Reads the record just begun of `element` (the `e`-th) into `mesh`.
+fn read_record(
+    body: &mut impl Body,
+    e: usize,
+    element: &Element,
+    plan: &Plan,
+    mesh: &mut Builder,
+) -> Result<(), Syntax> {
+    let nv = plan.vertex_count;
+    let mut xyz = [0.0; 3];
+    for (p, property) in element.properties.iter().enumerate() {
+        match property.kind {
+            Kind::Scalar(ty) => {
+                let value = body.read(ty)?;
+                if e == plan.vertex {
+                    if let Some(axis) = plan.xyz.iter().position(|&q| q == p) {
+                        xyz[axis] = value;
+                    }
+                }
+            }
+            Kind::List(count, item) => {
+                let n = body.read(count)?;
+                if n < 0.0 {
+                    return Err(body.error(&format!("negative list length {n}")));
+                }
+                // An integer below 2^63 (the count types are at most 32 bits): exact.
+                let n = n as usize;
+                if e != plan.face || p != plan.indices {
+                    body.skip(item, n)?;
+                    continue;
+                }
+                if n < 3 {
+                    let message = format!("{n} vertices; a face needs at least 3");
+                    return Err(body.error(&message));
+                }
+                mesh.polygon.clear();
+                for _ in 0..n {
+                    let v = body.read(item)?;
+                    if v < 0.0 || v >= nv as f64 {
+                        return Err(body.error(&format!(
+                            "vertex index {v} out of range: the file has {nv} vertices"
+                        )));
+                    }
+                    // In 0..nv, and nv < 2^32 (checked by the plan).
+                    mesh.polygon.push(v as u32);
+                }
+                fan(&mesh.polygon, &mut mesh.triangles);
+            }
+        }
+    }
+    if e == plan.vertex {
+        if !xyz.iter().all(|c| c.is_finite()) {
+            return Err(body.error(&format!("non-finite coordinate {xyz:?}")));
+        }
+        mesh.positions.push(DVec3::from_array(xyz));
+    }
+    body.end()
 }
 
 /// An ASCII body: one record per line.
 struct Ascii<'a> {
-    lines: std::iter::Enumerate<std::str::Lines<'a>>,
+    lines: std::iter::Enumerate<super::Lines<'a>>,
     /// Line number of the body's first line.
     first: usize,
     /// Line number of the file's last line.
     end: usize,
+    /// When the body has fewer non-blank lines than the header declares records: how many it
+    /// has, and how many are declared.
+    short: Option<(usize, usize)>,
     line: usize,
     tokens: std::str::SplitWhitespace<'a>,
     record: Record,
 }
 
 impl Body for Ascii<'_> {
-    fn begin(&mut self, element: &str, index: usize, count: usize) -> Result<(), Syntax> {
-        self.record.set(element, index);
+    fn begin(&mut self, element: &Element, index: usize) -> Result<(), Syntax> {
+        self.record.set(&element.name, index);
         for (i, text) in self.lines.by_ref() {
             let tokens = text.split_whitespace();
             if tokens.clone().next().is_some() {
@@ -419,7 +517,11 @@ impl Body for Ascii<'_> {
         }
         Err(Syntax::at(
             self.end,
-            format!("unexpected end of file: read {index} of {count} `{element}` elements"),
+            format!(
+                "unexpected end of file: element `{}` ends early, after {index} of the {} \
+                 records that line {} declares",
+                element.name, element.count, element.line
+            ),
         ))
     }
 
@@ -455,6 +557,21 @@ impl Body for Ascii<'_> {
     fn error(&self, message: &str) -> Syntax {
         Syntax::at(self.line, format!("{} {}: {message}", self.record.element, self.record.index))
     }
+
+    /// In a body with fewer lines than records, the first line that is not a record of the
+    /// element being read is where that element ends early.
+    fn ends_early(&self, element: &Element, index: usize, error: Syntax) -> Syntax {
+        let Some((data, records)) = self.short else { return error };
+        Syntax::at(
+            self.line,
+            format!(
+                "element `{}` ends early, after {index} of the {} records that line {} \
+                 declares: this line is not one ({}); the file has {data} lines of data for \
+                 the header's {records} records",
+                element.name, element.count, element.line, error.message
+            ),
+        )
+    }
 }
 
 /// A binary body.
@@ -464,24 +581,36 @@ struct Binary<'a> {
     big_endian: bool,
     /// Where the current record starts.
     start: usize,
+    /// Number of records of the current element.
+    count: usize,
     record: Record,
 }
 
 impl Binary<'_> {
     fn bytes<const N: usize>(&mut self) -> Result<[u8; N], Syntax> {
         let chunk = self.data.get(self.pos..self.pos.saturating_add(N));
-        let chunk = chunk
-            .and_then(|c| <[u8; N]>::try_from(c).ok())
-            .ok_or_else(|| self.error("truncated: the file ends in the middle of this element"))?;
+        let chunk =
+            chunk.and_then(|c| <[u8; N]>::try_from(c).ok()).ok_or_else(|| self.truncated())?;
         self.pos += N;
         Ok(chunk)
+    }
+
+    /// The file ends inside the current record.
+    fn truncated(&self) -> Syntax {
+        self.error(&format!(
+            "truncated: the file ends at byte {}, inside record {} of the {} this element has",
+            self.data.len(),
+            self.record.index,
+            self.count
+        ))
     }
 }
 
 impl Body for Binary<'_> {
-    fn begin(&mut self, element: &str, index: usize, _count: usize) -> Result<(), Syntax> {
-        self.record.set(element, index);
+    fn begin(&mut self, element: &Element, index: usize) -> Result<(), Syntax> {
+        self.record.set(&element.name, index);
         self.start = self.pos;
+        self.count = element.count;
         Ok(())
     }
 
@@ -516,7 +645,7 @@ impl Body for Binary<'_> {
                 self.pos = end;
                 Ok(())
             }
-            _ => Err(self.error("truncated: the file ends in the middle of this element")),
+            _ => Err(self.truncated()),
         }
     }
 
@@ -590,7 +719,12 @@ mod tests {
             assert_eq!(mesh.triangles, vec![[0, 1, 2]]);
             let e = parse(&bytes[..bytes.len() - 1]).expect_err("truncated");
             assert!(
-                e.line.is_none() && e.message.contains("face 0") && e.message.contains("truncated"),
+                e.line.is_none()
+                    && e.message.contains("element `face`")
+                    && e.message.contains(&format!(
+                        "ends at byte {}, after at most 0 of them",
+                        bytes.len() - 1
+                    )),
                 "{e:?}"
             );
         }
