@@ -1,11 +1,17 @@
 //! Methods by name, as the command line and the reports name them.
+//!
+//! The sample rates a method takes (`--rate`) are listed in one place, [`rates`], derived from
+//! the shared pattern's rates ([`crate::pattern::RATES`], capped at
+//! [`crate::pattern::MAX_METHOD_RATE`] for the techniques whose masks hold the sub-samples);
+//! [`method`] checks a given rate against that list before building anything, so the error
+//! lists exactly the rates the method accepts.
 
 use crate::{
     afsm::{AfsmOptions, AliasFreeShadowMap},
-    depth_test::MapOptions,
+    depth_test::{DepthCode, MapOptions},
     method::{MethodError, ShadowMethod},
     pan09::{Pan09, Pan09Options, VisibilityMode},
-    pattern::PatternKind,
+    pattern::{PatternKind, MAX_METHOD_RATE, RATES},
     pcf_bs::{BrabecSeidelPcf, BsOptions, Variant, DEFAULT_DEPTH_BITS},
     pcf_gems::{GemsPcf, GemsSamples},
     pcf_reeves::{ReevesOptions, ReevesPcf},
@@ -104,8 +110,39 @@ fn map_options(options: &MethodOptions, d: MapOptions) -> Result<MapOptions, Met
     Ok(o)
 }
 
+/// The sample rates (`--rate`) the method called `name` accepts, or `None` when it takes no
+/// rate: `pcf-reeves` every rate of the shared patterns (its jittered footprint samples);
+/// the supersampling techniques (`afsm-ss`, `pan09`, `spsm`, `spsm-f32`) those up to
+/// [`MAX_METHOD_RATE`], the width of their sub-sample masks.
+pub fn rates(name: &str) -> Option<Vec<u32>> {
+    let up_to = |max: u32| RATES.iter().copied().filter(|&r| r <= max).collect();
+    match name {
+        "pcf-reeves" => Some(RATES.to_vec()),
+        "afsm-ss" | "pan09" | "spsm" | "spsm-f32" => Some(up_to(MAX_METHOD_RATE)),
+        _ => None,
+    }
+}
+
+/// Checks `options.rate` against [`rates`]`(name)`; the error lists exactly those rates.
+fn check_rate(name: &str, options: &MethodOptions) -> Result<(), MethodError> {
+    let (Some(rate), Some(accepted)) = (options.rate, rates(name)) else {
+        return Ok(());
+    };
+    if accepted.contains(&rate) {
+        return Ok(());
+    }
+    Err(MethodError::InvalidOption {
+        option: "--rate",
+        message: format!(
+            "{name} takes {} samples per pixel, got {rate}",
+            accepted.iter().map(u32::to_string).collect::<Vec<_>>().join(", ")
+        ),
+    })
+}
+
 /// The method called `name`, configured by `options` and validated, on `options.device`.
 pub fn method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMethod>, MethodError> {
+    check_rate(name, options)?;
     let cpu = cpu_method(name, options)?;
     match options.device {
         Device::Cpu => Ok(cpu),
@@ -186,6 +223,8 @@ fn pan09_options(options: &MethodOptions) -> Result<Pan09Options, MethodError> {
 /// Brabec and Seidel's options from the shared ones, validated.
 fn bs_options(options: &MethodOptions) -> Result<BsOptions, MethodError> {
     let depth_bits = options.depth_bits.unwrap_or(DEFAULT_DEPTH_BITS);
+    // The bits first: the default constant bias is derived from them.
+    DepthCode::new(depth_bits, 0.0, 1.0)?;
     let d = BsOptions::with_depth_bits(depth_bits);
     let o = BsOptions { map: map_options(options, d.map)?, depth_bits };
     o.validate()?;
@@ -250,5 +289,51 @@ fn cpu_method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMetho
                 METHODS.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")
             ),
         }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A rate builds a method exactly when [`rates`] lists it, and the error for any other
+    /// rate lists exactly those rates: the list and the methods' own validation agree.
+    #[test]
+    fn rates_are_exactly_what_each_method_accepts() {
+        let tried: Vec<u32> = (0..=1100).chain([2048, 4096, 1_000_000, u32::MAX]).collect();
+        for (name, _) in METHODS {
+            let Some(accepted) = rates(name) else {
+                continue;
+            };
+            let listed = accepted.iter().map(u32::to_string).collect::<Vec<_>>().join(", ");
+            for &rate in &tried {
+                let built = method(name, &MethodOptions { rate: Some(rate), ..Default::default() });
+                match built {
+                    Ok(_) => assert!(accepted.contains(&rate), "{name} built at rate {rate}"),
+                    Err(e) => {
+                        assert!(!accepted.contains(&rate), "{name} refused rate {rate}: {e}");
+                        let text = e.to_string();
+                        assert!(text.starts_with("--rate: "), "{name} at {rate}: {text}");
+                        assert!(
+                            text.contains(&format!("takes {listed} samples")),
+                            "{name} at {rate}: {text}"
+                        );
+                    }
+                }
+            }
+        }
+        assert_eq!(rates("pan09").and_then(|r| r.last().copied()), Some(MAX_METHOD_RATE));
+        assert_eq!(rates("sm"), None);
+    }
+
+    /// Depth precisions that are not supported are named as such, whatever the default bias
+    /// derived from them would have been.
+    #[test]
+    fn unsupported_depth_bits_name_the_flag() {
+        for bits in [0, 16, 33, 1 << 31, 4_000_000_000, u32::MAX] {
+            let o = MethodOptions { depth_bits: Some(bits), ..Default::default() };
+            let e = method("pcf-bs-fast-2x2", &o).err().map(|e| e.to_string()).unwrap_or_default();
+            assert!(e.starts_with("--depth-bits: "), "{bits}: {e}");
+        }
     }
 }
