@@ -10,8 +10,8 @@
 //! 2. **Shadow ray** from the hit point towards the light (directional: along `-direction`,
 //!    unbounded; spot: towards `position`, ending at the light; the spot's cone is ignored, as
 //!    in the shadow maps and `exact`), against caster triangles only (`frame.is_caster`),
-//!    excluding the hit triangle itself and starting at [`SHADOW_RAY_OFFSET`] times the scene's
-//!    bounding-box diagonal. Opaque scenes (no `transparency` effect, also when the scene file
+//!    excluding the hit triangle itself and ignoring hits nearer than [`shadow_offset`] (local
+//!    to the hit point, see Choices). Opaque scenes (no `transparency` effect, also when the scene file
 //!    forces it off): the first caster hit ends the ray (`ray_traverse_miss`). Scenes with
 //!    `transparency`: every caster hit along the ray multiplies the transmittance by
 //!    `1 - opacity` (an opaque caster ends the ray at 0).
@@ -33,19 +33,32 @@
 //! # Precision: f32 BVH, f64 triangles
 //!
 //! obvhs is `f32`-only (boxes, rays, its Möller-Trumbore test). It is used only to *find
-//! candidates*: the BVH is built from boxes computed in `f64` and padded outwards by
-//! [`BOX_PADDING`] of the scene diagonal plus 8 `f32` ulps of the largest coordinate before
-//! rounding to `f32`, so that every box contains its `f64` triangle and absorbs the `f32`
-//! rounding of the ray (origin, direction, obvhs' reciprocal direction, which it clamps to
-//! `1/f32::EPSILON` for tiny components: the padding is 80 times the distance such a ray
-//! drifts across the scene). Every hit decision is made in `f64` by our own triangle test
-//! (called from obvhs' traversal closures with the BVH slot, i.e. the position in
-//! `primitive_indices`, whose triangles we store in that order): Woop, Benthin and Wald's
-//! watertight ray-triangle test (JCGT 2013), double-sided. Consequences: the traversal prunes
-//! with `f32` distances rounded upwards (never losing the closest `f64` hit); obvhs' node test
-//! clamps the near distance to `f32::EPSILON` (1.2e-7 world units), so a shadow ray also
-//! ignores occluders closer than that to its start, which is already below the shadow offset
-//! in any scene larger than 120 units and a contact-sized gap otherwise.
+//! candidates*; every hit decision is made in `f64` by our own triangle test (called from
+//! obvhs' traversal closures with the BVH slot, i.e. the position in `primitive_indices`, whose
+//! triangles we store in that order): Woop, Benthin and Wald's watertight ray-triangle test
+//! (JCGT 2013), double-sided. What makes the `f32` search lose nothing, whatever the scene's
+//! size and position (tested from scale 1e-6 to 1e6, translations of 1e7, objects 1e12 away):
+//!
+//! - **Its own frame** (`BvhFrame`): the BVH is built and traversed in world coordinates
+//!   minus a centre (the per-axis median of the triangles' box centres, so one far object does
+//!   not move it) times a power of two near the inverse of the median triangle size. Every
+//!   scene looks to obvhs like one of unit triangles near the origin; a far object is simply
+//!   far. Frame coordinates are kept below 1e15 so that obvhs' `f32` areas stay finite.
+//! - **Padding from local magnitudes**: each box is computed in `f64` in the frame and padded
+//!   by 32 `f32` epsilons of (its own largest coordinate + the reach of ray origins) before
+//!   rounding to `f32`: that covers the rounding of the ray's origin and direction, obvhs'
+//!   reciprocal of direction components below `f32::EPSILON` (clamped to `1/EPSILON`, a drift
+//!   of `EPSILON` per unit travelled), and its slab tests. The reach is the largest frame
+//!   magnitude of the main body of the geometry (triangles within 1e6 typical radii of the
+//!   centre) and of the camera's ray origins; a ray that starts farther out (on a far-away
+//!   object) is tested against every triangle instead, so far objects neither widen every box
+//!   nor lose hits.
+//! - **Start shift**: obvhs' CWBVH node test ignores children left before frame distance 1e-4
+//!   (its `EPSILON`); frame rays therefore start `2e-4` (plus 8 `f32` ulps of the origin) behind
+//!   the world ray's origin, and frame parameters map back by that shift. Occluders in contact
+//!   with the receiver are found at any scale.
+//! - The traversal prunes with `f32` frame distances rounded upwards, never losing the closest
+//!   `f64` hit.
 //!
 //! Edges and vertices: Woop's test evaluates the three edge functions of a triangle from
 //! per-vertex quantities that depend only on the ray and the vertex, so two triangles that
@@ -60,13 +73,17 @@
 //! # Choices
 //!
 //! - **Shadow ray start**: from the `f64` hit point, skipping the hit triangle, and ignoring
-//!   hits nearer than `1e-9` of the scene diagonal. The hit point lies within about `1e-15` of
-//!   the camera distance off its plane, so a coplanar neighbour (a subdivided lit plane, even
-//!   under a light 85° from the vertical) is met at most about `1e-13` of the scene size away:
-//!   four orders of magnitude inside the offset, so lit planes stay lit. A closed mesh cannot
-//!   leak: a shadow ray leaving a point facing away from the light crosses the far side at a
-//!   distance of the order of the mesh's thickness, far beyond the offset; only occluders
-//!   within `1e-9` of the scene size of the point (contact) are missed.
+//!   hits nearer than [`SHADOW_RAY_OFFSET`] (`1e-10`) times the magnitude of the numbers that
+//!   made the point: the larger coordinate magnitude of the camera ray's origin and the hit,
+//!   plus their distance. The hit point's rounding error is about `1e-16` of that magnitude, so
+//!   a coplanar neighbour (a subdivided lit plane, even under a light 89.9° from the vertical,
+//!   which stretches the distance 573 times) is met about `1e-13` of it away: far inside the
+//!   offset, so lit planes stay lit. The offset is local: it neither grows with a far-away
+//!   object nor shrinks with the scene's size relative to its position, so at a translation of
+//!   1e7 it is 1e-3 units (the resolution of `f64` coordinates there is 2e-9). A closed mesh
+//!   cannot leak: a shadow ray leaving a point facing away from the light crosses the far side
+//!   at a distance of the order of the mesh's thickness; only occluders closer than the offset
+//!   (contact) are missed.
 //! - **Transmittance is grey**: Aila and Laine (2004, section 4) give each sampling point an
 //!   RGB colour, initially white, that "a semi-transparent surface ... modulates" and that
 //!   opaque surfaces set to black, without saying how the caster's colour enters. Scenes have
@@ -96,12 +113,19 @@ pub const STAGE_BVH_BUILD: &str = "BVH build";
 /// Name of the stage that traces the camera and shadow rays.
 pub const STAGE_RAY_TRACING: &str = "ray tracing";
 
-/// Shadow rays ignore hits nearer than this fraction of the scene's bounding-box diagonal.
-pub const SHADOW_RAY_OFFSET: f64 = 1e-9;
+/// Shadow rays ignore hits nearer than this fraction of the magnitude of the numbers that
+/// made their start point (see [`shadow_offset`]).
+pub const SHADOW_RAY_OFFSET: f64 = 1e-10;
 
-/// BVH boxes are padded outwards by this fraction of the scene's bounding-box diagonal (plus
-/// 8 `f32` ulps of the largest coordinate) before rounding to `f32`.
-pub const BOX_PADDING: f64 = 1e-5;
+/// The distance below which a shadow ray from `p`, the hit of a camera ray from `origin`,
+/// ignores occluders: [`SHADOW_RAY_OFFSET`] times the largest coordinate magnitude of the two
+/// points plus their distance (in the max norm), the scale of `p`'s rounding error. Local: a
+/// far-away object, or the scene's position and size, do not change it.
+#[inline]
+pub fn shadow_offset(origin: DVec3, p: DVec3) -> f64 {
+    let magnitude = origin.abs().max(p.abs()).max_element() + (p - origin).abs().max_element();
+    SHADOW_RAY_OFFSET * magnitude
+}
 
 /// The ray-traced reference: one camera ray and one shadow ray per sub-sample of `pattern`.
 #[derive(Debug, Clone, PartialEq)]
@@ -203,31 +227,192 @@ impl TraceRay {
         let t = (u * (sz * a[kz]) + v * (sz * b[kz]) + w * (sz * c[kz])) / det;
         t.is_finite().then_some(t)
     }
+}
 
-    /// The `f32` ray obvhs traverses, with `tmax` rounded upwards.
-    fn bvh_ray(&self, tmax: f64) -> BvhRay {
-        let tmax = if tmax.is_finite() { (tmax * (1.0 + 1e-6)) as f32 } else { f32::INFINITY };
-        // `+ 0.0` turns -0.0 into +0.0: obvhs inverts -0.0 to -1/EPSILON but sorts it into the
-        // positive octant, which would make every box test miss.
-        let dir = |x: f64| x as f32 + 0.0;
-        BvhRay::new(
-            Vec3A::new(self.origin.x as f32, self.origin.y as f32, self.origin.z as f32),
-            Vec3A::new(dir(self.dir.x), dir(self.dir.y), dir(self.dir.z)),
-            0.0,
-            tmax,
-        )
+/// An `f32` upper bound of a non-negative ray parameter, for obvhs' pruning.
+#[inline]
+fn upper_f32(t: f64) -> f32 {
+    if t.is_finite() {
+        (t * (1.0 + 1e-6)) as f32
+    } else {
+        f32::INFINITY
     }
 }
 
-/// An `f32` upper bound of a ray parameter, for obvhs' pruning.
-#[inline]
-fn upper_f32(t: f64) -> f32 {
-    (t * (1.0 + 1e-6)) as f32
+/// The `f32` coordinate frame the BVH is built and traversed in: world coordinates centred on
+/// the geometry and scaled by a power of two to its typical triangle, so that the BVH sees every
+/// scene as it sees one of unit triangles at the origin, whatever its absolute size or position.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct BvhFrame {
+    /// World point mapped to the origin (per-axis median of the triangles' box centres).
+    centre: DVec3,
+    /// World-to-frame scale, a power of two (exact in `f64`).
+    scale: f64,
+    /// Largest frame-space coordinate magnitude of a ray origin the box padding covers: the
+    /// main body of the geometry and the camera's ray origins. Rays starting farther out
+    /// (from geometry far beyond the rest) are tested against every triangle instead.
+    reach: f64,
+}
+
+/// Box padding in units of `f32::EPSILON` times (reach + box magnitude): covers the `f32`
+/// rounding of the ray's origin and direction, obvhs' clamped reciprocal of direction components
+/// below `f32::EPSILON`, and the rounding of its slab tests, with a margin of about 8.
+const PAD_ULPS: f64 = 32.0;
+
+/// obvhs' CWBVH node test ignores children whose exit distance is below this (its `EPSILON`);
+/// rays are started this far and more behind their origin so that nothing is lost to it.
+const NODE_TMIN: f64 = 1e-4;
+
+/// Geometry farther than this many typical radii from the centre does not widen the padding
+/// of the rest (see [`BvhFrame::reach`]).
+const OUTLIER_FACTOR: f64 = 1e6;
+
+/// Largest frame-space coordinate magnitude: keeps obvhs' `f32` areas and costs finite.
+const MAX_FRAME_COORDINATE: f64 = 1e15;
+
+impl BvhFrame {
+    /// Fits the frame to the finite, non-degenerate triangles of `geometry`; `origins` are
+    /// further ray origins (the camera's) the padding must cover.
+    pub(crate) fn fit(geometry: &Geometry, origins: &[DVec3]) -> Self {
+        let mut centres: [Vec<f64>; 3] = Default::default();
+        let mut sizes = Vec::new();
+        for t in 0..geometry.len() {
+            if let Some((lo, hi)) = triangle_box(geometry, t) {
+                let c = 0.5 * lo + 0.5 * hi;
+                for (k, v) in centres.iter_mut().enumerate() {
+                    v.push(c[k]);
+                }
+                sizes.push((hi - lo).max_element());
+            }
+        }
+        if sizes.is_empty() {
+            return Self { centre: DVec3::ZERO, scale: 1.0, reach: 1.0 };
+        }
+        let centre =
+            DVec3::new(median(&mut centres[0]), median(&mut centres[1]), median(&mut centres[2]));
+        let typical = median(&mut sizes);
+        // World distances from the centre (in the max norm) of each triangle's farthest corner.
+        let mut radii: Vec<f64> = (0..geometry.len())
+            .filter_map(|t| triangle_box(geometry, t))
+            .map(|(lo, hi)| (lo - centre).abs().max(hi - centre).max_element())
+            .collect();
+        let farthest = radii.iter().copied().fold(0.0, f64::max);
+        let median_radius = median(&mut radii);
+        let mut scale = if typical > 0.0 { power_of_two_near(1.0 / typical) } else { 1.0 };
+        if farthest * scale > MAX_FRAME_COORDINATE {
+            scale = power_of_two_near(MAX_FRAME_COORDINATE / farthest) * 0.5;
+        }
+        let main_limit = OUTLIER_FACTOR * (median_radius + typical);
+        let main = radii.iter().copied().filter(|&r| r <= main_limit).fold(0.0, f64::max);
+        let origins = origins
+            .iter()
+            .filter(|o| o.is_finite())
+            .map(|&o| (o - centre).abs().max_element())
+            .fold(0.0, f64::max);
+        // The start shift moves origins back by at most about 2 NODE_TMIN (see `start_shift`).
+        let reach = (main.max(origins) * scale + 4.0 * NODE_TMIN).min(MAX_FRAME_COORDINATE);
+        Self { centre, scale, reach }
+    }
+
+    /// `p` in frame coordinates (`f64`).
+    #[inline]
+    fn to_frame(&self, p: DVec3) -> DVec3 {
+        (p - self.centre) * self.scale
+    }
+
+    /// The `f32` box of a triangle with world box `(lo, hi)`, padded outwards.
+    fn padded_box(&self, lo: DVec3, hi: DVec3) -> Aabb {
+        let (lo, hi) = (self.to_frame(lo), self.to_frame(hi));
+        let magnitude = lo.abs().max(hi.abs()).max_element();
+        let pad = PAD_ULPS * f64::from(f32::EPSILON) * (self.reach + magnitude);
+        let f = |v: DVec3| Vec3A::new(v.x as f32, v.y as f32, v.z as f32);
+        Aabb::new(f(lo - DVec3::splat(pad)), f(hi + DVec3::splat(pad)))
+    }
+
+    /// How far (in frame units) a ray starting at frame point `o` is started behind its origin,
+    /// so that obvhs' node test, which ignores boxes left before [`NODE_TMIN`], loses nothing
+    /// despite the `f32` rounding of the shifted origin.
+    #[inline]
+    fn start_shift(o: DVec3) -> f64 {
+        2.0 * NODE_TMIN + 8.0 * f64::from(f32::EPSILON) * o.abs().max_element()
+    }
+
+    /// The `f32` ray obvhs traverses for `ray` up to world parameter `tmax`. `None` when the
+    /// ray starts beyond [`BvhFrame::reach`], where the padding does not cover its rounding.
+    fn bvh_ray(&self, ray: &TraceRay, tmax: f64) -> Option<FrameRay> {
+        let o = self.to_frame(ray.origin);
+        if !(o.abs().max_element() <= self.reach) {
+            return None;
+        }
+        // Frame rays take the world ray's direction made unit, so frame parameters are frame
+        // distances; `step` is the frame distance per unit of world parameter.
+        let len = ray.dir.length();
+        let d = ray.dir / len;
+        let step = len * self.scale;
+        let shift = Self::start_shift(o);
+        let start = o - shift * d;
+        // `+ 0.0` turns -0.0 into +0.0: obvhs inverts -0.0 to -1/EPSILON but sorts it into the
+        // positive octant, which would make every box test miss.
+        let dir = |x: f64| x as f32 + 0.0;
+        let ray = BvhRay::new(
+            Vec3A::new(start.x as f32, start.y as f32, start.z as f32),
+            Vec3A::new(dir(d.x), dir(d.y), dir(d.z)),
+            0.0,
+            upper_f32(shift + tmax * step),
+        );
+        Some(FrameRay { ray, shift, step })
+    }
+}
+
+/// A ray in the BVH's frame: frame parameter `shift + t * step` is world parameter `t`.
+struct FrameRay {
+    ray: BvhRay,
+    shift: f64,
+    step: f64,
+}
+
+impl FrameRay {
+    /// An `f32` frame parameter at or beyond world parameter `t`, for obvhs' pruning.
+    #[inline]
+    fn upper(&self, t: f64) -> f32 {
+        upper_f32(self.shift + t * self.step)
+    }
+}
+
+/// The world box of triangle `t` of `geometry`, or `None` when a corner is not finite or the
+/// triangle has no area (it cannot be hit).
+fn triangle_box(geometry: &Geometry, t: usize) -> Option<(DVec3, DVec3)> {
+    let [a, b, c] = geometry.corners(t);
+    if !(a.is_finite() && b.is_finite() && c.is_finite()) {
+        return None;
+    }
+    // The area test is made on the corners scaled by their largest magnitude, so that neither
+    // huge nor tiny coordinates overflow or underflow the cross product.
+    let m = a.abs().max(b.abs()).max(c.abs()).max_element();
+    let (a, b, c) = (a / m, b / m, c / m);
+    if m == 0.0 || (b - a).cross(c - a) == DVec3::ZERO {
+        return None;
+    }
+    let [a, b, c] = geometry.corners(t);
+    Some((a.min(b).min(c), a.max(b).max(c)))
+}
+
+/// The median of `v` (the upper one for even lengths); `v` is reordered. `v` is not empty.
+fn median(v: &mut [f64]) -> f64 {
+    let k = v.len() / 2;
+    *v.select_nth_unstable_by(k, f64::total_cmp).1
+}
+
+/// The power of two nearest to the finite positive `x` (in the log scale), within `2^±1000`.
+fn power_of_two_near(x: f64) -> f64 {
+    let k = x.log2().round().clamp(-1000.0, 1000.0);
+    2f64.powi(k as i32)
 }
 
 /// A CWBVH over some triangles, with their `f64` corners in BVH slot order.
 pub(crate) struct Accel {
     bvh: CwBvh,
+    frame: BvhFrame,
     /// Corners of the triangle in each slot (the order of `bvh.primitive_indices`).
     corners: Vec<[DVec3; 3]>,
     /// Triangle id (index into the frame's geometry) of each slot.
@@ -237,31 +422,24 @@ pub(crate) struct Accel {
 }
 
 impl Accel {
-    /// Builds the BVH over the triangles `t` of `geometry` with `keep(t)` that have finite
-    /// corners and non-zero area; `pass(t)` is the light a triangle lets through.
+    /// Builds the BVH, in `frame`, over the triangles `t` of `geometry` with `keep(t)` that
+    /// have finite corners and non-zero area; `pass(t)` is the light a triangle lets through.
     pub(crate) fn build(
         geometry: &Geometry,
         keep: impl Fn(usize) -> bool,
         pass: impl Fn(usize) -> f64,
-        pad: f64,
+        frame: BvhFrame,
     ) -> Self {
         let mut ids = Vec::new();
         let mut boxes = Vec::new();
-        let down =
-            |v: DVec3| Vec3A::new((v.x - pad) as f32, (v.y - pad) as f32, (v.z - pad) as f32);
-        let up = |v: DVec3| Vec3A::new((v.x + pad) as f32, (v.y + pad) as f32, (v.z + pad) as f32);
         for t in 0..geometry.len() {
             if !keep(t) {
                 continue;
             }
-            let [a, b, c] = geometry.corners(t);
-            if !(a.is_finite() && b.is_finite() && c.is_finite())
-                || (b - a).cross(c - a) == DVec3::ZERO
-            {
-                continue;
+            if let Some((lo, hi)) = triangle_box(geometry, t) {
+                ids.push(t as u32);
+                boxes.push(frame.padded_box(lo, hi));
             }
-            ids.push(t as u32);
-            boxes.push(Aabb::new(down(a.min(b).min(c)), up(a.max(b).max(c))));
         }
         let bvh = if boxes.is_empty() {
             CwBvh::default()
@@ -271,26 +449,36 @@ impl Accel {
         let ids: Vec<u32> = bvh.primitive_indices.iter().map(|&p| ids[p as usize]).collect();
         let corners = ids.iter().map(|&t| geometry.corners(t as usize)).collect();
         let pass = ids.iter().map(|&t| pass(t as usize).clamp(0.0, 1.0)).collect();
-        Self { bvh, corners, ids, pass }
+        Self { bvh, frame, corners, ids, pass }
     }
 
     /// The closest hit with `tmin <= t <= tmax`, as `(t, triangle id)`; ties go to the lower id.
     pub(crate) fn closest(&self, ray: &TraceRay, tmin: f64, tmax: f64) -> Option<(f64, u32)> {
         let mut best: Option<(f64, u32)> = None;
-        self.bvh.ray_traverse(ray.bvh_ray(tmax), &mut RayHit::none(), |_, slot| {
-            let Some(t) = ray.intersect(&self.corners[slot]) else { return f32::INFINITY };
+        let mut visit = |slot: usize| -> Option<f64> {
+            let t = ray.intersect(&self.corners[slot])?;
             if !(t >= tmin && t <= tmax) {
-                return f32::INFINITY;
+                return None;
             }
             let id = self.ids[slot];
             match best {
-                Some((bt, bid)) if bt < t || (bt == t && bid <= id) => f32::INFINITY,
+                Some((bt, bid)) if bt < t || (bt == t && bid <= id) => None,
                 _ => {
                     best = Some((t, id));
-                    upper_f32(t)
+                    Some(t)
                 }
             }
-        });
+        };
+        match self.frame.bvh_ray(ray, tmax) {
+            Some(fr) => {
+                self.bvh.ray_traverse(fr.ray, &mut RayHit::none(), |_, slot| {
+                    visit(slot).map_or(f32::INFINITY, |t| fr.upper(t))
+                });
+            }
+            None => (0..self.ids.len()).for_each(|slot| {
+                visit(slot);
+            }),
+        }
         best
     }
 
@@ -299,22 +487,40 @@ impl Accel {
     /// no light through (`ray_traverse_miss`).
     pub(crate) fn transmittance(&self, ray: &TraceRay, tmin: f64, tmax: f64, skip: u32) -> f64 {
         let mut light = 1.0;
-        self.bvh.ray_traverse_miss(ray.bvh_ray(tmax), |_, slot| {
+        // Whether the ray is finished (no light left).
+        let mut visit = |slot: usize| -> bool {
             if self.ids[slot] == skip {
-                return f32::INFINITY;
+                return false;
             }
             match ray.intersect(&self.corners[slot]) {
                 Some(t) if t > tmin && t < tmax => {
                     light *= self.pass[slot];
-                    if light == 0.0 {
-                        0.0
-                    } else {
-                        f32::INFINITY
+                    light == 0.0
+                }
+                _ => false,
+            }
+        };
+        match self.frame.bvh_ray(ray, tmax) {
+            Some(fr) => {
+                self.bvh.ray_traverse_miss(
+                    fr.ray,
+                    |_, slot| {
+                        if visit(slot) {
+                            0.0
+                        } else {
+                            f32::INFINITY
+                        }
+                    },
+                );
+            }
+            None => {
+                for slot in 0..self.ids.len() {
+                    if visit(slot) {
+                        break;
                     }
                 }
-                _ => f32::INFINITY,
             }
-        });
+        }
         light
     }
 }
@@ -355,7 +561,6 @@ struct Tracer<'a> {
     /// The casters' BVH, when some triangle does not cast shadows (else the camera's).
     caster_accel: Option<Accel>,
     light: LightSource,
-    shadow_tmin: f64,
     /// Camera rays start this far along their direction (orthographic cameras start behind
     /// the scene), and accept hits from `camera_tmin`.
     start_shift: f64,
@@ -371,14 +576,13 @@ impl<'a> Tracer<'a> {
     ) -> Result<Self, ReferenceError> {
         let light = match frame.scene.light {
             Light::Directional { direction } => {
-                let towards = -direction.normalize_or_zero();
-                if !towards.is_finite() || towards == DVec3::ZERO {
+                let Some(along) = scenes::direction::unit(direction) else {
                     return Err(ReferenceError::NotApplicable(format!(
                         "raytrace: the directional light of scene `{}` has no direction",
                         frame.scene.name
                     )));
-                }
-                LightSource::Towards(towards)
+                };
+                LightSource::Towards(-along)
             }
             Light::Spot { position, .. } => {
                 if !position.is_finite() {
@@ -393,8 +597,6 @@ impl<'a> Tracer<'a> {
         let geometry = &frame.geometry;
         let (lo, hi) = bounds(geometry).unwrap_or((DVec3::ZERO, DVec3::ZERO));
         let diagonal = (hi - lo).length();
-        let largest = lo.abs().max(hi.abs()).max_element();
-        let pad = (BOX_PADDING * diagonal + 8.0 * f64::from(f32::EPSILON) * largest).max(1e-30);
         let transparency = frame.effects.transparency;
         let objects = &frame.scene.objects;
         let pass = |t: usize| {
@@ -404,14 +606,6 @@ impl<'a> Tracer<'a> {
                 0.0
             }
         };
-
-        let (camera_accel, caster_accel) = rec.stages.time(STAGE_BVH_BUILD, || {
-            let all = Accel::build(geometry, |_| true, pass, pad);
-            let casters = (0..geometry.len())
-                .any(|t| !frame.is_caster(t))
-                .then(|| Accel::build(geometry, |t| frame.is_caster(t), pass, pad));
-            (all, casters)
-        });
 
         // Camera rays: perspective from depth `near`; orthographic from behind the scene.
         let camera = &frame.camera;
@@ -428,46 +622,51 @@ impl<'a> Tracer<'a> {
                         camera.depth_of(c)
                     })
                     .fold(f64::INFINITY, f64::min);
-                (nearest.min(0.0) - diagonal.max(1.0) * 1e-3, 0.0)
+                (nearest.min(0.0) - diagonal * 1e-3, 0.0)
             }
         };
-        Ok(Self {
-            frame,
-            pattern,
-            camera_accel,
-            caster_accel,
-            light,
-            shadow_tmin: SHADOW_RAY_OFFSET * diagonal,
-            start_shift,
-            camera_tmin,
-        })
+        // Where camera rays start: the eye, or the image rectangle's corners behind the scene.
+        let (w, h) = (f64::from(frame.width()), f64::from(frame.height()));
+        let origins: Vec<DVec3> = [(0.0, 0.0), (w, 0.0), (0.0, h), (w, h)]
+            .into_iter()
+            .map(|(x, y)| {
+                let r = camera.ray(glam::DVec2::new(x, y));
+                r.origin + start_shift * r.direction
+            })
+            .collect();
+
+        let (camera_accel, caster_accel) = rec.stages.time(STAGE_BVH_BUILD, || {
+            let bvh_frame = BvhFrame::fit(geometry, &origins);
+            let all = Accel::build(geometry, |_| true, pass, bvh_frame);
+            let casters = (0..geometry.len())
+                .any(|t| !frame.is_caster(t))
+                .then(|| Accel::build(geometry, |t| frame.is_caster(t), pass, bvh_frame));
+            (all, casters)
+        });
+
+        Ok(Self { frame, pattern, camera_accel, caster_accel, light, start_shift, camera_tmin })
     }
 
     /// The camera ray and the shadow ray of sub-sample `s` of pixel `(i, j)`.
     fn sample(&self, i: u32, j: u32, s: usize) -> SampleHit {
         let r = self.frame.camera.ray(self.pattern.point(i, j, s));
-        let hit =
-            TraceRay::new(r.origin + self.start_shift * r.direction, r.direction).and_then(|ray| {
-                self.camera_accel
-                    .closest(&ray, self.camera_tmin, f64::INFINITY)
-                    .map(|(t, id)| (ray.at(t), id))
-            });
+        let origin = r.origin + self.start_shift * r.direction;
+        let hit = TraceRay::new(origin, r.direction).and_then(|ray| {
+            self.camera_accel
+                .closest(&ray, self.camera_tmin, f64::INFINITY)
+                .map(|(t, id)| (ray.at(t), id))
+        });
         let Some((p, id)) = hit else {
             return SampleHit { triangle: None, light: 1.0, rays: 1 };
         };
         let (dir, tmax) = match self.light {
-            LightSource::Towards(d) => (d, f64::INFINITY),
-            LightSource::At(q) => {
-                let v = q - p;
-                let dist = v.length();
-                (v / dist, dist)
-            }
+            LightSource::Towards(d) => (Some(d), f64::INFINITY),
+            LightSource::At(q) => (scenes::direction::unit(q - p), (q - p).length()),
         };
+        let tmin = shadow_offset(origin, p);
         let casters = self.caster_accel.as_ref().unwrap_or(&self.camera_accel);
-        let light = match TraceRay::new(p, dir) {
-            Some(ray) if tmax > self.shadow_tmin => {
-                casters.transmittance(&ray, self.shadow_tmin, tmax, id)
-            }
+        let light = match dir.and_then(|d| TraceRay::new(p, d)) {
+            Some(ray) if tmax > tmin => casters.transmittance(&ray, tmin, tmax, id),
             // The point is at the light (or the ray is degenerate): lit.
             _ => 1.0,
         };
@@ -702,7 +901,7 @@ mod tests {
         assert!(TraceRay::new(DVec3::ZERO, DVec3::ZERO).is_none());
         assert!(TraceRay::new(DVec3::NAN, DVec3::X).is_none());
         let g = geometry(line.to_vec(), vec![[0, 1, 2]]);
-        let accel = Accel::build(&g, |_| true, |_| 0.0, 1e-6);
+        let accel = Accel::build(&g, |_| true, |_| 0.0, BvhFrame::fit(&g, &[ray.origin]));
         assert!(accel.ids.is_empty());
         assert_eq!(accel.closest(&ray, 0.0, f64::INFINITY), None);
         assert_eq!(accel.transmittance(&ray, 0.0, f64::INFINITY, u32::MAX), 1.0);
@@ -711,8 +910,9 @@ mod tests {
     #[test]
     fn single_triangle_bvh_finds_its_hit() {
         let g = geometry(vec![DVec3::ZERO, DVec3::X, DVec3::Y], vec![[0, 1, 2]]);
-        let accel = Accel::build(&g, |_| true, |_| 0.25, 1e-6);
         let ray = TraceRay::new(DVec3::new(0.2, 0.2, 2.0), DVec3::NEG_Z).expect("finite");
+        let accel = Accel::build(&g, |_| true, |_| 0.25, BvhFrame::fit(&g, &[ray.origin]));
+        assert!(accel.frame.bvh_ray(&ray, f64::INFINITY).is_some());
         assert_eq!(accel.closest(&ray, 0.0, f64::INFINITY), Some((2.0, 0)));
         assert_eq!(accel.transmittance(&ray, 0.0, f64::INFINITY, u32::MAX), 0.25);
         assert_eq!(accel.transmittance(&ray, 0.0, f64::INFINITY, 0), 1.0);
@@ -731,13 +931,14 @@ mod tests {
             ],
             vec![[0, 1, 2]],
         );
-        let accel = Accel::build(&g, |_| true, |_| 0.0, 1e-6);
+        let eye = DVec3::new(0.1, 5.0, 0.2);
+        let accel = Accel::build(&g, |_| true, |_| 0.0, BvhFrame::fit(&g, &[eye]));
         let up = -DVec3::new(0.0, -1.0, 0.0);
         assert!(up.x.is_sign_negative() && up.z.is_sign_negative());
         let ray = TraceRay::new(DVec3::new(0.1, 0.0, 0.2), up).expect("finite");
         assert_eq!(accel.closest(&ray, 0.0, f64::INFINITY), Some((2.0, 0)));
         assert_eq!(accel.transmittance(&ray, 1e-9, f64::INFINITY, u32::MAX), 0.0);
-        let down = TraceRay::new(DVec3::new(0.1, 5.0, 0.2), DVec3::new(-0.0, -1.0, -0.0));
+        let down = TraceRay::new(eye, DVec3::new(-0.0, -1.0, -0.0));
         assert!(accel.closest(&down.expect("finite"), 0.0, f64::INFINITY).is_some());
     }
 
@@ -757,7 +958,12 @@ mod tests {
                 (b - a).cross(c - a).normalize().dot(a - centre).abs()
             })
             .fold(f64::INFINITY, f64::min);
-        let accel = Accel::build(&g, |_| true, |_| 0.0, 1e-5 * (hi - lo).length());
+        let eyes = [
+            centre + DVec3::new(0.0, 0.0, 7.0),
+            centre + DVec3::new(3.1, 4.7, -5.3),
+            centre + DVec3::new(-0.01, 9.0, 0.02),
+        ];
+        let accel = Accel::build(&g, |_| true, |_| 0.0, BvhFrame::fit(&g, &eyes));
         let mut targets: Vec<DVec3> = g.positions.clone();
         for tri in &g.triangles {
             for e in 0..3 {
@@ -766,14 +972,11 @@ mod tests {
             }
         }
         let mut tested = 0;
-        for eye in [
-            centre + DVec3::new(0.0, 0.0, 7.0),
-            centre + DVec3::new(3.1, 4.7, -5.3),
-            centre + DVec3::new(-0.01, 9.0, 0.02),
-        ] {
+        for eye in eyes {
             for &target in &targets {
                 let dir = target - eye;
                 let ray = TraceRay::new(eye, dir).expect("finite");
+                assert!(accel.frame.bvh_ray(&ray, f64::INFINITY).is_some());
                 let off_axis = (centre - eye).cross(dir).length() / dir.length();
                 if off_axis < r_in * (1.0 - 1e-9) {
                     tested += 1;
@@ -782,5 +985,127 @@ mod tests {
             }
         }
         assert!(tested > 10_000, "{tested}");
+    }
+
+    /// A ground of 2 x 16 triangles under a tilted occluder, the shadow rays of a grid of ground
+    /// points (with the offset the tracer uses, from an eye above), and optionally one triangle
+    /// far away: returns the number of points the BVH finds shadowed and the number a test of
+    /// every triangle finds shadowed.
+    fn shadowed_points(scale: f64, shift: DVec3, far: Option<f64>) -> (usize, usize) {
+        let place = |p: DVec3| p * scale + shift;
+        let mut positions = Vec::new();
+        let mut triangles = Vec::new();
+        let n = 4u32;
+        for j in 0..=n {
+            for i in 0..=n {
+                let (x, z) = (f64::from(i) * 4.0 - 8.0, f64::from(j) * 4.0 - 8.0);
+                positions.push(place(DVec3::new(x, 0.0, z)));
+            }
+        }
+        for j in 0..n {
+            for i in 0..n {
+                let v = |di: u32, dj: u32| (j + dj) * (n + 1) + i + di;
+                triangles.push([v(0, 0), v(1, 0), v(1, 1)]);
+                triangles.push([v(0, 0), v(1, 1), v(0, 1)]);
+            }
+        }
+        let k = positions.len() as u32;
+        positions.extend([
+            place(DVec3::new(-2.0, 1.0, -2.0)),
+            place(DVec3::new(2.5, 1.5, -1.0)),
+            place(DVec3::new(0.0, 0.001, 2.0)),
+        ]);
+        triangles.push([k, k + 1, k + 2]);
+        if let Some(d) = far {
+            let k = positions.len() as u32;
+            positions.extend([
+                DVec3::new(d, d, 0.0),
+                DVec3::new(d + 1.0, d, 0.0),
+                DVec3::new(d, d + 1.0, 0.0),
+            ]);
+            triangles.push([k, k + 1, k + 2]);
+        }
+        let g = geometry(positions, triangles);
+        let eye = place(DVec3::new(0.0, 6.0, 9.0));
+        let accel = Accel::build(&g, |_| true, |_| 0.0, BvhFrame::fit(&g, &[eye]));
+        let towards = DVec3::new(0.3, 1.0, 0.2).normalize();
+        let (mut shadowed, mut brute) = (0, 0);
+        for j in 0..64 {
+            for i in 0..64 {
+                let local = DVec3::new(f64::from(i) / 8.0 - 4.0, 0.0, f64::from(j) / 8.0 - 4.0);
+                let p = place(local);
+                let ray = TraceRay::new(p, towards).expect("finite");
+                let t = shadow_offset(eye, p);
+                if accel.transmittance(&ray, t, f64::INFINITY, u32::MAX) == 0.0 {
+                    shadowed += 1;
+                }
+                if (0..g.len()).any(|k| ray.intersect(&g.corners(k)).is_some_and(|h| h > t)) {
+                    brute += 1;
+                }
+            }
+        }
+        (shadowed, brute)
+    }
+
+    #[test]
+    fn shadows_do_not_depend_on_scale_position_or_far_objects() {
+        let (base, brute) = shadowed_points(1.0, DVec3::ZERO, None);
+        assert_eq!(base, brute);
+        assert!(base > 200 && base < 4000, "{base}");
+        let mut cases = Vec::new();
+        for scale in [1e-6, 1e-5, 1e-3, 1e3, 1e6] {
+            cases.push((scale, DVec3::ZERO, None));
+        }
+        for shift in [DVec3::splat(1e7), DVec3::new(-1e7, 3e6, 1e5)] {
+            cases.push((1.0, shift, None));
+            cases.push((1e-3, shift * 1e-3, None));
+        }
+        for d in [1e8, 1e10, 1e12] {
+            cases.push((1.0, DVec3::ZERO, Some(d)));
+        }
+        for (scale, shift, far) in cases {
+            // The BVH finds every occluder a test of all triangles finds; the count moves from
+            // the scale-1 one only where a point lies on the shadow's edge to within rounding.
+            let (count, brute) = shadowed_points(scale, shift, far);
+            assert_eq!(count, brute, "scale {scale}, shift {shift}, far {far:?}");
+            assert!(count.abs_diff(base) <= 4, "{count} vs {base}: {scale}, {shift}, {far:?}");
+        }
+    }
+
+    /// Coordinates far beyond the supported range (1e24, 1e300) must not make the BVH builder
+    /// panic (they are refused earlier, at scene validation, but the tracer stands alone).
+    #[test]
+    fn huge_coordinates_do_not_panic() {
+        for scale in [1e24, 1e300] {
+            let (count, _) = shadowed_points(scale, DVec3::ZERO, None);
+            assert!(count <= 4096);
+        }
+        let (count, brute) = shadowed_points(1.0, DVec3::ZERO, Some(1e300));
+        assert_eq!(count, brute);
+    }
+
+    /// An occluder lying a millionth of its size above the ground: obvhs' node test ignores
+    /// boxes left within 1e-4 of a ray's start, which the start shift must make up for.
+    #[test]
+    fn occluders_in_contact_are_found() {
+        for scale in [1e-6, 1.0, 1e6] {
+            let h = 4e-6 * scale;
+            let positions = vec![
+                DVec3::new(-4.0, 0.0, -4.0) * scale,
+                DVec3::new(4.0, 0.0, -4.0) * scale,
+                DVec3::new(0.0, 0.0, 4.0) * scale,
+                DVec3::new(-2.0 * scale, h, -2.0 * scale),
+                DVec3::new(2.0 * scale, h, -2.0 * scale),
+                DVec3::new(0.0, h, 2.0 * scale),
+            ];
+            let g = geometry(positions, vec![[0, 1, 2], [3, 4, 5]]);
+            let eye = DVec3::new(0.0, 6.0, 9.0) * scale;
+            let accel = Accel::build(&g, |_| true, |_| 0.0, BvhFrame::fit(&g, &[eye]));
+            let p = DVec3::new(0.0, 0.0, 0.0);
+            let ray = TraceRay::new(p, DVec3::Y).expect("finite");
+            let t = shadow_offset(eye, p);
+            assert!(t < h);
+            assert_eq!(accel.transmittance(&ray, t, f64::INFINITY, 0), 0.0, "scale {scale}");
+        }
     }
 }
