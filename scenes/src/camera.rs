@@ -19,11 +19,13 @@ pub enum Camera {
     /// Central projection.
     Perspective {
         /// Eye position.
+        #[serde(deserialize_with = "crate::arrays::dvec3")]
         eye: DVec3,
         /// Point looked at.
+        #[serde(deserialize_with = "crate::arrays::dvec3")]
         target: DVec3,
         /// Up hint (default `[0, 1, 0]`).
-        #[serde(default = "default_up")]
+        #[serde(default = "default_up", deserialize_with = "crate::arrays::dvec3")]
         up: DVec3,
         /// Vertical field of view in degrees, in (0, 180).
         fov_y_deg: f64,
@@ -34,11 +36,13 @@ pub enum Camera {
     /// Parallel projection.
     Orthographic {
         /// Centre of the image plane.
+        #[serde(deserialize_with = "crate::arrays::dvec3")]
         eye: DVec3,
         /// Point looked at (gives the direction).
+        #[serde(deserialize_with = "crate::arrays::dvec3")]
         target: DVec3,
         /// Up hint (default `[0, 1, 0]`).
-        #[serde(default = "default_up")]
+        #[serde(default = "default_up", deserialize_with = "crate::arrays::dvec3")]
         up: DVec3,
         /// Height of the view volume in world units; the width follows the aspect ratio.
         height: f64,

@@ -1,6 +1,7 @@
 //! Scenes for the shadow workbench: meshes, materials, lights, cameras, scene files,
 //! procedural generators, mesh loaders, and the effects a scene calls for.
 
+mod arrays;
 pub mod camera;
 pub mod direction;
 pub mod generators;

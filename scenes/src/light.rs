@@ -12,13 +12,16 @@ pub enum Light {
     /// Parallel light travelling along `direction`.
     Directional {
         /// Direction the light travels (from the light towards the scene); need not be unit.
+        #[serde(deserialize_with = "crate::arrays::dvec3")]
         direction: DVec3,
     },
     /// Point light with a cone, seen as a perspective projection.
     Spot {
         /// Light position.
+        #[serde(deserialize_with = "crate::arrays::dvec3")]
         position: DVec3,
         /// Point the spot is aimed at.
+        #[serde(deserialize_with = "crate::arrays::dvec3")]
         target: DVec3,
         /// Full opening angle of the frustum in degrees, in (0, 170].
         fov_deg: f64,

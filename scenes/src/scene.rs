@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 #[serde(deny_unknown_fields, default)]
 pub struct Material {
     /// Linear RGB albedo in [0, 1] (default `[0.8, 0.8, 0.8]`).
+    #[serde(deserialize_with = "crate::arrays::exact")]
     pub color: [f64; 3],
     /// Opacity of a shadow caster in [0, 1] (default 1). Below 1 the scene has `transparency`.
     pub opacity: f64,

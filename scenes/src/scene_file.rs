@@ -80,14 +80,17 @@ pub struct FileShape {
 #[serde(deny_unknown_fields, default)]
 pub struct Transform {
     /// Per-axis scale (default `[1, 1, 1]`).
+    #[serde(deserialize_with = "crate::arrays::dvec3")]
     pub scale: DVec3,
     /// Rotation in degrees about x, then y, then z (default zero).
+    #[serde(deserialize_with = "crate::arrays::dvec3")]
     pub rotate_deg: DVec3,
     /// If set, centre the bounds on the origin and scale so the largest extent equals this.
     pub fit_size: Option<f64>,
     /// Lift the object so its lowest point is at y = 0 (default false).
     pub on_ground: bool,
     /// Translation (default zero).
+    #[serde(deserialize_with = "crate::arrays::dvec3")]
     pub translate: DVec3,
 }
 
@@ -143,7 +146,7 @@ pub struct SceneDesc {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
     /// Default image size `[width, height]` (default `[800, 600]`).
-    #[serde(default = "default_resolution")]
+    #[serde(default = "default_resolution", deserialize_with = "crate::arrays::exact")]
     pub resolution: [u32; 2],
     /// Camera.
     pub camera: Camera,

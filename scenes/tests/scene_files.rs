@@ -91,3 +91,77 @@ fn every_builtin_knows_its_resolution_and_light() {
     }
     assert_eq!(registry::builtin("random-1m").expect("exists").resolution, [1024, 768]);
 }
+
+/// Scene files with every fixed-size array the format has, once with a perspective camera and a
+/// spot light, once with an orthographic camera and a directional light.
+const ARRAYS: [&str; 2] = [
+    r#"resolution = [64, 48]
+[camera.perspective]
+eye = [0.0, 6.0, 8.0]
+target = [0.0, 0.0, 0.0]
+up = [0.0, 1.0, 0.0]
+fov_y_deg = 45.0
+[light.spot]
+position = [3.0, 9.0, 2.0]
+target = [0.0, 0.0, 0.0]
+fov_deg = 75.0
+[[object]]
+shape.plane = { size = 10.0 }
+material = { color = [0.5, 0.5, 0.5] }
+transform = { scale = [1.0, 1.0, 1.0], rotate_deg = [0.0, 10.0, 0.0], translate = [0.0, 0.0, 0.0] }
+[[object]]
+shape.cage = { size = [4.0, 4.0, 4.0] }
+[[object]]
+shape.random_triangles = { count = 10, extent = [8.0, 3.0, 8.0] }
+"#,
+    r#"[camera.orthographic]
+eye = [0.0, 6.0, 8.0]
+target = [0.0, 0.0, 0.0]
+up = [0.0, 1.0, 0.0]
+height = 12.0
+[light.directional]
+direction = [-0.3, -1.0, -0.2]
+[[object]]
+shape.plane = { size = 10.0 }
+"#,
+];
+
+#[test]
+fn fixed_size_arrays_refuse_any_other_length_naming_line_and_key() {
+    let path = Path::new("arrays.toml");
+    let mut checked = 0;
+    for text in ARRAYS {
+        let desc = SceneDesc::from_toml(text, path).unwrap_or_else(|e| panic!("{e}"));
+        desc.resolve("arrays", path, Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+        for (i, line) in text.lines().enumerate() {
+            // Every `key = [x, y(, z)]` on the line.
+            for (start, _) in line.match_indices(" = [") {
+                let key = line[..start].rsplit(['{', ',', ' ']).next().expect("a key");
+                let open = start + " = [".len();
+                let close = open + line[open..].find(']').expect("closed");
+                let values = &line[open..close];
+                let (fewer, _) = values.rsplit_once(", ").expect("several values");
+                for wrong in
+                    [format!("{values}, 7"), format!("{values}, \"seven\""), fewer.to_owned()]
+                {
+                    let bad_line = format!("{}{wrong}{}", &line[..open], &line[close..]);
+                    let mut lines: Vec<&str> = text.lines().collect();
+                    lines[i] = &bad_line;
+                    let bad = lines.join("\n");
+                    let err = SceneDesc::from_toml(&bad, path).expect_err(&bad_line).to_string();
+                    assert!(
+                        err.contains("arrays.toml")
+                            && err.contains(&format!("line {}", i + 1))
+                            && err.contains(&format!("{key} = ["))
+                            && err.contains("invalid length"),
+                        "{bad_line}: {err}"
+                    );
+                    checked += 1;
+                }
+            }
+        }
+    }
+    // resolution, eye, target, up, position, target, color, scale, rotate_deg, translate, size,
+    // extent; eye, target, up, direction: three wrong lengths each.
+    assert_eq!(checked, 3 * 16);
+}

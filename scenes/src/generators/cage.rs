@@ -27,6 +27,7 @@ use serde::{Deserialize, Serialize};
 #[serde(deny_unknown_fields, default)]
 pub struct CageParams {
     /// Outer size `[x, y, z]` of the cage, in world units. Default `[4, 4, 4]`.
+    #[serde(deserialize_with = "crate::arrays::exact")]
     pub size: [f64; 3],
     /// Bars across each face in each direction, counting the two edge bars (at least 2).
     /// Default 12.

@@ -34,6 +34,7 @@ pub struct RandomTrianglesParams {
     pub total_area: f64,
     /// Size `[x, y, z]` of the box the triangles are placed in, in world units. Default
     /// `[8, 3, 8]`.
+    #[serde(deserialize_with = "crate::arrays::exact")]
     pub extent: [f64; 3],
     /// Height of the box's bottom above the ground, in world units. Default 1.
     pub min_height: f64,
