@@ -13,11 +13,24 @@
 //! software adapters (whose timestamps do not wait for the compute work between them), it is
 //! the wall-clock time from submission to completion. [`GpuContext::timing`] names which one
 //! the run record gets.
+//!
+//! Errors: what the device reports outside any call's result (validation errors, running out
+//! of memory, a lost device) would make wgpu panic by default; here it is kept and returned as
+//! [`GpuError::Device`] by the next wait ([`GpuContext::wait`], and so every stage and
+//! read-back), an internal failure like any other device error.
+//!
+//! Runtime folder: Mesa's Vulkan driver prints `error: XDG_RUNTIME_DIR is invalid` when that
+//! variable is unset or names no folder. Before the wgpu instance is made, such a value is
+//! replaced, for this process only, by a private folder (`shadowbench-runtime-UID`, mode 0700)
+//! under the system temp dir; a folder of that name that is not ours and private is not used.
 
 use super::GpuError;
 use bytemuck::Pod;
 use instrumentation::Recorder;
-use std::{sync::OnceLock, time::Instant};
+use std::{
+    sync::{Arc, Mutex, OnceLock},
+    time::Instant,
+};
 use wgpu::util::DeviceExt;
 
 /// Environment variable restricting the wgpu backends asked for an adapter.
@@ -59,7 +72,38 @@ pub struct GpuContext {
     period_ns: f64,
     /// Query set of two timestamps, when [`Timing::TimestampQueries`].
     queries: Option<wgpu::QuerySet>,
+    /// The first error the device reported outside a call's result (uncaptured error or
+    /// device loss), not yet returned.
+    fault: Arc<Mutex<Option<String>>>,
 }
+
+/// The variable Mesa's Vulkan driver checks for a runtime folder.
+const RUNTIME_ENV: &str = "XDG_RUNTIME_DIR";
+
+/// Points `XDG_RUNTIME_DIR` at a private folder when it is unset or not a folder, as the
+/// module doc says; leaves it alone when no such folder can be had.
+#[cfg(target_os = "linux")]
+fn ensure_runtime_dir() {
+    use std::os::unix::fs::{DirBuilderExt, MetadataExt};
+    if std::env::var_os(RUNTIME_ENV).is_some_and(|d| std::path::Path::new(&d).is_dir()) {
+        return;
+    }
+    let Ok(uid) = std::fs::metadata("/proc/self").map(|m| m.uid()) else {
+        return;
+    };
+    let dir = std::env::temp_dir().join(format!("shadowbench-runtime-{uid}"));
+    // An existing folder is used only when it is ours and private (not made by someone else).
+    let _ = std::fs::DirBuilder::new().mode(0o700).create(&dir);
+    let usable = std::fs::symlink_metadata(&dir)
+        .is_ok_and(|m| m.is_dir() && m.uid() == uid && m.mode() & 0o077 == 0);
+    if usable {
+        std::env::set_var(RUNTIME_ENV, &dir);
+    }
+}
+
+/// No runtime folder is needed where there is no Mesa Vulkan driver to ask for one.
+#[cfg(not(target_os = "linux"))]
+fn ensure_runtime_dir() {}
 
 /// Ranks an adapter: real GPUs first, software rasterizers last.
 fn rank(info: &wgpu::AdapterInfo) -> u8 {
@@ -96,6 +140,7 @@ impl GpuContext {
     /// Opens the adapter chosen as the module doc says.
     pub fn new() -> Result<Self, GpuError> {
         let backends = backends()?;
+        ensure_runtime_dir();
         let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
         desc.backends = backends;
         let instance = wgpu::Instance::new(desc);
@@ -147,6 +192,18 @@ impl GpuContext {
             ..Default::default()
         }))
         .map_err(|e| GpuError::Device(e.to_string()))?;
+        let fault = Arc::new(Mutex::new(None));
+        let keep = |fault: &Arc<Mutex<Option<String>>>, message: String| {
+            if let Ok(mut f) = fault.lock() {
+                f.get_or_insert(message);
+            }
+        };
+        let f = Arc::clone(&fault);
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| keep(&f, e.to_string())));
+        let f = Arc::clone(&fault);
+        device.set_device_lost_callback(move |reason, message| {
+            keep(&f, format!("device lost ({reason:?}): {message}"));
+        });
         let queries = has_timestamps.then(|| {
             device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("stage timestamps"),
@@ -156,7 +213,7 @@ impl GpuContext {
         });
         let timing = if has_timestamps { Timing::TimestampQueries } else { Timing::SubmitAndWait };
         let period_ns = f64::from(queue.get_timestamp_period());
-        Ok(Self { device, queue, info: adapter.get_info(), timing, period_ns, queries })
+        Ok(Self { device, queue, info: adapter.get_info(), timing, period_ns, queries, fault })
     }
 
     /// The adapter as the run record names it, e.g. `llvmpipe (LLVM 15.0.6, 256 bits) via Vulkan`.
@@ -327,12 +384,17 @@ impl GpuContext {
         Ok(out)
     }
 
-    /// Blocks until all submitted work is done.
+    /// Blocks until all submitted work is done; an error the device reported since the last
+    /// wait (see the module doc) is returned here.
     pub fn wait(&self) -> Result<(), GpuError> {
         self.device
             .poll(wgpu::PollType::wait_indefinitely())
-            .map(|_| ())
-            .map_err(|e| GpuError::Device(e.to_string()))
+            .map_err(|e| GpuError::Device(e.to_string()))?;
+        match self.fault.lock().map(|mut f| f.take()) {
+            Ok(None) => Ok(()),
+            Ok(Some(message)) => Err(GpuError::Device(message)),
+            Err(_) => Err(GpuError::Device("the device's error record is poisoned".into())),
+        }
     }
 
     /// Copies `buffer` back to the CPU as elements of `T`.
@@ -362,5 +424,28 @@ impl GpuContext {
         drop(data);
         staging.unmap();
         Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An error the device reports outside a call's result (here a buffer both readable and
+    /// writable by mapping, which WebGPU forbids) comes back from the next wait as a device
+    /// error, once, instead of wgpu's default panic.
+    #[test]
+    fn device_errors_come_back_from_the_next_wait() {
+        let ctx = GpuContext::new().expect("a GPU adapter (scripts/install-gpu-driver)");
+        ctx.wait().expect("no error yet");
+        let _invalid = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("invalid"),
+            size: 16,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::MAP_WRITE,
+            mapped_at_creation: false,
+        });
+        let e = ctx.wait().expect_err("the error is returned");
+        assert!(matches!(e, GpuError::Device(_)), "{e}");
+        ctx.wait().expect("returned once");
     }
 }
