@@ -23,12 +23,16 @@
 //!
 //! - **The shadow predicate is the ray-traced reference's.** A sample on triangle `R` is
 //!   shadowed by caster triangle `T` iff `T != R`, the sample's light image point lies inside
-//!   `T`'s projection, and `T` is nearer the light than the sample by more than
-//!   [`SHADOW_OFFSET`] times the scene's bounding-box diagonal (in world units along the
-//!   light's ray: the threshold depth of [`samples::threshold_depth`]). `raytrace`'s shadow
-//!   rays make the same test (they skip the hit triangle and hits nearer than the offset; a
-//!   spot light's segment ends at the light, and every caster in front of a sample's depth is
-//!   on that segment). With the shared pattern at equal rate the two evaluate the same image
+//!   `T`'s projection, and `T` is nearer the light than the sample by more than the sample's
+//!   [`shadow_offset`] (in world units along the light's ray: the threshold depth of
+//!   [`samples::threshold_depth`]). The offset is local: [`SHADOW_OFFSET`] times the magnitude
+//!   of the numbers that made the sample's surface point (the camera ray's origin and the
+//!   point), the scale of that point's rounding error, so neither the scene's size nor its
+//!   position nor a far-away object changes which casters count (an offset in units of the
+//!   scene's diagonal lost every shadow near the origin once one triangle lay 1e10 away).
+//!   `raytrace`'s shadow rays make the same test (they skip the hit triangle and hits nearer
+//!   than the same offset; a spot light's segment ends at the light, and every caster in front
+//!   of a sample's depth is on that segment). With the shared pattern at equal rate the two evaluate the same image
 //!   points, so they can differ only where a sample lies exactly on a caster's edge, where
 //!   each breaks the tie by its own rule, or within `f64` rounding of one.
 //! - **Exact coverage.** Point-in-triangle is decided by Shewchuk's exact `orient2d` on the
@@ -46,9 +50,14 @@
 //! - **Light image.** The light's projector fitted to the scene ([`Frame::light_projector`]) at
 //!   [`LIGHT_IMAGE_RES`]; the resolution only scales coordinates, nothing is discretised.
 //!   Samples outside that image are kept (the reference ignores the spot's cone). A spot light
-//!   projects only points beyond its `near` plane (the nearest depth of the scene's padded
-//!   bounds, so every surface unless the light is inside them): casters are clipped there,
-//!   and surface points nearer than it are lit.
+//!   projects only points beyond its `near` plane: casters are clipped there, and surface
+//!   points nearer than it are lit. The fitted frustum's `near` is the nearest depth of the
+//!   scene's padded bounds, but a fixed fraction (1e-4) of the scene's diagonal when the light
+//!   is inside them, which a far-away object makes larger than the whole scene near the light
+//!   (every shadow was lost). [`light_projector`] keeps the fitted `near` only where it is
+//!   smaller than a local one: [`SHADOW_OFFSET`] times the magnitude of the light's position
+//!   and of its distance to the farthest visible surface point, so only points within the
+//!   shadow offset of the light, which the ray tracer also counts as lit, are left out.
 //! - **Depth.** A caster's depth at a sample is where the light's ray through the sample's
 //!   image point meets the caster's plane, clamped to the depth range of its corners (as the
 //!   rasterizer does); the sample's own depth is its surface point's light depth.
@@ -97,7 +106,7 @@ use glam::{DVec2, DVec3};
 use instrumentation::{Counters, Recorder};
 use rayon::prelude::*;
 use samples::{transform_samples, Sample, Surface};
-use scenes::{Geometry, Projector};
+use scenes::Projector;
 
 /// The paper's Table 1 (measured on a 1.6 GHz Mobile Pentium 4), to print beside ours. Rows:
 /// triangles, 2D BSP nodes, nodes visited, nodes occlusion culled, sampling points tested,
@@ -125,9 +134,20 @@ pub const STAGE_RASTERIZATION: &str = "rasterization of blockers";
 /// (`afsm-ss`); the full name is given by [`gbuffer_stage`].
 pub const STAGE_GBUFFER_SUBSAMPLE: &str = "camera G-buffer";
 
-/// Shadow offset as a fraction of the scene's bounding-box diagonal; equal to the ray-traced
-/// reference's `SHADOW_RAY_OFFSET`.
-pub const SHADOW_OFFSET: f64 = 1e-9;
+/// Shadow offset as a fraction of the magnitude of the numbers that made a sample's surface
+/// point (see [`shadow_offset`]); equal to the ray-traced reference's `SHADOW_RAY_OFFSET`.
+pub const SHADOW_OFFSET: f64 = 1e-10;
+
+/// The distance below which a caster does not shadow the surface point `p`, the hit of a
+/// camera ray from `origin`: [`SHADOW_OFFSET`] times the largest coordinate magnitude of the
+/// two points plus their distance (in the max norm), the scale of `p`'s rounding error, as the
+/// ray-traced reference's shadow rays measure it. Local: a far-away object, or the scene's
+/// position and size, do not change it.
+#[inline]
+pub fn shadow_offset(origin: DVec3, p: DVec3) -> f64 {
+    let magnitude = origin.abs().max(p.abs()).max_element() + (p - origin).abs().max_element();
+    SHADOW_OFFSET * magnitude
+}
 
 /// Resolution of the light image the samples are expressed in (a scale, not a grid).
 pub const LIGHT_IMAGE_RES: u32 = 1024;
@@ -223,19 +243,25 @@ impl AliasFreeShadowMap {
     }
 }
 
-/// The diagonal of the bounding box of the finite positions (as the ray-traced reference
-/// measures the scene).
-pub(crate) fn scene_diagonal(geometry: &Geometry) -> f64 {
-    let (lo, hi) =
-        geometry.positions.iter().filter(|p| p.is_finite()).fold(
-            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-            |(lo, hi), &p| (lo.min(p), hi.max(p)),
-        );
-    if lo.x <= hi.x {
-        (hi - lo).length()
-    } else {
-        0.0
+/// The light's projector of `afsm` (see "Light image" in the module doc): the fitted one at
+/// [`LIGHT_IMAGE_RES`]; for a spot light with its `near` no larger than [`SHADOW_OFFSET`]
+/// times the magnitude of the light's position plus its distance to the farthest surface
+/// point the camera sees at a pixel centre (max norm), never zero.
+pub fn light_projector(frame: &Frame<'_>) -> Projector {
+    let mut light = frame.light_projector(LIGHT_IMAGE_RES);
+    if light.is_perspective() {
+        let q = light.origin;
+        let g = &frame.gbuffer;
+        let reach = (0..g.triangle.len())
+            .filter(|&k| g.covered(k))
+            .map(|k| (g.position[k] - q).abs().max_element())
+            .fold(0.0, f64::max);
+        let local = SHADOW_OFFSET * (q.abs().max_element() + reach);
+        if local > 0.0 && local < light.near {
+            light.near = local;
+        }
     }
+    light
 }
 
 /// Per pixel, the mean over its `rate` sub-samples of their light (lit for sub-samples that
@@ -362,10 +388,9 @@ impl ShadowMethod for AliasFreeShadowMap {
                 None => Surface { triangle: &g.triangle, depth: &g.depth },
             })
             .collect();
-        let light = frame.light_projector(LIGHT_IMAGE_RES);
-        let offset = SHADOW_OFFSET * scene_diagonal(&frame.geometry);
+        let light = light_projector(frame);
         let samples = rec.stages.time(STAGE_TRANSFORMATION, || {
-            transform_samples(&frame.camera, &light, &surfaces, &pattern, frame.width(), offset)
+            transform_samples(&frame.camera, &light, &surfaces, &pattern, frame.width())
         });
         drop(surfaces);
         drop(extra);

@@ -2,6 +2,7 @@
 //! sub-sample's surface point is moved to the light's image plane, keeping its exact `f64`
 //! image coordinates (no discretisation) and its light depth.
 
+use super::shadow_offset;
 use crate::{pattern::SamplePattern, raster::NO_TRIANGLE};
 use glam::DVec2;
 use rayon::prelude::*;
@@ -50,7 +51,8 @@ pub fn threshold_depth(light: &Projector, xy: DVec2, z: f64, offset: f64) -> f64
 ///
 /// `surfaces[s]` is the camera's nearest surface at sub-sample `s` of `pattern` (for the
 /// centre sample, the frame's G-buffer). A sub-sample's surface point is
-/// `camera.ray(point).at(depth)` at its image point, as the G-buffer computes positions.
+/// `camera.ray(point).at(depth)` at its image point, as the G-buffer computes positions; its
+/// threshold depth takes the point's own [`shadow_offset`] from the camera ray's origin.
 /// Background sub-samples, and points a spot light cannot project (nearer than its `near`
 /// plane, or behind it), give no sample. Samples come out in id order.
 pub fn transform_samples(
@@ -59,7 +61,6 @@ pub fn transform_samples(
     surfaces: &[Surface<'_>],
     pattern: &SamplePattern,
     width: u32,
-    offset: f64,
 ) -> Vec<Sample> {
     let rate = pattern.rate() as usize;
     let pixels = surfaces.first().map_or(0, |s| s.triangle.len());
@@ -75,9 +76,10 @@ pub fn transform_samples(
                 return None;
             }
             let point = pattern.point((pixel % w) as u32, (pixel / w) as u32, s);
-            let position = camera.ray(point).at(surface.depth[pixel]);
+            let ray = camera.ray(point);
+            let position = ray.at(surface.depth[pixel]);
             let (xy, z) = light.project(position)?;
-            let zt = threshold_depth(light, xy, z, offset);
+            let zt = threshold_depth(light, xy, z, shadow_offset(ray.origin, position));
             zt.is_finite().then_some(Sample { x: xy.x, y: xy.y, zt, id: id as u32, tri })
         })
         .collect()

@@ -53,8 +53,8 @@
 use super::{frame::projector_data, GpuContext, GpuError, GpuFrame, COMMON_WGSL};
 use crate::{
     afsm::{
-        self, blockers::Blocker, samples::Sample, AfsmOptions, AliasFreeShadowMap, LIGHT_IMAGE_RES,
-        SHADOW_OFFSET, STAGE_RASTERIZATION, STAGE_TRANSFORMATION,
+        self, blockers::Blocker, samples::Sample, AfsmOptions, AliasFreeShadowMap, SHADOW_OFFSET,
+        STAGE_RASTERIZATION, STAGE_TRANSFORMATION,
     },
     frame::Frame,
     method::{MethodError, ShadowMethod, Visibility},
@@ -109,16 +109,15 @@ pub struct AfsmGpuOutput {
 
 /// The kernels of `afsm` for `frame` with its G-buffer and geometry in `gpu`: the light per
 /// pixel; adds `sampling_points_tested` to `rec`'s counters and a note with the grid and the
-/// undecided pairs. `frame` supplies the light, the scene's size (for the shadow offset) and
-/// the triangles for the CPU's resolution of undecided pairs.
+/// undecided pairs. `frame` supplies the light, the camera (for the samples' shadow offsets)
+/// and the triangles for the CPU's resolution of undecided pairs.
 pub fn shade(
     ctx: &GpuContext,
     gpu: &GpuFrame,
     frame: &Frame<'_>,
     rec: &mut Recorder,
 ) -> Result<AfsmGpuOutput, MethodError> {
-    let light = frame.light_projector(LIGHT_IMAGE_RES);
-    let offset = SHADOW_OFFSET * afsm::scene_diagonal(&frame.geometry);
+    let light = afsm::light_projector(frame);
     let pixels = gpu.pixels();
     let grid = grid_size(pixels);
     let triangles = gpu.triangles as usize;
@@ -132,13 +131,14 @@ pub fn shade(
     let fparams = ctx.upload(
         "afsm fparams",
         &[
-            offset,
+            SHADOW_OFFSET,
             f64::from(grid) / light.width,
             f64::from(grid) / light.height,
             ORIENT2D_FILTER_BOUND,
         ],
     );
-    let uparams = ctx.upload("afsm uparams", &[pixels as u32, grid, gpu.triangles]);
+    let uparams = ctx.upload("afsm uparams", &[pixels as u32, grid, gpu.triangles, frame.width()]);
+    let camera_buf = ctx.upload("afsm camera", &projector_data(&frame.camera));
     let scan = super::scan::Scan::new(ctx);
 
     // Transformation of samples.
@@ -151,7 +151,16 @@ pub fn shade(
     let sample_tri = ctx.zeroed::<u32>("afsm sample triangle", pixels);
     let bind = ctx.bind(
         &transform,
-        &[&light_buf, &fparams, &uparams, &gpu.triangle, &gpu.position, &sample_f, &sample_tri],
+        &[
+            &light_buf,
+            &fparams,
+            &uparams,
+            &gpu.triangle,
+            &gpu.position,
+            &sample_f,
+            &sample_tri,
+            &camera_buf,
+        ],
     );
     ctx.stage(rec, STAGE_TRANSFORMATION, |e| {
         GpuContext::dispatch(e, &transform, &bind, GpuContext::groups_1d(pixels, WG));

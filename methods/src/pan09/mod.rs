@@ -51,8 +51,8 @@
 //!   (resolution and bias options), so they equal `sm` with those options.
 //! - **The shadow predicate is the ray tracer's** (as `afsm`'s, see [`crate::afsm`]): a facet
 //!   point is shadowed by a caster triangle other than the pixel's own G-buffer triangle when
-//!   the light's ray from it crosses the triangle more than [`crate::afsm::SHADOW_OFFSET`]
-//!   times the scene diagonal away ([`visibility`]). Hence at rate 1 a silhouette pixel
+//!   the light's ray from it crosses the triangle more than the triangle's local shadow
+//!   offset away ([`visibility::occluder_offset`]). Hence at rate 1 a silhouette pixel
 //!   (whose only sub-sample is the G-buffer's point) equals `afsm`, and on a planar receiver,
 //!   where the facet *is* the surface, exact mode equals `raytrace` at the same rate and
 //!   pattern, sub-sample for sub-sample, up to samples within `f64` rounding of a blocker's
@@ -136,7 +136,6 @@ pub use crate::frame::STAGE_LIGHT_DEPTH_MAP;
 pub use crate::sm::STAGE_DEPTH_TEST;
 
 use crate::{
-    afsm::{scene_diagonal, SHADOW_OFFSET},
     depth_test::{DepthTester, MapOptions},
     frame::Frame,
     method::{MethodError, ShadowMethod, Visibility},
@@ -490,7 +489,7 @@ impl Pan09 {
         let scene = visibility::Scene {
             geometry: &frame.geometry,
             light: LightModel::of(&light),
-            offset: SHADOW_OFFSET * scene_diagonal(&frame.geometry),
+            eye: frame.camera.origin,
             camera: &camera,
         };
         let fs = &facets.facets;

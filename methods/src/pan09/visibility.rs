@@ -16,8 +16,10 @@
 //!
 //! **Shadow predicate.** Equivalent to `afsm`'s and the ray tracer's (see
 //! [`crate::afsm`]): the pixel's own G-buffer triangle is excluded, and a triangle shadows a
-//! point only when it crosses the point's light ray more than [`crate::afsm::SHADOW_OFFSET`]
-//! times the scene diagonal before the point, measured along the ray for directional lights
+//! point only when it crosses the point's light ray more than its [`occluder_offset`] before
+//! the point ([`crate::afsm::SHADOW_OFFSET`] times the magnitude of the triangle's and the
+//! camera's coordinates, the local scale of `afsm`'s offset: never the scene's size, so a
+//! far-away object does not remove shadows), measured along the ray for directional lights
 //! (exactly the ray tracer's rule) and perpendicular to the triangle's plane for spot lights
 //! (the distance along the ray is not linear in the point; the two differ only for casters
 //! within the offset of the receiver, i.e. in contact).
@@ -127,6 +129,17 @@ impl Occluder {
     }
 }
 
+/// The shadow offset of the triangle `corners` seen from `eye`: [`crate::afsm::SHADOW_OFFSET`]
+/// times the largest coordinate magnitude of `eye` and the corners plus the largest distance
+/// (max norm) from `eye` to a corner, the scale of the rounding of the points it is compared
+/// with (`afsm::shadow_offset` at the triangle instead of the sample).
+pub fn occluder_offset(eye: DVec3, corners: [DVec3; 3]) -> f64 {
+    let magnitude =
+        corners.iter().map(|c| c.abs().max_element()).fold(eye.abs().max_element(), f64::max)
+            + corners.iter().map(|&c| (c - eye).abs().max_element()).fold(0.0, f64::max);
+    crate::afsm::SHADOW_OFFSET * magnitude
+}
+
 /// What the evaluation needs of the frame.
 #[derive(Debug, Clone, Copy)]
 pub struct Scene<'a> {
@@ -134,8 +147,9 @@ pub struct Scene<'a> {
     pub geometry: &'a Geometry,
     /// The light.
     pub light: LightModel,
-    /// Shadow offset in world units.
-    pub offset: f64,
+    /// The camera's position (the projector's origin), the point the offsets are measured
+    /// from.
+    pub eye: DVec3,
     /// The camera's rays.
     pub camera: &'a CameraBasis,
 }
@@ -173,8 +187,8 @@ pub fn occlusion_masks<M: Mask, C: Coverage<M>>(
             |(mut evaluations, mut candidates), pair| {
                 let t = pair.triangle;
                 let corners = scene.geometry.corners(t as usize);
-                let Some(occluder) =
-                    Occluder::new(corners, scene.light, scene.offset, scene.camera)
+                let offset = occluder_offset(scene.eye, corners);
+                let Some(occluder) = Occluder::new(corners, scene.light, offset, scene.camera)
                 else {
                     return (evaluations, candidates);
                 };

@@ -3,9 +3,9 @@
 // shadow threshold depth. Appended to common.wgsl.
 
 @group(0) @binding(0) var<storage, read> light_data: array<f64, 18>;
-// [shadow offset in world units, ...]
+// [afsm::SHADOW_OFFSET, ...]
 @group(0) @binding(1) var<storage, read> fparams: array<f64>;
-// [pixels, ...]
+// [pixels, grid, triangles, image width]
 @group(0) @binding(2) var<storage, read> uparams: array<u32>;
 @group(0) @binding(3) var<storage, read> g_triangle: array<u32>;
 @group(0) @binding(4) var<storage, read> g_position: array<f64>;
@@ -13,6 +13,17 @@
 @group(0) @binding(5) var<storage, read_write> sample_f: array<f64>;
 // Per pixel: the sample's triangle, NO_TRIANGLE where the pixel has no sample.
 @group(0) @binding(6) var<storage, read_write> sample_tri: array<u32>;
+@group(0) @binding(7) var<storage, read> camera_data: array<f64, 18>;
+
+fn max_element(v: vec3<f64>) -> f64 {
+    return max(max(v.x, v.y), v.z);
+}
+
+// afsm::shadow_offset: the offset of the surface point `p` hit by a camera ray from `origin`.
+fn shadow_offset(origin: vec3<f64>, p: vec3<f64>) -> f64 {
+    let magnitude = max_element(max(abs(origin), abs(p))) + max_element(abs(p - origin));
+    return fparams[0] * magnitude;
+}
 
 // samples::threshold_depth.
 fn threshold_depth(p: Proj, x: f64, y: f64, z: f64, offset: f64) -> f64 {
@@ -41,7 +52,10 @@ fn transform(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
         if r.w == 0.0lf {
             tri = NO_TRIANGLE;
         } else {
-            let zt = threshold_depth(p, r.x, r.y, r.z, fparams[0]);
+            let w = uparams[3];
+            let centre = vec2<f64>(f64(k % w) + 0.5lf, f64(k / w) + 0.5lf);
+            let origin = proj_ray(proj_load(camera_data), centre).origin;
+            let zt = threshold_depth(p, r.x, r.y, r.z, shadow_offset(origin, position));
             r.z = zt;
             if !is_finite64(zt) {
                 tri = NO_TRIANGLE;

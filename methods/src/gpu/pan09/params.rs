@@ -1,11 +1,12 @@
 //! The run's constants as the kernels read them (`params.wgsl`): `P` (`f64`) holds the light
-//! and camera projectors, the depth tolerance, the shadow offset, the light and eye models,
+//! and camera projectors, the depth tolerance, the shadow offset ratio (`afsm::SHADOW_OFFSET`,
+//! scaled per triangle by the kernels), the light and eye models,
 //! the camera's screen basis and the light's planes seen by it (computed on the CPU by the
 //! CPU's own code, per frame, as the projectors are), then the pattern's offsets; `U` (`u32`)
 //! the sizes, kinds and masks.
 
 use crate::{
-    afsm::{scene_diagonal, SHADOW_OFFSET},
+    afsm::SHADOW_OFFSET,
     depth_test::DepthTester,
     frame::Frame,
     gpu::frame::projector_data,
@@ -90,7 +91,7 @@ pub(super) fn params(
         tester.constant,
         tester.slope_bias,
         tester.max_slope,
-        SHADOW_OFFSET * scene_diagonal(&frame.geometry),
+        SHADOW_OFFSET,
         f64::INFINITY,
     ]);
     p.extend_from_slice(&light_v.to_array());

@@ -7,6 +7,7 @@ struct Setup {
     constant: f64,
     slope_bias: f64,
     max_slope: f64,
+    // afsm::SHADOW_OFFSET; visibility::occluder_offset scales it per triangle.
     offset: f64,
     inf: f64,
     lm: LightModel,

@@ -19,6 +19,22 @@
 @group(0) @binding(11) var<storage, read_write> candidates: array<u32>;
 @group(0) @binding(12) var<storage, read_write> counters: array<atomic<u32>>;
 
+fn max_element(v: vec3<f64>) -> f64 {
+    return max(max(v.x, v.y), v.z);
+}
+
+// visibility::occluder_offset: `ratio` (afsm::SHADOW_OFFSET) times the magnitude of the
+// triangle's corners seen from `eye`.
+fn occluder_offset(eye: vec3<f64>, c: array<vec3<f64>, 3>, ratio: f64) -> f64 {
+    var m = max_element(abs(eye));
+    var d = 0.0lf;
+    for (var i = 0u; i < 3u; i++) {
+        m = max(m, max_element(abs(c[i])));
+        d = max(d, max_element(abs(c[i] - eye)));
+    }
+    return ratio * (m + d);
+}
+
 fn corner(t: u32, i: u32) -> vec3<f64> {
     let o = 9u * t + 3u * i;
     return vec3<f64>(corners[o], corners[o + 1u], corners[o + 2u]);
@@ -33,7 +49,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     let texel = tt[2u * i];
     let t = tt[2u * i + 1u];
     let c = array<vec3<f64>, 3>(corner(t, 0u), corner(t, 1u), corner(t, 2u));
-    let o = occluder(c, s.lm, s.offset, s.cam);
+    let o = occluder(c, s.lm, occluder_offset(s.camera.origin, c, s.offset), s.cam);
     if !o.ok { return; }
     var evaluations = 0u;
     for (var j = toff[texel]; j < toff[texel + 1u]; j++) {
