@@ -21,6 +21,30 @@
 //! shadow acne, larger ones move shadows away from their casters ("Peter Panning"), more so the
 //! wider the filter, as the papers' users know.
 //!
+//! # Grazing light: the valid range and its warning
+//!
+//! The slope ratio of a plane whose normal makes the angle `θ` with the light's ray is at most
+//! `tan θ` per axis, so the slope term is the part of the rule that adapts to the
+//! light-receiver angle: it grows with `tan θ` as the plane turns towards the light's horizon.
+//! The bound `max_slope` only exists so that surfaces parallel to the light (ratio infinite)
+//! keep a finite tolerance. Its default, [`DEFAULT_MAX_SLOPE`] = 1000, puts the edge of the
+//! valid range at `atan(1000)` = 89.94°: with default options a lit ground stays lit for every
+//! light up to 89.9° from its normal. (The earlier default, 10, ended the range at 84.3°; the
+//! ground then showed acne over its whole lit part, mean error 0.06 at 85° and 0.41 at 89°.)
+//! The cost of the larger bound is confined to the surfaces it newly covers: a plane at
+//! `θ` gets `tan θ` times the depth change of one texel step, which is the depth span of the
+//! footprint its own texel already has on it, so shadows move by at most that footprint.
+//!
+//! Beyond the range acne is possible, so every method that uses the rule checks the frame's
+//! visible surface points ([`DepthTester::range_warning`]): when more than
+//! [`WARNING_SHARE`] of them lie where `slope_bias * min(ratio, max_slope) < ratio` on some
+//! axis (the tolerance falls short of the plane's own depth change), the run records a
+//! warning naming the largest light-receiver angle met, the flags `--slope-bias` and
+//! `--max-slope` with their values, the valid range, and the `--max-slope` that would cover
+//! those points. A few pixels on triangles that happen to lie almost parallel to the light
+//! (random triangles, tessellated spheres at the terminator) stay below the share and do not
+//! warn; a ground under a grazing light, or a `--slope-bias` below 1 on sloped surfaces, does.
+//!
 //! # Quantized depth
 //!
 //! Brabec and Seidel store depth as colour through a linear ramp texture (section 2), so both
@@ -46,15 +70,24 @@ pub struct MapOptions {
     /// Slope-scaled bias in units of the receiver's depth change over the method's reach
     /// (see the module doc). Default 1.0; values >= 1 keep a lit plane free of acne.
     pub slope_bias: f64,
-    /// Upper bound of the slope ratio `|n·axis| / |n·ray|` (about 84° from the light). Default 10.
+    /// Upper bound of the slope ratio `|n·axis| / |n·ray|`. Default [`DEFAULT_MAX_SLOPE`]
+    /// (1000: planes up to 89.94° from the light's ray).
     pub max_slope: f64,
 }
 
 impl Default for MapOptions {
     fn default() -> Self {
-        Self { map_res: 1024, constant_bias: 1e-5, slope_bias: 1.0, max_slope: 10.0 }
+        Self { map_res: 1024, constant_bias: 1e-5, slope_bias: 1.0, max_slope: DEFAULT_MAX_SLOPE }
     }
 }
+
+/// Default bound of the slope ratio: `tan` of 89.94°, so that the valid range of the bias rule
+/// reaches a light 89.9° from a plane's normal (see the module doc).
+pub const DEFAULT_MAX_SLOPE: f64 = 1000.0;
+
+/// Share of a frame's visible surface points beyond the bias rule's valid range above which a
+/// run records a warning.
+pub const WARNING_SHARE: f64 = 0.01;
 
 impl MapOptions {
     /// Checks the options; errors name the command-line flag.
@@ -165,6 +198,75 @@ impl DepthTester {
     pub fn tolerance(&self, r: &Receiver, reach: DVec2) -> f64 {
         self.constant + self.slope_bias * reach.dot(r.slope)
     }
+
+    /// Where the frame's visible surface points stand against the rule's valid range.
+    pub fn range(&self, frame: &Frame<'_>) -> BiasRange {
+        let g = &frame.gbuffer;
+        let per_pixel = |k: usize| -> Option<(f64, f64)> {
+            if !g.covered(k) {
+                return None;
+            }
+            let n = g.normal[k];
+            let (xy, _) = self.projector.project(g.position[k])?;
+            let dir = scenes::direction::unit(self.projector.ray(xy).direction)?;
+            let n_dir = n.dot(dir).abs();
+            let ratio = (n.dot(self.projector.right).abs() / n_dir)
+                .max(n.dot(self.projector.up).abs() / n_dir);
+            let ratio = if ratio.is_nan() { 0.0 } else { ratio };
+            let angle = n_dir.clamp(0.0, 1.0).acos().to_degrees();
+            Some((ratio, angle))
+        };
+        let (covered, beyond, max_angle, max_ratio) = (0..g.triangle.len())
+            .into_par_iter()
+            .filter_map(per_pixel)
+            .map(|(ratio, angle)| {
+                let ok = self.slope_bias * ratio.min(self.max_slope) >= ratio;
+                if ok {
+                    (1usize, 0usize, 0.0f64, 0.0f64)
+                } else {
+                    (1, 1, angle, ratio)
+                }
+            })
+            .reduce(|| (0, 0, 0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1, a.2.max(b.2), a.3.max(b.3)));
+        BiasRange { covered, beyond, max_angle_deg: max_angle, max_ratio }
+    }
+
+    /// The warning a run of `method` records when more than [`WARNING_SHARE`] of the frame's
+    /// visible surface points lie beyond the rule's valid range (see the module doc).
+    pub fn range_warning(&self, method: &str, frame: &Frame<'_>) -> Option<String> {
+        let r = self.range(frame);
+        if r.beyond == 0 || (r.beyond as f64) <= WARNING_SHARE * r.covered as f64 {
+            return None;
+        }
+        let bound_deg = self.max_slope.atan().to_degrees();
+        let fix = if self.slope_bias < 1.0 {
+            format!("--slope-bias 1 and --max-slope {:.4} would cover them", r.max_ratio)
+        } else if r.max_ratio.is_finite() {
+            format!("--max-slope {:.4} would cover them", r.max_ratio)
+        } else {
+            "surfaces parallel to the light cannot be covered".to_owned()
+        };
+        Some(format!(
+            "{method}: {} of {} visible surface pixels see the light up to {:.2}° from their \
+             normal, beyond the depth bias rule's valid range (--slope-bias >= 1 and a slope \
+             ratio up to --max-slope, {:.2}° from the normal; given --slope-bias {}, \
+             --max-slope {}): they may show shadow acne; {fix}",
+            r.beyond, r.covered, r.max_angle_deg, bound_deg, self.slope_bias, self.max_slope
+        ))
+    }
+}
+
+/// The visible surface points of a frame against the bias rule's valid range.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BiasRange {
+    /// Pixels whose surface point projects into the light's view.
+    pub covered: usize,
+    /// Those whose tolerance falls short of their plane's depth change on some axis.
+    pub beyond: usize,
+    /// The largest angle between the light's ray and a surface normal among them, degrees.
+    pub max_angle_deg: f64,
+    /// The largest slope ratio among them (infinite for surfaces parallel to the light).
+    pub max_ratio: f64,
 }
 
 /// What a filter computed for one pixel: its lit fraction and the work it did.

@@ -425,6 +425,7 @@ impl ShadowMethod for GpuPcf {
         };
         let projector = frame.light_projector(o.map_res);
         let tester = DepthTester::new(&o, projector, frame.light_depth_range(&projector));
+        rec.warnings.extend(tester.range_warning(self.name(), frame));
         let (lit, counters) = match *self {
             GpuPcf::Reeves { options } => {
                 let map = plain_map(rec)?;

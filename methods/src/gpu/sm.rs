@@ -178,6 +178,7 @@ impl ShadowMethod for GpuShadowMap {
         )?;
         let tester =
             DepthTester::new(&self.options, map.projector, frame.light_depth_range(&map.projector));
+        rec.warnings.extend(tester.range_warning(self.name(), frame));
         let (lit, counters) = depth_test(ctx, &gframe, &map, &tester, rec)?;
         rec.counters.merge(&counters);
         Ok(Visibility { width: frame.width(), height: frame.height(), lit, transmittance: None })

@@ -420,6 +420,7 @@ impl Pan09 {
         let map = frame.light_depth_map(res, rec);
         let light = map.projector;
         let tester = DepthTester::new(&self.options.map, light, frame.light_depth_range(&light));
+        rec.warnings.extend(tester.range_warning("pan09", frame));
         let geometry = &frame.geometry;
         let adjacency = rec
             .stages

@@ -168,6 +168,7 @@ impl ShadowMethod for GemsPcf {
         let map = frame.light_depth_map(self.options.map_res, rec);
         let tester =
             DepthTester::new(&self.options, map.projector, frame.light_depth_range(&map.projector));
+        rec.warnings.extend(tester.range_warning(self.name(), frame));
         let per_pixel = match self.samples {
             GemsSamples::Sixteen => 16,
             GemsSamples::FourDithered => 4,

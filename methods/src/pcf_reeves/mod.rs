@@ -198,6 +198,7 @@ impl ShadowMethod for ReevesPcf {
         let map = frame.light_depth_map(o.map.map_res, rec);
         let tester =
             DepthTester::new(&o.map, map.projector, frame.light_depth_range(&map.projector));
+        rec.warnings.extend(tester.range_warning(self.name(), frame));
         let g = &frame.gbuffer;
         let (lit, counters) = rec.stages.time(STAGE_FILTERING, || {
             filter_pixels(frame, &tester, |pixel, k, r| {

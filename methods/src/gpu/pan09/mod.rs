@@ -268,6 +268,12 @@ impl GpuPan09 {
         let k = self.kernels.get_or_init(|| Kernels::new(ctx));
         let words = params::words(self.options.rate);
         let (p, u) = params::params(frame, &map.projector, &self.options, &self.pattern);
+        let tester = crate::depth_test::DepthTester::new(
+            &self.options.map,
+            map.projector,
+            frame.light_depth_range(&map.projector),
+        );
+        rec.warnings.extend(tester.range_warning("pan09", frame));
         let run = Run {
             ctx,
             frame: gframe,
