@@ -1,4 +1,9 @@
 //! Writers for a render's three files: `visibility.exr`, `shadow.png`, `run.json`.
+//!
+//! The same run writes the same bytes: the EXR's blocks are compressed in parallel but written
+//! in increasing order ([`ENCODING`]: without a line order the `exr` crate writes them as they
+//! finish), the PNG encoder is sequential, and the JSON's fields come in a fixed order; only
+//! the measured fields of `run.json` (the stage times and their total) differ between runs.
 
 use glam::DVec3;
 use image::RgbImage;
@@ -23,6 +28,13 @@ fn write_err(path: &Path, e: impl std::fmt::Display) -> OutputError {
     OutputError::Write { path: path.to_owned(), message: e.to_string() }
 }
 
+/// The EXR encoding: the `exr` crate's default (RLE, 64 x 64 tiles) with the blocks in
+/// increasing order, so that the file's bytes do not depend on which block finished first.
+const ENCODING: exr::image::Encoding = exr::image::Encoding {
+    line_order: exr::meta::attribute::LineOrder::Increasing,
+    ..exr::image::Encoding::FAST_LOSSLESS
+};
+
 /// Writes the lit fraction as a 32-bit float EXR: one channel `Y`, or `R`, `G`, `B` when the
 /// visibility carries RGB transmittance.
 pub fn write_visibility_exr(path: &Path, v: &Visibility) -> Result<(), OutputError> {
@@ -33,14 +45,14 @@ pub fn write_visibility_exr(path: &Path, v: &Visibility) -> Result<(), OutputErr
             let pixels = SpecificChannels::build()
                 .with_channel("Y")
                 .with_pixel_fn(|p: Vec2<usize>| (v.lit[p.y() * w + p.x()],));
-            Image::from_channels((w, h), pixels).write().to_file(path)
+            Image::from_encoded_channels((w, h), ENCODING, pixels).write().to_file(path)
         }
         Some(rgb) => {
             let pixels = SpecificChannels::rgb(|p: Vec2<usize>| {
                 let [r, g, b] = rgb[p.y() * w + p.x()];
                 (r, g, b)
             });
-            Image::from_channels((w, h), pixels).write().to_file(path)
+            Image::from_encoded_channels((w, h), ENCODING, pixels).write().to_file(path)
         }
     };
     result.map_err(|e| write_err(path, e))
@@ -92,4 +104,31 @@ pub fn write_shadow_png(path: &Path, frame: &Frame<'_>, v: &Visibility) -> Resul
 pub fn write_run_json(path: &Path, record: &RunRecord) -> Result<(), OutputError> {
     let text = serde_json::to_string_pretty(record).map_err(|e| write_err(path, e))?;
     std::fs::write(path, text + "\n").map_err(|e| write_err(path, e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The EXR is written with its blocks in increasing order, so that writing the same
+    /// buffer twice gives the same bytes however the parallel compression finishes.
+    #[test]
+    fn the_same_visibility_writes_the_same_exr_bytes() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let (width, height) = (1000u32, 700u32);
+        // Varied content, so that blocks take different times to compress.
+        let lit: Vec<f32> = (0..width * height)
+            .map(|k| if (k.wrapping_mul(2_654_435_761) >> 7) % 5 < 2 { 1.0 } else { 0.25 })
+            .collect();
+        let v = Visibility { width, height, lit, transmittance: None };
+        let mut files = Vec::new();
+        for k in 0..3 {
+            let path = dir.path().join(format!("v{k}.exr"));
+            write_visibility_exr(&path, &v).expect("writes");
+            let meta = exr::meta::MetaData::read_from_file(&path, false).expect("reads back");
+            assert_eq!(meta.headers[0].line_order, exr::meta::attribute::LineOrder::Increasing);
+            files.push(std::fs::read(&path).expect("bytes"));
+        }
+        assert!(files.windows(2).all(|w| w[0] == w[1]), "the files differ");
+    }
 }
