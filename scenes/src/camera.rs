@@ -1,6 +1,9 @@
-//! Cameras: perspective or orthographic, placed with a look-at.
+//! Cameras: perspective or orthographic, placed with a look-at. The view direction `target -
+//! eye` and the up hint are normalised robustly ([`crate::direction::unit`]), so that any finite
+//! non-zero magnitude is valid.
 
-use crate::projection::{look_basis, ProjectionKind, Projector};
+use crate::direction::unit;
+use crate::projection::{direction_between, look_basis, ProjectionKind, Projector};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
@@ -74,10 +77,10 @@ impl Camera {
                 return Err((key, "must be finite".into()));
             }
         }
-        if (*target - *eye).length_squared() == 0.0 {
+        if direction_between(*eye, *target).is_none() {
             return Err(("target", "must differ from eye".into()));
         }
-        if up.length_squared() == 0.0 {
+        if unit(*up).is_none() {
             return Err(("up", "must not be zero".into()));
         }
         Ok(())
@@ -87,6 +90,13 @@ impl Camera {
     pub fn eye(&self) -> DVec3 {
         match self {
             Camera::Perspective { eye, .. } | Camera::Orthographic { eye, .. } => *eye,
+        }
+    }
+
+    /// Point looked at.
+    pub fn target(&self) -> DVec3 {
+        match self {
+            Camera::Perspective { target, .. } | Camera::Orthographic { target, .. } => *target,
         }
     }
 
@@ -109,7 +119,42 @@ impl Camera {
                 (eye, target, up, kind, f64::NEG_INFINITY)
             }
         };
-        let (right, up, forward) = look_basis(target - eye, up);
+        // A camera that validates has a direction; one that does not gets a basis of NaN.
+        let view = direction_between(eye, target).unwrap_or(DVec3::NAN);
+        let (right, up, forward) = look_basis(view, up);
         Projector { origin: eye, right, up, forward, kind, near, width: w, height: h }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn camera(eye: DVec3, target: DVec3, up: DVec3) -> Camera {
+        Camera::Perspective { eye, target, up, fov_y_deg: 45.0, near: 0.01 }
+    }
+
+    #[test]
+    fn any_finite_non_zero_view_and_up_are_valid() {
+        let want = camera(DVec3::new(0.0, 6.0, 8.0), DVec3::ZERO, DVec3::Y).projector(64, 48);
+        for (eye, up) in [
+            (DVec3::new(0.0, 6.0, 8.0) * 1e-170, DVec3::Y * 1e-170),
+            (DVec3::new(0.0, 6.0, 8.0) * 1e154, DVec3::Y * 1e300),
+        ] {
+            let c = camera(eye, DVec3::ZERO, up);
+            assert_eq!(c.validate(), Ok(()), "{eye} {up}");
+            let p = c.projector(64, 48);
+            for (got, want) in [(p.right, want.right), (p.up, want.up), (p.forward, want.forward)] {
+                assert!((got - want).length() < 1e-15, "{eye}: {got} vs {want}");
+            }
+        }
+        // Points so far apart that their difference overflows still have a direction.
+        let far = camera(DVec3::new(0.0, f64::MAX, 0.0), DVec3::new(0.0, -f64::MAX, 0.0), DVec3::Z);
+        assert_eq!(far.validate(), Ok(()));
+        assert_eq!(far.projector(8, 8).forward, DVec3::NEG_Y);
+        let same = camera(DVec3::ONE, DVec3::ONE, DVec3::Y).validate();
+        assert_eq!(same.map_err(|(key, _)| key), Err("target"));
+        let flat = camera(DVec3::ONE, DVec3::ZERO, DVec3::ZERO).validate();
+        assert_eq!(flat.map_err(|(key, _)| key), Err("up"));
     }
 }

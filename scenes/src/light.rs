@@ -1,7 +1,13 @@
 //! Lights: directional (orthographic light frustum fitted to the scene's bounds) and spot
 //! (perspective frustum).
+//!
+//! Any finite non-zero direction is valid, however large or small: directions are normalised
+//! with [`crate::direction::unit`] (never overflowing or underflowing), and a resolved scene
+//! carries a directional light's direction as a unit vector ([`Light::normalized`]), so that no
+//! consumer normalises a user's vector again.
 
-use crate::projection::{look_basis, ProjectionKind, Projector};
+use crate::direction::unit;
+use crate::projection::{direction_between, look_basis, ProjectionKind, Projector};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
@@ -37,7 +43,7 @@ impl Light {
     pub fn validate(&self) -> Result<(), (&'static str, String)> {
         match self {
             Light::Directional { direction } => {
-                if !direction.is_finite() || direction.length_squared() == 0.0 {
+                if unit(*direction).is_none() {
                     return Err(("direction", "must be finite and non-zero".into()));
                 }
             }
@@ -45,7 +51,7 @@ impl Light {
                 if !position.is_finite() {
                     return Err(("position", "must be finite".into()));
                 }
-                if !target.is_finite() || (*target - *position).length_squared() == 0.0 {
+                if direction_between(*position, *target).is_none() {
                     return Err(("target", "must be finite and differ from position".into()));
                 }
                 if !(*fov_deg > 0.0 && *fov_deg <= 170.0) {
@@ -56,14 +62,27 @@ impl Light {
         Ok(())
     }
 
-    /// Unit direction from `p` towards the light.
-    pub fn direction_to_light(&self, p: DVec3) -> DVec3 {
-        match self {
-            Light::Directional { direction } => -direction.normalize(),
-            Light::Spot { position, target, .. } => {
-                (*position - p).normalize_or((*position - *target).normalize())
+    /// The light as a resolved scene carries it: a directional light's `direction` as a unit
+    /// vector; a spot light, or a direction that does not validate, unchanged.
+    pub fn normalized(&self) -> Self {
+        match *self {
+            Light::Directional { direction } => {
+                Light::Directional { direction: unit(direction).unwrap_or(direction) }
             }
+            Light::Spot { .. } => self.clone(),
         }
+    }
+
+    /// Unit direction from `p` towards the light (for a spot light at `p`, its axis reversed);
+    /// NaN for a light that does not validate.
+    pub fn direction_to_light(&self, p: DVec3) -> DVec3 {
+        let towards = match *self {
+            Light::Directional { direction } => unit(-direction),
+            Light::Spot { position, target, .. } => {
+                direction_between(p, position).or_else(|| direction_between(target, position))
+            }
+        };
+        towards.unwrap_or(DVec3::NAN)
     }
 
     /// The light's projector onto a `res x res` map, fitted to the axis-aligned box
@@ -112,7 +131,8 @@ impl Light {
                 }
             }
             Light::Spot { position, target, fov_deg } => {
-                let (right, up, forward) = look_basis(target - position, DVec3::Y);
+                let axis = direction_between(position, target).unwrap_or(DVec3::NAN);
+                let (right, up, forward) = look_basis(axis, DVec3::Y);
                 let nearest =
                     corners.map(|c| (c - position).dot(forward)).fold(f64::INFINITY, f64::min);
                 let near = nearest.max(1e-4 * pad / FIT_MARGIN);
@@ -151,6 +171,38 @@ mod tests {
             assert!(depth > 0.0);
             assert!(xy.x > 0.0 && xy.x < 512.0 && xy.y > 0.0 && xy.y < 512.0, "{xy}");
         }
+    }
+
+    #[test]
+    fn any_finite_non_zero_direction_is_valid_and_normalized() {
+        let d = DVec3::new(-0.5, -1.0, -0.25);
+        let bounds = (DVec3::new(-5.0, 0.0, -5.0), DVec3::new(5.0, 3.0, 5.0));
+        let want = Light::Directional { direction: d }.projector(bounds, 64);
+        for scale in [1e-170, 1e-300, 1.0, 1e154, 1e300] {
+            let light = Light::Directional { direction: d * scale };
+            assert_eq!(light.validate(), Ok(()), "scale {scale}");
+            let Light::Directional { direction } = light.normalized() else { unreachable!() };
+            assert!((direction - d.normalize()).length() < 1e-15, "scale {scale}: {direction}");
+            let towards = light.direction_to_light(DVec3::ZERO);
+            assert!((towards + d.normalize()).length() < 1e-15, "scale {scale}: {towards}");
+            let p = light.projector(bounds, 64);
+            assert!((p.forward - want.forward).length() < 1e-15, "scale {scale}");
+            assert!((p.origin - want.origin).length() < 1e-12, "scale {scale}");
+        }
+        for bad in [DVec3::ZERO, DVec3::new(f64::NAN, -1.0, 0.0), DVec3::NEG_INFINITY] {
+            let light = Light::Directional { direction: bad };
+            assert!(light.validate().is_err(), "{bad}");
+            let Light::Directional { direction } = light.normalized() else { unreachable!() };
+            assert_eq!(direction.to_array().map(f64::to_bits), bad.to_array().map(f64::to_bits));
+        }
+        // A spot whose position and target are so far apart that their difference overflows.
+        let far = DVec3::new(0.0, f64::MAX, 0.0);
+        let spot = Light::Spot { position: far, target: -far, fov_deg: 60.0 };
+        assert_eq!(spot.validate(), Ok(()));
+        assert_eq!(spot.normalized(), spot);
+        assert_eq!(spot.direction_to_light(-far), DVec3::Y);
+        let spot = Light::Spot { position: DVec3::ONE, target: DVec3::ONE, fov_deg: 60.0 };
+        assert_eq!(spot.validate().map_err(|(key, _)| key), Err("target"));
     }
 
     #[test]

@@ -10,6 +10,7 @@
 //! Everything is `f64`: the projector is the one place where world and image meet, and the
 //! exact reference and the rasterizer both rely on it agreeing with itself.
 
+use crate::direction::unit;
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
@@ -79,11 +80,26 @@ impl Ray {
     }
 }
 
+/// The unit vector from point `from` towards point `to`, or `None` when they coincide or one is
+/// not finite. The difference of two finite points may exceed `f64::MAX`; it is then taken
+/// between the halved points (exact at such magnitudes), so that it never overflows.
+pub fn direction_between(from: DVec3, to: DVec3) -> Option<DVec3> {
+    if !(from.is_finite() && to.is_finite()) {
+        return None;
+    }
+    let d = to - from;
+    unit(if d.is_finite() { d } else { 0.5 * to - 0.5 * from })
+}
+
 /// An orthonormal basis `(right, up, forward)` looking along `forward`, with `up` as close to
-/// `up_hint` as possible. Falls back to another hint when the two are parallel.
+/// `up_hint` as possible. Falls back to another hint when the two are parallel or the hint is
+/// zero. Both vectors are normalised with [`unit`], so that any finite non-zero magnitude
+/// works; a `forward` without a direction (zero or not finite) gives a basis of NaN.
 pub fn look_basis(forward: DVec3, up_hint: DVec3) -> (DVec3, DVec3, DVec3) {
-    let f = forward.normalize();
-    let mut r = f.cross(up_hint);
+    let Some(f) = unit(forward) else {
+        return (DVec3::NAN, DVec3::NAN, DVec3::NAN);
+    };
+    let mut r = f.cross(unit(up_hint).unwrap_or(DVec3::ZERO));
     if r.length_squared() < 1e-20 {
         let alt = if f.x.abs() < 0.9 { DVec3::X } else { DVec3::Z };
         r = f.cross(alt);
@@ -204,6 +220,25 @@ mod tests {
         let p = persp();
         assert!(p.project(p.origin - p.forward).is_none());
         assert!(p.project(p.origin).is_none());
+    }
+
+    #[test]
+    fn basis_and_directions_take_any_finite_non_zero_magnitude() {
+        // Components exact at every scale, subnormal (2^-1070) included.
+        let forward = DVec3::new(0.5, -1.0, -2.0);
+        let want = look_basis(forward, DVec3::Y);
+        for scale in [f64::MIN_POSITIVE * 2f64.powi(-48), 1e-170, 1e154, 1e300, f64::MAX / 2.0] {
+            let (r, u, f) = look_basis(forward * scale, DVec3::Y * scale);
+            for (got, want) in [(r, want.0), (u, want.1), (f, want.2)] {
+                assert!((got - want).length() < 1e-12, "scale {scale}: {got} vs {want}");
+            }
+        }
+        let far = DVec3::new(f64::MAX, 0.0, 0.0);
+        assert_eq!(direction_between(-far, far), Some(DVec3::X));
+        assert_eq!(direction_between(DVec3::ZERO, DVec3::splat(1e-320)), unit(DVec3::ONE));
+        assert_eq!(direction_between(DVec3::ONE, DVec3::ONE), None);
+        assert_eq!(direction_between(DVec3::ONE, DVec3::INFINITY), None);
+        assert!(look_basis(DVec3::ZERO, DVec3::Y).0.is_nan());
     }
 
     #[test]

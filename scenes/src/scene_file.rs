@@ -25,7 +25,14 @@
 //! Unknown keys and bad values are errors naming the file and the key. A transform applies,
 //! in order: `scale`, `rotate_deg` (about x, then y, then z), `fit_size` (centre the bounds on
 //! the origin and scale uniformly so the largest extent equals it), `on_ground` (lift so the
-//! lowest point is at y = 0), `translate`.
+//! lowest point is at y = 0), `translate`. The fit is exact in scale for any finite mesh with a
+//! non-zero extent, from subnormal coordinates to ±1.7e308: the mesh is first scaled by a
+//! power of two (exact), so that its bounds, extent and centre neither overflow nor underflow.
+//!
+//! Resolution refuses, as [`SceneError::OutOfRange`], a scene beyond the range every method
+//! supports ([`crate::limits`]): a camera eye or target, a spot light's position or target, or
+//! a resolved vertex with a coordinate beyond `MAX_COORDINATE`, or geometry whose bounding box
+//! has a diagonal under `MIN_EXTENT`. A resolved scene's directional light has a unit direction.
 
 use crate::{
     camera::Camera,
@@ -35,6 +42,7 @@ use crate::{
     },
     io::{load_mesh, LoadError},
     light::Light,
+    limits::{MAX_COORDINATE, MIN_EXTENT},
     mesh::Mesh,
     scene::{EffectSwitches, Material, Object, Scene},
 };
@@ -189,6 +197,16 @@ pub enum SceneError {
         /// What is wrong.
         message: String,
     },
+    /// The scene lies beyond the supported range of coordinates or sizes ([`crate::limits`]).
+    #[error("{path}: `{key}`: {message}")]
+    OutOfRange {
+        /// The scene file, mesh file or `builtin:NAME`.
+        path: PathBuf,
+        /// The key, e.g. `camera.eye` or `object[1]`.
+        key: String,
+        /// What is out of range, with the value and the supported range.
+        message: String,
+    },
     /// A mesh file referenced by the scene could not be loaded.
     #[error("{path}: `{key}`: {source}")]
     Mesh {
@@ -265,6 +283,21 @@ impl SceneDesc {
         }
         self.camera.validate().map_err(|(k, m)| invalid(format!("camera.{k}"), m))?;
         self.light.validate().map_err(|(k, m)| invalid(format!("light.{k}"), m))?;
+        let out_of_range = |key: String, message: String| SceneError::OutOfRange {
+            path: origin.to_owned(),
+            key,
+            message,
+        };
+        let mut points =
+            vec![("camera.eye", self.camera.eye()), ("camera.target", self.camera.target())];
+        if let Light::Spot { position, target, .. } = self.light {
+            points.extend([("light.position", position), ("light.target", target)]);
+        }
+        for (key, p) in points {
+            if let Some(message) = beyond_range(p.abs().max_element()) {
+                return Err(out_of_range(key.into(), message));
+            }
+        }
         if self.objects.is_empty() {
             return Err(invalid("object".into(), "a scene needs at least one [[object]]".into()));
         }
@@ -308,6 +341,21 @@ impl SceneDesc {
                 .apply(&mut mesh)
                 .map_err(|(k, msg)| invalid(key(&format!("transform.{k}")), msg))?;
             let object_name = o.name.clone().unwrap_or_else(|| format!("{}{i}", o.shape.kind()));
+            let largest = mesh
+                .positions
+                .iter()
+                .map(|p| if p.is_finite() { p.abs().max_element() } else { f64::INFINITY })
+                .fold(0.0, f64::max);
+            if let Some(message) = beyond_range(largest) {
+                let from = match &o.shape {
+                    Shape::File(f) => format!(" ({})", f.path.display()),
+                    _ => String::new(),
+                };
+                return Err(out_of_range(
+                    format!("object[{i}]"),
+                    format!("object `{object_name}`{from}: {message}"),
+                ));
+            }
             objects.push(Object {
                 name: object_name,
                 mesh,
@@ -315,15 +363,50 @@ impl SceneDesc {
                 casts_shadows: o.casts_shadows,
             });
         }
-        Ok(Scene {
+        let scene = Scene {
             name,
             width,
             height,
             camera: self.camera.clone(),
-            light: self.light.clone(),
+            light: self.light.normalized(),
             objects,
             switches: self.effects,
-        })
+        };
+        let (lo, hi) = scene.bounds();
+        let diagonal = (hi - lo).length();
+        if diagonal < MIN_EXTENT {
+            return Err(out_of_range(
+                "object".into(),
+                format!(
+                    "the geometry's bounding box has a diagonal of {}, below the supported \
+                     minimum {MIN_EXTENT:e}",
+                    short(diagonal)
+                ),
+            ));
+        }
+        Ok(scene)
+    }
+}
+
+/// `x` in scientific notation with at most 3 significant digits, for messages.
+fn short(x: f64) -> String {
+    let text = format!("{x:.2e}");
+    match text.split_once('e') {
+        Some((mantissa, exponent)) => {
+            let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+            format!("{mantissa}e{exponent}")
+        }
+        None => text,
+    }
+}
+
+/// Why a largest coordinate magnitude `m` is beyond [`MAX_COORDINATE`] (or not finite), if it is.
+fn beyond_range(m: f64) -> Option<String> {
+    let beyond = format!("beyond the supported range |x| <= {MAX_COORDINATE:e}");
+    if m.is_finite() {
+        (m > MAX_COORDINATE).then(|| format!("coordinates reach {}, {beyond}", short(m)))
+    } else {
+        Some(format!("coordinates overflow, {beyond}"))
     }
 }
 
@@ -385,21 +468,25 @@ impl Transform {
         if self.scale.cmpeq(DVec3::ZERO).any() {
             return Err(("scale", "must not be zero on any axis".into()));
         }
-        let r = self.rotate_deg;
-        let rotate =
-            DMat4::from_euler(EulerRot::ZYX, r.z.to_radians(), r.y.to_radians(), r.x.to_radians());
-        mesh.transform(&(rotate * DMat4::from_scale(self.scale)));
         if let Some(size) = self.fit_size {
             if !(size > 0.0 && size.is_finite()) {
                 return Err(("fit_size", format!("must be positive and finite, got {size}")));
             }
-            if let Some((lo, hi)) = mesh.bounds() {
-                let extent = (hi - lo).max_element();
-                let s = if extent > 0.0 { size / extent } else { 1.0 };
-                let m =
-                    DMat4::from_scale(DVec3::splat(s)) * DMat4::from_translation(-0.5 * (lo + hi));
-                mesh.transform(&m);
-            }
+        }
+        let r = self.rotate_deg;
+        let rotate =
+            DMat4::from_euler(EulerRot::ZYX, r.z.to_radians(), r.y.to_radians(), r.x.to_radians());
+        if self.fit_size.is_some() {
+            // The fit undoes any uniform scale: bring the coordinates near 1 first, so that
+            // scaling and rotating a mesh near ±1e308 does not overflow.
+            scale_by_power_of_two(mesh, -exponent(largest_magnitude(mesh)));
+        }
+        mesh.transform(&(rotate * DMat4::from_scale(self.scale)));
+        if mesh.positions.iter().any(|p| !p.is_finite()) {
+            return Err(("scale", "scaling and rotating make the coordinates overflow".into()));
+        }
+        if let Some(size) = self.fit_size {
+            fit(mesh, size);
         }
         if self.on_ground {
             if let Some((lo, _)) = mesh.bounds() {
@@ -408,5 +495,62 @@ impl Transform {
         }
         mesh.transform(&DMat4::from_translation(self.translate));
         Ok(())
+    }
+}
+
+/// Centres `mesh`'s bounds on the origin and scales it uniformly so that its largest extent is
+/// `size` (finite and positive); a mesh of zero extent is only centred. Exact in scale for any
+/// finite mesh: powers of two bring first its coordinates and then its extent near 1, so that
+/// neither the extent nor the centre overflows and the scale factor neither overflows nor
+/// underflows, whether the coordinates are near ±1e308 or subnormal.
+fn fit(mesh: &mut Mesh, size: f64) {
+    scale_by_power_of_two(mesh, -exponent(largest_magnitude(mesh)));
+    let Some((lo, hi)) = mesh.bounds() else { return };
+    // Coordinates below 2 in magnitude: the extent is below 4, the centre exact.
+    let extent = (hi - lo).max_element();
+    let centre = 0.5 * (lo + hi);
+    for p in &mut mesh.positions {
+        *p -= centre;
+    }
+    if extent > 0.0 {
+        scale_by_power_of_two(mesh, -exponent(extent));
+        if let Some((lo, hi)) = mesh.bounds() {
+            // The extent is now near [1, 2): the factor is finite, no coordinate overflows.
+            let s = size / (hi - lo).max_element();
+            for p in &mut mesh.positions {
+                *p *= s;
+            }
+        }
+    }
+}
+
+/// The largest magnitude of any coordinate of `mesh` (0 without vertices).
+fn largest_magnitude(mesh: &Mesh) -> f64 {
+    mesh.positions.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max)
+}
+
+/// The exponent `k` with `2^k <= m < 2^(k+1)` of a finite positive `m` (subnormal included),
+/// read from its bits; 0 for 0.
+fn exponent(m: f64) -> i32 {
+    let bits = m.to_bits();
+    let biased = ((bits >> 52) & 0x7ff) as i32;
+    let mantissa = bits & ((1 << 52) - 1);
+    match (biased, mantissa) {
+        (0, 0) => 0,
+        (0, _) => -1074 + 63 - mantissa.leading_zeros() as i32,
+        _ => biased - 1023,
+    }
+}
+
+/// Multiplies every coordinate of `mesh` by `2^k`, in steps of at most `2^±1000` (each exact
+/// unless it underflows): `2^k` itself need not be an `f64`.
+fn scale_by_power_of_two(mesh: &mut Mesh, mut k: i32) {
+    while k != 0 {
+        let step = k.clamp(-1000, 1000);
+        let factor = 2f64.powi(step);
+        for p in &mut mesh.positions {
+            *p *= factor;
+        }
+        k -= step;
     }
 }

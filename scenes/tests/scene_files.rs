@@ -1,6 +1,7 @@
 //! Scene files: round trips, errors that name the file and key, derived effects.
 
-use scenes::{registry, SceneDesc, SceneError, BUILTINS};
+use glam::DVec3;
+use scenes::{registry, Light, SceneDesc, SceneError, BUILTINS};
 use std::path::Path;
 
 #[test]
@@ -164,4 +165,148 @@ fn fixed_size_arrays_refuse_any_other_length_naming_line_and_key() {
     // resolution, eye, target, up, position, target, color, scale, rotate_deg, translate, size,
     // extent; eye, target, up, direction: three wrong lengths each.
     assert_eq!(checked, 3 * 16);
+}
+
+/// The unit cube of `tests/data/cube.obj` with every coordinate multiplied by `scale`, as OBJ.
+fn scaled_cube(scale: f64) -> String {
+    let text =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/cube.obj"))
+            .expect("read");
+    text.lines()
+        .map(|line| match line.strip_prefix("v ") {
+            Some(xyz) => {
+                let v: Vec<String> = xyz
+                    .split_whitespace()
+                    .map(|c| format!("{:e}", c.parse::<f64>().expect("number") * scale))
+                    .collect();
+                format!("v {}\n", v.join(" "))
+            }
+            None => format!("{line}\n"),
+        })
+        .collect()
+}
+
+/// Resolves `--scene NAME` for a mesh file holding `text`.
+fn mesh_scene(name: &str, text: &str) -> Result<scenes::Scene, SceneError> {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join(name);
+    std::fs::write(&path, text).expect("write");
+    scenes::load(path.to_str().expect("utf-8"))
+}
+
+#[test]
+fn the_fit_holds_any_finite_mesh_with_an_extent() {
+    let plain = mesh_scene("cube.obj", &scaled_cube(1.0)).expect("plain cube");
+    assert_eq!(plain.objects[1].mesh.bounds().map(|(lo, hi)| hi - lo), Some(DVec3::splat(4.0)));
+    // Powers of two: the fit is exact, from subnormal coordinates to near f64::MAX.
+    for k in [-1070, -1030, -500, 500, 1000, 1023] {
+        let scale = f64::MIN_POSITIVE * 2f64.powi(1022 + k.min(0)) * 2f64.powi(k.max(0));
+        let scene = mesh_scene("cube.obj", &scaled_cube(scale)).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(scene.objects[1].mesh, plain.objects[1].mesh, "2^{k}");
+    }
+    // Others: the same up to rounding.
+    for scale in [1e-320, 3e-300, 7e300, 1.7e308, -1.7e308] {
+        let scene = mesh_scene("cube.obj", &scaled_cube(scale)).unwrap_or_else(|e| panic!("{e}"));
+        let (lo, hi) = scene.objects[1].mesh.bounds().expect("vertices");
+        assert!((hi - lo - DVec3::splat(4.0)).abs().max_element() < 1e-12, "{scale}: {lo} {hi}");
+        assert!(lo.y == 0.0 && (lo.x + hi.x).abs() < 1e-12, "{scale}: {lo} {hi}");
+    }
+    // Coordinates from -1.7e308 to 1.7e308: the extent alone would overflow.
+    let wide = "v -1.7e308 0 0\nv 1.7e308 0 0\nv 0 1.7e308 0\nv 0 0 1e308\nf 1 2 3\nf 1 2 4\n";
+    let scene = mesh_scene("wide.obj", wide).unwrap_or_else(|e| panic!("{e}"));
+    let (lo, hi) = scene.objects[1].mesh.bounds().expect("vertices");
+    assert!((hi.x - lo.x - 4.0).abs() < 1e-12 && (hi.y - 2.0).abs() < 1e-12, "{lo} {hi}");
+}
+
+/// [`ARRAYS`]' second scene with `from` replaced by `to`, resolved.
+fn resolve_with(from: &str, to: &str) -> Result<scenes::Scene, SceneError> {
+    let text = ARRAYS[1].replace(from, to);
+    assert_ne!(text, ARRAYS[1], "{from}");
+    let path = Path::new("range.toml");
+    SceneDesc::from_toml(&text, path)?.resolve("range", path, Path::new("."))
+}
+
+#[test]
+fn scenes_beyond_the_supported_range_are_refused_naming_key_and_range() {
+    let spot = "[light.spot]\nposition = [3.0, 9.0, 2.0]\ntarget = [0.0, 0.0, 0.0]\nfov_deg = 60.0";
+    let light = "[light.directional]\ndirection = [-0.3, -1.0, -0.2]";
+    for (from, to, key, reach) in [
+        ("eye = [0.0, 6.0, 8.0]", "eye = [0.0, 6.0, 2e15]", "camera.eye", "2e15"),
+        ("target = [0.0, 0.0, 0.0]", "target = [-1e300, 0.0, 0.0]", "camera.target", "1e300"),
+        (light, &spot.replace("9.0", "1.5e15"), "light.position", "1.5e15"),
+        (light, &spot.replace("target = [0.0", "target = [-3e20"), "light.target", "3e20"),
+        (
+            "size = 10.0 }",
+            "size = 10.0 }\ntransform = { translate = [0, 0, 1e16] }",
+            "object[0]",
+            "1e16",
+        ),
+        (
+            "size = 10.0 }",
+            "size = 10.0 }\ntransform = { scale = [3e14, 1, 3e14] }",
+            "object[0]",
+            "1.5e15",
+        ),
+        (
+            "size = 10.0 }",
+            "size = 10.0 }\ntransform = { scale = [1e300, 1e300, 1] }",
+            "object[0]",
+            "5e300",
+        ),
+    ] {
+        let err = resolve_with(from, to).expect_err(to);
+        let msg = err.to_string();
+        assert!(matches!(&err, SceneError::OutOfRange { key: k, .. } if k == key), "{msg}");
+        assert!(
+            msg.contains("range.toml")
+                && msg.contains(&format!(
+                    "coordinates reach {reach}, beyond the supported range |x| <= 1e15"
+                )),
+            "{msg}"
+        );
+    }
+    let err =
+        resolve_with("size = 10.0 }", "size = 1.0 }\ntransform = { scale = [1e-10, 1, 1e-10] }")
+            .expect_err("tiny");
+    assert!(matches!(&err, SceneError::OutOfRange { key, .. } if key == "object"), "{err}");
+    assert!(err.to_string().contains("below the supported minimum 1e-9"), "{err}");
+    // At the limits: accepted.
+    resolve_with("size = 10.0 }", "size = 10.0 }\ntransform = { scale = [2e14, 1, 2e14] }")
+        .expect("1e15 is in range");
+    resolve_with("size = 10.0 }", "size = 1e-9 }").expect("a diagonal of 1.4e-9 is in range");
+    let err =
+        resolve_with("size = 10.0 }", "size = 10.0 }\ntransform = { scale = [1e308, 1e308, 1] }")
+            .expect_err("overflow");
+    assert!(err.to_string().contains("overflow"), "{err}");
+
+    // A mesh file placed without a fit: the object is named with its file.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let huge = "v 0 0 0\nv 1 0 0\nv 0 3.2e20 0\nf 1 2 3\n";
+    std::fs::write(dir.path().join("huge.obj"), huge).expect("write");
+    let text = ARRAYS[1].replace(
+        "shape.plane = { size = 10.0 }",
+        "name = \"model\"\nshape.file = { path = \"huge.obj\" }",
+    );
+    let path = Path::new("range.toml");
+    let desc = SceneDesc::from_toml(&text, path).expect("parses");
+    let err = desc.resolve("range", path, dir.path()).expect_err("huge");
+    assert!(
+        err.to_string().contains(
+            "range.toml: `object[0]`: object `model` (huge.obj): coordinates reach 3.2e20, \
+             beyond the supported range |x| <= 1e15"
+        ),
+        "{err}"
+    );
+}
+
+#[test]
+fn any_finite_non_zero_light_direction_resolves_to_a_unit_vector() {
+    let want = DVec3::new(-0.3, -1.0, -0.2).normalize();
+    for d in ["[-0.3e154, -1e154, -0.2e154]", "[-3e-171, -1e-170, -2e-171]", "[-3, -10, -2]"] {
+        let scene = resolve_with("[-0.3, -1.0, -0.2]", d).unwrap_or_else(|e| panic!("{d}: {e}"));
+        let Light::Directional { direction } = scene.light else { panic!("directional") };
+        assert!((direction - want).length() < 1e-15, "{d}: {direction}");
+    }
+    let err = resolve_with("[-0.3, -1.0, -0.2]", "[0.0, -0.0, 0.0]").expect_err("zero");
+    assert!(err.to_string().contains("light.direction"), "{err}");
 }
