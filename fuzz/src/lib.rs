@@ -1,7 +1,7 @@
 //! Fuzz targets: one function per parser, each taking the fuzzer's bytes and panicking only
 //! when the code under test breaks its contract.
 //!
-//! The same functions run under AFL++ (the binaries in `src/bin/`, built by `cargo afl build`)
+//! The same functions run under AFL++ (the binary of `src/main.rs`, built by `cargo afl build`)
 //! and in the workspace test `tests/fuzz_regressions.rs`, which includes this file by `#[path]`
 //! and replays every input saved in `tests/data/fuzz/<target>/`. That is why this file uses
 //! only `std`, `scenes` and `reports`, which both builds have.
@@ -17,7 +17,10 @@
 //!   relative and made of plain names, so no input reads the disk (every such file is then
 //!   missing); a description whose file paths are anything else is parsed but not resolved.
 //!   The mesh loaders themselves are the other targets.
-//! - `suite` (the report-suite parser): `Suite::parse`.
+//! - `suite` (the report-suite parser): `Suite::parse`. It checks that every scene a suite
+//!   names is a built-in or a scene or mesh file that loads, so a fuzzed suite can make it
+//!   read a file (one with a `.toml`, `.obj`, `.off` or `.ply` extension, never written); a
+//!   mutated name is seldom the path of a real file.
 //!
 //! The text parsers read their bytes lossily as UTF-8 (invalid sequences become U+FFFD), so
 //! that a stray byte does not hide the rest of the input from them.
