@@ -57,7 +57,11 @@
 //!   (every shadow was lost). [`light_projector`] keeps the fitted `near` only where it is
 //!   smaller than a local one: [`SHADOW_OFFSET`] times the magnitude of the light's position
 //!   and of its distance to the farthest visible surface point, so only points within the
-//!   shadow offset of the light, which the ray tracer also counts as lit, are left out.
+//!   shadow offset of the light, which the ray tracer also counts as lit, are left out. For
+//!   directional lights it centres the orthographic image on the visible surface points when
+//!   the fitted frame's rounding exceeds their shadow offset (a frame fitted to a scene that
+//!   holds an object 1e10 away rounds light image coordinates and depths near the origin to
+//!   about 1e-6 world units, and flipped pixels near shadow edges).
 //! - **Depth.** A caster's depth at a sample is where the light's ray through the sample's
 //!   image point meets the caster's plane, clamped to the depth range of its corners (as the
 //!   rasterizer does); the sample's own depth is its surface point's light depth.
@@ -106,7 +110,7 @@ use glam::{DVec2, DVec3};
 use instrumentation::{Counters, Recorder};
 use rayon::prelude::*;
 use samples::{transform_samples, Sample, Surface};
-use scenes::Projector;
+use scenes::{projection::ProjectionKind, Projector};
 
 /// The paper's Table 1 (measured on a 1.6 GHz Mobile Pentium 4), to print beside ours. Rows:
 /// triangles, 2D BSP nodes, nodes visited, nodes occlusion culled, sampling points tested,
@@ -244,21 +248,57 @@ impl AliasFreeShadowMap {
 }
 
 /// The light's projector of `afsm` (see "Light image" in the module doc): the fitted one at
-/// [`LIGHT_IMAGE_RES`]; for a spot light with its `near` no larger than [`SHADOW_OFFSET`]
-/// times the magnitude of the light's position plus its distance to the farthest surface
-/// point the camera sees at a pixel centre (max norm), never zero.
+/// [`LIGHT_IMAGE_RES`], with its frame taken from the surface points the camera sees at pixel
+/// centres where the scene's frame is too coarse for them. Orthographic: when the fitted
+/// frame's rounding (`f64::EPSILON` times its half extent or its origin's distance from those
+/// points) exceeds [`SHADOW_OFFSET`] times their own magnitude, the origin moves to the centre
+/// of their bounding box and the image rectangle shrinks around them, so that light image
+/// coordinates and depths keep the precision of the visible scene however far other objects
+/// lie. Spot: `near`
+/// no larger than [`SHADOW_OFFSET`] times the magnitude of the light's position plus its
+/// distance to the farthest of those points (max norm), never zero.
 pub fn light_projector(frame: &Frame<'_>) -> Projector {
     let mut light = frame.light_projector(LIGHT_IMAGE_RES);
-    if light.is_perspective() {
-        let q = light.origin;
-        let g = &frame.gbuffer;
-        let reach = (0..g.triangle.len())
-            .filter(|&k| g.covered(k))
-            .map(|k| (g.position[k] - q).abs().max_element())
-            .fold(0.0, f64::max);
-        let local = SHADOW_OFFSET * (q.abs().max_element() + reach);
-        if local > 0.0 && local < light.near {
-            light.near = local;
+    let g = &frame.gbuffer;
+    let visible = || (0..g.triangle.len()).filter(|&k| g.covered(k)).map(|k| g.position[k]);
+    match light.kind {
+        ProjectionKind::Orthographic { .. } => {
+            let (lo, hi) = visible().fold(
+                (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+                |(lo, hi), p| (lo.min(p), hi.max(p)),
+            );
+            let centre = 0.5 * (lo + hi);
+            let (mut hw, mut hh) = (0.0f64, 0.0f64);
+            for i in 0..8 {
+                let c = DVec3::new(
+                    if i & 1 == 0 { lo.x } else { hi.x },
+                    if i & 2 == 0 { lo.y } else { hi.y },
+                    if i & 4 == 0 { lo.z } else { hi.z },
+                ) - centre;
+                hw = hw.max(c.dot(light.right).abs());
+                hh = hh.max(c.dot(light.up).abs());
+            }
+            let ProjectionKind::Orthographic { half_width, half_height } = light.kind else {
+                return light;
+            };
+            // The fitted frame rounds light coordinates to about `EPSILON` of its scale; keep
+            // it while that stays below the shadow offset of the visible points.
+            let fitted =
+                half_width.max(half_height).max((light.origin - centre).abs().max_element());
+            let local = hw.max(hh) + centre.abs().max_element();
+            let coarse = f64::EPSILON * fitted > SHADOW_OFFSET * local;
+            if coarse && centre.is_finite() && hw > 0.0 && hh > 0.0 && hw.max(hh).is_finite() {
+                light.origin = centre;
+                light.kind = ProjectionKind::Orthographic { half_width: hw, half_height: hh };
+            }
+        }
+        ProjectionKind::Perspective { .. } => {
+            let q = light.origin;
+            let reach = visible().map(|p| (p - q).abs().max_element()).fold(0.0, f64::max);
+            let local = SHADOW_OFFSET * (q.abs().max_element() + reach);
+            if local > 0.0 && local < light.near {
+                light.near = local;
+            }
         }
     }
     light
