@@ -21,7 +21,8 @@
 //!    triangulation and pixel clipping) is at least `1 - 1e-9`, and no triangle of another
 //!    object that lies (at least partly) on the camera's side of the receiver plane touches
 //!    the closed square. The touch test is conservative: the part of the triangle on the
-//!    camera's side (within `1e-9` of the scene's extent), clipped at the camera's near plane,
+//!    camera's side (within `1e-9` of the receiver's extent, the precision of its plane: a
+//!    far-away object must not widen it), clipped at the camera's near plane,
 //!    is projected, and every pixel whose closed square, widened by `1e-7` pixels, meets it is
 //!    disqualified. Triangles entirely behind the plane as seen from the camera do not count.
 //!    Pixels not evaluated still get the value computed for them.

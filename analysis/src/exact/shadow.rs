@@ -49,7 +49,7 @@ pub(crate) struct Setup {
     light_side: f64,
     /// `+1` or `-1`: the sign of `n·p - d` on the camera's side of the plane.
     camera_side: f64,
-    /// Tolerance of "on the camera's side" for occluders: `1e-9` of the scene's extent.
+    /// Tolerance of "on the camera's side" for occluders: `1e-9` of the receiver's extent.
     side_tolerance: f64,
     light: LightSetup,
     camera: Projector,
@@ -110,9 +110,17 @@ impl Setup {
             ProjectionKind::Orthographic { .. } => -n.dot(camera.forward),
         };
         let camera_side = if camera_side < 0.0 { -1.0 } else { 1.0 };
-        let (lo, hi) = frame.scene.bounds();
-        let extent = (hi - lo).length();
-        let side_tolerance = if extent.is_finite() { 1e-9 * extent } else { 0.0 };
+        // The receiver's own size: its plane holds its vertices within `1e-9` of it
+        // (`Mesh::plane`); the scene's size, which a far-away object sets, plays no part.
+        let extent = frame.scene.objects[receiver].mesh.bounds().map_or(0.0, |(lo, hi)| {
+            let e = (hi - lo).length();
+            if e.is_finite() {
+                e
+            } else {
+                0.0
+            }
+        });
+        let side_tolerance = 1e-9 * extent;
         Ok(Self {
             receiver,
             n,
