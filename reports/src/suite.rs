@@ -24,10 +24,21 @@
 //!
 //! Unknown keys and bad values are errors that name the file and the key (and the line,
 //! through the TOML parser).
+//!
+//! A suite is checked whole before anything runs ([`Suite::parse`]): every run's method with
+//! every combination of its values is built as the sweep will build it (so a value the method
+//! refuses is refused here, with the values it takes), every grid panel likewise, every scene
+//! must be a built-in name or a scene file that loads, and the reference rate must suit
+//! `raytrace`. Errors name the file, the key (`run[2].rate`) and, where the value is in the
+//! file, its line; the line comes from a second pass of the TOML parser that keeps spans
+//! ([`Spans`]), so the suite's own types stay plain. A built-in scene whose optional model
+//! has not been fetched is the one thing left to the run, which lists it as not run.
 
 use crate::tables::TableSpec;
+use methods::MethodOptions;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+use toml::Spanned;
 
 /// A suite could not be read.
 #[derive(Debug, thiserror::Error)]
@@ -48,16 +59,132 @@ pub enum SuiteError {
         /// The parser's message, with line and key.
         message: String,
     },
-    /// A value is out of range.
-    #[error("{path}: `{key}`: {message}")]
+    /// A value is out of range, or names a method or scene that does not exist.
+    #[error("{path}: {}`{key}`: {message}", line.map_or(String::new(), |l| format!("line {l}: ")))]
     Invalid {
         /// The file.
         path: PathBuf,
+        /// The line of the value, when it is in the file.
+        line: Option<usize>,
         /// The key.
         key: String,
         /// What is wrong.
         message: String,
     },
+}
+
+/// The largest frame width or height a suite (and the command line) takes.
+pub const MAX_FRAME_SIDE: u32 = 16384;
+
+/// The most pixels a frame may have: the G-buffer alone takes 60 bytes a pixel, and methods
+/// and references keep a few buffers of the frame's size besides, so 2^25 pixels (8192 x
+/// 4096) keep a run within a few GB.
+pub const MAX_FRAME_PIXELS: u64 = 1 << 25;
+
+/// Checks a frame size against [`MAX_FRAME_SIDE`] and [`MAX_FRAME_PIXELS`]; the error says
+/// which limit and the values.
+pub fn check_frame(width: u32, height: u32) -> Result<(), String> {
+    for (what, v) in [("width", width), ("height", height)] {
+        if !(1..=MAX_FRAME_SIDE).contains(&v) {
+            return Err(format!("{what} must be in 1..={MAX_FRAME_SIDE}, got {v}"));
+        }
+    }
+    let pixels = u64::from(width) * u64::from(height);
+    if pixels > MAX_FRAME_PIXELS {
+        return Err(format!(
+            "a {width} x {height} frame has {pixels} pixels, more than the {MAX_FRAME_PIXELS} \
+             (8192 x 4096) a run can hold in memory"
+        ));
+    }
+    Ok(())
+}
+
+/// Where the values of a suite are in its file: the suite's keys with their spans, read by a
+/// second pass of the TOML parser (keys not listed here are ignored by this pass).
+#[derive(Debug, Default, Deserialize)]
+struct Spans {
+    #[serde(default)]
+    scenes: Vec<Spanned<String>>,
+    ref_rate: Option<Spanned<u32>>,
+    #[serde(default, rename = "run")]
+    runs: Vec<ValueSpans>,
+    #[serde(default, rename = "grid")]
+    grids: Vec<GridSpans>,
+    #[serde(default, rename = "table")]
+    tables: Vec<TableSpans>,
+}
+
+/// The spans of a `[[run]]` or a grid panel.
+#[derive(Debug, Default, Deserialize)]
+struct ValueSpans {
+    method: Option<Spanned<String>>,
+    #[serde(default)]
+    map_res: Option<Spanned<toml::Value>>,
+    #[serde(default)]
+    rate: Option<Spanned<toml::Value>>,
+    #[serde(default)]
+    depth_bits: Option<Spanned<toml::Value>>,
+    #[serde(default)]
+    device: Option<Spanned<toml::Value>>,
+}
+
+/// The spans of a `[[grid]]`.
+#[derive(Debug, Default, Deserialize)]
+struct GridSpans {
+    #[serde(default)]
+    panels: Vec<ValueSpans>,
+}
+
+/// The spans of a `[[table]]`.
+#[derive(Debug, Default, Deserialize)]
+struct TableSpans {
+    #[serde(default)]
+    scenes: Vec<Spanned<String>>,
+}
+
+impl ValueSpans {
+    /// The span of the value the failing option came from: the key the option names, else
+    /// the method.
+    fn of(&self, option: &str) -> Option<std::ops::Range<usize>> {
+        let value = match option {
+            "--map-res" => &self.map_res,
+            "--rate" => &self.rate,
+            "--depth-bits" => &self.depth_bits,
+            "--device" => &self.device,
+            _ => &None,
+        };
+        value.as_ref().map(Spanned::span).or_else(|| self.method.as_ref().map(Spanned::span))
+    }
+}
+
+/// The suite key of a method option (`--map-res` -> `map_res`), or `method` for the others.
+fn key_of(option: &str) -> &'static str {
+    match option {
+        "--map-res" => "map_res",
+        "--rate" => "rate",
+        "--depth-bits" => "depth_bits",
+        "--device" => "device",
+        _ => "method",
+    }
+}
+
+/// Builds `method` with `options` as a sweep will. Building a GPU method opens no device, so
+/// this checks `device = ["gpu"]` runs on machines without one too (they are then not run).
+/// The error is the option at fault (`--method` when it is not an option) and what is wrong.
+fn check_method(method: &str, options: &MethodOptions) -> Result<(), (&'static str, String)> {
+    match analysis::registry::technique(method, options) {
+        Ok(_) => Ok(()),
+        Err(methods::MethodError::InvalidOption { option, message }) => Err((option, message)),
+        Err(e) => Err(("--method", e.to_string())),
+    }
+}
+
+/// Whether `name` is a built-in scene or a scene file that loads; the error otherwise.
+fn check_scene(name: &str) -> Result<(), String> {
+    if scenes::registry::builtin(name).is_some() {
+        return Ok(());
+    }
+    scenes::load(name).map(|_| ()).map_err(|e| e.to_string())
 }
 
 /// Which reference each scene is measured against.
@@ -198,21 +325,27 @@ impl Suite {
     pub fn parse(text: &str, path: &Path) -> Result<Self, SuiteError> {
         let suite: Suite = toml::from_str(text)
             .map_err(|e| SuiteError::Parse { path: path.to_owned(), message: e.to_string() })?;
-        let invalid = |key: &str, message: String| SuiteError::Invalid {
-            path: path.to_owned(),
-            key: key.to_owned(),
-            message,
+        let spans: Spans = toml::from_str(text).unwrap_or_default();
+        let line = |span: Option<std::ops::Range<usize>>| {
+            span.map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1)
         };
+        let at = |span: Option<std::ops::Range<usize>>, key: &str, message: String| {
+            SuiteError::Invalid {
+                path: path.to_owned(),
+                line: line(span),
+                key: key.to_owned(),
+                message,
+            }
+        };
+        let invalid = |key: &str, message: String| at(None, key, message);
         if suite.repeats == 0 {
             return Err(invalid("repeats", "must be at least 1".into()));
         }
-        for (key, v) in [("width", suite.width), ("height", suite.height)] {
-            if v > 16384 {
-                return Err(invalid(key, format!("must be at most 16384, got {v}")));
-            }
-        }
         if (suite.width == 0) != (suite.height == 0) {
             return Err(invalid("width", "give both width and height, or neither".into()));
+        }
+        if suite.width != 0 {
+            check_frame(suite.width, suite.height).map_err(|m| invalid("width", m))?;
         }
         if suite.scenes.is_empty() {
             return Err(invalid("scenes", "must name at least one scene".into()));
@@ -239,14 +372,88 @@ impl Suite {
             }
         }
         for (k, t) in suite.tables.iter().enumerate() {
-            if (t.width == 0) != (t.height == 0) || t.width > 16384 || t.height > 16384 {
+            if (t.width == 0) != (t.height == 0)
+                || (t.width != 0 && check_frame(t.width, t.height).is_err())
+            {
                 return Err(invalid(
                     &format!("table[{k}].width"),
-                    "give both width and height (at most 16384), or neither".into(),
+                    format!(
+                        "give both width and height (at most {MAX_FRAME_SIDE} each, \
+                         {MAX_FRAME_PIXELS} pixels), or neither"
+                    ),
                 ));
             }
         }
+        suite.check_values(&spans, &at)?;
         Ok(suite)
+    }
+
+    /// Checks what the runs take: methods and their values, grid panels, scenes and the
+    /// reference rate, as the module doc says.
+    fn check_values(
+        &self,
+        spans: &Spans,
+        at: &dyn Fn(Option<std::ops::Range<usize>>, &str, String) -> SuiteError,
+    ) -> Result<(), SuiteError> {
+        if self.reference != ReferenceChoice::Exact {
+            analysis::registry::reference("raytrace", self.ref_rate, Default::default()).map_err(
+                |e| {
+                    let message = match e {
+                        analysis::reference::ReferenceError::InvalidOption { message, .. } => {
+                            message
+                        }
+                        other => other.to_string(),
+                    };
+                    at(spans.ref_rate.as_ref().map(Spanned::span), "ref_rate", message)
+                },
+            )?;
+        }
+        for (k, spec) in self.runs.iter().enumerate() {
+            let span = spans.runs.get(k);
+            for options in crate::sweep::expand(spec) {
+                if let Err((option, message)) = check_method(&spec.method, &options) {
+                    let key = format!("run[{k}].{}", key_of(option));
+                    return Err(at(span.and_then(|s| s.of(option)), &key, message));
+                }
+            }
+        }
+        for (k, grid) in self.grids.iter().enumerate() {
+            for (j, p) in grid.panels.iter().enumerate() {
+                let span = spans.grids.get(k).and_then(|g| g.panels.get(j));
+                let options = MethodOptions {
+                    map_res: p.map_res,
+                    rate: p.rate,
+                    depth_bits: p.depth_bits,
+                    ..Default::default()
+                };
+                let checked = if p.classes && !matches!(p.method.as_str(), "spsm" | "spsm-f32") {
+                    Err((
+                        "--method",
+                        "`classes` shows the pixel classes of spsm or spsm-f32 only".to_owned(),
+                    ))
+                } else {
+                    check_method(&p.method, &options)
+                };
+                if let Err((option, message)) = checked {
+                    let key = format!("grid[{k}].panels[{j}].{}", key_of(option));
+                    return Err(at(span.and_then(|s| s.of(option)), &key, message));
+                }
+            }
+        }
+        let scene_lists = std::iter::once(("scenes".to_owned(), &self.scenes, &spans.scenes[..]))
+            .chain(self.tables.iter().enumerate().map(|(k, t)| {
+                let spans = spans.tables.get(k).map_or(&[][..], |t| &t.scenes[..]);
+                (format!("table[{k}].scenes"), &t.scenes, spans)
+            }));
+        for (key, names, spans) in scene_lists {
+            for (j, name) in names.iter().enumerate() {
+                check_scene(name).map_err(|m| {
+                    let span = spans.get(j).map(Spanned::span);
+                    at(span, &format!("{key}[{j}]"), m)
+                })?;
+            }
+        }
+        Ok(())
     }
 
     /// A built-in suite by name, or a suite file by path.
@@ -309,5 +516,75 @@ mod tests {
         assert!(e.to_string().contains("table[0].width"), "{e}");
         let e = Suite::load("/no/such/suite.toml").expect_err("missing");
         assert!(e.to_string().contains("quick"), "{e}");
+    }
+
+    /// What the runs take is checked before anything runs: every error names the file, the
+    /// line of the value, the key and what is allowed.
+    #[test]
+    fn methods_values_and_scenes_are_checked_with_their_line() {
+        let p = Path::new("s.toml");
+        let suite = |scenes: &str, run: &str, rest: &str| {
+            format!("name = \"x\"\nscenes = {scenes}\n[[run]]\n{run}\n{rest}")
+        };
+        let ok = suite("[\"cage\"]", "method = \"pan09\"\nrate = [4, 32]", "");
+        assert!(Suite::parse(&ok, p).is_ok());
+        let panel = "[[grid]]\ntitle = \"g\"\nscene = \"cage\"\ninset = [0.1, 0.1, 0.2, 0.2]\n\
+                     panels = [{ method = \"sm\" }, { method = \"sm\", map_res = 0 }]\n";
+        let table = "[[table]]\npaper = \"aila-laine-table1\"\nscenes = [\"cage\", \"nowhere\"]\n";
+        let cases: &[(String, &str, &[&str])] = &[
+            (suite("[\"cage\"]", "method = \"magic\"", ""), "line 4: `run[0].method`", &["pan09"]),
+            (
+                suite("[\"cage\"]", "method = \"pan09\"\nrate = [4, 0]", ""),
+                "line 5: `run[0].rate`",
+                &["takes 1, 4, 8, 16, 32, 64, 128 samples", "got 0"],
+            ),
+            (
+                suite("[\"cage\"]", "method = \"sm\"\nmap_res = [0]", ""),
+                "line 5: `run[0].map_res`",
+                &["1..=16384"],
+            ),
+            (
+                suite("[\"cage\"]", "method = \"afsm-ss\"\ndevice = [\"gpu\"]", ""),
+                "line 5: `run[0].device`",
+                &["no GPU kernels", "pan09"],
+            ),
+            (
+                suite("[\"cage\", \"no-such-scene\"]", "method = \"sm\"", ""),
+                "line 2: `scenes[1]`",
+                &["no-such-scene", "plane-square"],
+            ),
+            (
+                suite("[\"cage\"]", "method = \"sm\"", panel),
+                "line 9: `grid[0].panels[1].map_res`",
+                &["1..=16384"],
+            ),
+            (
+                suite("[\"cage\"]", "method = \"sm\"", table),
+                "line 7: `table[0].scenes[1]`",
+                &["nowhere"],
+            ),
+            (
+                format!("ref_rate = 3\n{}", suite("[\"cage\"]", "method = \"sm\"", "")),
+                "line 1: `ref_rate`",
+                &["1, 4, 8"],
+            ),
+        ];
+        for (text, at, needles) in cases {
+            let e = Suite::parse(text, p).expect_err(at).to_string();
+            assert!(e.starts_with("s.toml: ") && e.contains(at), "{at}: {e}");
+            for n in *needles {
+                assert!(e.contains(n), "{at}: `{n}` not in {e}");
+            }
+        }
+    }
+
+    #[test]
+    fn frames_beyond_the_limits_are_refused_with_the_limit() {
+        assert!(check_frame(8192, 4096).is_ok());
+        assert!(check_frame(16384, 1).is_ok());
+        let e = check_frame(16384, 16384).expect_err("too many pixels");
+        assert!(e.contains(&MAX_FRAME_PIXELS.to_string()), "{e}");
+        let e = check_frame(0, 10).expect_err("empty");
+        assert!(e.contains("width") && e.contains("16384"), "{e}");
     }
 }
