@@ -1,17 +1,24 @@
 //! `shadowbench`: the command line of the shadow-map antialiasing workbench.
 //!
 //! Argument parsing and wiring only; the algorithms live in the workspace's crates. Exit
-//! codes: 0 success, 2 bad input (one message naming the file, line, key or flag), 1 internal
-//! failure.
+//! codes: 0 success, 2 bad input (one message naming the file, line, key, flag or environment
+//! variable), 1 internal failure.
+//!
+//! Every input is checked before any computation, in this order: the flags and the scene
+//! ([`job`]: method options, frame size), the GPU environment for `--device gpu` (the adapter
+//! is opened, so `SHADOWBENCH_GPU_*` errors come first), then the output folder
+//! ([`prepare_out`]: created, and written once with a probe file). A method error is bad
+//! input, except a GPU device failure, which is internal ([`method_failure`]).
 
 use analysis::{error_image, Metrics};
 use anyhow::Context;
 use clap::{Parser, Subcommand, ValueEnum};
 use instrumentation::{Recorder, RunRecord};
 use methods::{
-    pan09::VisibilityMode, pattern::PatternKind, registry::Device, Frame, MethodOptions,
-    ShadowMethod, Visibility,
+    gpu::GpuError, pan09::VisibilityMode, pattern::PatternKind, registry::Device, Frame,
+    MethodError, MethodOptions, ShadowMethod, Visibility,
 };
+use reports::suite::{check_frame, MAX_FRAME_SIDE};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -129,7 +136,7 @@ struct CompareArgs {
     #[arg(long, value_enum, default_value_t = ReferenceName::Exact)]
     reference: ReferenceName,
     /// Sub-samples per pixel of the `raytrace` reference (1, 4, 8, ..., 1024); default 256.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
     ref_rate: Option<u32>,
 }
 
@@ -151,40 +158,40 @@ struct RenderArgs {
     method: String,
     /// Sub-samples per pixel for methods that supersample and for `raytrace`:
     /// 1, 4, 8, 16, 32, 64, 128 (up to 1024 for `raytrace`); default 1 (32 for `afsm-ss` and
-    /// `pan09`). For `pcf-reeves`, the jittered samples per pixel footprint (same values);
-    /// default 16. For `spsm`, the sub-samples of uncertain pixels (1: no antialiasing, the
-    /// default).
-    #[arg(long, value_name = "N")]
+    /// `pan09`). For `pcf-reeves`, the jittered samples per pixel footprint (the same values
+    /// up to 1024); default 16. For `spsm`, the sub-samples of uncertain pixels (1: no
+    /// antialiasing, the default).
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
     rate: Option<u32>,
     /// Sub-sample pattern, shared by every method at equal rate; default grid.
     #[arg(long, value_enum)]
     pattern: Option<Pattern>,
     /// Shadow map resolution R (the map is R x R texels); default 1024 (512 for `pan09`, the
     /// paper's).
-    #[arg(long, value_name = "R")]
+    #[arg(long, value_name = "R", allow_negative_numbers = true)]
     map_res: Option<u32>,
     /// Constant depth bias as a fraction of the scene's light depth range; default 1e-5
     /// (for `pcf-bs-*`: max(1e-5, 2^(1 - depth bits)), the least valid at that precision).
-    #[arg(long, value_name = "B")]
+    #[arg(long, value_name = "B", allow_negative_numbers = true)]
     constant_bias: Option<f64>,
     /// Slope-scaled depth bias in units of the receiver's depth change over the farthest
     /// texel a method compares against; default 1. Values >= 1 keep lit planes free of
     /// shadow acne for every shadow-map method.
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
     slope_bias: Option<f64>,
     /// Upper bound of the receiver slope ratio used by the slope bias; default 10 (about 84°).
-    #[arg(long, value_name = "M")]
+    #[arg(long, value_name = "M", allow_negative_numbers = true)]
     max_slope: Option<f64>,
     /// Bits per stored depth of Brabec & Seidel's depth-as-colour maps: 8, 12, 24 or 32
     /// (the paper's hardware had 8, at best 12); default 32.
-    #[arg(long, value_name = "BITS")]
+    #[arg(long, value_name = "BITS", allow_negative_numbers = true)]
     depth_bits: Option<u32>,
     /// Seed of stochastic sampling (`pcf-reeves`' jitter); default 0.
-    #[arg(long, value_name = "SEED")]
+    #[arg(long, value_name = "SEED", allow_negative_numbers = true)]
     seed: Option<u64>,
     /// Exponent n of the x^n code of `spsm`'s 8-bit depth derivatives, 1 (linear) to 9;
     /// default 5.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
     derivative_power: Option<u32>,
     /// How `pan09` turns a blocker's half-planes into sub-sample masks: `table` (the paper's
     /// precomputed lookup table, the default) or `exact` (every sub-sample tested in f64).
@@ -196,10 +203,10 @@ struct RenderArgs {
     #[arg(long, value_enum, default_value_t = DeviceArg::Cpu)]
     device: DeviceArg,
     /// Image width in pixels; default: the scene's.
-    #[arg(long, value_name = "W")]
+    #[arg(long, value_name = "W", allow_negative_numbers = true)]
     width: Option<u32>,
     /// Image height in pixels; default: the scene's.
-    #[arg(long, value_name = "H")]
+    #[arg(long, value_name = "H", allow_negative_numbers = true)]
     height: Option<u32>,
     /// Output folder; default `shadowbench-out/SCENE-METHOD`.
     #[arg(long, value_name = "DIR")]
@@ -225,6 +232,41 @@ impl<E: Into<anyhow::Error>> From<E> for Failure {
 
 fn input(e: impl Into<anyhow::Error>) -> Failure {
     Failure::Input(e.into())
+}
+
+/// A GPU error: the device failing is internal; no adapter, an adapter without what the
+/// kernels need, or a bad `SHADOWBENCH_GPU_*` variable is the environment, bad input.
+fn gpu_failure(e: GpuError) -> Failure {
+    match e {
+        GpuError::Device(_) => Failure::Internal(e.into()),
+        _ => input(e),
+    }
+}
+
+/// A method's error: bad input (an option, a scene it does not apply to), except GPU device
+/// failures, which are internal.
+fn method_failure(e: MethodError) -> Failure {
+    match e {
+        MethodError::Gpu(g) => gpu_failure(g),
+        _ => input(e),
+    }
+}
+
+/// Makes sure the output folder `out` can take the files, before any computation: a file in
+/// the way, a folder that cannot be created and one that cannot be written (tried with a
+/// probe file, created and removed: permission bits say nothing to root) are bad input that
+/// names `flag` and the path.
+fn prepare_out(out: &Path, flag: &str) -> Result<(), Failure> {
+    let bad = |why: String| input(anyhow::anyhow!("{flag} {}: {why}", out.display()));
+    if out.exists() && !out.is_dir() {
+        return Err(bad("a file is in the way (the output must be a folder)".into()));
+    }
+    std::fs::create_dir_all(out).map_err(|e| bad(format!("cannot create the folder: {e}")))?;
+    let probe = out.join(format!(".shadowbench-probe-{}", std::process::id()));
+    std::fs::write(&probe, b"").map_err(|e| bad(format!("the folder is not writable: {e}")))?;
+    std::fs::remove_file(&probe)
+        .map_err(|e| bad(format!("cannot remove the probe file {}: {e}", probe.display())))?;
+    Ok(())
 }
 
 fn scenes(json: bool, toml: Option<String>) -> Result<(), Failure> {
@@ -311,7 +353,7 @@ fn job(a: &RenderArgs) -> Result<Job, Failure> {
         visibility: a.visibility.map(VisibilityMode::from),
         device: a.device.into(),
     };
-    let technique = analysis::registry::technique(&a.method, &options).map_err(input)?;
+    let technique = analysis::registry::technique(&a.method, &options).map_err(method_failure)?;
     let params = technique.params();
     for (flag, given, key) in [
         ("--rate", a.rate.is_some(), "rate"),
@@ -329,20 +371,30 @@ fn job(a: &RenderArgs) -> Result<Job, Failure> {
     let width = a.width.unwrap_or(scene.width);
     let height = a.height.unwrap_or(scene.height);
     for (flag, v) in [("--width", width), ("--height", height)] {
-        if !(1..=16384).contains(&v) {
-            return Err(input(anyhow::anyhow!("{flag}: must be in 1..=16384, got {v}")));
+        if !(1..=MAX_FRAME_SIDE).contains(&v) {
+            return Err(input(anyhow::anyhow!(
+                "{flag}: must be in 1..={MAX_FRAME_SIDE}, got {v} (the scene's resolution when \
+                 not given)"
+            )));
         }
+    }
+    check_frame(width, height).map_err(|m| input(anyhow::anyhow!("--width and --height: {m}")))?;
+    if a.device == DeviceArg::Gpu {
+        methods::gpu::GpuContext::shared().map_err(gpu_failure)?;
     }
     Ok(Job { scene, technique, width, height })
 }
 
-/// Runs the job's technique on `frame`, returning its visibility and run record.
 fn report(a: ReportArgs) -> Result<(), Failure> {
     let suite =
         reports::Suite::load(&a.suite).map_err(|e| input(anyhow::anyhow!("--suite: {e}")))?;
-    let out =
-        a.out.unwrap_or_else(|| PathBuf::from(format!("shadowbench-out/report-{}", suite.name)));
-    std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
+    let (out, flag) = match a.out {
+        Some(out) => (out, "--out"),
+        None => {
+            (PathBuf::from(format!("shadowbench-out/report-{}", suite.name)), "--out (default)")
+        }
+    };
+    prepare_out(&out, flag)?;
     let bar = indicatif::ProgressBar::new(reports::run_count(&suite));
     bar.set_style(
         indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} runs, {elapsed} {msg}")
@@ -367,12 +419,13 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
     Ok(())
 }
 
+/// Runs the job's technique on `frame`, returning its visibility and run record.
 fn run(
     job: &Job,
     frame: &Frame<'_>,
     mut rec: Recorder,
 ) -> Result<(Visibility, RunRecord), Failure> {
-    let visibility = job.technique.run(frame, &mut rec).map_err(input)?;
+    let visibility = job.technique.run(frame, &mut rec).map_err(method_failure)?;
     let record = RunRecord {
         scene: job.scene.name.clone(),
         method: job.technique.name().to_owned(),
@@ -393,15 +446,17 @@ fn run(
     Ok((visibility, record))
 }
 
+/// The output folder (`--out`, or `shadowbench-out/SCENE-METHOD{suffix}`), made ready by
+/// [`prepare_out`].
 fn out_dir(a: &RenderArgs, job: &Job, suffix: &str) -> Result<PathBuf, Failure> {
-    let out = a.out.clone().unwrap_or_else(|| {
-        PathBuf::from(format!(
-            "shadowbench-out/{}-{}{suffix}",
-            job.scene.name,
-            job.technique.name()
-        ))
-    });
-    std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
+    let (out, flag) = match &a.out {
+        Some(out) => (out.clone(), "--out"),
+        None => {
+            let name = format!("{}-{}{suffix}", job.scene.name, job.technique.name());
+            (Path::new("shadowbench-out").join(name), "--out (default)")
+        }
+    };
+    prepare_out(&out, flag)?;
     Ok(out)
 }
 
@@ -419,10 +474,10 @@ fn write_run(
 
 fn render(a: RenderArgs) -> Result<(), Failure> {
     let job = job(&a)?;
+    let out = out_dir(&a, &job, "")?;
     let mut rec = Recorder::default();
     let frame = Frame::new(&job.scene, job.width, job.height, &mut rec);
     let (visibility, record) = run(&job, &frame, rec)?;
-    let out = out_dir(&a, &job, "")?;
     write_run(&out, &frame, &visibility, &record)?;
     if a.json {
         println!("{}", serde_json::to_string_pretty(&record)?);
@@ -454,6 +509,7 @@ fn compare(c: CompareArgs) -> Result<(), Failure> {
     let pattern = a.pattern.map(PatternKind::from).unwrap_or_default();
     let reference =
         analysis::registry::reference(ref_name, ref_rate.unwrap_or(1), pattern).map_err(input)?;
+    let out = out_dir(a, &job, &format!("-vs-{ref_name}"))?;
 
     let mut rec = Recorder::default();
     let frame = Frame::new(&job.scene, job.width, job.height, &mut rec);
@@ -463,7 +519,6 @@ fn compare(c: CompareArgs) -> Result<(), Failure> {
     let metrics = Metrics::compare(&visibility, &truth.lit, &truth.evaluated);
     let flip = analysis::flip::flip_mean(&visibility, &truth.lit, &truth.evaluated);
 
-    let out = out_dir(a, &job, &format!("-vs-{ref_name}"))?;
     write_run(&out, &frame, &visibility, &record)?;
     let boundary: Vec<bool> =
         truth.lit.iter().zip(&truth.evaluated).map(|(&r, &e)| e && r > 0.0 && r < 1.0).collect();

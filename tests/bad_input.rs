@@ -28,6 +28,172 @@ direction = [-0.3, -1.0, -0.2]
 shape.plane = { size = 10.0 }
 "#;
 
+// Mesh and scene inputs: byte-order marks and line ends, PLY elements that end early,
+// fixed-size arrays, directions of any magnitude, extents and the supported range.
+
+/// The unit cube of the loader tests, in each text format.
+const CUBE_OBJ: &str = include_str!("../scenes/tests/data/cube.obj");
+const CUBE_OFF: &str = include_str!("../scenes/tests/data/cube.off");
+const CUBE_PLY: &str = include_str!("../scenes/tests/data/cube.ply");
+
+/// Renders `scene` with `sm` at 32 x 24 and returns the bytes of `visibility.exr`, or the exit
+/// code and stderr of a failed run.
+fn visibility(scene: &str) -> Result<Vec<u8>, (Option<i32>, String)> {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("out");
+    let o = shadowbench(&[
+        "render",
+        "--scene",
+        scene,
+        "--method",
+        "sm",
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--out",
+        out.to_str().expect("utf-8"),
+    ]);
+    match o.status.code() {
+        Some(0) => Ok(std::fs::read(out.join("visibility.exr")).expect("visibility.exr")),
+        code => Err((code, stderr(&o))),
+    }
+}
+
+/// Writes `bytes` to `dir/name` and returns the path as a string.
+fn write_bytes(dir: &std::path::Path, name: &str, bytes: &[u8]) -> String {
+    let p = dir.join(name);
+    std::fs::write(&p, bytes).expect("writes the test file");
+    p.to_string_lossy().into_owned()
+}
+
+#[test]
+fn mesh_files_with_a_byte_order_mark_or_old_line_ends_render_like_plain_ones() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    for (ext, text) in [("obj", CUBE_OBJ), ("off", CUBE_OFF), ("ply", CUBE_PLY)] {
+        let plain = visibility(&write(dir.path(), &format!("plain.{ext}"), text))
+            .unwrap_or_else(|e| panic!("plain {ext}: {e:?}"));
+        for (name, bom, end) in
+            [("bom", true, "\n"), ("cr", false, "\r"), ("bom-crlf", true, "\r\n")]
+        {
+            let mut bytes = if bom { b"\xEF\xBB\xBF".to_vec() } else { Vec::new() };
+            bytes.extend(text.replace('\n', end).into_bytes());
+            let path = write_bytes(dir.path(), &format!("{name}.{ext}"), &bytes);
+            let got = visibility(&path).unwrap_or_else(|e| panic!("{path}: {e:?}"));
+            assert!(got == plain, "{path} renders differently from plain.{ext}");
+        }
+    }
+}
+
+#[test]
+fn a_ply_declaring_more_vertices_than_it_holds_names_the_vertex_element() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let ply = CUBE_PLY.replace("element vertex 8", "element vertex 10");
+    let path = write(dir.path(), "ten.ply", &ply);
+    let (code, err) = visibility(&path).expect_err("10 vertices declared, 8 present");
+    assert_eq!(code, Some(2), "{err}");
+    let face_line = 1 + ply.lines().position(|l| l == "end_header").expect("header") + 9;
+    assert!(
+        err.contains("ten.ply")
+            && err.contains(&format!("line {face_line}:"))
+            && err.contains("element `vertex` ends early, after 8 of the 10 records"),
+        "{err}"
+    );
+}
+
+#[test]
+fn fixed_size_arrays_of_another_length_are_refused_with_key_and_line() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    for (name, from, to, line) in [
+        ("resolution.toml", "[64, 48]", "[160, 120, 7]", "line 2"),
+        ("eye.toml", "[0.0, 6.0, 8.0]", "[0.0, 6.0, 8.0, \"far\"]", "line 4"),
+        ("direction.toml", "[-0.3, -1.0, -0.2]", "[-0.3, -1.0]", "line 8"),
+    ] {
+        let path = write(dir.path(), name, &VALID.replace(from, to));
+        let (code, err) = visibility(&path).expect_err(name);
+        assert_eq!(code, Some(2), "{name}: {err}");
+        // The message quotes the line, which holds the key.
+        let key = name.trim_end_matches(".toml");
+        assert!(
+            err.contains(name) && err.contains(line) && err.contains(&format!("{key} = {to}")),
+            "{name}: {err}"
+        );
+    }
+}
+
+/// [`VALID`] with a cage casting a shadow on the plane.
+fn with_caster() -> String {
+    format!("{VALID}[[object]]\nshape.cage = {{}}\n")
+}
+
+#[test]
+fn light_directions_of_any_finite_magnitude_cast_the_same_shadows() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene = with_caster();
+    let plain = visibility(&write(dir.path(), "plain.toml", &scene)).expect("renders");
+    // Powers of two about 1e154 and 1e-170: the direction is exactly the same.
+    for k in [510, -560] {
+        let s = 2f64.powi(k);
+        let d = format!("[{:e}, {:e}, {:e}]", -0.3 * s, -1.0 * s, -0.2 * s);
+        let name = format!("direction-2^{k}.toml");
+        let path = write(dir.path(), &name, &scene.replace("[-0.3, -1.0, -0.2]", &d));
+        let got = visibility(&path).unwrap_or_else(|e| panic!("{name}: {e:?}"));
+        assert!(got == plain, "{name} casts other shadows");
+    }
+}
+
+#[test]
+fn meshes_near_the_ends_of_f64_fit_like_any_other() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let plain = visibility(&write(dir.path(), "plain.obj", CUBE_OBJ)).expect("renders");
+    // The cube's 0 and 1 mapped to -2^1023 and 2^1023 (its extent overflows), or to 0 and
+    // 2^-1070 (subnormal).
+    for (name, map) in [
+        ("huge.obj", (|c: f64| (2.0 * c - 1.0) * 2f64.powi(1023)) as fn(f64) -> f64),
+        ("subnormal.obj", |c: f64| c * f64::MIN_POSITIVE * 2f64.powi(-48)),
+    ] {
+        let text: String = CUBE_OBJ
+            .lines()
+            .map(|line| match line.strip_prefix("v ") {
+                Some(xyz) => {
+                    let xyz: Vec<String> = xyz
+                        .split_whitespace()
+                        .map(|c| format!("{:e}", map(c.parse().expect("number"))))
+                        .collect();
+                    format!("v {}\n", xyz.join(" "))
+                }
+                None => format!("{line}\n"),
+            })
+            .collect();
+        let got =
+            visibility(&write(dir.path(), name, &text)).unwrap_or_else(|e| panic!("{name}: {e:?}"));
+        assert!(got == plain, "{name} renders differently from plain.obj");
+    }
+}
+
+#[test]
+fn scenes_beyond_the_supported_range_are_refused_naming_the_range() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    write(dir.path(), "model.obj", "v 0 0 0\nv 1 0 0\nv 0 3.2e20 0\nf 1 2 3\n");
+    let model = format!("{VALID}[[object]]\nshape.file = {{ path = \"model.obj\" }}\n");
+    let far_eye = VALID.replace("eye = [0.0, 6.0, 8.0]", "eye = [0.0, 6.0, 2e15]");
+    for (name, text, needles) in [
+        ("model.toml", model, &["`object[1]`", "(model.obj)", "coordinates reach 3.2e20"][..]),
+        ("eye.toml", far_eye, &["`camera.eye`", "coordinates reach 2e15"][..]),
+    ] {
+        let path = write(dir.path(), name, &text);
+        let (code, err) = visibility(&path).expect_err(name);
+        assert_eq!(code, Some(2), "{name}: {err}");
+        assert!(
+            err.contains(name) && err.contains("beyond the supported range |x| <= 1e15"),
+            "{err}"
+        );
+        for n in needles {
+            assert!(err.contains(n), "{name}: message lacks `{n}`: {err}");
+        }
+    }
+}
+
 #[test]
 fn a_valid_scene_file_renders() {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -167,4 +333,118 @@ fn bad_flags_and_names_are_named() {
         assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
         assert!(stderr(&o).contains(needle), "{args:?}: expected `{needle}` in {}", stderr(&o));
     }
+}
+
+/// `--out` that cannot take the files is refused before anything is computed, for every
+/// command that writes (it used to fail with "internal error" after the whole run).
+#[test]
+fn an_out_folder_that_cannot_be_written_is_named_before_computing() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let file = write(dir.path(), "a-file", "not a folder");
+    let under_file = format!("{file}/out");
+    let render = ["render", "--scene", "cage", "--method", "sm", "--width", "32", "--height", "24"];
+    let compare = [&["compare"][..], &render[1..], &["--reference", "exact"]].concat();
+    let report = ["report", "--suite", "quick"];
+    for command in [&render[..], &compare[..], &report[..]] {
+        for (out, why) in [(file.as_str(), "a file is in the way"), (&under_file, "cannot create")]
+        {
+            let o = shadowbench(&[command, &["--out", out]].concat());
+            let err = stderr(&o);
+            assert_eq!(o.status.code(), Some(2), "{command:?} --out {out}: {err}");
+            assert!(err.contains(&format!("--out {out}")) && err.contains(why), "{err}");
+        }
+    }
+}
+
+/// A rate a method refuses is named with exactly the rates that method takes (`pan09`,
+/// `afsm-ss` and `spsm` used to list the references' rates up to 1024, which they refuse).
+#[test]
+fn bad_rates_list_exactly_the_rates_of_the_method() {
+    for (method, rate, takes) in [
+        ("pan09", "0", "1, 4, 8, 16, 32, 64, 128 samples"),
+        ("afsm-ss", "0", "1, 4, 8, 16, 32, 64, 128 samples"),
+        ("spsm", "0", "1, 4, 8, 16, 32, 64, 128 samples"),
+        ("spsm-f32", "256", "1, 4, 8, 16, 32, 64, 128 samples"),
+        ("pcf-reeves", "3", "1, 4, 8, 16, 32, 64, 128, 256, 512, 1024 samples"),
+    ] {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let out = dir.path().join("out");
+        let o = shadowbench(&[
+            "render",
+            "--scene",
+            "cage",
+            "--method",
+            method,
+            "--rate",
+            rate,
+            "--width",
+            "32",
+            "--height",
+            "24",
+            "--out",
+            out.to_str().expect("utf-8"),
+        ]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{method} --rate {rate}: {err}");
+        assert!(err.contains("--rate") && err.contains(&format!("takes {takes}")), "{err}");
+    }
+}
+
+/// Extreme and malformed flag values: exit 2 naming the flag (or both frame flags and the
+/// limit), never a panic, an abort or a misleading name.
+#[test]
+fn extreme_flag_values_are_named() {
+    let sm = ["--method", "sm"];
+    let frame = ["--width", "32", "--height", "24"];
+    let cases: &[(Vec<&str>, &[&str])] = &[
+        (
+            [&sm[..], &["--width", "16384", "--height", "16384"]].concat(),
+            &["--width and --height", "33554432"],
+        ),
+        ([&sm[..], &["--width", "4000000000"]].concat(), &["--width", "16384"]),
+        ([&sm[..], &["--width", "100000", "--height", "1"]].concat(), &["--width"]),
+        ([&sm[..], &["--width", "-5"]].concat(), &["--width"]),
+        ([&sm[..], &["--width", "wide"]].concat(), &["--width"]),
+        ([&sm[..], &frame, &["--map-res", "1000000"]].concat(), &["--map-res"]),
+        ([&sm[..], &frame, &["--seed", "-1"]].concat(), &["--seed"]),
+        ([&sm[..], &frame, &["--slope-bias", "-1"]].concat(), &["--slope-bias"]),
+        (
+            [&["--method", "pcf-bs-2x2"][..], &frame, &["--depth-bits", "2147483648"]].concat(),
+            &["--depth-bits"],
+        ),
+        (
+            [&["--method", "pcf-bs-2x2"][..], &frame, &["--depth-bits", "4000000000"]].concat(),
+            &["--depth-bits", "8, 12, 24, 32"],
+        ),
+    ];
+    for (extra, needles) in cases {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let out = dir.path().join("out");
+        let args =
+            [&["render", "--scene", "cage"][..], extra, &["--out", out.to_str().expect("utf-8")]]
+                .concat();
+        let o = shadowbench(&args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        for n in *needles {
+            assert!(err.contains(n), "{args:?}: `{n}` not in {err}");
+        }
+        assert!(!out.join("visibility.exr").exists(), "{args:?}: ran");
+    }
+}
+
+/// The GPU environment variables are bad input named as such, before any computation.
+#[test]
+fn a_bad_gpu_backend_variable_is_named_with_the_allowed_values() {
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_shadowbench"))
+        .args(["render", "--scene", "cage", "--method", "sm", "--device", "gpu"])
+        .args(["--width", "32", "--height", "24", "--out"])
+        .arg(tempfile::tempdir().expect("tempdir").path().join("out"))
+        .env("SHADOWBENCH_GPU_BACKEND", "warp-drive")
+        .output()
+        .expect("the shadowbench binary runs");
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("SHADOWBENCH_GPU_BACKEND") && err.contains("warp-drive"), "{err}");
+    assert!(err.contains("vulkan, gl, metal, dx12"), "{err}");
 }

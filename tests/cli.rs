@@ -233,3 +233,64 @@ fn help_explains_every_render_flag() {
         );
     }
 }
+
+/// Two identical runs write the same bytes (the EXR's blocks used to come in the order their
+/// parallel compression finished), so checksums can compare runs; in `run.json` only the
+/// times may differ.
+#[test]
+fn identical_renders_write_identical_files() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let render = |name: &str| {
+        let out = dir.path().join(name);
+        let o = shadowbench(&[
+            "render",
+            "--scene",
+            "spheres",
+            "--method",
+            "pcf-gems16",
+            "--width",
+            "640",
+            "--height",
+            "480",
+            "--map-res",
+            "512",
+            "--out",
+            out.to_str().expect("utf-8"),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        out
+    };
+    let (a, b) = (render("a"), render("b"));
+    for f in ["visibility.exr", "shadow.png"] {
+        let bytes = |d: &std::path::Path| std::fs::read(d.join(f)).expect("the file");
+        assert!(bytes(&a) == bytes(&b), "{f} differs between identical runs");
+    }
+    let record = |d: &std::path::Path| {
+        let mut v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(d.join("run.json")).expect("run.json"))
+                .expect("JSON");
+        v["total_ms"] = serde_json::Value::Null;
+        for s in v["stages"].as_array_mut().expect("stages") {
+            s["ms"] = serde_json::Value::Null;
+        }
+        v
+    };
+    assert_eq!(record(&a), record(&b));
+}
+
+/// A successful GPU run prints nothing about `XDG_RUNTIME_DIR` when the variable is unset
+/// (Mesa's Vulkan driver used to print `error: XDG_RUNTIME_DIR is invalid` twice).
+#[test]
+fn gpu_render_without_a_runtime_dir_prints_no_error() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_shadowbench"))
+        .args(["render", "--scene", "cage", "--method", "sm", "--device", "gpu"])
+        .args(["--width", "64", "--height", "48", "--out"])
+        .arg(dir.path().join("gpu"))
+        .env_remove("XDG_RUNTIME_DIR")
+        .output()
+        .expect("the shadowbench binary runs");
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("XDG_RUNTIME_DIR"), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("error"), "{}", stderr(&o));
+}
