@@ -599,3 +599,24 @@ fn main() -> ExitCode {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// GPU errors: the environment (variables, no adapter, no 64-bit floats) is bad input,
+    /// exit 2; the device failing is internal, exit 1.
+    #[test]
+    fn gpu_device_failures_are_internal_and_the_environment_is_input() {
+        let internal = |e: MethodError| matches!(method_failure(e), Failure::Internal(_));
+        assert!(internal(MethodError::Gpu(GpuError::Device("lost".into()))));
+        for env in [
+            GpuError::BadBackend("warp".into()),
+            GpuError::NoAdapter { backends: "VULKAN".into() },
+            GpuError::NoF64Adapter { adapters: "llvmpipe".into() },
+        ] {
+            assert!(!internal(MethodError::Gpu(env)));
+        }
+        assert!(!internal(MethodError::NotApplicable("exact".into())));
+    }
+}
