@@ -239,10 +239,15 @@ impl DepthTester {
             return None;
         }
         let bound_deg = self.max_slope.atan().to_degrees();
-        let fix = if self.slope_bias < 1.0 {
-            format!("--slope-bias 1 and --max-slope {:.4} would cover them", r.max_ratio)
-        } else if r.max_ratio.is_finite() {
-            format!("--max-slope {:.4} would cover them", r.max_ratio)
+        let mut fixes = Vec::new();
+        if self.slope_bias < 1.0 {
+            fixes.push("--slope-bias 1".to_owned());
+        }
+        if r.max_ratio > self.max_slope && r.max_ratio.is_finite() {
+            fixes.push(format!("--max-slope {:.4}", r.max_ratio));
+        }
+        let fix = if r.max_ratio.is_finite() {
+            format!("{} would cover them", fixes.join(" and "))
         } else {
             "surfaces parallel to the light cannot be covered".to_owned()
         };
@@ -401,6 +406,73 @@ mod tests {
             let c = DepthCode::new(bits, 0.0, 1.0).expect("valid");
             assert!(c.tolerance(DepthCode::min_constant_bias(bits)) >= 1.0);
         }
+    }
+
+    /// A 10 x 10 ground alone under a directional light `angle_deg` from its normal, seen
+    /// from above at 32 x 24.
+    fn grazing_ground(angle_deg: f64) -> scenes::Scene {
+        let s = 5.0;
+        let corners = [
+            DVec3::new(-s, 0.0, -s),
+            DVec3::new(-s, 0.0, s),
+            DVec3::new(s, 0.0, s),
+            DVec3::new(s, 0.0, -s),
+        ];
+        let mesh =
+            scenes::Mesh::new(corners.to_vec(), vec![[0, 1, 2], [0, 2, 3]]).expect("valid mesh");
+        let (sin, cos) = angle_deg.to_radians().sin_cos();
+        scenes::Scene {
+            name: "ground".into(),
+            width: 32,
+            height: 24,
+            camera: scenes::Camera::Perspective {
+                eye: DVec3::new(0.0, 6.0, 8.0),
+                target: DVec3::ZERO,
+                up: DVec3::Y,
+                fov_y_deg: 45.0,
+                near: 0.01,
+            },
+            light: scenes::Light::Directional {
+                direction: DVec3::new(-0.8 * sin, -cos, -0.6 * sin),
+            },
+            objects: vec![scenes::Object {
+                name: "ground".into(),
+                mesh,
+                material: Default::default(),
+                casts_shadows: true,
+            }],
+            switches: Default::default(),
+        }
+    }
+
+    /// The bias warning of `sm` with `options` on `scene`.
+    fn warning(scene: &scenes::Scene, options: &MapOptions) -> Option<String> {
+        let frame = Frame::new(scene, 32, 24, &mut instrumentation::Recorder::default());
+        let light = frame.light_projector(options.map_res);
+        let tester = DepthTester::new(options, light, frame.light_depth_range(&light));
+        tester.range_warning("sm", &frame)
+    }
+
+    #[test]
+    fn grazing_light_is_in_range_by_default_and_warns_beyond_the_bound() {
+        let defaults = MapOptions::default();
+        for angle in [45.0, 85.0, 89.9] {
+            assert_eq!(warning(&grazing_ground(angle), &defaults), None, "{angle}°");
+        }
+        let bound_10 = MapOptions { max_slope: 10.0, ..defaults };
+        assert_eq!(warning(&grazing_ground(80.0), &bound_10), None);
+        let w = warning(&grazing_ground(89.0), &bound_10).expect("a warning at 89°");
+        assert!(w.contains("89.00°") && w.contains("--max-slope 10)"), "{w}");
+        assert!(w.contains("--max-slope 57.2"), "{w}");
+        assert!(!w.contains("--slope-bias 1 "), "{w}");
+    }
+
+    #[test]
+    fn a_slope_bias_below_one_warns_without_asking_for_a_smaller_bound() {
+        let o = MapOptions { slope_bias: 0.5, ..MapOptions::default() };
+        let w = warning(&grazing_ground(60.0), &o).expect("a warning");
+        assert!(w.contains("--slope-bias 1 would cover them"), "{w}");
+        assert!(!w.contains("--max-slope 1."), "{w}");
     }
 
     #[test]
