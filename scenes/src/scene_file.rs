@@ -486,7 +486,7 @@ impl Transform {
             return Err(("scale", "scaling and rotating make the coordinates overflow".into()));
         }
         if let Some(size) = self.fit_size {
-            fit(mesh, size);
+            fit(mesh, size).map_err(|message| ("fit_size", message))?;
         }
         if self.on_ground {
             if let Some((lo, _)) = mesh.bounds() {
@@ -499,29 +499,31 @@ impl Transform {
 }
 
 /// Centres `mesh`'s bounds on the origin and scales it uniformly so that its largest extent is
-/// `size` (finite and positive); a mesh of zero extent is only centred. Exact in scale for any
-/// finite mesh: powers of two bring first its coordinates and then its extent near 1, so that
-/// neither the extent nor the centre overflows and the scale factor neither overflows nor
-/// underflows, whether the coordinates are near ±1e308 or subnormal.
-fn fit(mesh: &mut Mesh, size: f64) {
+/// `size` (finite and positive); a mesh whose vertices are all one point has no extent to fit
+/// and is refused. Exact in scale for any finite mesh: powers of two bring first its
+/// coordinates and then its extent near 1, so that neither the extent nor the centre overflows
+/// and the scale factor neither overflows nor underflows, whether the coordinates are near
+/// ±1e308 or subnormal.
+fn fit(mesh: &mut Mesh, size: f64) -> Result<(), String> {
     scale_by_power_of_two(mesh, -exponent(largest_magnitude(mesh)));
-    let Some((lo, hi)) = mesh.bounds() else { return };
+    let Some((lo, hi)) = mesh.bounds() else { return Ok(()) };
     // Coordinates below 2 in magnitude: the extent is below 4, the centre exact.
     let extent = (hi - lo).max_element();
+    if extent == 0.0 {
+        return Err("the mesh has no extent to fit: its vertices are all one point".into());
+    }
     let centre = 0.5 * (lo + hi);
     for p in &mut mesh.positions {
         *p -= centre;
     }
-    if extent > 0.0 {
-        scale_by_power_of_two(mesh, -exponent(extent));
-        if let Some((lo, hi)) = mesh.bounds() {
-            // The extent is now near [1, 2): the factor is finite, no coordinate overflows.
-            let s = size / (hi - lo).max_element();
-            for p in &mut mesh.positions {
-                *p *= s;
-            }
-        }
+    let k = exponent(extent);
+    scale_by_power_of_two(mesh, -k);
+    // The extent is now in [1, 2): the factor is finite, and no coordinate overflows.
+    let s = size / times_power_of_two(DVec3::splat(extent), -k).x;
+    for p in &mut mesh.positions {
+        *p *= s;
     }
+    Ok(())
 }
 
 /// The largest magnitude of any coordinate of `mesh` (0 without vertices).
@@ -542,15 +544,20 @@ fn exponent(m: f64) -> i32 {
     }
 }
 
-/// Multiplies every coordinate of `mesh` by `2^k`, in steps of at most `2^±1000` (each exact
-/// unless it underflows): `2^k` itself need not be an `f64`.
-fn scale_by_power_of_two(mesh: &mut Mesh, mut k: i32) {
+/// Multiplies every coordinate of `mesh` by `2^k` ([`times_power_of_two`]).
+fn scale_by_power_of_two(mesh: &mut Mesh, k: i32) {
+    for p in &mut mesh.positions {
+        *p = times_power_of_two(*p, k);
+    }
+}
+
+/// `v * 2^k`, in steps of at most `2^±1000` (each exact unless it underflows), so that `2^k`
+/// itself need not be an `f64`.
+fn times_power_of_two(mut v: DVec3, mut k: i32) -> DVec3 {
     while k != 0 {
         let step = k.clamp(-1000, 1000);
-        let factor = 2f64.powi(step);
-        for p in &mut mesh.positions {
-            *p *= factor;
-        }
+        v *= 2f64.powi(step);
         k -= step;
     }
+    v
 }

@@ -216,6 +216,17 @@ fn the_fit_holds_any_finite_mesh_with_an_extent() {
     let scene = mesh_scene("wide.obj", wide).unwrap_or_else(|e| panic!("{e}"));
     let (lo, hi) = scene.objects[1].mesh.bounds().expect("vertices");
     assert!((hi.x - lo.x - 4.0).abs() < 1e-12 && (hi.y - 2.0).abs() < 1e-12, "{lo} {hi}");
+    // All one point: nothing to fit.
+    let err = mesh_scene("point.obj", "v 1e-320 1 1\nv 1e-320 1 1\nv 1e-320 1 1\nf 1 2 3\n")
+        .expect_err("one point");
+    assert!(
+        matches!(&err, SceneError::Invalid { key, .. } if key == "object[1].transform.fit_size"),
+        "{err}"
+    );
+    assert!(
+        err.to_string().contains("point.obj") && err.to_string().contains("one point"),
+        "{err}"
+    );
 }
 
 /// [`ARRAYS`]' second scene with `from` replaced by `to`, resolved.
