@@ -17,6 +17,8 @@
 //! mean absolute error over `exact`'s evaluated pixels within `1e-4` of the base scene's. Scenes beyond `scenes::limits` must be refused as bad input
 //! naming the supported range. Near the horizon, the shadow-map methods with default options
 //! must keep the lit ground lit, or say in the run's warnings that the bias is out of range.
+//! Where a GPU adapter exists (Mesa's lavapipe will do), `afsm`'s GPU kernels must equal the
+//! CPU's pixel for pixel on the base, scaled, translated and far-object scenes.
 
 mod common;
 
@@ -527,6 +529,39 @@ fn scenes_beyond_the_supported_range_are_refused_naming_it() {
             ["1e15", "1e-9", "1000000000000000", "0.000000001"].iter().any(|r| err.contains(r));
         if o.status.code() != Some(2) || !err.contains(file) || !names_range {
             failures.push(format!("{file}: exit {:?}: {err}", o.status.code()));
+        }
+    }
+    assert!(failures.is_empty(), "{} failures:\n{}", failures.len(), failures.join("\n"));
+}
+
+#[test]
+fn gpu_afsm_equals_the_cpu_on_every_scale_position_and_far_object() {
+    use methods::{
+        afsm::{AfsmOptions, AliasFreeShadowMap},
+        gpu::{afsm as gpu_afsm, GpuContext, GpuFrame},
+        ShadowMethod,
+    };
+    let ctx = match GpuContext::shared() {
+        Ok(ctx) => ctx,
+        Err(e) => {
+            eprintln!("skipped: no GPU adapter ({e})");
+            return;
+        }
+    };
+    let cpu = AliasFreeShadowMap::pixel_centres(AfsmOptions::default());
+    let mut failures = Vec::new();
+    for c in family().into_iter().filter(|c| c.base.is_some() || c.name.starts_with("base")) {
+        let frame = Frame::new(&c.scene, WIDTH, HEIGHT, &mut Recorder::default());
+        let want = cpu.run(&frame, &mut Recorder::default()).expect("CPU afsm runs");
+        let gpu = GpuFrame::upload(ctx, &frame, &frame.gbuffer);
+        match gpu_afsm::shade(ctx, &gpu, &frame, &mut Recorder::default()) {
+            Ok(out) => {
+                let differing = out.lit.iter().zip(&want.lit).filter(|(g, c)| g != c).count();
+                if differing > 0 {
+                    failures.push(format!("{}: {differing} pixels differ", c.name));
+                }
+            }
+            Err(e) => failures.push(format!("{}: {e}", c.name)),
         }
     }
     assert!(failures.is_empty(), "{} failures:\n{}", failures.len(), failures.join("\n"));
