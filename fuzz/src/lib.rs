@@ -34,8 +34,12 @@ use scenes::scene_file::Shape;
 use scenes::{Mesh, SceneDesc, SceneError};
 use std::path::{Component, Path};
 
+/// A fuzz target: runs the fuzzer's bytes through one parser and returns whether they were
+/// accepted; panics when the parser breaks its contract.
+pub type Target = fn(&[u8]) -> bool;
+
 /// The targets, by the names `scripts/fuzz` and `tests/data/fuzz/` use.
-pub const TARGETS: &[(&str, fn(&[u8]) -> bool)] =
+pub const TARGETS: &[(&str, Target)] =
     &[("obj", obj), ("off", off), ("ply", ply), ("scene", scene), ("suite", suite)];
 
 /// The folder that mesh files named by fuzzed scene files are looked up in: one that does not
