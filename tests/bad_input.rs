@@ -70,7 +70,10 @@ fn write_bytes(dir: &std::path::Path, name: &str, bytes: &[u8]) -> String {
 #[test]
 fn mesh_files_with_a_byte_order_mark_or_old_line_ends_render_like_plain_ones() {
     let dir = tempfile::tempdir().expect("tempdir");
-    for (ext, text) in [("obj", CUBE_OBJ), ("off", CUBE_OFF), ("ply", CUBE_PLY)] {
+    // The OBJ starts with a vertex, which a byte-order mark used to hide.
+    let obj: String =
+        CUBE_OBJ.lines().filter(|l| l.starts_with(['v', 'f'])).map(|l| format!("{l}\n")).collect();
+    for (ext, text) in [("obj", obj.as_str()), ("off", CUBE_OFF), ("ply", CUBE_PLY)] {
         let plain = visibility(&write(dir.path(), &format!("plain.{ext}"), text))
             .unwrap_or_else(|e| panic!("plain {ext}: {e:?}"));
         for (name, bom, end) in
@@ -131,8 +134,9 @@ fn light_directions_of_any_finite_magnitude_cast_the_same_shadows() {
     let dir = tempfile::tempdir().expect("tempdir");
     let scene = with_caster();
     let plain = visibility(&write(dir.path(), "plain.toml", &scene)).expect("renders");
-    // Powers of two about 1e154 and 1e-170: the direction is exactly the same.
-    for k in [510, -560] {
+    // Powers of two about 1e154 and 1e-170, whose squared lengths overflow and underflow: the
+    // direction is exactly the same.
+    for k in [512, -560] {
         let s = 2f64.powi(k);
         let d = format!("[{:e}, {:e}, {:e}]", -0.3 * s, -1.0 * s, -0.2 * s);
         let name = format!("direction-2^{k}.toml");

@@ -286,6 +286,15 @@ fn recode(text: &str, bom: bool, end: &str) -> Vec<u8> {
 fn text_formats_accept_a_byte_order_mark_and_every_line_end() {
     for name in ["cube.obj", "cube.off", "cube.ply"] {
         let text = std::fs::read_to_string(data(name)).expect("read");
+        // An OBJ that starts with a vertex, which a byte-order mark used to hide.
+        let text = match name {
+            "cube.obj" => text
+                .lines()
+                .filter(|l| l.starts_with(['v', 'f']))
+                .map(|l| format!("{l}\n"))
+                .collect(),
+            _ => text,
+        };
         for (bom, end) in
             [(true, "\n"), (false, "\r\n"), (false, "\r"), (true, "\r\n"), (true, "\r")]
         {
