@@ -12,10 +12,22 @@
 //! or more values than the header declares is an error naming it; blank lines are skipped, and
 //! an integer-typed value must be written as an integer. Data after the last element is ignored.
 //!
+//! The header's lines end as its first does (LF, CRLF or CR alone) and may follow a UTF-8
+//! byte-order mark; an ASCII body's lines may end with any of the three.
+//!
 //! Errors name the header line, the body line (ASCII) or the element, its index and the byte
 //! offset where its record starts (binary): malformed header, missing `x`/`y`/`z`, missing `face`
 //! element, truncated data, malformed or non-finite number, face with fewer than 3 vertices,
 //! index out of range.
+//!
+//! A header that declares more records than the body holds is blamed on the element that ends
+//! early, not on the records after it that would be misread in its place. ASCII: when the body
+//! has fewer non-blank lines than declared records, the first line that is not a record of the
+//! element being read is named, with how many of its declared records came before. Binary:
+//! before anything is read, the body's size is checked against the smallest records the header
+//! allows (lists empty, faces with 3 indices), naming the first element that cannot fit, its
+//! byte offset and how many of its records fit; a declared count of billions is refused there,
+//! with nothing allocated for it.
 
 use super::{fan, last_line, lines, strip_bom, Syntax};
 use crate::mesh::Mesh;
