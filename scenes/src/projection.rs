@@ -93,7 +93,7 @@ pub fn direction_between(from: DVec3, to: DVec3) -> Option<DVec3> {
 
 /// An orthonormal basis `(right, up, forward)` looking along `forward`, with `up` as close to
 /// `up_hint` as possible. Falls back to another hint when the two are parallel or the hint is
-/// zero. Both vectors are normalised with [`unit`], so that any finite non-zero magnitude
+/// zero. Both vectors are normalised with [`unit()`], so that any finite non-zero magnitude
 /// works; a `forward` without a direction (zero or not finite) gives a basis of NaN.
 pub fn look_basis(forward: DVec3, up_hint: DVec3) -> (DVec3, DVec3, DVec3) {
     let Some(f) = unit(forward) else {
