@@ -4,7 +4,7 @@
 //! The same functions run under AFL++ (the binary of `src/main.rs`, built by `cargo afl build`)
 //! and in the workspace test `tests/fuzz_regressions.rs`, which includes this file by `#[path]`
 //! and replays every input saved in `tests/data/fuzz/<target>/`. That is why this file uses
-//! only `std`, `scenes` and `reports`, which both builds have.
+//! only `std`, `glam`, `scenes` and `reports`, which both builds have.
 //!
 //! A target passes when the call returns `Ok` or `Err` without panicking. On top of that:
 //!
@@ -12,7 +12,9 @@
 //!   finite coordinates and only indices in range, checked here independently of
 //!   `Mesh::validate`.
 //! - `scene` (the scene-file parser): when the text parses, the description is resolved, and an
-//!   `Ok` scene's meshes are checked the same way. Shapes that name a mesh file are resolved
+//!   `Ok` scene is checked against what resolution promises: meshes checked the same way, every
+//!   vertex, camera point and spot-light point within `limits::MAX_COORDINATE`, a bounding-box
+//!   diagonal of at least `limits::MIN_EXTENT`, a directional light of unit direction. Shapes that name a mesh file are resolved
 //!   against [`NO_MESH_FOLDER`], a folder that does not exist, and only when the path is
 //!   relative and made of plain names, so no input reads the disk (every such file is then
 //!   missing); a description whose file paths are anything else is parsed but not resolved.
@@ -30,8 +32,9 @@
 //! test can check that the seeds are valid files.
 
 use scenes::io::{load_mesh_from_bytes, MeshFormat};
+use scenes::limits::{MAX_COORDINATE, MIN_EXTENT};
 use scenes::scene_file::Shape;
-use scenes::{Mesh, SceneDesc, SceneError};
+use scenes::{Camera, Light, Mesh, Scene, SceneDesc, SceneError};
 use std::path::{Component, Path};
 
 /// A fuzz target: runs the fuzzer's bytes through one parser and returns whether they were
@@ -72,9 +75,7 @@ pub fn scene(data: &[u8]) -> bool {
     }
     match desc.resolve("fuzz", origin, base) {
         Ok(scene) => {
-            for object in &scene.objects {
-                check_mesh(&object.mesh, &format!("scene object `{}`", object.name));
-            }
+            check_scene(&scene);
             true
         }
         Err(SceneError::ModelMissing { .. }) => true,
@@ -105,6 +106,32 @@ fn stays_in_base(shape: &Shape) -> bool {
     }
 }
 
+/// Panics unless `scene` is what `SceneDesc::resolve` promises (see the module documentation).
+fn check_scene(scene: &Scene) {
+    let within = |p: glam::DVec3| p.abs().max_element() <= MAX_COORDINATE;
+    for object in &scene.objects {
+        let what = format!("scene object `{}`", object.name);
+        check_mesh(&object.mesh, &what);
+        if let Some(p) = object.mesh.positions.iter().find(|&&p| !within(p)) {
+            panic!("{what}: accepted vertex {p} beyond {MAX_COORDINATE:e}");
+        }
+    }
+    let (Camera::Perspective { eye, target, .. } | Camera::Orthographic { eye, target, .. }) =
+        &scene.camera;
+    assert!(within(*eye) && within(*target), "accepted camera {eye} -> {target}");
+    match &scene.light {
+        Light::Directional { direction } => {
+            assert!((direction.length() - 1.0).abs() < 1e-12, "light direction {direction}");
+        }
+        Light::Spot { position, target, .. } => {
+            assert!(within(*position) && within(*target), "accepted spot {position} -> {target}");
+        }
+    }
+    let (lo, hi) = scene.bounds();
+    let diagonal = (hi - lo).length();
+    assert!(diagonal >= MIN_EXTENT, "accepted geometry of diagonal {diagonal:e}");
+}
+
 /// Panics unless `mesh` is what every consumer may assume of a loaded mesh.
 fn check_mesh(mesh: &Mesh, what: &str) {
     assert!(!mesh.triangles.is_empty(), "{what}: accepted a mesh without triangles");
@@ -133,6 +160,19 @@ mod tests {
             assert!(!stays_in_base(&file(path)), "{path}");
         }
         assert!(!Path::new(NO_MESH_FOLDER).exists());
+    }
+
+    #[test]
+    #[should_panic(expected = "light direction")]
+    fn a_light_of_non_unit_direction_fails_the_scene_check() {
+        let text = "[camera.orthographic]\neye = [0.0, 5.0, 0.1]\ntarget = [0.0, 0.0, 0.0]\n\
+                    height = 10.0\n[light.directional]\ndirection = [0.0, -2.0, 0.0]\n\
+                    [[object]]\nshape.plane = { size = 2.0 }\n";
+        let desc = SceneDesc::from_toml(text, Path::new("t.toml")).expect("parses");
+        let mut scene = desc.resolve("t", Path::new("t.toml"), Path::new(".")).expect("resolves");
+        check_scene(&scene);
+        scene.light = Light::Directional { direction: glam::DVec3::new(0.0, -2.0, 0.0) };
+        check_scene(&scene);
     }
 
     #[test]
