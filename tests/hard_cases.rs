@@ -16,7 +16,8 @@
 //! scene: the mean absolute error over `exact`'s evaluated pixels within `1e-4` of the base
 //! scene's. Every other method must do the same on the scaled and translated variants (with a
 //! far object the light frustum, fitted to the scene's bounds, no longer resolves the scene
-//! near the origin, so shadow maps are not held to it there). Scenes beyond `scenes::limits`
+//! near the origin, and the constant depth bias, a fraction of the light's depth range, grows
+//! past the scene under a spot light too, so shadow maps are not held to it there). Scenes beyond `scenes::limits`
 //! must be refused as bad input naming the supported range. Near the horizon, the shadow-map
 //! methods with default options must keep the lit ground lit, or say in the run's warnings
 //! that the bias is out of range.

@@ -10,8 +10,8 @@
 //! 2. **Shadow ray** from the hit point towards the light (directional: along `-direction`,
 //!    unbounded; spot: towards `position`, ending at the light; the spot's cone is ignored, as
 //!    in the shadow maps and `exact`), against caster triangles only (`frame.is_caster`),
-//!    excluding the hit triangle itself and ignoring hits nearer than [`shadow_offset`] (local
-//!    to the hit point, see Choices). Opaque scenes (no `transparency` effect, also when the scene file
+//!    excluding the hit triangle itself and ignoring hits nearer than `afsm::shadow_offset`
+//!    (local to the hit point, see Choices; `afsm` decides its shadows with the same offset). Opaque scenes (no `transparency` effect, also when the scene file
 //!    forces it off): the first caster hit ends the ray (`ray_traverse_miss`). Scenes with
 //!    `transparency`: every caster hit along the ray multiplies the transmittance by
 //!    `1 - opacity` (an opaque caster ends the ray at 0).
@@ -73,7 +73,7 @@
 //! # Choices
 //!
 //! - **Shadow ray start**: from the `f64` hit point, skipping the hit triangle, and ignoring
-//!   hits nearer than [`SHADOW_RAY_OFFSET`] (`1e-10`) times the magnitude of the numbers that
+//!   hits nearer than `afsm::SHADOW_OFFSET` (`1e-10`) times the magnitude of the numbers that
 //!   made the point: the larger coordinate magnitude of the camera ray's origin and the hit,
 //!   plus their distance. The hit point's rounding error is about `1e-16` of that magnitude, so
 //!   a coplanar neighbour (a subdivided lit plane, even under a light 89.9° from the vertical,
@@ -98,7 +98,7 @@
 use crate::reference::{Reference, ReferenceError, ReferenceImage};
 use glam::{DVec3, Vec3A};
 use instrumentation::Recorder;
-use methods::{pattern::SamplePattern, Frame};
+use methods::{afsm::shadow_offset, pattern::SamplePattern, Frame};
 use obvhs::{
     aabb::Aabb,
     cwbvh::{builder::build_cwbvh, CwBvh},
@@ -112,20 +112,6 @@ use scenes::{projection::ProjectionKind, Geometry, Light};
 pub const STAGE_BVH_BUILD: &str = "BVH build";
 /// Name of the stage that traces the camera and shadow rays.
 pub const STAGE_RAY_TRACING: &str = "ray tracing";
-
-/// Shadow rays ignore hits nearer than this fraction of the magnitude of the numbers that
-/// made their start point (see [`shadow_offset`]).
-pub const SHADOW_RAY_OFFSET: f64 = 1e-10;
-
-/// The distance below which a shadow ray from `p`, the hit of a camera ray from `origin`,
-/// ignores occluders: [`SHADOW_RAY_OFFSET`] times the largest coordinate magnitude of the two
-/// points plus their distance (in the max norm), the scale of `p`'s rounding error. Local: a
-/// far-away object, or the scene's position and size, do not change it.
-#[inline]
-pub fn shadow_offset(origin: DVec3, p: DVec3) -> f64 {
-    let magnitude = origin.abs().max(p.abs()).max_element() + (p - origin).abs().max_element();
-    SHADOW_RAY_OFFSET * magnitude
-}
 
 /// The ray-traced reference: one camera ray and one shadow ray per sub-sample of `pattern`.
 #[derive(Debug, Clone, PartialEq)]

@@ -92,7 +92,10 @@ impl Light {
     /// the box seen along the light (texels may be non-square), and whose origin lies in front
     /// of the box so that every depth is positive. Spot: a perspective frustum of the spot's
     /// opening angle; `near` is the nearest depth of the box's corners, clamped to a small
-    /// positive fraction of the box's size when the light is inside the box.
+    /// positive distance when the light is inside the box: 1e-4 of the spot's aim distance
+    /// (position to target) or of the box's diagonal, whichever is smaller. The aim distance
+    /// is the scale the spot lights; a far-away object, which stretches the box, does not push
+    /// the near plane past the geometry around the light.
     pub fn projector(&self, bounds: (DVec3, DVec3), res: u32) -> Projector {
         let (lo, hi) = bounds;
         let pad = (hi - lo).length().max(1e-9) * FIT_MARGIN;
@@ -135,7 +138,8 @@ impl Light {
                 let (right, up, forward) = look_basis(axis, DVec3::Y);
                 let nearest =
                     corners.map(|c| (c - position).dot(forward)).fold(f64::INFINITY, f64::min);
-                let near = nearest.max(1e-4 * pad / FIT_MARGIN);
+                let aim = (target - position).length();
+                let near = nearest.max(1e-4 * aim.min(pad / FIT_MARGIN));
                 let t = (fov_deg.to_radians() * 0.5).tan();
                 Projector {
                     origin: position,
@@ -203,6 +207,17 @@ mod tests {
         assert_eq!(spot.direction_to_light(-far), DVec3::Y);
         let spot = Light::Spot { position: DVec3::ONE, target: DVec3::ONE, fov_deg: 60.0 };
         assert_eq!(spot.validate().map_err(|(key, _)| key), Err("target"));
+    }
+
+    #[test]
+    fn spot_near_plane_is_not_pushed_out_by_a_far_object() {
+        let light =
+            Light::Spot { position: DVec3::new(0.0, 3.0, 0.0), target: DVec3::ZERO, fov_deg: 60.0 };
+        let near_box = (DVec3::new(-5.0, 0.0, -5.0), DVec3::new(5.0, 4.0, 5.0));
+        let far_box = (near_box.0, DVec3::splat(1e12));
+        let (a, b) = (light.projector(near_box, 64), light.projector(far_box, 64));
+        assert!(a.near > 0.0 && a.near <= 3.0001e-4, "{}", a.near);
+        assert_eq!(a.near, b.near);
     }
 
     #[test]

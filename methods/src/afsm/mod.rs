@@ -139,7 +139,7 @@ pub const STAGE_RASTERIZATION: &str = "rasterization of blockers";
 pub const STAGE_GBUFFER_SUBSAMPLE: &str = "camera G-buffer";
 
 /// Shadow offset as a fraction of the magnitude of the numbers that made a sample's surface
-/// point (see [`shadow_offset`]); equal to the ray-traced reference's `SHADOW_RAY_OFFSET`.
+/// point (see [`shadow_offset`]); the ray-traced reference's shadow rays use the same offset.
 pub const SHADOW_OFFSET: f64 = 1e-10;
 
 /// The distance below which a caster does not shadow the surface point `p`, the hit of a
