@@ -31,7 +31,6 @@ use std::{
     sync::{Arc, Mutex, OnceLock},
     time::Instant,
 };
-use wgpu::util::DeviceExt;
 
 /// Environment variable restricting the wgpu backends asked for an adapter.
 pub const BACKEND_ENV: &str = "SHADOWBENCH_GPU_BACKEND";
@@ -262,22 +261,40 @@ impl GpuContext {
         } else {
             bytes
         };
-        self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(label),
+        self.buffer_with(
+            label,
             contents,
-            usage: wgpu::BufferUsages::STORAGE
+            wgpu::BufferUsages::STORAGE
                 | wgpu::BufferUsages::COPY_SRC
                 | wgpu::BufferUsages::COPY_DST,
-        })
+        )
     }
 
     /// A uniform buffer holding `value`.
     pub fn uniform<T: Pod>(&self, label: &str, value: &T) -> wgpu::Buffer {
-        self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        self.buffer_with(
+            label,
+            bytemuck::bytes_of(value),
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        )
+    }
+
+    /// A buffer of `usage` holding `contents` (padded to a multiple of 4 bytes). A buffer the
+    /// device refuses (larger than its limits, out of memory) comes back invalid, and the
+    /// device's error is returned by the next wait; wgpu's own `create_buffer_init` panics
+    /// there instead.
+    fn buffer_with(&self, label: &str, contents: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
+        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(label),
-            contents: bytemuck::bytes_of(value),
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        })
+            size: (contents.len() as u64).next_multiple_of(4),
+            usage,
+            mapped_at_creation: true,
+        });
+        if let Ok(mut range) = buffer.get_mapped_range_mut(..) {
+            range.slice(..contents.len()).copy_from_slice(contents);
+        }
+        buffer.unmap();
+        buffer
     }
 
     /// A zeroed storage buffer of `len` elements of `T` (at least 4 bytes).
@@ -447,5 +464,23 @@ mod tests {
         let e = ctx.wait().expect_err("the error is returned");
         assert!(matches!(e, GpuError::Device(_)), "{e}");
         ctx.wait().expect("returned once");
+    }
+
+    /// A buffer larger than the device allows, uploaded from the CPU, is a device error from
+    /// the next wait, not a panic.
+    #[test]
+    fn an_upload_beyond_the_device_limits_is_a_device_error() {
+        let ctx = GpuContext::new().expect("a GPU adapter (scripts/install-gpu-driver)");
+        let too_big = ctx.device.limits().max_buffer_size + 4;
+        let Ok(len) = usize::try_from(too_big) else {
+            return;
+        };
+        if len > 1 << 33 {
+            eprintln!("skipped: the adapter allows buffers of {too_big} bytes");
+            return;
+        }
+        let _buffer = ctx.upload("too big", &vec![0u8; len]);
+        let e = ctx.wait().expect_err("the error is returned");
+        assert!(matches!(e, GpuError::Device(_)), "{e}");
     }
 }
