@@ -378,7 +378,9 @@ fn job(a: &RenderArgs) -> Result<Job, Failure> {
             )));
         }
     }
-    check_frame(width, height).map_err(|m| input(anyhow::anyhow!("--width and --height: {m}")))?;
+    let samples = methods::registry::stored_samples(&a.method, &options);
+    let flags = if samples > 1 { "--width, --height and --rate" } else { "--width and --height" };
+    check_frame(width, height, samples).map_err(|m| input(anyhow::anyhow!("{flags}: {m}")))?;
     if a.device == DeviceArg::Gpu {
         methods::gpu::GpuContext::shared().map_err(gpu_failure)?;
     }

@@ -406,6 +406,10 @@ fn extreme_flag_values_are_named() {
             &["--width and --height", "33554432"],
         ),
         ([&sm[..], &["--width", "4000000000"]].concat(), &["--width", "16384"]),
+        (
+            vec!["--method", "afsm-ss", "--rate", "128", "--width", "1920", "--height", "1080"],
+            &["--width, --height and --rate", "134217728"],
+        ),
         ([&sm[..], &["--width", "100000", "--height", "1"]].concat(), &["--width"]),
         ([&sm[..], &["--width", "-5"]].concat(), &["--width"]),
         ([&sm[..], &["--width", "wide"]].concat(), &["--width"]),

@@ -123,6 +123,16 @@ pub fn rates(name: &str) -> Option<Vec<u32>> {
     }
 }
 
+/// Sub-samples per pixel the method `name` keeps in memory at once with `options`: the
+/// alias-free shadow map's sampling points (`afsm-ss`: its rate, about 35 bytes each); 1 for
+/// the others, whose memory grows with the pixels and the map only. For frame size limits.
+pub fn stored_samples(name: &str, options: &MethodOptions) -> u32 {
+    match name {
+        "afsm-ss" => options.rate.unwrap_or(AfsmOptions::supersampled().rate),
+        _ => 1,
+    }
+}
+
 /// Checks `options.rate` against [`rates`]`(name)`; the error lists exactly those rates.
 fn check_rate(name: &str, options: &MethodOptions) -> Result<(), MethodError> {
     let (Some(rate), Some(accepted)) = (options.rate, rates(name)) else {
@@ -324,6 +334,14 @@ mod tests {
         }
         assert_eq!(rates("pan09").and_then(|r| r.last().copied()), Some(MAX_METHOD_RATE));
         assert_eq!(rates("sm"), None);
+    }
+
+    #[test]
+    fn afsm_ss_stores_its_rate_per_pixel() {
+        let o = MethodOptions { rate: Some(64), ..Default::default() };
+        assert_eq!(stored_samples("afsm-ss", &o), 64);
+        assert_eq!(stored_samples("afsm-ss", &MethodOptions::default()), 32);
+        assert_eq!(stored_samples("pan09", &o), 1);
     }
 
     /// Depth precisions that are not supported are named as such, whatever the default bias

@@ -81,9 +81,15 @@ pub const MAX_FRAME_SIDE: u32 = 16384;
 /// 4096) keep a run within a few GB.
 pub const MAX_FRAME_PIXELS: u64 = 1 << 25;
 
-/// Checks a frame size against [`MAX_FRAME_SIDE`] and [`MAX_FRAME_PIXELS`]; the error says
+/// The most sub-samples a method may keep in memory for one frame (pixels times
+/// [`methods::registry::stored_samples`]): 2^27, about 5 GB of `afsm-ss` sampling points
+/// (1920 x 1080 at 64 sub-samples fits, at 128 it does not).
+pub const MAX_FRAME_SAMPLES: u64 = 1 << 27;
+
+/// Checks a frame size against [`MAX_FRAME_SIDE`] and [`MAX_FRAME_PIXELS`], and the frame's
+/// stored sub-samples (`samples` per pixel) against [`MAX_FRAME_SAMPLES`]; the error says
 /// which limit and the values.
-pub fn check_frame(width: u32, height: u32) -> Result<(), String> {
+pub fn check_frame(width: u32, height: u32, samples: u32) -> Result<(), String> {
     for (what, v) in [("width", width), ("height", height)] {
         if !(1..=MAX_FRAME_SIDE).contains(&v) {
             return Err(format!("{what} must be in 1..={MAX_FRAME_SIDE}, got {v}"));
@@ -94,6 +100,13 @@ pub fn check_frame(width: u32, height: u32) -> Result<(), String> {
         return Err(format!(
             "a {width} x {height} frame has {pixels} pixels, more than the {MAX_FRAME_PIXELS} \
              (8192 x 4096) a run can hold in memory"
+        ));
+    }
+    let stored = pixels * u64::from(samples);
+    if stored > MAX_FRAME_SAMPLES {
+        return Err(format!(
+            "a {width} x {height} frame at {samples} stored sub-samples per pixel has {stored} \
+             sub-samples, more than the {MAX_FRAME_SAMPLES} a run can hold in memory"
         ));
     }
     Ok(())
@@ -345,7 +358,7 @@ impl Suite {
             return Err(invalid("width", "give both width and height, or neither".into()));
         }
         if suite.width != 0 {
-            check_frame(suite.width, suite.height).map_err(|m| invalid("width", m))?;
+            check_frame(suite.width, suite.height, 1).map_err(|m| invalid("width", m))?;
         }
         if suite.scenes.is_empty() {
             return Err(invalid("scenes", "must name at least one scene".into()));
@@ -373,7 +386,7 @@ impl Suite {
         }
         for (k, t) in suite.tables.iter().enumerate() {
             if (t.width == 0) != (t.height == 0)
-                || (t.width != 0 && check_frame(t.width, t.height).is_err())
+                || (t.width != 0 && check_frame(t.width, t.height, 1).is_err())
             {
                 return Err(invalid(
                     &format!("table[{k}].width"),
@@ -414,6 +427,12 @@ impl Suite {
                 if let Err((option, message)) = check_method(&spec.method, &options) {
                     let key = format!("run[{k}].{}", key_of(option));
                     return Err(at(span.and_then(|s| s.of(option)), &key, message));
+                }
+                let samples = methods::registry::stored_samples(&spec.method, &options);
+                if self.width != 0 {
+                    check_frame(self.width, self.height, samples).map_err(|m| {
+                        at(span.and_then(|s| s.of("--rate")), &format!("run[{k}].rate"), m)
+                    })?;
                 }
             }
         }
@@ -580,11 +599,14 @@ mod tests {
 
     #[test]
     fn frames_beyond_the_limits_are_refused_with_the_limit() {
-        assert!(check_frame(8192, 4096).is_ok());
-        assert!(check_frame(16384, 1).is_ok());
-        let e = check_frame(16384, 16384).expect_err("too many pixels");
+        assert!(check_frame(8192, 4096, 1).is_ok());
+        assert!(check_frame(16384, 1, 1).is_ok());
+        assert!(check_frame(1920, 1080, 64).is_ok());
+        let e = check_frame(16384, 16384, 1).expect_err("too many pixels");
         assert!(e.contains(&MAX_FRAME_PIXELS.to_string()), "{e}");
-        let e = check_frame(0, 10).expect_err("empty");
+        let e = check_frame(1920, 1080, 128).expect_err("too many sub-samples");
+        assert!(e.contains(&MAX_FRAME_SAMPLES.to_string()) && e.contains("128"), "{e}");
+        let e = check_frame(0, 10, 1).expect_err("empty");
         assert!(e.contains("width") && e.contains("16384"), "{e}");
     }
 }
