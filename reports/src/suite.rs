@@ -112,6 +112,13 @@ pub fn check_frame(width: u32, height: u32, samples: u32) -> Result<(), String> 
     Ok(())
 }
 
+/// A span of bytes in a suite file.
+type Span = std::ops::Range<usize>;
+
+/// Makes the error for the value at a span of the file (none when the value is not in it),
+/// under a key.
+type ErrorAt<'a> = dyn Fn(Option<Span>, &str, String) -> SuiteError + 'a;
+
 /// Where the values of a suite are in its file: the suite's keys with their spans, read by a
 /// second pass of the TOML parser (keys not listed here are ignored by this pass).
 #[derive(Debug, Default, Deserialize)]
@@ -158,7 +165,7 @@ struct TableSpans {
 impl ValueSpans {
     /// The span of the value the failing option came from: the key the option names, else
     /// the method.
-    fn of(&self, option: &str) -> Option<std::ops::Range<usize>> {
+    fn of(&self, option: &str) -> Option<Span> {
         let value = match option {
             "--map-res" => &self.map_res,
             "--rate" => &self.rate,
@@ -339,16 +346,14 @@ impl Suite {
         let suite: Suite = toml::from_str(text)
             .map_err(|e| SuiteError::Parse { path: path.to_owned(), message: e.to_string() })?;
         let spans: Spans = toml::from_str(text).unwrap_or_default();
-        let line = |span: Option<std::ops::Range<usize>>| {
+        let line = |span: Option<Span>| {
             span.map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1)
         };
-        let at = |span: Option<std::ops::Range<usize>>, key: &str, message: String| {
-            SuiteError::Invalid {
-                path: path.to_owned(),
-                line: line(span),
-                key: key.to_owned(),
-                message,
-            }
+        let at = |span: Option<Span>, key: &str, message: String| SuiteError::Invalid {
+            path: path.to_owned(),
+            line: line(span),
+            key: key.to_owned(),
+            message,
         };
         let invalid = |key: &str, message: String| at(None, key, message);
         if suite.repeats == 0 {
@@ -403,11 +408,7 @@ impl Suite {
 
     /// Checks what the runs take: methods and their values, grid panels, scenes and the
     /// reference rate, as the module doc says.
-    fn check_values(
-        &self,
-        spans: &Spans,
-        at: &dyn Fn(Option<std::ops::Range<usize>>, &str, String) -> SuiteError,
-    ) -> Result<(), SuiteError> {
+    fn check_values(&self, spans: &Spans, at: &ErrorAt<'_>) -> Result<(), SuiteError> {
         if self.reference != ReferenceChoice::Exact {
             analysis::registry::reference("raytrace", self.ref_rate, Default::default()).map_err(
                 |e| {
