@@ -616,6 +616,7 @@ mod tests {
             GpuError::BadBackend("warp".into()),
             GpuError::NoAdapter { backends: "VULKAN".into() },
             GpuError::NoF64Adapter { adapters: "llvmpipe".into() },
+            GpuError::NoMatchingAdapter { wanted: "h200".into(), adapters: "llvmpipe".into() },
         ] {
             assert!(!internal(MethodError::Gpu(env)));
         }

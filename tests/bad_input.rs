@@ -456,3 +456,28 @@ fn a_bad_gpu_backend_variable_is_named_with_the_allowed_values() {
     assert!(err.contains("SHADOWBENCH_GPU_BACKEND") && err.contains("warp-drive"), "{err}");
     assert!(err.contains("vulkan, gl, metal, dx12"), "{err}");
 }
+
+/// `SHADOWBENCH_GPU_ADAPTER` that matches no adapter is named, with the adapters found (it was
+/// reported as "no adapter with 64-bit floats"). Without any adapter the message says so
+/// instead; both are bad input.
+#[test]
+fn a_gpu_adapter_variable_matching_nothing_is_named_with_the_adapters_found() {
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_shadowbench"))
+        .args(["render", "--scene", "cage", "--method", "sm", "--device", "gpu"])
+        .args(["--width", "32", "--height", "24", "--out"])
+        .arg(tempfile::tempdir().expect("tempdir").path().join("out"))
+        .env("SHADOWBENCH_GPU_ADAPTER", "no-such-adapter-name")
+        .output()
+        .expect("the shadowbench binary runs");
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    if err.contains("no GPU adapter found") {
+        eprintln!("no adapter on this machine: {err}");
+        return;
+    }
+    assert!(
+        err.contains("SHADOWBENCH_GPU_ADAPTER") && err.contains("no-such-adapter-name"),
+        "{err}"
+    );
+    assert!(err.contains("adapters found:") && !err.contains("64-bit"), "{err}");
+}

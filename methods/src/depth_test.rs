@@ -373,9 +373,10 @@ impl DepthCode {
         depth_tolerance / self.span * self.max_code
     }
 
-    /// The documented smallest valid constant bias at this precision: `2^(1 - bits)`.
+    /// The documented smallest valid constant bias at this precision: `2^(1 - bits)` (for
+    /// any `bits`: beyond 1075 it is 0, the value of every smaller power of two in `f64`).
     pub fn min_constant_bias(bits: u32) -> f64 {
-        (2.0f64).powi(1 - bits as i32)
+        (2.0f64).powi(1 - bits.min(1100) as i32)
     }
 }
 
@@ -405,6 +406,9 @@ mod tests {
         for &bits in DEPTH_BITS {
             let c = DepthCode::new(bits, 0.0, 1.0).expect("valid");
             assert!(c.tolerance(DepthCode::min_constant_bias(bits)) >= 1.0);
+        }
+        for bits in [1100, 1 << 31, u32::MAX] {
+            assert_eq!(DepthCode::min_constant_bias(bits), 0.0, "{bits}");
         }
     }
 

@@ -154,13 +154,18 @@ impl GpuContext {
                 format!("{} ({:?})", i.name, i.backend)
             })
             .collect();
-        let mut usable: Vec<wgpu::Adapter> = adapters
-            .into_iter()
-            .filter(|a| a.features().contains(wgpu::Features::SHADER_F64))
-            .collect();
-        if let Ok(want) = std::env::var(ADAPTER_ENV) {
+        let mut usable = adapters;
+        if let Some(want) = std::env::var_os(ADAPTER_ENV) {
+            let want = want.to_string_lossy().into_owned();
             usable.retain(|a| a.get_info().name.contains(&want));
+            if usable.is_empty() {
+                return Err(GpuError::NoMatchingAdapter {
+                    wanted: want,
+                    adapters: names.join(", "),
+                });
+            }
         }
+        usable.retain(|a| a.features().contains(wgpu::Features::SHADER_F64));
         usable.sort_by_key(|a| rank(&a.get_info()));
         let Some(adapter) = usable.into_iter().next() else {
             return Err(GpuError::NoF64Adapter { adapters: names.join(", ") });

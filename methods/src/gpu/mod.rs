@@ -62,6 +62,17 @@ pub enum GpuError {
         /// The adapters found.
         adapters: String,
     },
+    /// `SHADOWBENCH_GPU_ADAPTER` is set, and no adapter's name contains it.
+    #[error(
+        "SHADOWBENCH_GPU_ADAPTER={wanted:?}: no adapter's name contains it; adapters found: \
+         {adapters}"
+    )]
+    NoMatchingAdapter {
+        /// The variable's value.
+        wanted: String,
+        /// The adapters found.
+        adapters: String,
+    },
     /// `SHADOWBENCH_GPU_BACKEND` names no backend.
     #[error("SHADOWBENCH_GPU_BACKEND={0:?} names no wgpu backend (vulkan, gl, metal, dx12)")]
     BadBackend(String),
