@@ -179,7 +179,8 @@ struct RenderArgs {
     /// shadow acne for every shadow-map method.
     #[arg(long, value_name = "S", allow_negative_numbers = true)]
     slope_bias: Option<f64>,
-    /// Upper bound of the receiver slope ratio used by the slope bias; default 10 (about 84°).
+    /// Upper bound of the receiver slope ratio used by the slope bias; default 1000 (planes up
+    /// to 89.94° from the light keep their lit parts lit; beyond, the run records a warning).
     #[arg(long, value_name = "M", allow_negative_numbers = true)]
     max_slope: Option<f64>,
     /// Bits per stored depth of Brabec & Seidel's depth-as-colour maps: 8, 12, 24 or 32
