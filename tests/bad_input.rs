@@ -441,18 +441,24 @@ fn extreme_flag_values_are_named() {
     }
 }
 
-/// The GPU environment variables are bad input named as such, before any computation.
-#[test]
-fn a_bad_gpu_backend_variable_is_named_with_the_allowed_values() {
+/// Renders `cage` with `sm` on the GPU with the environment variable `key` set to `value`;
+/// returns (exit code, stderr).
+fn gpu_render_with(key: &str, value: &str) -> (Option<i32>, String) {
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_shadowbench"))
         .args(["render", "--scene", "cage", "--method", "sm", "--device", "gpu"])
         .args(["--width", "32", "--height", "24", "--out"])
         .arg(tempfile::tempdir().expect("tempdir").path().join("out"))
-        .env("SHADOWBENCH_GPU_BACKEND", "warp-drive")
+        .env(key, value)
         .output()
         .expect("the shadowbench binary runs");
-    let err = stderr(&o);
-    assert_eq!(o.status.code(), Some(2), "{err}");
+    (o.status.code(), stderr(&o))
+}
+
+/// The GPU environment variables are bad input named as such, before any computation.
+#[test]
+fn a_bad_gpu_backend_variable_is_named_with_the_allowed_values() {
+    let (code, err) = gpu_render_with("SHADOWBENCH_GPU_BACKEND", "warp-drive");
+    assert_eq!(code, Some(2), "{err}");
     assert!(err.contains("SHADOWBENCH_GPU_BACKEND") && err.contains("warp-drive"), "{err}");
     assert!(err.contains("vulkan, gl, metal, dx12"), "{err}");
 }
@@ -462,15 +468,8 @@ fn a_bad_gpu_backend_variable_is_named_with_the_allowed_values() {
 /// instead; both are bad input.
 #[test]
 fn a_gpu_adapter_variable_matching_nothing_is_named_with_the_adapters_found() {
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_shadowbench"))
-        .args(["render", "--scene", "cage", "--method", "sm", "--device", "gpu"])
-        .args(["--width", "32", "--height", "24", "--out"])
-        .arg(tempfile::tempdir().expect("tempdir").path().join("out"))
-        .env("SHADOWBENCH_GPU_ADAPTER", "no-such-adapter-name")
-        .output()
-        .expect("the shadowbench binary runs");
-    let err = stderr(&o);
-    assert_eq!(o.status.code(), Some(2), "{err}");
+    let (code, err) = gpu_render_with("SHADOWBENCH_GPU_ADAPTER", "no-such-adapter-name");
+    assert_eq!(code, Some(2), "{err}");
     if err.contains("no GPU adapter found") {
         eprintln!("no adapter on this machine: {err}");
         return;
