@@ -236,7 +236,8 @@ fn input(e: impl Into<anyhow::Error>) -> Failure {
 }
 
 /// A GPU error: the device failing is internal; no adapter, an adapter without what the
-/// kernels need, or a bad `SHADOWBENCH_GPU_*` variable is the environment, bad input.
+/// kernels need, a bad `SHADOWBENCH_GPU_*` variable (the environment) or an input beyond the
+/// adapter's limits is bad input.
 fn gpu_failure(e: GpuError) -> Failure {
     match e {
         GpuError::Device(_) => Failure::Internal(e.into()),
@@ -618,6 +619,7 @@ mod tests {
             GpuError::NoAdapter { backends: "VULKAN".into() },
             GpuError::NoF64Adapter { adapters: "llvmpipe".into() },
             GpuError::NoMatchingAdapter { wanted: "h200".into(), adapters: "llvmpipe".into() },
+            GpuError::Limit("binding of 268435456 bytes".into()),
         ] {
             assert!(!internal(MethodError::Gpu(env)));
         }

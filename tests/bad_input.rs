@@ -480,3 +480,18 @@ fn a_gpu_adapter_variable_matching_nothing_is_named_with_the_adapters_found() {
     );
     assert!(err.contains("adapters found:") && !err.contains("64-bit"), "{err}");
 }
+
+/// A map larger than the GPU adapter's binding limit (llvmpipe takes 128 MiB) is bad input
+/// naming `--map-res`, not a device failure; an adapter with larger limits renders it.
+#[test]
+fn a_map_beyond_the_gpu_limits_is_bad_input_naming_the_flag() {
+    let (code, err) = render("cage", &["--device", "gpu", "--map-res", "8192"]);
+    if err.contains("no GPU adapter found") {
+        eprintln!("no adapter on this machine: {err}");
+        return;
+    }
+    assert!(code == Some(0) || code == Some(2), "{code:?}: {err}");
+    if code == Some(2) {
+        assert!(err.contains("GPU adapter's limits") && err.contains("--map-res"), "{err}");
+    }
+}

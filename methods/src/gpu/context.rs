@@ -73,7 +73,23 @@ pub struct GpuContext {
     queries: Option<wgpu::QuerySet>,
     /// The first error the device reported outside a call's result (uncaptured error or
     /// device loss), not yet returned.
-    fault: Arc<Mutex<Option<String>>>,
+    fault: Arc<Mutex<Option<GpuError>>>,
+}
+
+/// The error an uncaptured wgpu error becomes: a validation error that says a size exceeds
+/// one of the adapter's limits (a buffer, a binding, a dispatch) was caused by the input's
+/// size, [`GpuError::Limit`]; everything else is a device failure.
+fn classify(e: &wgpu::Error) -> GpuError {
+    // wgpu's messages span several indented lines: one line reads better after a prefix.
+    let text = e.to_string().split_whitespace().collect::<Vec<_>>().join(" ");
+    match e {
+        wgpu::Error::Validation { .. }
+            if text.contains("limit") || text.contains("greater than the maximum") =>
+        {
+            GpuError::Limit(text)
+        }
+        _ => GpuError::Device(text),
+    }
 }
 
 /// The variable Mesa's Vulkan driver checks for a runtime folder.
@@ -197,16 +213,16 @@ impl GpuContext {
         }))
         .map_err(|e| GpuError::Device(e.to_string()))?;
         let fault = Arc::new(Mutex::new(None));
-        let keep = |fault: &Arc<Mutex<Option<String>>>, message: String| {
+        let keep = |fault: &Arc<Mutex<Option<GpuError>>>, e: GpuError| {
             if let Ok(mut f) = fault.lock() {
-                f.get_or_insert(message);
+                f.get_or_insert(e);
             }
         };
         let f = Arc::clone(&fault);
-        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| keep(&f, e.to_string())));
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| keep(&f, classify(&e))));
         let f = Arc::clone(&fault);
         device.set_device_lost_callback(move |reason, message| {
-            keep(&f, format!("device lost ({reason:?}): {message}"));
+            keep(&f, GpuError::Device(format!("device lost ({reason:?}): {message}")));
         });
         let queries = has_timestamps.then(|| {
             device.create_query_set(&wgpu::QuerySetDescriptor {
@@ -414,7 +430,7 @@ impl GpuContext {
             .map_err(|e| GpuError::Device(e.to_string()))?;
         match self.fault.lock().map(|mut f| f.take()) {
             Ok(None) => Ok(()),
-            Ok(Some(message)) => Err(GpuError::Device(message)),
+            Ok(Some(e)) => Err(e),
             Err(_) => Err(GpuError::Device("the device's error record is poisoned".into())),
         }
     }
@@ -471,8 +487,8 @@ mod tests {
         ctx.wait().expect("returned once");
     }
 
-    /// A buffer larger than the device allows, uploaded from the CPU, is a device error from
-    /// the next wait, not a panic.
+    /// A buffer larger than the device allows, uploaded from the CPU, is a limit error (bad
+    /// input: the frame or map is too large for this adapter) from the next wait, not a panic.
     #[test]
     fn an_upload_beyond_the_device_limits_is_a_device_error() {
         let ctx = GpuContext::new().expect("a GPU adapter (scripts/install-gpu-driver)");
@@ -486,6 +502,6 @@ mod tests {
         }
         let _buffer = ctx.upload("too big", &vec![0u8; len]);
         let e = ctx.wait().expect_err("the error is returned");
-        assert!(matches!(e, GpuError::Device(_)), "{e}");
+        assert!(matches!(e, GpuError::Limit(_)), "{e}");
     }
 }

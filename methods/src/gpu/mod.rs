@@ -76,6 +76,13 @@ pub enum GpuError {
     /// `SHADOWBENCH_GPU_BACKEND` names no backend.
     #[error("SHADOWBENCH_GPU_BACKEND={0:?} names no wgpu backend (vulkan, gl, metal, dx12)")]
     BadBackend(String),
+    /// The input needs more than the adapter's limits allow (a buffer or binding larger than
+    /// it takes): bad input for this device.
+    #[error(
+        "the input exceeds the GPU adapter's limits (lower --map-res, the frame size or --rate, \
+         or run with --device cpu): {0}"
+    )]
+    Limit(String),
     /// The device failed (internal failure).
     #[error("GPU device: {0}")]
     Device(String),

@@ -87,8 +87,8 @@ pub fn rasterize(
     let triangles = frame.geometry.triangles.len() as u32;
     let max_dim = ctx.device.limits().max_texture_dimension_2d;
     if width > max_dim || height > max_dim {
-        return Err(GpuError::Device(format!(
-            "{width}x{height} exceeds the adapter's largest image ({max_dim})"
+        return Err(GpuError::Limit(format!(
+            "{width}x{height} exceeds the adapter's largest image, {max_dim}"
         )));
     }
     let (lo, hi) = frame.light_depth_bounds(p);
