@@ -302,7 +302,7 @@ impl BvhFrame {
 
     /// `p` in frame coordinates (`f64`).
     #[inline]
-    fn to_frame(&self, p: DVec3) -> DVec3 {
+    fn to_frame(self, p: DVec3) -> DVec3 {
         (p - self.centre) * self.scale
     }
 
@@ -327,7 +327,8 @@ impl BvhFrame {
     /// ray starts beyond [`BvhFrame::reach`], where the padding does not cover its rounding.
     fn bvh_ray(&self, ray: &TraceRay, tmax: f64) -> Option<FrameRay> {
         let o = self.to_frame(ray.origin);
-        if !(o.abs().max_element() <= self.reach) {
+        let m = o.abs().max_element();
+        if m.is_nan() || m > self.reach {
             return None;
         }
         // Frame rays take the world ray's direction made unit, so frame parameters are frame
