@@ -45,13 +45,8 @@ fn triangles(tris: &[[DVec3; 3]]) -> Mesh {
 
 /// An axis-aligned box between `lo` and `hi`, counter-clockwise seen from outside.
 fn box_mesh(lo: DVec3, hi: DVec3) -> Mesh {
-    let c = |i: usize| {
-        DVec3::new(
-            if i & 1 == 0 { lo.x } else { hi.x },
-            if i & 2 == 0 { lo.y } else { hi.y },
-            if i & 4 == 0 { lo.z } else { hi.z },
-        )
-    };
+    let corners = scenes::mesh::box_corners(lo, hi);
+    let c = |i: usize| corners[i];
     let centre = 0.5 * (lo + hi);
     let quads =
         [[0, 1, 3, 2], [4, 5, 7, 6], [0, 1, 5, 4], [2, 3, 7, 6], [0, 2, 6, 4], [1, 3, 7, 5]];

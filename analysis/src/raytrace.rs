@@ -11,10 +11,11 @@
 //!    unbounded; spot: towards `position`, ending at the light; the spot's cone is ignored, as
 //!    in the shadow maps and `exact`), against caster triangles only (`frame.is_caster`),
 //!    excluding the hit triangle itself and ignoring hits nearer than `afsm::shadow_offset`
-//!    (local to the hit point, see Choices; `afsm` decides its shadows with the same offset). Opaque scenes (no `transparency` effect, also when the scene file
-//!    forces it off): the first caster hit ends the ray (`ray_traverse_miss`). Scenes with
-//!    `transparency`: every caster hit along the ray multiplies the transmittance by
-//!    `1 - opacity` (an opaque caster ends the ray at 0).
+//!    (local to the hit point, see Choices; `afsm` decides its shadows with the same offset).
+//!    Opaque scenes (no `transparency` effect, also when the scene file forces it off): the
+//!    first caster hit ends the ray (`ray_traverse_miss`). Scenes with `transparency`: every
+//!    caster hit along the ray multiplies the transmittance by `1 - opacity` (an opaque caster
+//!    ends the ray at 0).
 //!
 //! A pixel's `lit` is the mean of its sub-samples' visibility (1 lit, 0 shadowed, the
 //! transmittance with transparency; background sub-samples count 1), so at rate `N` and without
@@ -260,27 +261,23 @@ impl BvhFrame {
     /// Fits the frame to the finite, non-degenerate triangles of `geometry`; `origins` are
     /// further ray origins (the camera's) the padding must cover.
     pub(crate) fn fit(geometry: &Geometry, origins: &[DVec3]) -> Self {
-        let mut centres: [Vec<f64>; 3] = Default::default();
-        let mut sizes = Vec::new();
-        for t in 0..geometry.len() {
-            if let Some((lo, hi)) = triangle_box(geometry, t) {
-                let c = 0.5 * lo + 0.5 * hi;
-                for (k, v) in centres.iter_mut().enumerate() {
-                    v.push(c[k]);
-                }
-                sizes.push((hi - lo).max_element());
-            }
-        }
-        if sizes.is_empty() {
+        let boxes: Vec<(DVec3, DVec3)> =
+            (0..geometry.len()).filter_map(|t| triangle_box(geometry, t)).collect();
+        if boxes.is_empty() {
             return Self { centre: DVec3::ZERO, scale: 1.0, reach: 1.0 };
         }
-        let centre =
-            DVec3::new(median(&mut centres[0]), median(&mut centres[1]), median(&mut centres[2]));
+        let axis = |k: usize| {
+            let mut centres: Vec<f64> =
+                boxes.iter().map(|(lo, hi)| 0.5 * lo[k] + 0.5 * hi[k]).collect();
+            median(&mut centres)
+        };
+        let centre = DVec3::new(axis(0), axis(1), axis(2));
+        let mut sizes: Vec<f64> = boxes.iter().map(|(lo, hi)| (*hi - *lo).max_element()).collect();
         let typical = median(&mut sizes);
         // World distances from the centre (in the max norm) of each triangle's farthest corner.
-        let mut radii: Vec<f64> = (0..geometry.len())
-            .filter_map(|t| triangle_box(geometry, t))
-            .map(|(lo, hi)| (lo - centre).abs().max(hi - centre).max_element())
+        let mut radii: Vec<f64> = boxes
+            .iter()
+            .map(|&(lo, hi)| (lo - centre).abs().max(hi - centre).max_element())
             .collect();
         let farthest = radii.iter().copied().fold(0.0, f64::max);
         let median_radius = median(&mut radii);
@@ -376,11 +373,13 @@ fn triangle_box(geometry: &Geometry, t: usize) -> Option<(DVec3, DVec3)> {
     // The area test is made on the corners scaled by their largest magnitude, so that neither
     // huge nor tiny coordinates overflow or underflow the cross product.
     let m = a.abs().max(b.abs()).max(c.abs()).max_element();
-    let (a, b, c) = (a / m, b / m, c / m);
-    if m == 0.0 || (b - a).cross(c - a) == DVec3::ZERO {
+    if m == 0.0 {
         return None;
     }
-    let [a, b, c] = geometry.corners(t);
+    let (sa, sb, sc) = (a / m, b / m, c / m);
+    if (sb - sa).cross(sc - sa) == DVec3::ZERO {
+        return None;
+    }
     Some((a.min(b).min(c), a.max(b).max(c)))
 }
 
@@ -599,15 +598,9 @@ impl<'a> Tracer<'a> {
         let (start_shift, camera_tmin) = match camera.kind {
             ProjectionKind::Perspective { .. } => (0.0, camera.near),
             ProjectionKind::Orthographic { .. } => {
-                let nearest = (0..8)
-                    .map(|i| {
-                        let c = DVec3::new(
-                            if i & 1 == 0 { lo.x } else { hi.x },
-                            if i & 2 == 0 { lo.y } else { hi.y },
-                            if i & 4 == 0 { lo.z } else { hi.z },
-                        );
-                        camera.depth_of(c)
-                    })
+                let nearest = scenes::mesh::box_corners(lo, hi)
+                    .iter()
+                    .map(|&c| camera.depth_of(c))
                     .fold(f64::INFINITY, f64::min);
                 (nearest.min(0.0) - diagonal * 1e-3, 0.0)
             }

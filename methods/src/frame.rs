@@ -72,12 +72,7 @@ impl<'s> Frame<'s> {
     pub fn light_depth_bounds(&self, light: &Projector) -> (f64, f64) {
         let (lo, hi) = self.scene.bounds();
         let (mut a, mut b) = (f64::INFINITY, f64::NEG_INFINITY);
-        for i in 0..8 {
-            let c = glam::DVec3::new(
-                if i & 1 == 0 { lo.x } else { hi.x },
-                if i & 2 == 0 { lo.y } else { hi.y },
-                if i & 4 == 0 { lo.z } else { hi.z },
-            );
+        for c in scenes::mesh::box_corners(lo, hi) {
             let d = light.depth_of(c);
             a = a.min(d);
             b = b.max(d);

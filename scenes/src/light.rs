@@ -7,6 +7,7 @@
 //! consumer normalises a user's vector again.
 
 use crate::direction::unit;
+use crate::mesh::box_corners;
 use crate::projection::{direction_between, look_basis, ProjectionKind, Projector};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -100,13 +101,7 @@ impl Light {
         let (lo, hi) = bounds;
         let pad = (hi - lo).length().max(1e-9) * FIT_MARGIN;
         let (lo, hi) = (lo - DVec3::splat(pad), hi + DVec3::splat(pad));
-        let corners = (0..8).map(move |i| {
-            DVec3::new(
-                if i & 1 == 0 { lo.x } else { hi.x },
-                if i & 2 == 0 { lo.y } else { hi.y },
-                if i & 4 == 0 { lo.z } else { hi.z },
-            )
-        });
+        let corners = box_corners(lo, hi);
         let size = f64::from(res);
         match *self {
             Light::Directional { direction } => {
@@ -136,8 +131,10 @@ impl Light {
             Light::Spot { position, target, fov_deg } => {
                 let axis = direction_between(position, target).unwrap_or(DVec3::NAN);
                 let (right, up, forward) = look_basis(axis, DVec3::Y);
-                let nearest =
-                    corners.map(|c| (c - position).dot(forward)).fold(f64::INFINITY, f64::min);
+                let nearest = corners
+                    .iter()
+                    .map(|&c| (c - position).dot(forward))
+                    .fold(f64::INFINITY, f64::min);
                 let aim = (target - position).length();
                 let near = nearest.max(1e-4 * aim.min(pad / FIT_MARGIN));
                 let t = (fov_deg.to_radians() * 0.5).tan();

@@ -146,6 +146,18 @@ impl Mesh {
     }
 }
 
+/// The eight corners of the axis-aligned box `(lo, hi)`: corner `i` takes `hi` on axis `k`
+/// where bit `k` of `i` is set (x, y, z), `lo` elsewhere.
+pub fn box_corners(lo: DVec3, hi: DVec3) -> [DVec3; 8] {
+    std::array::from_fn(|i| {
+        DVec3::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        )
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -161,15 +161,7 @@ impl Scene {
     fn maybe_visible(&self, o: &Object) -> bool {
         let Some((lo, hi)) = o.mesh.bounds() else { return false };
         let cam = self.camera.projector(self.width, self.height);
-        let corners: Vec<DVec3> = (0..8)
-            .map(|i| {
-                DVec3::new(
-                    if i & 1 == 0 { lo.x } else { hi.x },
-                    if i & 2 == 0 { lo.y } else { hi.y },
-                    if i & 4 == 0 { lo.z } else { hi.z },
-                )
-            })
-            .collect();
+        let corners = crate::mesh::box_corners(lo, hi);
         if corners.iter().all(|&c| cam.is_perspective() && cam.depth_of(c) < cam.near) {
             return false;
         }

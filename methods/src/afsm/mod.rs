@@ -32,9 +32,9 @@
 //!   scene's diagonal lost every shadow near the origin once one triangle lay 1e10 away).
 //!   `raytrace`'s shadow rays make the same test (they skip the hit triangle and hits nearer
 //!   than the same offset; a spot light's segment ends at the light, and every caster in front
-//!   of a sample's depth is on that segment). With the shared pattern at equal rate the two evaluate the same image
-//!   points, so they can differ only where a sample lies exactly on a caster's edge, where
-//!   each breaks the tie by its own rule, or within `f64` rounding of one.
+//!   of a sample's depth is on that segment). With the shared pattern at equal rate the two
+//!   evaluate the same image points, so they can differ only where a sample lies exactly on a
+//!   caster's edge, where each breaks the tie by its own rule, or within `f64` rounding of one.
 //! - **Exact coverage.** Point-in-triangle is decided by Shewchuk's exact `orient2d` on the
 //!   `f64` light image coordinates, ties on an edge by the rasterizer's top-left rule, so a
 //!   sample on an edge shared by two casters is covered by exactly one of them.
@@ -254,33 +254,25 @@ impl AliasFreeShadowMap {
 /// points) exceeds [`SHADOW_OFFSET`] times their own magnitude, the origin moves to the centre
 /// of their bounding box and the image rectangle shrinks around them, so that light image
 /// coordinates and depths keep the precision of the visible scene however far other objects
-/// lie. Spot: `near`
-/// no larger than [`SHADOW_OFFSET`] times the magnitude of the light's position plus its
-/// distance to the farthest of those points (max norm), never zero.
+/// lie. Spot: `near` no larger than [`SHADOW_OFFSET`] times the magnitude of the light's
+/// position plus its distance to the farthest of those points (max norm), never zero.
 pub fn light_projector(frame: &Frame<'_>) -> Projector {
     let mut light = frame.light_projector(LIGHT_IMAGE_RES);
     let g = &frame.gbuffer;
     let visible = || (0..g.triangle.len()).filter(|&k| g.covered(k)).map(|k| g.position[k]);
     match light.kind {
-        ProjectionKind::Orthographic { .. } => {
+        ProjectionKind::Orthographic { half_width, half_height } => {
             let (lo, hi) = visible().fold(
                 (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
                 |(lo, hi), p| (lo.min(p), hi.max(p)),
             );
             let centre = 0.5 * (lo + hi);
             let (mut hw, mut hh) = (0.0f64, 0.0f64);
-            for i in 0..8 {
-                let c = DVec3::new(
-                    if i & 1 == 0 { lo.x } else { hi.x },
-                    if i & 2 == 0 { lo.y } else { hi.y },
-                    if i & 4 == 0 { lo.z } else { hi.z },
-                ) - centre;
+            for c in scenes::mesh::box_corners(lo, hi) {
+                let c = c - centre;
                 hw = hw.max(c.dot(light.right).abs());
                 hh = hh.max(c.dot(light.up).abs());
             }
-            let ProjectionKind::Orthographic { half_width, half_height } = light.kind else {
-                return light;
-            };
             // The fitted frame rounds light coordinates to about `EPSILON` of its scale; keep
             // it while that stays below the shadow offset of the visible points.
             let fitted =
