@@ -3,16 +3,21 @@
 
 mod common;
 use common::{shadowbench, stderr, write};
+use std::process::Output;
+
+/// Renders `scene` with `method` at 32 x 24 and the `extra` flags into the folder `out`.
+fn render_into(out: &std::path::Path, scene: &str, method: &str, extra: &[&str]) -> Output {
+    let mut args =
+        vec!["render", "--scene", scene, "--method", method, "--width", "32", "--height", "24"];
+    args.extend_from_slice(extra);
+    args.extend_from_slice(&["--out", out.to_str().expect("utf-8")]);
+    shadowbench(&args)
+}
 
 /// Renders `scene` with `sm` and returns (exit code, stderr).
 fn render(scene: &str, extra: &[&str]) -> (Option<i32>, String) {
     let dir = tempfile::tempdir().expect("tempdir");
-    let out = dir.path().join("out");
-    let mut args =
-        vec!["render", "--scene", scene, "--method", "sm", "--width", "32", "--height", "24"];
-    args.extend_from_slice(extra);
-    args.extend_from_slice(&["--out", out.to_str().expect("utf-8")]);
-    let o = shadowbench(&args);
+    let o = render_into(&dir.path().join("out"), scene, "sm", extra);
     (o.status.code(), stderr(&o))
 }
 
@@ -41,19 +46,7 @@ const CUBE_PLY: &str = include_str!("../scenes/tests/data/cube.ply");
 fn visibility(scene: &str) -> Result<Vec<u8>, (Option<i32>, String)> {
     let dir = tempfile::tempdir().expect("tempdir");
     let out = dir.path().join("out");
-    let o = shadowbench(&[
-        "render",
-        "--scene",
-        scene,
-        "--method",
-        "sm",
-        "--width",
-        "32",
-        "--height",
-        "24",
-        "--out",
-        out.to_str().expect("utf-8"),
-    ]);
+    let o = render_into(&out, scene, "sm", &[]);
     match o.status.code() {
         Some(0) => Ok(std::fs::read(out.join("visibility.exr")).expect("visibility.exr")),
         code => Err((code, stderr(&o))),
@@ -372,22 +365,7 @@ fn bad_rates_list_exactly_the_rates_of_the_method() {
         ("pcf-reeves", "3", "1, 4, 8, 16, 32, 64, 128, 256, 512, 1024 samples"),
     ] {
         let dir = tempfile::tempdir().expect("tempdir");
-        let out = dir.path().join("out");
-        let o = shadowbench(&[
-            "render",
-            "--scene",
-            "cage",
-            "--method",
-            method,
-            "--rate",
-            rate,
-            "--width",
-            "32",
-            "--height",
-            "24",
-            "--out",
-            out.to_str().expect("utf-8"),
-        ]);
+        let o = render_into(&dir.path().join("out"), "cage", method, &["--rate", rate]);
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(2), "{method} --rate {rate}: {err}");
         assert!(err.contains("--rate") && err.contains(&format!("takes {takes}")), "{err}");
