@@ -1,7 +1,7 @@
 //! An independent cross-check of `exact`: tiny-skia rasterizes the same screen-space shadow
 //! union ([`crate::exact::shadow_union`]) with anti-aliasing at `k` times the frame's
 //! resolution, the coverage is box-filtered down to the frame, and the result is compared with
-//! `exact` over the evaluated pixels.
+//! `exact` over the `planar` pixels of that receiver.
 //!
 //! tiny-skia works in `f32` and its anti-aliasing takes 4 x 4 sub-samples per pixel (coverage
 //! quantised to 8 bits), so the difference is expected near 0.02 per partially covered pixel
@@ -9,6 +9,7 @@
 //! checks that both read the polygons the same way (orientation, holes, frame).
 
 use crate::exact::{shadow_union, ExactCoverage, ScreenPolygons};
+use crate::pixel_class::PixelClass;
 use crate::reference::{Reference, ReferenceError};
 use instrumentation::Recorder;
 use methods::Frame;
@@ -88,14 +89,23 @@ pub fn tiny_skia_coverage(
 }
 
 /// Rasterizes the frame's shadow union with tiny-skia at `k` times the resolution and
-/// compares the lit fraction with `exact` over the pixels `exact` evaluates.
+/// compares the lit fraction with `exact` over the `planar` pixels of the scene's main planar
+/// receiver (`Scene::receiver_plane`) that `exact` evaluates.
 pub fn tiny_skia_crosscheck(frame: &Frame<'_>, k: u32) -> Result<CrossCheck, ReferenceError> {
-    let exact = ExactCoverage.evaluate(frame, &mut Recorder::default())?;
+    let exact = ExactCoverage::default().evaluate(frame, &mut Recorder::default())?;
     let union = shadow_union(frame)?;
     let shadowed = tiny_skia_coverage(&union, frame.width(), frame.height(), k)?;
+    let receiver = frame.scene.receiver_plane().map(|(o, _, _)| o as u32);
+    let classes = exact.classes.as_deref().unwrap_or_default();
+    let on_receiver = |p: usize| {
+        let t = frame.gbuffer.triangle[p];
+        classes.get(p) == Some(&PixelClass::Planar)
+            && t != methods::raster::NO_TRIANGLE
+            && Some(frame.geometry.object[t as usize]) == receiver
+    };
     let (mut n, mut sum, mut max) = (0u64, 0.0, 0.0f64);
-    for ((&s, &e), &ev) in shadowed.iter().zip(&exact.lit).zip(&exact.evaluated) {
-        if ev {
+    for (p, ((&s, &e), &ev)) in shadowed.iter().zip(&exact.lit).zip(&exact.evaluated).enumerate() {
+        if ev && on_receiver(p) {
             let d = ((1.0 - s).clamp(0.0, 1.0) - e).abs();
             n += 1;
             sum += d;

@@ -5,6 +5,7 @@ pub mod crosscheck;
 pub mod exact;
 pub mod flip;
 pub mod metrics;
+pub mod pixel_class;
 pub mod raytrace;
 pub mod reference;
 pub mod registry;

@@ -734,9 +734,23 @@ impl Reference for RayTrace {
         frame: &Frame<'_>,
         rec: &mut Recorder,
     ) -> Result<ReferenceImage, ReferenceError> {
+        self.evaluate_pixels(frame, None, rec)
+    }
+}
+
+impl RayTrace {
+    /// Traces the pixels where `mask` is true (every pixel with `None`); the others are lit
+    /// (1) and not evaluated, and cost no ray. `exact` uses it for its `edge` pixels.
+    pub fn evaluate_pixels(
+        &self,
+        frame: &Frame<'_>,
+        mask: Option<&[bool]>,
+        rec: &mut Recorder,
+    ) -> Result<ReferenceImage, ReferenceError> {
         let tracer = Tracer::new(frame, &self.pattern, rec)?;
         let (w, h) = (frame.width(), frame.height());
         let rate = self.pattern.rate() as usize;
+        let wanted = |i: u32, j: u32| mask.is_none_or(|m| m[(j * w + i) as usize]);
         let rows: Vec<Row> = rec.stages.time(STAGE_RAY_TRACING, || {
             (0..h)
                 .into_par_iter()
@@ -747,6 +761,11 @@ impl Reference for RayTrace {
                         rays: 0,
                     };
                     for i in 0..w {
+                        if !wanted(i, j) {
+                            row.lit.push(1.0);
+                            row.evaluated.push(false);
+                            continue;
+                        }
                         let (mut sum, mut all_hit) = (0.0f64, true);
                         for s in 0..rate {
                             let hit = tracer.sample(i, j, s);
@@ -772,7 +791,7 @@ impl Reference for RayTrace {
         }
         let transmittance =
             frame.effects.transparency.then(|| lit.iter().map(|&t| [t; 3]).collect());
-        Ok(ReferenceImage { width: w, height: h, lit, evaluated, transmittance })
+        Ok(ReferenceImage { width: w, height: h, lit, evaluated, transmittance, classes: None })
     }
 }
 

@@ -1,5 +1,6 @@
 //! The seam between the workbench and a ground truth.
 
+use crate::pixel_class::PixelClass;
 use instrumentation::Recorder;
 use methods::Frame;
 
@@ -16,6 +17,22 @@ pub struct ReferenceImage {
     pub evaluated: Vec<bool>,
     /// RGB transmittance per pixel, when the reference carries it (scenes with transparency).
     pub transmittance: Option<Vec<[f64; 3]>>,
+    /// Each pixel's class (`exact` computes them; see [`crate::pixel_class`]).
+    pub classes: Option<Vec<PixelClass>>,
+}
+
+impl ReferenceImage {
+    /// The pixels the reference vouches for whose class is `planar` or `surface` (every
+    /// evaluated pixel when there are no classes): the shadow-only pixels, where the error is
+    /// the shadow's and not the camera's.
+    pub fn shadow_only(&self) -> Vec<bool> {
+        match &self.classes {
+            Some(c) => {
+                self.evaluated.iter().zip(c).map(|(&e, c)| e && c.is_shadow_only()).collect()
+            }
+            None => self.evaluated.clone(),
+        }
+    }
 }
 
 /// Why a reference could not be computed.

@@ -16,7 +16,8 @@ use methods::{
 pub const REFERENCES: &[(&str, &str)] = &[
     (
         "exact",
-        "exact lit area per pixel on a planar receiver (polygon union, exact pixel clipping)",
+        "exact lit area per pixel on every visible surface (polygon union, exact pixel \
+         clipping); edge pixels ray traced",
     ),
     ("raytrace", "ray-traced supersampling: one camera and one shadow ray per sub-sample"),
 ];
@@ -24,23 +25,16 @@ pub const REFERENCES: &[(&str, &str)] = &[
 /// Default sub-sample rate of the `raytrace` reference in `compare`.
 pub const DEFAULT_REF_RATE: u32 = 256;
 
-/// The reference called `name`; `rate` and `pattern` configure `raytrace`.
+/// The reference called `name`; `rate` and `pattern` configure `raytrace`, and `exact`'s
+/// reference of its `edge` pixels (`raytrace` at that rate).
 pub fn reference(
     name: &str,
     rate: u32,
     pattern: PatternKind,
 ) -> Result<Box<dyn Reference>, ReferenceError> {
     match name {
-        "exact" => Ok(Box::new(ExactCoverage)),
-        "raytrace" => {
-            let pattern = SamplePattern::new(rate, pattern).map_err(|e| match e {
-                MethodError::InvalidOption { message, .. } => {
-                    ReferenceError::InvalidOption { option: "--ref-rate", message }
-                }
-                other => ReferenceError::NotApplicable(other.to_string()),
-            })?;
-            Ok(Box::new(RayTrace { pattern }))
-        }
+        "exact" => Ok(Box::new(ExactCoverage { edge: Some(raytrace(rate, pattern)?) })),
+        "raytrace" => Ok(Box::new(raytrace(rate, pattern)?)),
         _ => Err(ReferenceError::InvalidOption {
             option: "--reference",
             message: format!(
@@ -49,6 +43,17 @@ pub fn reference(
             ),
         }),
     }
+}
+
+/// `raytrace` at `rate` sub-samples of `pattern`.
+fn raytrace(rate: u32, pattern: PatternKind) -> Result<RayTrace, ReferenceError> {
+    let pattern = SamplePattern::new(rate, pattern).map_err(|e| match e {
+        MethodError::InvalidOption { message, .. } => {
+            ReferenceError::InvalidOption { option: "--ref-rate", message }
+        }
+        other => ReferenceError::NotApplicable(other.to_string()),
+    })?;
+    Ok(RayTrace { pattern })
 }
 
 /// A reference run as a method: its lit fraction rounded to `f32`.

@@ -87,7 +87,7 @@ fn scene_with_mesh(camera: Camera, light: Light, mesh: Mesh) -> Scene {
 fn exact(scene: &Scene, w: u32, h: u32) -> (Frame<'_>, ReferenceImage, Recorder) {
     let mut rec = Recorder::default();
     let frame = Frame::new(scene, w, h, &mut rec);
-    let img = ExactCoverage.evaluate(&frame, &mut rec).expect("exact applies");
+    let img = ExactCoverage::default().evaluate(&frame, &mut rec).expect("exact applies");
     assert_eq!(img.lit.len(), (w * h) as usize);
     assert_eq!(img.evaluated.len(), (w * h) as usize);
     assert_finite_in_range(&img);
@@ -756,7 +756,7 @@ fn exact_does_not_apply_to_transparency_or_curved_receivers() {
         let scene = scenes::load(name).expect("built-in");
         let mut rec = Recorder::default();
         let frame = Frame::new(&scene, 32, 24, &mut rec);
-        match ExactCoverage.evaluate(&frame, &mut rec) {
+        match ExactCoverage::default().evaluate(&frame, &mut rec) {
             Err(ReferenceError::NotApplicable(msg)) => {
                 assert!(msg.contains(needle) && msg.contains(name), "{name}: {msg}")
             }

@@ -88,6 +88,14 @@ counters! {
     recovered_pixels,
     /// Sub-samples evaluated against a recovered silhouette (SPSM antialiasing).
     antialiased_samples,
+    /// Pixel-triangle overlaps measured to classify pixels (`exact`).
+    pixel_triangle_overlaps,
+    /// Receiver triangles whose shadows were computed (`exact`, surface pixels).
+    receiver_triangles,
+    /// Receiver-caster pairs looked at after the light-space caster grid (`exact`).
+    caster_pairs,
+    /// Non-empty shadow polygons projected onto a receiver (`exact`).
+    shadow_polygons,
 }
 
 impl std::ops::AddAssign<&Counters> for Counters {

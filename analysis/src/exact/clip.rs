@@ -1,5 +1,5 @@
 //! Exact clipping of convex polygons against axis-aligned lines in `f64`: the per-pixel area
-//! of triangles on the pixel grid, and the pixels whose closed squares a polygon touches.
+//! of polygons on the pixel grid; and clipping of convex polygons against each other.
 //!
 //! A convex polygon is split at a line `x = c` (or `y = c`) into the part on each side; the
 //! crossing points are computed once, with the split coordinate set to `c` exactly, so the two
@@ -7,7 +7,6 @@
 //! shoelace sums. Areas are taken relative to the pixel's corner, where coordinates are small
 //! and exact (`x - i` is exact for `x` in `[i, i + 1]`).
 
-use super::ScreenPolygons;
 use rayon::prelude::*;
 
 /// A point in screen space (pixels, y down).
@@ -18,7 +17,7 @@ pub(crate) type Pt = [f64; 2];
 const CAP: usize = 24;
 
 /// Rows per band of the parallel pixel clipper.
-const BAND: usize = 8;
+pub(crate) const BAND: usize = 8;
 
 /// A convex polygon of at most [`CAP`] vertices, on the stack.
 #[derive(Clone, Copy)]
@@ -51,7 +50,7 @@ impl Poly {
     }
 
     #[inline]
-    fn push(&mut self, p: Pt) {
+    pub fn push(&mut self, p: Pt) {
         if self.n < CAP {
             self.v[self.n] = p;
             self.n += 1;
@@ -128,7 +127,7 @@ pub(crate) fn keep(poly: &Poly, axis: usize, c: f64, keep_above: bool) -> Poly {
 /// Bins items into bands of [`BAND`] rows: `rows(item)` gives the inclusive row range an item
 /// may touch (already clamped to the image). Returns `(offsets, items)` in CSR layout: band
 /// `b`'s items are `items[offsets[b]..offsets[b + 1]]`.
-fn bin_by_band(
+pub(crate) fn bin_by_band(
     count: usize,
     height: usize,
     rows: impl Fn(usize) -> Option<(usize, usize)>,
@@ -160,7 +159,7 @@ fn bin_by_band(
 /// Rows `[floor(lo), ceil(hi) - 1]` a span `[lo, hi]` of positive length overlaps, clamped
 /// to `0..height`; `None` when outside or empty.
 #[inline]
-fn overlapped_rows(lo: f64, hi: f64, height: usize) -> Option<(usize, usize)> {
+pub(crate) fn overlapped_rows(lo: f64, hi: f64, height: usize) -> Option<(usize, usize)> {
     if hi.is_nan() || lo.is_nan() || hi <= lo || hi <= 0.0 || lo >= height as f64 {
         return None;
     }
@@ -170,9 +169,15 @@ fn overlapped_rows(lo: f64, hi: f64, height: usize) -> Option<(usize, usize)> {
 }
 
 /// Area of every pixel covered by the triangles (`width x height` image, row-major), each
-/// triangle clipped exactly against the pixel grid. Triangles must lie in the frame
-/// `[0, width] x [0, height]` (parts outside are dropped); overlapping triangles add up.
-pub(crate) fn accumulate_area(tris: &[[Pt; 3]], width: usize, height: usize) -> Vec<f64> {
+/// triangle clipped exactly against the pixel grid, triangle `t`'s area added to pixel `k` only
+/// where `accept(t, k)`. Triangles must lie in the frame `[0, width] x [0, height]` (parts
+/// outside are dropped); overlapping triangles add up.
+pub(crate) fn accumulate_area_where(
+    tris: &[[Pt; 3]],
+    width: usize,
+    height: usize,
+    accept: impl Fn(usize, usize) -> bool + Sync,
+) -> Vec<f64> {
     let mut acc = vec![0.0; width * height];
     if width == 0 || height == 0 {
         return acc;
@@ -186,52 +191,76 @@ pub(crate) fn accumulate_area(tris: &[[Pt; 3]], width: usize, height: usize) -> 
     acc.par_chunks_mut(BAND * width).enumerate().for_each(|(band, chunk)| {
         let r0 = band * BAND;
         let r1 = (r0 + BAND).min(height);
-        let (mut lo, mut hi) = (Poly::new(), Poly::new());
         for &t in &items[offsets[band]..offsets[band + 1]] {
-            let mut cur = Poly::from_slice(&tris[t as usize]);
-            if cur.area2_rel(0.0, 0.0) < 0.0 {
-                cur.reverse();
+            let t = t as usize;
+            let mut poly = Poly::from_slice(&tris[t]);
+            if poly.area2_rel(0.0, 0.0) < 0.0 {
+                poly.reverse();
             }
-            let (ymin, ymax) = cur.range(1);
-            if ymin < r0 as f64 {
-                split(&cur, 1, r0 as f64, &mut lo, &mut hi);
-                cur = hi;
-            }
-            let j_start = (ymin.floor().max(r0 as f64)) as usize;
-            let j_end = (ymax.ceil().max(0.0) as usize).min(r1);
-            for j in j_start..j_end {
-                if cur.n < 3 {
-                    break;
+            for_each_pixel(&poly, r0, r1, width, |i, j, area| {
+                let k = j * width + i;
+                if accept(t, k) {
+                    chunk[k - r0 * width] += area;
                 }
-                let row = if ymax > (j + 1) as f64 {
-                    split(&cur, 1, (j + 1) as f64, &mut lo, &mut hi);
-                    cur = hi;
-                    lo
-                } else {
-                    let row = cur;
-                    cur.n = 0;
-                    row
-                };
-                let base = (j - r0) * width;
-                sweep_row(&row, j as f64, &mut chunk[base..base + width]);
-            }
+            });
         }
     });
     acc
 }
 
-/// Adds the area of the convex polygon `row` (inside the row strip at `y = j`) to the pixels of
-/// `out` (one row), splitting it at every column line.
+/// Calls `f(i, j, area)` for every pixel `(i, j)` of rows `r0..r1` (and columns
+/// `0..width`) that the convex polygon `poly` (positive [`Poly::area2_rel`]) overlaps, with
+/// the area of the overlap, clipping it exactly against the pixel grid: row strips, then
+/// columns. Every overlapped pixel is visited once, in row-major order.
 #[inline]
-fn sweep_row(row: &Poly, j: f64, out: &mut [f64]) {
+pub(crate) fn for_each_pixel(
+    poly: &Poly,
+    r0: usize,
+    r1: usize,
+    width: usize,
+    mut f: impl FnMut(usize, usize, f64),
+) {
+    let (mut lo, mut hi) = (Poly::new(), Poly::new());
+    let mut cur = *poly;
+    let (ymin, ymax) = cur.range(1);
+    if ymax.is_nan() || ymin.is_nan() || ymax <= r0 as f64 || ymin >= r1 as f64 {
+        return;
+    }
+    if ymin < r0 as f64 {
+        split(&cur, 1, r0 as f64, &mut lo, &mut hi);
+        cur = hi;
+    }
+    let j_start = (ymin.floor().max(r0 as f64)) as usize;
+    let j_end = (ymax.ceil().max(0.0) as usize).min(r1);
+    for j in j_start..j_end {
+        if cur.n < 3 {
+            break;
+        }
+        let row = if ymax > (j + 1) as f64 {
+            split(&cur, 1, (j + 1) as f64, &mut lo, &mut hi);
+            cur = hi;
+            lo
+        } else {
+            let row = cur;
+            cur.n = 0;
+            row
+        };
+        sweep_row(&row, j, width, &mut f);
+    }
+}
+
+/// Calls `f(i, j, area)` for every column `i` the convex polygon `row` (inside the row strip
+/// at `y = j`) overlaps, splitting it at every column line.
+#[inline]
+fn sweep_row(row: &Poly, j: usize, width: usize, f: &mut impl FnMut(usize, usize, f64)) {
     if row.n < 3 {
         return;
     }
-    let width = out.len();
     let (xmin, xmax) = row.range(0);
     if xmax.is_nan() || xmin.is_nan() || xmax <= 0.0 || xmin >= width as f64 {
         return;
     }
+    let fj = j as f64;
     let mut cur = *row;
     let (mut lo, mut hi) = (Poly::new(), Poly::new());
     if xmin < 0.0 {
@@ -240,72 +269,93 @@ fn sweep_row(row: &Poly, j: f64, out: &mut [f64]) {
     }
     let i_start = xmin.floor().max(0.0) as usize;
     let i_end = (xmax.ceil() as usize).min(width);
-    for (i, slot) in out.iter_mut().enumerate().take(i_end).skip(i_start) {
+    for i in i_start..i_end {
         if cur.n < 3 {
             break;
         }
         let fi = i as f64;
         if xmax > fi + 1.0 {
             split(&cur, 0, fi + 1.0, &mut lo, &mut hi);
-            *slot += 0.5 * lo.area2_rel(fi, j);
+            f(i, j, 0.5 * lo.area2_rel(fi, fj));
             cur = hi;
         } else {
-            *slot += 0.5 * cur.area2_rel(fi, j);
+            f(i, j, 0.5 * cur.area2_rel(fi, fj));
             break;
         }
     }
 }
 
-/// Marks in `mask` (row-major `width x height`) every pixel whose closed square the convex
-/// polygon touches, widened by `eps` pixels on every side (conservative).
-pub(crate) fn mark_touched(
-    polys: &ScreenPolygons,
-    width: usize,
-    height: usize,
-    eps: f64,
-    mask: &mut [bool],
-) {
-    if width == 0 || height == 0 {
-        return;
+/// The part of the convex polygon `poly` on the left of the directed line `a -> b` (the
+/// inside of a counter-clockwise polygon, in a y-up frame, of which `a -> b` is an edge).
+/// Crossing points are interpolated along `poly`'s edges.
+#[inline]
+pub(crate) fn keep_left(poly: &Poly, a: Pt, b: Pt) -> Poly {
+    let mut out = Poly::new();
+    let n = poly.n;
+    let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
+    let side = |p: Pt| ex * (p[1] - a[1]) - ey * (p[0] - a[0]);
+    for k in 0..n {
+        let p = poly.v[k];
+        let q = poly.v[if k + 1 == n { 0 } else { k + 1 }];
+        let (dp, dq) = (side(p), side(q));
+        if dp >= 0.0 {
+            out.push(p);
+        }
+        if (dp < 0.0 && dq > 0.0) || (dp > 0.0 && dq < 0.0) {
+            let t = dp / (dp - dq);
+            out.push([p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])]);
+        }
     }
-    let touched_range = |lo: f64, hi: f64, size: usize| -> Option<(usize, usize)> {
-        // Pixel `i`'s closed span [i, i + 1] meets [lo - eps, hi + eps].
-        let (lo, hi) = (lo - eps, hi + eps);
-        if hi.is_nan() || lo.is_nan() || hi < 0.0 || lo > size as f64 || hi < lo {
-            return None;
+    out
+}
+
+/// Whether the edge `s -> e` has a direction: a clip can leave two vertices a few roundings
+/// apart, and the line through them points anywhere. Edges shorter than `1e-9` of their
+/// coordinates' magnitude (and of a pixel) are skipped as clip lines and separating axes;
+/// the neighbouring edges of the convex polygon bound it there.
+#[inline]
+fn has_direction(s: Pt, e: Pt) -> bool {
+    let magnitude = s[0].abs().max(s[1].abs()).max(1.0);
+    (e[0] - s[0]).abs().max((e[1] - s[1]).abs()) > 1e-9 * magnitude
+}
+
+/// The intersection of the convex polygons `a` and `b` (both with positive
+/// [`Poly::area2_rel`]).
+pub(crate) fn intersect(a: &Poly, b: &Poly) -> Poly {
+    let mut cur = *a;
+    for k in 0..b.n {
+        if cur.n < 3 {
+            cur.n = 0;
+            break;
         }
-        let a = (lo.ceil() - 1.0).max(0.0) as usize;
-        let b = (hi.floor().max(0.0) as usize).min(size - 1);
-        (a <= b).then_some((a, b))
+        let (s, e) = (b.v[k], b.v[if k + 1 == b.n { 0 } else { k + 1 }]);
+        if has_direction(s, e) {
+            cur = keep_left(&cur, s, e);
+        }
+    }
+    cur
+}
+
+/// Whether the convex polygons `a` and `b` (positive [`Poly::area2_rel`]) have disjoint
+/// interiors by a separating line through an edge of one of them (the separating axis test;
+/// touching counts as disjoint). `false` means they may overlap.
+pub(crate) fn separated(a: &Poly, b: &Poly) -> bool {
+    let outside = |p: &Poly, q: &Poly| {
+        (0..p.n).any(|k| {
+            let (s, e) = (p.v[k], p.v[if k + 1 == p.n { 0 } else { k + 1 }]);
+            let (ex, ey) = (e[0] - s[0], e[1] - s[1]);
+            has_direction(s, e)
+                && q.points().iter().all(|v| ex * (v[1] - s[1]) - ey * (v[0] - s[0]) <= 0.0)
+        })
     };
-    let (offsets, items) = bin_by_band(polys.len(), height, |k| {
-        let p = Poly::from_slice(&polys.points[polys.ranges[k].clone()]);
-        if p.n == 0 {
-            return None;
-        }
-        let (lo, hi) = p.range(1);
-        touched_range(lo, hi, height)
-    });
-    mask.par_chunks_mut(BAND * width).enumerate().for_each(|(band, chunk)| {
-        let r0 = band * BAND;
-        let r1 = (r0 + BAND).min(height);
-        for &k in &items[offsets[band]..offsets[band + 1]] {
-            let p = &Poly::from_slice(&polys.points[polys.ranges[k as usize].clone()]);
-            let (ylo, yhi) = p.range(1);
-            let Some((a, b)) = touched_range(ylo, yhi, height) else { continue };
-            for j in a.max(r0)..=b.min(r1 - 1) {
-                let strip = keep(&keep(p, 1, j as f64 - eps, true), 1, (j + 1) as f64 + eps, false);
-                if strip.n == 0 {
-                    continue;
-                }
-                let (xlo, xhi) = strip.range(0);
-                if let Some((ia, ib)) = touched_range(xlo, xhi, width) {
-                    let base = (j - r0) * width;
-                    chunk[base + ia..=base + ib].iter_mut().for_each(|m| *m = true);
-                }
-            }
-        }
-    });
+    outside(a, b) || outside(b, a)
+}
+
+/// The convex polygon `poly` clipped to the pixel square `(i, j)`.
+#[inline]
+pub(crate) fn clip_to_pixel(poly: &Poly, i: usize, j: usize) -> Poly {
+    let (x, y) = (i as f64, j as f64);
+    keep(&keep(&keep(&keep(poly, 0, x, true), 0, x + 1.0, false), 1, y, true), 1, y + 1.0, false)
 }
 
 #[cfg(test)]
@@ -316,7 +366,7 @@ mod tests {
     fn a_square_on_the_grid_covers_its_pixels_exactly() {
         let tris =
             [[[1.25, 0.5], [3.75, 0.5], [3.75, 2.0]], [[1.25, 0.5], [3.75, 2.0], [1.25, 2.0]]];
-        let acc = accumulate_area(&tris, 5, 3);
+        let acc = accumulate_area_where(&tris, 5, 3, |_, _| true);
         let expect = [
             0.0, 0.375, 0.5, 0.375, 0.0, //
             0.0, 0.75, 1.0, 0.75, 0.0, //
@@ -330,22 +380,10 @@ mod tests {
     #[test]
     fn areas_sum_to_the_triangle_area() {
         let tri = [[0.3, 0.7], [17.9, 3.2], [5.5, 11.6]];
-        let acc = accumulate_area(&[tri], 20, 20);
+        let acc = accumulate_area_where(&[tri], 20, 20, |_, _| true);
         let area = 0.5 * Poly::from_slice(&tri).area2_rel(0.0, 0.0).abs();
         let sum: f64 = acc.iter().sum();
         assert!((sum - area).abs() < 1e-12, "{sum} vs {area}");
         assert!(acc.iter().all(|&a| (-1e-15..=1.0 + 1e-15).contains(&a)));
-    }
-
-    #[test]
-    fn touching_a_corner_marks_the_four_pixels_around_it() {
-        let mut tri = ScreenPolygons::default();
-        tri.push(&[[2.0, 2.0], [1.5, 3.0], [1.0, 2.5]]);
-        let mut mask = vec![false; 16];
-        mark_touched(&tri, 4, 4, 0.0, &mut mask);
-        let marked: Vec<usize> = (0..16).filter(|&k| mask[k]).collect();
-        // The corner (2, 2) touches pixels (1, 1), (2, 1), (1, 2), (2, 2); the vertex on
-        // x = 1 touches (0, 2), the one on y = 3 touches (1, 3).
-        assert_eq!(marked, vec![5, 6, 8, 9, 10, 13]);
     }
 }

@@ -1,39 +1,44 @@
-//! `exact`: the exact ground truth for planar receivers.
+//! `exact`: the exact ground truth on every visible surface.
 //!
-//! A pixel's value is the fraction of its square, mapped onto the receiver plane, that the
-//! light sees. The method:
+//! A pixel's value is the lit fraction of the visible surface area in its square. Every
+//! visible triangle is a planar receiver; what `exact` can vouch for is decided first, pixel by
+//! pixel, from the camera's view of the triangles ([`classes`]: `planar`, `surface`, `edge`,
+//! `uncovered`). `planar` and `surface` pixels, whose squares are tiled by known triangles of
+//! one surface and see nothing else, are evaluated exactly; `edge` pixels (silhouettes, depth
+//! discontinuities, several objects, background) are left to `raytrace` at the rate the
+//! caller gives ([`ExactCoverage::edge`]), so that the camera's geometric aliasing stays out of
+//! the shadow error; `uncovered` pixels see nothing and are lit.
 //!
-//! 1. **Shadow polygons.** Every caster triangle (a triangle `t` with `frame.is_caster(t)` of
-//!    an object other than the receiver: a plane cannot shadow itself) is clipped to the part
-//!    strictly between the light and the receiver plane and projected along light rays onto
-//!    the plane (directional: parallel; spot: central from the light), then through the
-//!    camera onto the screen and clipped to the frame `[0, W] x [0, H]`. Both maps are
-//!    composed in homogeneous coordinates (see [`shadow`](self)): every clip is a linear
-//!    inequality on the triangle, so clipping happens before any division.
-//! 2. **Union** of all shadow polygons with i_overlay's integer engine on an exact grid.
-//! 3. **Triangulation** of the union's contours with spade's constrained Delaunay
-//!    triangulation; faces of odd crossing parity (inside, holes excluded) are kept.
-//! 4. **Pixel clipping**: each triangle is clipped exactly against the pixel grid in `f64`
-//!    (row strips, then columns), in parallel over bands of rows; the shadowed area of every
-//!    pixel is accumulated and `lit = 1 - shadowed`, clamped to `[0, 1]`.
-//! 5. **Evaluated pixels**: a pixel is evaluated iff its whole square sees the receiver:
-//!    the receiver object's screen coverage of the square (computed with the same union,
-//!    triangulation and pixel clipping) is at least `1 - 1e-9`, and no triangle of another
-//!    object that lies (at least partly) on the camera's side of the receiver plane touches
-//!    the closed square. The touch test is conservative: the part of the triangle on the
-//!    camera's side (within `1e-9` of the receiver's extent, the precision of its plane: a
-//!    far-away object must not widen it), clipped at the camera's near plane,
-//!    is projected, and every pixel whose closed square, widened by `1e-7` pixels, meets it is
-//!    disqualified. Triangles entirely behind the plane as seen from the camera do not count.
-//!    Pixels not evaluated still get the value computed for them.
+//! 1. **Pixel classes** ([`classes`]), with the triangles that tile each evaluated square.
+//! 2. **Planar objects** (a mesh with one plane, `Mesh::plane`), for their `planar` pixels:
+//!    every caster triangle of another object is clipped to the part strictly between the
+//!    light and the plane and projected along light rays onto the plane (directional:
+//!    parallel; spot: central from the light), then through the camera onto the screen and
+//!    clipped to the frame ([`shadow`](self)): both maps are composed in homogeneous
+//!    coordinates, so every clip is a linear inequality on the triangle and happens before any
+//!    division. The shadow polygons are unioned with i_overlay's integer engine on an exact
+//!    grid, the union is triangulated with spade's constrained Delaunay triangulation (faces of
+//!    odd crossing parity kept), and the triangles are clipped exactly against the pixel grid
+//!    in `f64` (row strips, then columns), in parallel over bands of rows. A pixel's shadowed
+//!    area is accumulated and `lit = 1 - shadowed`, clamped to `[0, 1]`. Stages `shadow
+//!    polygons`, `union`, `triangulation`, `pixel clipping`.
+//! 3. **Surface triangles**, for `surface` pixels ([`surface`]): every triangle tiling a
+//!    `surface` pixel is a receiver of its own: the casters a light-space grid returns for it
+//!    ([`casters`]; any triangle, its own mesh included: self-shadowing) are projected onto
+//!    its plane by the same machinery, intersected with its screen polygon, unioned and
+//!    triangulated; the pieces are clipped against the pixel grid and each pixel adds the
+//!    areas of the triangles that tile it. Stages `caster grid`, `surface shadows`, `surface
+//!    pixel clipping`.
+//! 4. **Edge pixels**: `raytrace` on the `edge` pixels only (its stages `BVH build`, `ray
+//!    tracing`), when [`ExactCoverage::edge`] is set.
 //!
-//! Stages, timed under these names: `shadow polygons`, `union`, `triangulation`,
-//! `pixel clipping`, `evaluated pixels`.
+//! A stage with nothing to do (no `planar` pixels, no `surface` pixels, no `edge` pixels or no
+//! edge reference) is not run and is listed as skipped.
 //!
 //! # Precision
 //!
 //! The only approximations are the `f64` rounding of the projections and clips, and the
-//! snapping of the union to i_overlay's integer grid (its float API would map a bounding box
+//! snapping of the unions to i_overlay's integer grid (its float API would map a bounding box
 //! onto the integers with a power-of-two scale around the box's centre; here the `i64` engine
 //! is driven directly, see [`union`](self)). The grid step is `2^(e - 53)` pixels with
 //! `2^e >= max(W, H)` ([`union_grid_step`]; 1.1e-13 px at 800 x 600): the finest step whose
@@ -44,23 +49,25 @@
 //! square under a vertical light seen by an axis-aligned orthographic camera, do not move, and
 //! that case comes out exact to the last bit.
 //!
-//! Measured (`analysis/tests/exact.rs`, against a union computed without any grid by
-//! vertical slabs from the same shadow polygons): the worst per-pixel error of everything after
-//! the shadow polygons (union, triangulation, pixel clipping) is about three grid steps:
-//! 1.5e-14 at 64 x 48, 2.3e-13 on `bunny-plane` and 2.9e-13 on `cage` at 800 x 600, 6.5e-13 at
-//! 2000 x 1500, 1.2e-12 at 3000 x 2000. Stated bound: **4 grid steps per pixel** (4.5e-13 at
-//! 800 x 600, below 1e-11 for any frame up to 16384 pixels on a side), far below the 1e-9 the
-//! ground truth must meet. Against analytic areas (rotated squares, spot lights, a grazing
-//! perspective view) the agreement is 1e-13 or better.
+//! Measured on planar receivers (`analysis/tests/exact.rs`, against a union computed without
+//! any grid by vertical slabs from the same shadow polygons): the worst per-pixel error of
+//! everything after the shadow polygons (union, triangulation, pixel clipping) is about three
+//! grid steps: 1.5e-14 at 64 x 48, 2.3e-13 on `bunny-plane` and 2.9e-13 on `cage` at
+//! 800 x 600, 6.5e-13 at 2000 x 1500, 1.2e-12 at 3000 x 2000. Stated bound: **4 grid steps per
+//! pixel** (4.5e-13 at 800 x 600, below 1e-11 for any frame up to 16384 pixels on a side), far
+//! below the 1e-9 the ground truth must meet. Against analytic areas (rotated squares, spot
+//! lights, a grazing perspective view) the agreement is 1e-13 or better. A `surface` pixel adds
+//! one such union per tiling triangle, each within the same bound on its own part.
 //!
 //! # Choices where the issue is vague
 //!
-//! - Receiver: `scene.receiver_plane()` (the largest visible planar object). `exact` does not
-//!   apply (`ReferenceError::NotApplicable`) when the scene has transparency, when
-//!   `planar_receiver` is off or there is no receiver plane, when a directional light runs
-//!   parallel to the plane, or when a spot light lies in it.
-//! - Caster parts: directional lights keep the part with height `h >= 0` above the plane on the
-//!   light's side (triangles with every corner at `h <= 0`, e.g. lying in the plane, are
+//! - `exact` applies to every scene with opaque casters; it does not apply
+//!   (`ReferenceError::NotApplicable`) when the scene has transparency.
+//! - A receiver whose plane holds the light (a directional light parallel to it, a spot light
+//!   in it) gets light only at grazing incidence and has no projection: its pixels are not
+//!   evaluated, and a note says how many.
+//! - Caster parts: directional lights keep the part with height `h >= 0` above the plane on
+//!   the light's side (triangles with every corner at `h <= 0`, e.g. lying in the plane, are
 //!   dropped); spot lights also keep `h <= H`, the light's height (parts beyond the plane
 //!   through the light, parallel to the receiver, cast no shadow on it). A point at height
 //!   `H` projects to infinity on the plane; in homogeneous coordinates it is the receiver's
@@ -72,24 +79,31 @@
 //!   every depth.
 //! - Degenerate shadow polygons (fewer than three vertices, zero area, a vertex at or behind
 //!   the eye) are ignored; they have no area.
-//! - The receiver's own side is not considered: a receiver seen from the side away from the
-//!   light gets the same visibility (its points still see the light through the open side).
+//! - A receiver is not asked which side the light is on: a surface facing away from the light
+//!   is dark because the rest of its (closed) mesh shadows it, not by a shading rule; an open
+//!   sheet lit from behind is lit.
+//! - A planar object's union is computed over the whole frame, as for one receiver plane; only
+//!   its own `planar` pixels take values from it.
+//! - `uncovered` pixels are lit (1) and not evaluated; `edge` pixels without an edge reference
+//!   are lit (1) and not evaluated.
 
+mod casters;
+pub mod classes;
 mod clip;
 mod shadow;
+mod surface;
 mod union;
 
+use crate::pixel_class::{self, PixelClass};
+use crate::raytrace::RayTrace;
 use crate::reference::{Reference, ReferenceError, ReferenceImage};
+use classes::Classes;
 use instrumentation::Recorder;
 use methods::Frame;
 use shadow::Setup;
 use std::ops::Range;
 
-/// Receiver coverage a pixel needs to be evaluated.
-pub const MIN_RECEIVER_COVERAGE: f64 = 1.0 - 1e-9;
-
-/// Widening, in pixels, of the closed pixel squares in the occluder touch test.
-pub const TOUCH_EPS: f64 = 1e-7;
+pub use classes::classify;
 
 /// Polygons in screen space (pixels from the top-left, y down), stored flat: contour `k` is
 /// `points[ranges[k].clone()]`, closed implicitly (the last point connects to the first).
@@ -142,9 +156,13 @@ impl ScreenPolygons {
     }
 }
 
-/// The exact reference for planar receivers (name `exact`; no options).
-#[derive(Debug, Clone, Copy, Default)]
-pub struct ExactCoverage;
+/// The exact reference (name `exact`).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ExactCoverage {
+    /// The reference of `edge` pixels (`raytrace` at some rate); `None` leaves them
+    /// unevaluated.
+    pub edge: Option<RayTrace>,
+}
 
 impl Reference for ExactCoverage {
     fn name(&self) -> &'static str {
@@ -152,7 +170,18 @@ impl Reference for ExactCoverage {
     }
 
     fn params(&self) -> serde_json::Map<String, serde_json::Value> {
-        serde_json::Map::new()
+        let mut m = serde_json::Map::new();
+        match &self.edge {
+            Some(rt) => {
+                m.insert("edge_reference".into(), "raytrace".into());
+                m.insert("edge_rate".into(), rt.pattern.rate().into());
+                m.insert("edge_pattern".into(), rt.pattern.kind().name().into());
+            }
+            None => {
+                m.insert("edge_reference".into(), "none".into());
+            }
+        }
+        m
     }
 
     fn evaluate(
@@ -160,24 +189,26 @@ impl Reference for ExactCoverage {
         frame: &Frame<'_>,
         rec: &mut Recorder,
     ) -> Result<ReferenceImage, ReferenceError> {
-        evaluate(frame, rec)
+        evaluate(frame, self.edge.as_ref(), rec)
     }
 }
 
-/// The screen-space shadow polygons of every caster, before the union: each the shadow of one
-/// caster triangle on the receiver plane, clipped to the frame, with positive shoelace area in
-/// screen coordinates ([`ScreenPolygons::signed_area`]).
+/// The screen-space shadow polygons on the scene's main planar receiver
+/// (`Scene::receiver_plane`), before the union: each the shadow of one caster triangle of
+/// another object, clipped to the frame, with positive shoelace area in screen coordinates
+/// ([`ScreenPolygons::signed_area`]).
 pub fn shadow_polygons(frame: &Frame<'_>) -> Result<ScreenPolygons, ReferenceError> {
-    Ok(Setup::new(frame)?.shadow_polygons(frame))
+    let (receiver, setup) = Setup::main_receiver(frame)?;
+    Ok(setup.shadow_polygons(frame, receiver))
 }
 
-/// The union of the shadow polygons in screen space, exactly as `exact` triangulates it:
+/// The union of [`shadow_polygons`] in screen space, exactly as `exact` triangulates it:
 /// outer contours and holes, whose interior is the set of points of odd crossing parity
 /// (fill with the even-odd rule).
 pub fn shadow_union(frame: &Frame<'_>) -> Result<ScreenPolygons, ReferenceError> {
-    let setup = Setup::new(frame)?;
-    let step = union::grid_step(setup.width, setup.height);
-    Ok(union::union(&setup.shadow_polygons(frame), step))
+    let (receiver, setup) = Setup::main_receiver(frame)?;
+    let step = union::grid_step(setup.screen.width, setup.screen.height);
+    Ok(union::union(&setup.shadow_polygons(frame, receiver), step))
 }
 
 /// The grid step, in pixels, on which `exact` forms unions for a `width x height` frame:
@@ -186,47 +217,187 @@ pub fn union_grid_step(width: u32, height: u32) -> f64 {
     union::grid_step(f64::from(width), f64::from(height))
 }
 
-/// Area of every pixel covered by the union of `polys` (all of one orientation).
-fn covered_area(polys: &ScreenPolygons, w: usize, h: usize, step: f64) -> Vec<f64> {
-    let (tris, _) = union::triangulate(&union::union(polys, step));
-    clip::accumulate_area(&tris, w, h)
+/// The object whose surface pixel `k` sees (for `planar` and `surface` pixels).
+fn object_of(frame: &Frame<'_>, classes: &Classes, k: usize) -> Option<u32> {
+    classes.tiles_of(k).first().map(|&t| frame.geometry.object[t as usize])
 }
 
-fn evaluate(frame: &Frame<'_>, rec: &mut Recorder) -> Result<ReferenceImage, ReferenceError> {
-    let setup = Setup::new(frame)?;
+fn evaluate(
+    frame: &Frame<'_>,
+    edge: Option<&RayTrace>,
+    rec: &mut Recorder,
+) -> Result<ReferenceImage, ReferenceError> {
+    Setup::check(frame)?;
     let (width, height) = (frame.width(), frame.height());
     let (w, h) = (width as usize, height as usize);
-    let step = union::grid_step(setup.width, setup.height);
-    let polys = rec.stages.time("shadow polygons", || setup.shadow_polygons(frame));
-    let contours = rec.stages.time("union", || union::union(&polys, step));
-    let (tris, conflicts) = rec.stages.time("triangulation", || union::triangulate(&contours));
-    let shadowed = rec.stages.time("pixel clipping", || clip::accumulate_area(&tris, w, h));
-    let evaluated = rec.stages.time("evaluated pixels", || {
-        let coverage = covered_area(&setup.receiver_polygons(frame), w, h, step);
-        let mut touched = vec![false; w * h];
-        clip::mark_touched(&setup.occluder_polygons(frame), w, h, TOUCH_EPS, &mut touched);
-        coverage
-            .iter()
-            .zip(&touched)
-            .map(|(&c, &t)| c >= MIN_RECEIVER_COVERAGE && !t)
-            .collect::<Vec<bool>>()
-    });
-    rec.notes.push(format!(
-        "exact: {} shadow polygons, union of {} contours ({} vertices), {} triangles",
-        polys.len(),
-        contours.len(),
-        contours.points.len(),
-        tris.len()
-    ));
-    if conflicts > 0 {
+    let classes = rec.stages.time("pixel classes", || classify(frame));
+    rec.counters.pixel_triangle_overlaps += classes.overlaps;
+    let class = &classes.class;
+    let mut shadowed = vec![0.0f64; w * h];
+    let mut evaluated = vec![false; w * h];
+    let mut grazing_pixels = 0u64;
+
+    // Planar objects.
+    let mut objects: Vec<u32> = (0..w * h)
+        .filter(|&k| class[k] == PixelClass::Planar)
+        .filter_map(|k| object_of(frame, &classes, k))
+        .collect();
+    objects.sort_unstable();
+    objects.dedup();
+    let mut planes = Vec::new();
+    for &o in &objects {
+        let setup = frame.scene.objects[o as usize]
+            .mesh
+            .plane()
+            .and_then(|(n, d)| Setup::for_plane(frame, n, d));
+        match setup {
+            Some(s) => planes.push((o, s)),
+            None => {
+                grazing_pixels += (0..w * h)
+                    .filter(|&k| {
+                        class[k] == PixelClass::Planar && object_of(frame, &classes, k) == Some(o)
+                    })
+                    .count() as u64;
+            }
+        }
+    }
+    let planar_stages = ["shadow polygons", "union", "triangulation", "pixel clipping"];
+    if planes.is_empty() {
+        planar_stages.iter().for_each(|s| rec.stages.skip(s));
+    } else {
+        let step = union::grid_step(f64::from(width), f64::from(height));
+        let polys: Vec<ScreenPolygons> = rec.stages.time(planar_stages[0], || {
+            planes.iter().map(|(o, s)| s.shadow_polygons(frame, *o as usize)).collect()
+        });
+        rec.counters.shadow_polygons += polys.iter().map(|p| p.len() as u64).sum::<u64>();
+        let unions: Vec<ScreenPolygons> = rec
+            .stages
+            .time(planar_stages[1], || polys.iter().map(|p| union::union(p, step)).collect());
+        let tris: Vec<_> = rec
+            .stages
+            .time(planar_stages[2], || unions.iter().map(union::triangulate).collect::<Vec<_>>());
+        rec.stages.time(planar_stages[3], || {
+            for ((o, _), (t, _)) in planes.iter().zip(&tris) {
+                let mine = |k: usize| {
+                    class[k] == PixelClass::Planar && object_of(frame, &classes, k) == Some(*o)
+                };
+                let area = clip::accumulate_area_where(t, w, h, |_, k| mine(k));
+                for k in (0..w * h).filter(|&k| mine(k)) {
+                    shadowed[k] = area[k];
+                    evaluated[k] = true;
+                }
+            }
+        });
+        for (((o, _), p), (c, (t, conflicts))) in
+            planes.iter().zip(&polys).zip(unions.iter().zip(&tris))
+        {
+            let name = &frame.scene.objects[*o as usize].name;
+            rec.notes.push(format!(
+                "exact: on `{name}`, {} shadow polygons, union of {} contours ({} vertices), {} \
+                 triangles",
+                p.len(),
+                c.len(),
+                c.points.len(),
+                t.len()
+            ));
+            if *conflicts > 0 {
+                rec.notes.push(format!(
+                    "exact: spade skipped {conflicts} crossing constraint edges of the union on \
+                     `{name}`; values near them may be off"
+                ));
+            }
+        }
+    }
+
+    // Surface triangles.
+    let mut receivers: Vec<u32> = (0..w * h)
+        .filter(|&k| class[k] == PixelClass::Surface)
+        .flat_map(|k| classes.tiles_of(k).iter().copied())
+        .collect();
+    receivers.sort_unstable();
+    receivers.dedup();
+    let surface_stages = ["caster grid", "surface shadows", "surface pixel clipping"];
+    if receivers.is_empty() {
+        surface_stages.iter().for_each(|s| rec.stages.skip(s));
+    } else {
+        let grid =
+            rec.stages.time(surface_stages[0], || casters::CasterGrid::new(frame, &receivers));
+        let s = rec.stages.time(surface_stages[1], || surface::shadows(frame, &grid, &receivers));
+        rec.counters.receiver_triangles += receivers.len() as u64;
+        rec.counters.caster_pairs += s.pairs;
+        rec.counters.shadow_polygons += s.polygons;
+        rec.stages.time(surface_stages[2], || {
+            let area = clip::accumulate_area_where(&s.tris, w, h, |t, k| {
+                class[k] == PixelClass::Surface && classes.tiles_of(k).contains(&s.tag[t])
+            });
+            for k in (0..w * h).filter(|&k| class[k] == PixelClass::Surface) {
+                if classes.tiles_of(k).iter().any(|t| s.grazing.binary_search(t).is_ok()) {
+                    grazing_pixels += 1;
+                } else {
+                    shadowed[k] = area[k];
+                    evaluated[k] = true;
+                }
+            }
+        });
         rec.notes.push(format!(
-            "exact: spade skipped {conflicts} crossing constraint edges of the union; values \
-             near them may be off"
+            "exact: {} receiver triangles, {} receiver-caster pairs, {} shadow polygons, {} \
+             shadow triangles",
+            receivers.len(),
+            s.pairs,
+            s.polygons,
+            s.tris.len()
+        ));
+        if s.conflicts > 0 {
+            rec.notes.push(format!(
+                "exact: spade skipped {} crossing constraint edges of surface unions; values \
+                 near them may be off",
+                s.conflicts
+            ));
+        }
+    }
+    if grazing_pixels > 0 {
+        rec.notes.push(format!(
+            "exact: {grazing_pixels} pixels see a surface whose plane holds the light (grazing \
+             incidence); not evaluated"
         ));
     }
-    let lit = shadowed
+    let mut lit: Vec<f64> = shadowed
         .iter()
-        .map(|&a| if a.is_nan() { 0.0 } else { (1.0 - a).clamp(0.0, 1.0) })
+        .zip(&evaluated)
+        .map(|(&a, &e)| {
+            if !e {
+                1.0
+            } else if a.is_nan() {
+                0.0
+            } else {
+                (1.0 - a).clamp(0.0, 1.0)
+            }
+        })
         .collect();
-    Ok(ReferenceImage { width, height, lit, evaluated, transmittance: None })
+
+    // Edge pixels.
+    let edges: Vec<bool> = class.iter().map(|&c| c == PixelClass::Edge).collect();
+    match edge {
+        Some(rt) if edges.contains(&true) => {
+            let img = rt.evaluate_pixels(frame, Some(&edges), rec)?;
+            for k in (0..w * h).filter(|&k| edges[k]) {
+                lit[k] = img.lit[k];
+                evaluated[k] = img.evaluated[k];
+            }
+        }
+        _ => rec.stages.skip("edge pixels (raytrace)"),
+    }
+    let n = pixel_class::counts(class);
+    rec.notes.push(format!(
+        "exact: pixel classes: {} planar, {} surface, {} edge, {} uncovered",
+        n[1], n[2], n[3], n[0]
+    ));
+    Ok(ReferenceImage {
+        width,
+        height,
+        lit,
+        evaluated,
+        transmittance: None,
+        classes: Some(classes.class),
+    })
 }

@@ -36,22 +36,9 @@ enum LightSetup {
     Spot { pos: DVec3, big_h: f64 },
 }
 
-/// The receiver plane, light and camera of a frame, with the clip functions derived from them.
-#[derive(Debug, Clone)]
-pub(crate) struct Setup {
-    /// Index of the receiver object.
-    pub receiver: usize,
-    /// Unit normal of the receiver plane.
-    n: DVec3,
-    /// Offset of the receiver plane (`n·p = d`).
-    d: f64,
-    /// `+1` or `-1`: the sign of `n·p - d` on the light's side of the plane.
-    light_side: f64,
-    /// `+1` or `-1`: the sign of `n·p - d` on the camera's side of the plane.
-    camera_side: f64,
-    /// Tolerance of "on the camera's side" for occluders: `1e-9` of the receiver's extent.
-    side_tolerance: f64,
-    light: LightSetup,
+/// The camera's map from world space to the screen, with the homogeneous clips `exact` uses.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Screen {
     camera: Projector,
     /// Image width in pixels.
     pub width: f64,
@@ -59,80 +46,153 @@ pub(crate) struct Setup {
     pub height: f64,
 }
 
+/// The receiver plane and light of a frame, with the clip functions derived from them.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Setup {
+    /// Unit normal of the receiver plane.
+    n: DVec3,
+    /// Offset of the receiver plane (`n·p = d`).
+    d: f64,
+    /// `+1` or `-1`: the sign of `n·p - d` on the light's side of the plane.
+    light_side: f64,
+    light: LightSetup,
+    /// The camera.
+    pub screen: Screen,
+}
+
 impl Setup {
-    /// Checks that `exact` applies to the frame and derives the projection.
-    pub fn new(frame: &Frame<'_>) -> Result<Self, ReferenceError> {
-        let name = &frame.scene.name;
+    /// Checks that `exact` applies to the frame as a whole (opaque casters only).
+    pub fn check(frame: &Frame<'_>) -> Result<(), ReferenceError> {
         if frame.effects.transparency {
             return Err(ReferenceError::NotApplicable(format!(
-                "exact does not apply to scene `{name}`: it has semi-transparent casters \
+                "exact does not apply to scene `{}`: it has semi-transparent casters \
                  (effect `transparency`), and exact handles opaque casters only; use the \
-                 `raytrace` reference"
+                 `raytrace` reference",
+                frame.scene.name
             )));
         }
+        Ok(())
+    }
+
+    /// The setup for the scene's main planar receiver (`Scene::receiver_plane`, the largest
+    /// visible planar object): its object index and the setup.
+    pub fn main_receiver(frame: &Frame<'_>) -> Result<(usize, Self), ReferenceError> {
+        Self::check(frame)?;
+        let name = &frame.scene.name;
         let no_plane = || {
             ReferenceError::NotApplicable(format!(
-                "exact does not apply to scene `{name}`: no planar receiver is visible (effect \
-                 `planar_receiver` is off); use the `raytrace` reference"
+                "scene `{name}` has no visible planar receiver (effect `planar_receiver` is off)"
             ))
         };
         if !frame.effects.planar_receiver {
             return Err(no_plane());
         }
         let (receiver, n, d) = frame.scene.receiver_plane().ok_or_else(no_plane)?;
+        let setup = Self::for_plane(frame, n, d).ok_or_else(|| {
+            ReferenceError::NotApplicable(format!(
+                "the light of scene `{name}` lies in the plane of its receiver (a directional \
+                 light parallel to it, or a spot light in it)"
+            ))
+        })?;
+        Ok((receiver, setup))
+    }
+
+    /// The setup for the receiver plane `n·p = d` (`n` a unit normal); `None` when the light
+    /// runs parallel to the plane (directional) or lies in it (spot): light reaches such a
+    /// plane only at grazing incidence and no shadow projects onto it.
+    pub fn for_plane(frame: &Frame<'_>, n: DVec3, d: f64) -> Option<Self> {
         let (light, light_side) = match frame.scene.light {
             Light::Directional { direction } => {
-                let dir = direction;
-                let nl = n.dot(dir);
+                let nl = n.dot(direction);
                 if nl == 0.0 || !nl.is_finite() {
-                    return Err(ReferenceError::NotApplicable(format!(
-                        "exact does not apply to scene `{name}`: the directional light runs \
-                         parallel to the receiver plane"
-                    )));
+                    return None;
                 }
                 // Light comes from -dir: the lit side is where n·p - d has the sign of -n·dir.
-                (LightSetup::Directional { dir, nl }, -nl.signum())
+                (LightSetup::Directional { dir: direction, nl }, -nl.signum())
             }
             Light::Spot { position, .. } => {
                 let s = n.dot(position) - d;
                 if s == 0.0 || !s.is_finite() {
-                    return Err(ReferenceError::NotApplicable(format!(
-                        "exact does not apply to scene `{name}`: the spot light lies in the \
-                         receiver plane"
-                    )));
+                    return None;
                 }
                 (LightSetup::Spot { pos: position, big_h: s.abs() }, s.signum())
             }
         };
-        let camera = frame.camera;
-        let camera_side = match camera.kind {
-            ProjectionKind::Perspective { .. } => n.dot(camera.origin) - d,
-            ProjectionKind::Orthographic { .. } => -n.dot(camera.forward),
+        Some(Self { n, d, light_side, light, screen: Screen::new(frame) })
+    }
+
+    /// Height of `p` above the receiver plane, positive on the light's side.
+    #[inline]
+    pub fn light_height(&self, p: DVec3) -> f64 {
+        self.light_side * (self.n.dot(p) - self.d)
+    }
+
+    /// The shadow of caster triangle `tri` on the receiver plane, in screen space, clipped to
+    /// the frame; `None` when empty or degenerate.
+    ///
+    /// Kept part: `h >= 0` (the light's side of the plane), for spot lights also `h <= H` (not
+    /// beyond the plane through the light parallel to the receiver), and, for perspective
+    /// cameras, shadow points at `depth >= near`. In homogeneous coordinates a point at the
+    /// light's height maps to the receiver's horizon (a point at infinity of the plane), which
+    /// the frame clip removes or keeps as a finite screen point: nothing is projected to
+    /// infinity.
+    pub fn caster(&self, tri: [DVec3; 3]) -> Option<Poly> {
+        let h = tri.map(|p| self.light_height(p));
+        if h.iter().all(|&x| x <= 0.0) {
+            return None;
+        }
+        let recs = match self.light {
+            LightSetup::Directional { dir, nl } => [0, 1, 2].map(|k| {
+                let p = tri[k];
+                let q = p + ((self.d - self.n.dot(p)) / nl) * dir;
+                let [x, y, w, near] = self.screen.camera_h(q, 1.0);
+                [x, y, w, h[k], 1.0, near]
+            }),
+            LightSetup::Spot { pos, big_h } => [0, 1, 2].map(|k| {
+                // q = pos + (p - pos) H / (H - h): homogeneous (H p - h pos, H - h).
+                let p = tri[k];
+                let w = big_h - h[k];
+                let [x, y, wt, near] = self.screen.camera_h(big_h * p - h[k] * pos, w);
+                [x, y, wt, h[k], w, near]
+            }),
         };
-        let camera_side = if camera_side < 0.0 { -1.0 } else { 1.0 };
-        // The receiver's own size: its plane holds its vertices within `1e-9` of it
-        // (`Mesh::plane`); the scene's size, which a far-away object sets, plays no part.
-        let extent = frame.scene.objects[receiver].mesh.bounds().map_or(0.0, |(lo, hi)| {
-            let e = (hi - lo).length();
-            if e.is_finite() {
-                e
+        self.screen.finish(recs).map(|(poly, _)| poly)
+    }
+
+    /// Shadow polygons of every caster triangle of `frame` of an object other than
+    /// `receiver` (a plane cannot shadow itself), in triangle order.
+    pub fn shadow_polygons(&self, frame: &Frame<'_>, receiver: usize) -> ScreenPolygons {
+        let g = &frame.geometry;
+        collect(g.len(), |t| {
+            if g.object[t] as usize != receiver && frame.is_caster(t) {
+                self.caster(g.corners(t))
             } else {
-                0.0
+                None
             }
-        });
-        let side_tolerance = 1e-9 * extent;
-        Ok(Self {
-            receiver,
-            n,
-            d,
-            light_side,
-            camera_side,
-            side_tolerance,
-            light,
-            camera,
+        })
+    }
+}
+
+impl Screen {
+    /// The camera of `frame`.
+    pub fn new(frame: &Frame<'_>) -> Self {
+        Self {
+            camera: frame.camera,
             width: f64::from(frame.width()),
             height: f64::from(frame.height()),
-        })
+        }
+    }
+
+    /// The camera's ray through screen point `xy`, parameterised by depth.
+    #[inline]
+    pub fn ray(&self, xy: [f64; 2]) -> scenes::projection::Ray {
+        self.camera.ray(glam::DVec2::new(xy[0], xy[1]))
+    }
+
+    /// The camera's origin (eye or image-plane centre).
+    #[inline]
+    pub fn origin(&self) -> DVec3 {
+        self.camera.origin
     }
 
     /// Homogeneous screen coordinates `(X, Y, W)` of the homogeneous point `(q, w)`, and the
@@ -161,70 +221,21 @@ impl Setup {
         }
     }
 
-    /// Height of `p` above the receiver plane, positive on the light's side.
-    #[inline]
-    fn light_height(&self, p: DVec3) -> f64 {
-        self.light_side * (self.n.dot(p) - self.d)
-    }
-
-    /// The shadow of caster triangle `tri` on the receiver plane, in screen space, clipped to
-    /// the frame; `None` when empty or degenerate.
-    ///
-    /// Kept part: `h >= 0` (the light's side of the plane), for spot lights also `h <= H` (not
-    /// beyond the plane through the light parallel to the receiver), and, for perspective
-    /// cameras, shadow points at `depth >= near`. In homogeneous coordinates a point at the
-    /// light's height maps to the receiver's horizon (a point at infinity of the plane), which
-    /// the frame clip removes or keeps as a finite screen point: nothing is projected to
-    /// infinity.
-    pub fn caster(&self, tri: [DVec3; 3]) -> Option<Poly> {
-        let h = tri.map(|p| self.light_height(p));
-        if h.iter().all(|&x| x <= 0.0) {
-            return None;
-        }
-        let recs = match self.light {
-            LightSetup::Directional { dir, nl } => [0, 1, 2].map(|k| {
-                let p = tri[k];
-                let q = p + ((self.d - self.n.dot(p)) / nl) * dir;
-                let [x, y, w, near] = self.camera_h(q, 1.0);
-                [x, y, w, h[k], 1.0, near]
-            }),
-            LightSetup::Spot { pos, big_h } => [0, 1, 2].map(|k| {
-                // q = pos + (p - pos) H / (H - h): homogeneous (H p - h pos, H - h).
-                let p = tri[k];
-                let w = big_h - h[k];
-                let [x, y, wt, near] = self.camera_h(big_h * p - h[k] * pos, w);
-                [x, y, wt, h[k], w, near]
-            }),
-        };
-        self.finish(recs, true)
-    }
-
-    /// Receiver triangle `tri` in screen space, clipped at the camera's near plane and to the
-    /// frame; `None` when empty or degenerate.
-    pub fn receiver(&self, tri: [DVec3; 3]) -> Option<Poly> {
+    /// Triangle `tri` as the camera sees it: clipped at the near plane and to the frame, and
+    /// the sign of its winding on screen (`+1` or `-1`); `None` when empty or degenerate
+    /// (seen edge-on).
+    pub fn triangle(&self, tri: [DVec3; 3]) -> Option<(Poly, f64)> {
         let recs = tri.map(|p| {
             let [x, y, w, near] = self.camera_h(p, 1.0);
             [x, y, w, 1.0, 1.0, near]
         });
-        self.finish(recs, true)
+        self.finish(recs)
     }
 
-    /// The part of triangle `tri` on the camera's side of the receiver plane (within
-    /// [`Setup::side_tolerance`]) in screen space, clipped at the near plane and to the frame
-    /// widened by a pixel (not exactly: for marking touched pixels only).
-    pub fn occluder(&self, tri: [DVec3; 3]) -> Option<Poly> {
-        let recs = tri.map(|p| {
-            let side = self.camera_side * (self.n.dot(p) - self.d) + self.side_tolerance;
-            let [x, y, w, near] = self.camera_h(p, 1.0);
-            [x, y, w, side, 1.0, near]
-        });
-        self.finish(recs, false)
-    }
-
-    /// Clips the three clip-space vertices, divides, and (with `exact_frame`) clips exactly to
-    /// the frame; drops empty or degenerate results and orients the rest with positive
-    /// [`Poly::area2_rel`].
-    fn finish(&self, recs: [Rec; 3], exact_frame: bool) -> Option<Poly> {
+    /// Clips the three clip-space vertices, divides, and clips exactly to the frame; drops
+    /// empty or degenerate results, orients the rest with positive [`Poly::area2_rel`] and
+    /// returns the sign the winding had.
+    fn finish(&self, recs: [Rec; 3]) -> Option<(Poly, f64)> {
         let (wd, ht, m) = (self.width, self.height, FRAME_MARGIN);
         let planes: [Rec; 7] = [
             [0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
@@ -286,54 +297,21 @@ impl Setup {
             pts[k] = [x, y];
         }
         let mut poly = Poly::from_slice(&pts[..na]);
-        if exact_frame {
-            poly = keep(&poly, 0, 0.0, true);
-            poly = keep(&poly, 0, wd, false);
-            poly = keep(&poly, 1, 0.0, true);
-            poly = keep(&poly, 1, ht, false);
-        }
+        poly = keep(&poly, 0, 0.0, true);
+        poly = keep(&poly, 0, wd, false);
+        poly = keep(&poly, 1, 0.0, true);
+        poly = keep(&poly, 1, ht, false);
         if poly.n < 3 {
             return None;
         }
         let area2 = poly.area2_rel(0.5 * wd, 0.5 * ht);
         if !(area2 != 0.0 && area2.is_finite()) {
-            // Degenerate: a segment or a point. Occluders still touch pixels.
-            return (!exact_frame).then_some(poly);
+            return None;
         }
         if area2 < 0.0 {
             poly.reverse();
         }
-        Some(poly)
-    }
-
-    /// Shadow polygons of every caster triangle of `frame` (every triangle of a shadow-casting
-    /// object other than the receiver), in triangle order.
-    pub fn shadow_polygons(&self, frame: &Frame<'_>) -> ScreenPolygons {
-        let g = &frame.geometry;
-        collect(g.len(), |t| {
-            if g.object[t] as usize != self.receiver && frame.is_caster(t) {
-                self.caster(g.corners(t))
-            } else {
-                None
-            }
-        })
-    }
-
-    /// Screen polygons of the receiver object's triangles.
-    pub fn receiver_polygons(&self, frame: &Frame<'_>) -> ScreenPolygons {
-        let g = &frame.geometry;
-        collect(g.len(), |t| {
-            (g.object[t] as usize == self.receiver).then(|| self.receiver(g.corners(t))).flatten()
-        })
-    }
-
-    /// Screen polygons (frame widened by a pixel) of the parts of other objects' triangles on
-    /// the camera's side of the receiver plane.
-    pub fn occluder_polygons(&self, frame: &Frame<'_>) -> ScreenPolygons {
-        let g = &frame.geometry;
-        collect(g.len(), |t| {
-            (g.object[t] as usize != self.receiver).then(|| self.occluder(g.corners(t))).flatten()
-        })
+        Some((poly, area2.signum()))
     }
 }
 

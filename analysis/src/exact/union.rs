@@ -36,6 +36,20 @@ pub fn grid_step(width: f64, height: f64) -> f64 {
 /// contours: outer contours and holes, whose interior is the set of points of odd crossing
 /// parity.
 pub(crate) fn union(polys: &ScreenPolygons, step: f64) -> ScreenPolygons {
+    overlay(polys, None, step)
+}
+
+/// The union of the polygons (as [`union`]) intersected with the convex polygon `within`, in
+/// one overlay: the boundary the two share is `within`'s own edges, once.
+pub(crate) fn union_within(
+    polys: &ScreenPolygons,
+    within: &[[f64; 2]],
+    step: f64,
+) -> ScreenPolygons {
+    overlay(polys, Some(within), step)
+}
+
+fn overlay(polys: &ScreenPolygons, within: Option<&[[f64; 2]]>, step: f64) -> ScreenPolygons {
     let (points, ranges) = (&polys.points, &polys.ranges);
     if ranges.is_empty() {
         return ScreenPolygons::default();
@@ -49,17 +63,22 @@ pub(crate) fn union(polys: &ScreenPolygons, step: f64) -> ScreenPolygons {
         ogc: false,
     };
     let solver = Solver::with_strategy_and_precision(Strategy::Auto, Precision::HIGH);
-    let mut overlay = Overlay::<i64>::new_custom(points.len(), options, solver);
+    let snap = move |p: &[f64; 2]| {
+        IntPoint::new((p[0] * scale).round() as i64, (p[1] * scale).round() as i64)
+    };
+    let mut overlay = Overlay::<i64>::new_custom(points.len() + 8, options, solver);
     for r in ranges {
-        overlay.add_path_iter(
-            points[r.clone()].iter().map(|p| {
-                IntPoint::new((p[0] * scale).round() as i64, (p[1] * scale).round() as i64)
-            }),
-            ShapeType::Subject,
-        );
+        overlay.add_path_iter(points[r.clone()].iter().map(snap), ShapeType::Subject);
     }
+    let rule = match within {
+        Some(c) => {
+            overlay.add_path_iter(c.iter().map(snap), ShapeType::Clip);
+            OverlayRule::Intersect
+        }
+        None => OverlayRule::Subject,
+    };
     let mut out = FlatContoursBuffer::<i64>::with_capacity(0);
-    overlay.overlay_into(OverlayRule::Subject, FillRule::NonZero, &mut out);
+    overlay.overlay_into(rule, FillRule::NonZero, &mut out);
     let points = out.points.iter().map(|p| [p.x as f64 * step, p.y as f64 * step]).collect();
     ScreenPolygons { points, ranges: out.ranges }
 }

@@ -1,0 +1,329 @@
+//! Pixel classes: what each pixel's square sees, decided exactly from the camera's view of
+//! the triangles.
+//!
+//! # The rule
+//!
+//! Every triangle `t` is projected through the camera, clipped at the near plane and to the
+//! frame ([`Screen::triangle`]): a convex screen polygon `P_t` with a winding sign (`+1` or
+//! `-1`, the orientation its corners have on screen); triangles seen edge-on have no polygon.
+//! For the closed square `Q` of a pixel:
+//!
+//! 1. `F` = the triangles whose polygon overlaps `Q` with an area above [`MIN_OVERLAP`] (the
+//!    overlap is clipped exactly against the pixel grid, as `exact`'s areas are).
+//!    `F` empty: **`uncovered`**.
+//! 2. The seed `s` is the triangle the camera G-buffer holds at the pixel centre (the nearest
+//!    triangle there). No seed, or a seed not in `F`: **`edge`**.
+//! 3. `C` = the triangles of `F` reachable from `s` through shared edges (two corners at
+//!    bitwise-equal positions) between triangles of `s`'s object with `s`'s winding: one
+//!    continuous surface, front-facing as `s` is (a surface is judged by the consistency of
+//!    its own winding, whichever way its file winds it, so a visible back face, whose winding
+//!    on screen is the other, never joins `C`).
+//! 4. `C` tiles `Q` without gap or overlap: the areas of `P_t ∩ Q` over `C` sum to at least
+//!    [`MIN_TILE_COVERAGE`], and no two triangles of `C` overlap inside `Q` by more than
+//!    [`MAX_TILE_OVERLAP`] (two triangles sharing an edge with one winding lie on its two
+//!    sides and are not tested; the others by a separating-axis test, then by their clipped
+//!    intersection's area). Otherwise: **`edge`**.
+//! 5. Nothing of `F \ C` is in front of `C`: for every `u` in `F \ C` and `t` in `C` whose
+//!    polygons overlap inside `Q` (by more than [`MIN_OVERLAP`]), `u`'s plane is not nearer
+//!    to the camera than `t`'s at any corner of that overlap. The inverse depth of a plane
+//!    is affine on the screen, so the corners decide for the whole convex overlap. Depths are
+//!    compared along the camera ray through the corner with a tolerance of `1e-9` times the
+//!    largest distance of the two triangles' corners from the camera's origin (the magnitude
+//!    of the numbers in the comparison). Otherwise: **`edge`**.
+//! 6. Then the square sees `C` and nothing else: **`planar`** when `s`'s object is planar
+//!    (`Mesh::plane`), else **`surface`**.
+//!
+//! `exact` evaluates `planar` and `surface` pixels: their visible surface is known triangle by
+//! triangle (`C`), and its lit fraction is computed exactly. Everything a square sees beyond
+//! one surface (a silhouette, a depth discontinuity, several objects, background) is `edge`.
+//!
+//! # Cost
+//!
+//! One exact pixel-grid clip per triangle (the `pixel_triangle_overlaps` counter counts the
+//! overlaps found), then per pixel a few tests between the triangles overlapping it, in
+//! parallel over bands of rows.
+
+use super::clip::{self, Poly};
+use super::shadow::Screen;
+use super::ScreenPolygons;
+use crate::pixel_class::PixelClass;
+use glam::DVec3;
+use methods::{raster::NO_TRIANGLE, Frame};
+use rayon::prelude::*;
+
+/// Smallest area (pixels) of a triangle's overlap with a square, or of two triangles' overlap,
+/// that counts: below it the overlap is the rounding of a shared edge or corner.
+pub const MIN_OVERLAP: f64 = 1e-12;
+
+/// Area (pixels) the covering surface must reach in a square to tile it.
+pub const MIN_TILE_COVERAGE: f64 = 1.0 - 1e-9;
+
+/// Largest overlap (pixels) two triangles of the covering surface may have in a square.
+pub const MAX_TILE_OVERLAP: f64 = 1e-9;
+
+/// Relative tolerance of the depth comparison of rule 5.
+const DEPTH_TOLERANCE: f64 = 1e-9;
+
+/// Every pixel's class, and for `planar` and `surface` pixels the triangles that tile their
+/// square.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Classes {
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// The class of each pixel (row-major).
+    pub class: Vec<PixelClass>,
+    /// Pixel `k`'s tiling triangles are `tiles[offsets[k]..offsets[k + 1]]` (in triangle
+    /// order; empty for `edge` and `uncovered` pixels).
+    pub offsets: Vec<u32>,
+    /// The tiling triangles of every pixel, pixel after pixel.
+    pub tiles: Vec<u32>,
+    /// Pixel-triangle overlaps measured.
+    pub overlaps: u64,
+}
+
+impl Classes {
+    /// The triangles that tile pixel `k`'s square.
+    pub fn tiles_of(&self, k: usize) -> &[u32] {
+        &self.tiles[self.offsets[k] as usize..self.offsets[k + 1] as usize]
+    }
+}
+
+/// The screen polygons of every triangle: `polys` contour `k` belongs to triangle
+/// `tri[k]` and has winding `winding[k]`.
+struct Projected {
+    polys: ScreenPolygons,
+    tri: Vec<u32>,
+    winding: Vec<f64>,
+}
+
+impl Projected {
+    fn new(frame: &Frame<'_>, screen: &Screen) -> Self {
+        const CHUNK: usize = 4096;
+        let g = &frame.geometry;
+        let parts: Vec<Projected> = (0..g.len().div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|c| {
+                let mut part =
+                    Projected { polys: ScreenPolygons::default(), tri: vec![], winding: vec![] };
+                for t in c * CHUNK..((c + 1) * CHUNK).min(g.len()) {
+                    if let Some((poly, sign)) = screen.triangle(g.corners(t)) {
+                        part.polys.push(poly.points());
+                        part.tri.push(t as u32);
+                        part.winding.push(sign);
+                    }
+                }
+                part
+            })
+            .collect();
+        let mut all = Projected { polys: ScreenPolygons::default(), tri: vec![], winding: vec![] };
+        for p in parts {
+            for c in p.polys.contours() {
+                all.polys.push(c);
+            }
+            all.tri.extend(p.tri);
+            all.winding.extend(p.winding);
+        }
+        all
+    }
+
+    fn poly(&self, k: usize) -> Poly {
+        Poly::from_slice(&self.polys.points[self.polys.ranges[k].clone()])
+    }
+}
+
+/// One triangle overlapping a pixel: its contour in [`Projected`] and the overlap's area.
+#[derive(Clone, Copy)]
+struct Overlap {
+    contour: u32,
+    area: f64,
+}
+
+/// Classifies every pixel of `frame` (see the module documentation for the rule).
+pub fn classify(frame: &Frame<'_>) -> Classes {
+    let screen = Screen::new(frame);
+    let (width, height) = (frame.width() as usize, frame.height() as usize);
+    let projected = Projected::new(frame, &screen);
+    let planar: Vec<bool> = frame.scene.objects.iter().map(|o| o.mesh.plane().is_some()).collect();
+    let (offsets, items) = clip::bin_by_band(projected.tri.len(), height, |k| {
+        let (lo, hi) = projected.poly(k).range(1);
+        clip::overlapped_rows(lo, hi, height)
+    });
+    let bands = height.div_ceil(clip::BAND);
+    let ctx = Context { frame, screen: &screen, projected: &projected, planar: &planar };
+    let results: Vec<(Vec<PixelClass>, Vec<u32>, Vec<u32>, u64)> = (0..bands)
+        .into_par_iter()
+        .map(|band| {
+            let r0 = band * clip::BAND;
+            let r1 = (r0 + clip::BAND).min(height);
+            let mut entries: Vec<(u32, Overlap)> = Vec::new();
+            for &k in &items[offsets[band]..offsets[band + 1]] {
+                let poly = projected.poly(k as usize);
+                clip::for_each_pixel(&poly, r0, r1, width, |i, j, area| {
+                    if area > MIN_OVERLAP {
+                        let local = ((j - r0) * width + i) as u32;
+                        entries.push((local, Overlap { contour: k, area }));
+                    }
+                });
+            }
+            entries.sort_by_key(|e| (e.0, e.1.contour));
+            let count = (r1 - r0) * width;
+            let mut class = vec![PixelClass::Uncovered; count];
+            let (mut counts, mut tiles) = (vec![0u32; count], Vec::new());
+            let mut group: Vec<Overlap> = Vec::new();
+            let mut at = 0;
+            while at < entries.len() {
+                let local = entries[at].0 as usize;
+                group.clear();
+                while at < entries.len() && entries[at].0 as usize == local {
+                    group.push(entries[at].1);
+                    at += 1;
+                }
+                let (i, j) = (local % width, r0 + local / width);
+                let before = tiles.len();
+                class[local] = ctx.classify_pixel(i, j, &group, &mut tiles);
+                counts[local] = (tiles.len() - before) as u32;
+            }
+            (class, counts, tiles, entries.len() as u64)
+        })
+        .collect();
+    let mut out = Classes {
+        width: width as u32,
+        height: height as u32,
+        class: Vec::with_capacity(width * height),
+        offsets: Vec::with_capacity(width * height + 1),
+        tiles: Vec::new(),
+        overlaps: 0,
+    };
+    out.offsets.push(0);
+    for (class, counts, tiles, overlaps) in results {
+        out.class.extend(class);
+        let mut end = out.tiles.len() as u32;
+        for c in counts {
+            end += c;
+            out.offsets.push(end);
+        }
+        out.tiles.extend(tiles);
+        out.overlaps += overlaps;
+    }
+    out
+}
+
+/// What the per-pixel rule reads.
+struct Context<'a> {
+    frame: &'a Frame<'a>,
+    screen: &'a Screen,
+    projected: &'a Projected,
+    planar: &'a [bool],
+}
+
+impl Context<'_> {
+    /// Classifies pixel `(i, j)` from the triangles overlapping it (`group`, in triangle
+    /// order); appends its tiling triangles to `tiles` when it is `planar` or `surface`.
+    fn classify_pixel(
+        &self,
+        i: usize,
+        j: usize,
+        group: &[Overlap],
+        tiles: &mut Vec<u32>,
+    ) -> PixelClass {
+        let g = &self.frame.geometry;
+        let p = self.projected;
+        let k = j * self.frame.width() as usize + i;
+        let seed_tri = self.frame.gbuffer.triangle[k];
+        if seed_tri == NO_TRIANGLE {
+            return PixelClass::Edge;
+        }
+        let tri = |o: &Overlap| p.tri[o.contour as usize] as usize;
+        let Some(seed) = group.iter().position(|o| tri(o) == seed_tri as usize) else {
+            return PixelClass::Edge;
+        };
+        let winding = p.winding[group[seed].contour as usize];
+        let object = g.object[seed_tri as usize];
+        let corners: Vec<[DVec3; 3]> = group.iter().map(|o| g.corners(tri(o))).collect();
+        // Rule 3: the continuous surface through the seed.
+        let mut in_c = vec![false; group.len()];
+        in_c[seed] = true;
+        let mut stack = vec![seed];
+        while let Some(m) = stack.pop() {
+            for f in 0..group.len() {
+                if !in_c[f]
+                    && g.object[tri(&group[f])] == object
+                    && p.winding[group[f].contour as usize] == winding
+                    && shares_edge(&corners[m], &corners[f])
+                {
+                    in_c[f] = true;
+                    stack.push(f);
+                }
+            }
+        }
+        // Rule 4: C tiles the square.
+        let covered: f64 = group.iter().zip(&in_c).filter(|(_, &c)| c).map(|(o, _)| o.area).sum();
+        if covered < MIN_TILE_COVERAGE {
+            return PixelClass::Edge;
+        }
+        let members: Vec<usize> = (0..group.len()).filter(|&f| in_c[f]).collect();
+        let polys: Vec<Poly> = group.iter().map(|o| p.poly(o.contour as usize)).collect();
+        let overlap = |a: usize, b: usize| -> Option<Poly> {
+            if clip::separated(&polys[a], &polys[b]) {
+                return None;
+            }
+            let r = clip::intersect(&clip::clip_to_pixel(&polys[a], i, j), &polys[b]);
+            (r.n >= 3).then_some(r)
+        };
+        for (x, &a) in members.iter().enumerate() {
+            for &b in &members[x + 1..] {
+                if shares_edge(&corners[a], &corners[b]) {
+                    continue;
+                }
+                if let Some(r) = overlap(a, b) {
+                    if 0.5 * r.area2_rel(i as f64, j as f64) > MAX_TILE_OVERLAP {
+                        return PixelClass::Edge;
+                    }
+                }
+            }
+        }
+        // Rule 5: nothing else in front of C.
+        for u in (0..group.len()).filter(|&f| !in_c[f]) {
+            for &t in &members {
+                let Some(r) = overlap(u, t) else { continue };
+                if 0.5 * r.area2_rel(i as f64, j as f64) <= MIN_OVERLAP {
+                    continue;
+                }
+                if r.points().iter().any(|&x| self.in_front(&corners[u], &corners[t], x)) {
+                    return PixelClass::Edge;
+                }
+            }
+        }
+        tiles.extend(members.iter().map(|&m| tri(&group[m]) as u32));
+        if self.planar[object as usize] {
+            PixelClass::Planar
+        } else {
+            PixelClass::Surface
+        }
+    }
+
+    /// Whether the plane of triangle `u` is nearer to the camera than that of `t` along the
+    /// camera ray through screen point `x` (beyond the tolerance of rule 5).
+    fn in_front(&self, u: &[DVec3; 3], t: &[DVec3; 3], x: [f64; 2]) -> bool {
+        let ray = self.screen.ray(x);
+        let depth = |c: &[DVec3; 3]| {
+            let n = (c[1] - c[0]).cross(c[2] - c[0]);
+            n.dot(c[0] - ray.origin) / n.dot(ray.direction)
+        };
+        let (du, dt) = (depth(u), depth(t));
+        if !(du.is_finite() && dt.is_finite()) {
+            return false;
+        }
+        let o = self.screen.origin();
+        let magnitude = u.iter().chain(t).map(|&c| (c - o).abs().max_element()).fold(0.0, f64::max);
+        du < dt - DEPTH_TOLERANCE * magnitude
+    }
+}
+
+/// Whether two triangles share an edge: two corners at bitwise-equal positions.
+#[inline]
+fn shares_edge(a: &[DVec3; 3], b: &[DVec3; 3]) -> bool {
+    a.iter().filter(|p| b.contains(p)).count() >= 2
+}
