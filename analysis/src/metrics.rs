@@ -1,10 +1,19 @@
-//! Per-pixel error metrics over the evaluated pixels.
+//! Per-pixel error metrics over chosen pixels, as a whole ([`Metrics`]) and per pixel class
+//! ([`ClassMetrics`], [`per_class`]).
 //!
-//! A pixel is evaluated when the caller's mask says so (for the exact reference: the pixels
-//! whose whole square sees the receiver plane). `pixel_match` is the fraction of evaluated
-//! pixels within half an 8-bit step of the reference; boundary pixels are those whose
-//! reference is strictly between 0 and 1.
+//! A pixel is compared when the caller's mask says so: the reference must vouch for it
+//! (`ReferenceImage::evaluated`), and `metrics.json`'s headline takes only the shadow-only
+//! pixels (`planar` and `surface`, [`crate::ReferenceImage::shadow_only`]), where the error is
+//! the shadow's and not the camera's. `pixel_match` is the fraction of compared pixels within
+//! half an 8-bit step of the reference; boundary pixels are those whose reference is strictly
+//! between 0 and 1.
+//!
+//! `p95_abs_error` is the 95th percentile of the absolute error by the nearest-rank
+//! definition: with the `n` errors sorted ascending, the one of rank `ceil(0.95 n)` (1-based),
+//! so it is always one of the measured errors (the largest when `n < 20`).
 
+use crate::pixel_class::PixelClass;
+use crate::reference::ReferenceImage;
 use image::RgbImage;
 use methods::Visibility;
 use serde::{Deserialize, Serialize};
@@ -66,6 +75,98 @@ impl Metrics {
     }
 }
 
+/// Error of a result against a reference over one set of pixels (a pixel class), as written
+/// under `classes` in `metrics.json`. A statistic of no pixels is `None` (`null`), not 0.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ClassMetrics {
+    /// Pixels compared.
+    pub pixels: u64,
+    /// Mean of `|value - reference|`.
+    pub mean_abs_error: Option<f64>,
+    /// Root mean square error.
+    pub rmse: Option<f64>,
+    /// Largest `|value - reference|`.
+    pub max_abs_error: Option<f64>,
+    /// 95th percentile of `|value - reference|` (nearest rank, see the module doc).
+    pub p95_abs_error: Option<f64>,
+    /// Compared pixels whose reference is strictly between 0 and 1.
+    pub boundary_pixels: u64,
+    /// Mean absolute error over the boundary pixels.
+    pub boundary_mean_abs_error: Option<f64>,
+}
+
+impl ClassMetrics {
+    /// Compares `result` with `reference` on the pixels where `mask` is true.
+    ///
+    /// # Panics
+    /// When the three buffers differ in size (a caller's bug, not bad input).
+    pub fn compare(result: &Visibility, reference: &[f64], mask: &[bool]) -> Self {
+        assert_eq!(result.lit.len(), reference.len(), "result and reference differ in size");
+        assert_eq!(result.lit.len(), mask.len(), "result and mask differ in size");
+        let mut errors: Vec<f64> = Vec::new();
+        let (mut nb, mut sum_b) = (0u64, 0.0);
+        for ((&v, &r), _) in result.lit.iter().zip(reference).zip(mask).filter(|(_, &m)| m) {
+            let e = (f64::from(v) - r).abs();
+            errors.push(e);
+            if r > 0.0 && r < 1.0 {
+                nb += 1;
+                sum_b += e;
+            }
+        }
+        let n = errors.len();
+        let some = |v: f64| (n > 0).then_some(v);
+        let mean = errors.iter().sum::<f64>() / n as f64;
+        let rmse = (errors.iter().map(|e| e * e).sum::<f64>() / n as f64).sqrt();
+        let max = errors.iter().copied().fold(0.0, f64::max);
+        let p95 = (n > 0).then(|| {
+            // Nearest rank: the ceil(0.95 n)-th smallest, computed in integers.
+            let rank = (95 * n).div_ceil(100);
+            *errors.select_nth_unstable_by(rank - 1, f64::total_cmp).1
+        });
+        Self {
+            pixels: n as u64,
+            mean_abs_error: some(mean),
+            rmse: some(rmse),
+            max_abs_error: some(max),
+            p95_abs_error: p95,
+            boundary_pixels: nb,
+            boundary_mean_abs_error: (nb > 0).then(|| sum_b / nb as f64),
+        }
+    }
+}
+
+/// [`ClassMetrics`] of the three classes whose pixels can be compared (`uncovered` pixels
+/// see nothing), as written under `classes` in `metrics.json`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PerClass {
+    /// Pixels whose square sees one planar object.
+    pub planar: ClassMetrics,
+    /// Pixels tiled by one continuous surface.
+    pub surface: ClassMetrics,
+    /// Silhouettes, depth discontinuities, several objects (against the reference's values
+    /// where it evaluated them, e.g. `exact`'s ray-traced edge pixels).
+    pub edge: ClassMetrics,
+}
+
+/// Compares `result` with `truth` class by class: a pixel counts in its class (`classes[k]`)
+/// when `truth` evaluated it.
+///
+/// # Panics
+/// When the buffers differ in size (a caller's bug, not bad input).
+pub fn per_class(result: &Visibility, truth: &ReferenceImage, classes: &[PixelClass]) -> PerClass {
+    assert_eq!(classes.len(), truth.evaluated.len(), "classes and reference differ in size");
+    let of = |class: PixelClass| {
+        let mask: Vec<bool> =
+            truth.evaluated.iter().zip(classes).map(|(&e, &c)| e && c == class).collect();
+        ClassMetrics::compare(result, &truth.lit, &mask)
+    };
+    PerClass {
+        planar: of(PixelClass::Planar),
+        surface: of(PixelClass::Surface),
+        edge: of(PixelClass::Edge),
+    }
+}
+
 /// The error image of Pan et al. Fig. 8: `10 x |value - reference|` in grey, clamped to white;
 /// pixels not evaluated are dark blue.
 pub fn error_image(result: &Visibility, reference: &[f64], evaluated: &[bool]) -> RgbImage {
@@ -118,6 +219,73 @@ mod tests {
         assert_eq!(img.get_pixel(2, 0).0, [0, 0, 64]);
     }
 
+    #[test]
+    fn class_metrics_on_a_known_case() {
+        // Errors 0.00, 0.05, ..., 0.95 (twenty pixels) against a reference of 0.5 (all on the
+        // boundary), and one masked-out pixel with a large error.
+        let mut lit: Vec<f32> = (0..20).map(|k| 0.5 + 0.05 * k as f32).collect();
+        lit.push(0.0);
+        let mut r = vec![0.5; 20];
+        r.push(1.0);
+        let mut mask = vec![true; 20];
+        mask.push(false);
+        let errors: Vec<f64> = (0..20).map(|k| f64::from(lit[k]) - 0.5).collect();
+        let m = ClassMetrics::compare(&vis(lit), &r, &mask);
+        assert_eq!(m.pixels, 20);
+        let mean = errors.iter().sum::<f64>() / 20.0;
+        let rmse = (errors.iter().map(|e| e * e).sum::<f64>() / 20.0).sqrt();
+        assert!((m.mean_abs_error.expect("mean") - mean).abs() < 1e-12);
+        assert!((m.rmse.expect("rmse") - rmse).abs() < 1e-12);
+        assert_eq!(m.max_abs_error, Some(errors[19]));
+        // Nearest rank: ceil(0.95 * 20) = 19th smallest.
+        assert_eq!(m.p95_abs_error, Some(errors[18]));
+        assert_eq!(m.boundary_pixels, 20);
+        assert!((m.boundary_mean_abs_error.expect("boundary") - mean).abs() < 1e-12);
+
+        // One pixel: every statistic is its error; no boundary pixel: null, not 0.
+        let one = ClassMetrics::compare(&vis(vec![0.25, 0.0]), &[0.0, 0.0], &[true, false]);
+        assert_eq!(one.pixels, 1);
+        assert_eq!(
+            (one.mean_abs_error, one.rmse, one.max_abs_error, one.p95_abs_error),
+            (Some(0.25), Some(0.25), Some(0.25), Some(0.25))
+        );
+        assert_eq!((one.boundary_pixels, one.boundary_mean_abs_error), (0, None));
+        let json = serde_json::to_value(one).expect("serializes");
+        assert!(json["boundary_mean_abs_error"].is_null());
+
+        // No pixel: every statistic null.
+        let none = ClassMetrics::compare(&vis(vec![0.25]), &[0.0], &[false]);
+        assert_eq!(none.pixels, 0);
+        assert!(none.mean_abs_error.is_none() && none.rmse.is_none());
+        assert!(none.max_abs_error.is_none() && none.p95_abs_error.is_none());
+    }
+
+    #[test]
+    fn per_class_counts_each_class_where_the_reference_evaluated_it() {
+        use PixelClass::{Edge, Planar, Surface, Uncovered};
+        let classes = [Planar, Planar, Surface, Edge, Edge, Uncovered];
+        let truth = ReferenceImage {
+            width: 6,
+            height: 1,
+            lit: vec![1.0, 0.5, 0.0, 0.0, 1.0, 1.0],
+            evaluated: vec![true, true, true, true, false, false],
+            transmittance: None,
+            classes: Some(classes.to_vec()),
+        };
+        let v = vis(vec![1.0, 0.25, 0.125, 0.5, 0.0, 0.0]);
+        let m = per_class(&v, &truth, &classes);
+        assert_eq!((m.planar.pixels, m.surface.pixels, m.edge.pixels), (2, 1, 1));
+        assert_eq!(m.planar.max_abs_error, Some(0.25));
+        assert_eq!(m.planar.boundary_pixels, 1);
+        assert_eq!(m.surface.mean_abs_error, Some(0.125));
+        // The edge pixel the reference left out (error 1) is not counted.
+        assert_eq!(m.edge.max_abs_error, Some(0.5));
+        let json = serde_json::to_value(m).expect("serializes");
+        for class in ["planar", "surface", "edge"] {
+            assert!(json[class]["p95_abs_error"].is_number(), "{class}");
+        }
+    }
+
     proptest::proptest! {
         #[test]
         fn metrics_are_bounded(values in proptest::collection::vec((0.0f32..=1.0, 0.0f64..=1.0, proptest::bool::ANY), 1..64)) {
@@ -129,6 +297,28 @@ mod tests {
             proptest::prop_assert!(m.rmse <= m.max_abs_error + 1e-12);
             proptest::prop_assert!((0.0..=1.0).contains(&m.pixel_match));
             proptest::prop_assert!(m.boundary_pixels <= m.evaluated_pixels);
+        }
+
+        #[test]
+        fn class_metrics_are_ordered(values in proptest::collection::vec((0.0f32..=1.0, 0.0f64..=1.0, proptest::bool::ANY), 1..64)) {
+            let v = vis(values.iter().map(|t| t.0).collect());
+            let r: Vec<f64> = values.iter().map(|t| t.1).collect();
+            let e: Vec<bool> = values.iter().map(|t| t.2).collect();
+            let m = ClassMetrics::compare(&v, &r, &e);
+            proptest::prop_assert_eq!(m.pixels, e.iter().filter(|&&x| x).count() as u64);
+            proptest::prop_assert!(m.boundary_pixels <= m.pixels);
+            if m.pixels == 0 {
+                proptest::prop_assert!(m.mean_abs_error.is_none() && m.p95_abs_error.is_none());
+            } else {
+                let (mean, rmse) = (m.mean_abs_error.expect("mean"), m.rmse.expect("rmse"));
+                let max = m.max_abs_error.expect("max");
+                let p95 = m.p95_abs_error.expect("p95");
+                proptest::prop_assert!(mean <= rmse + 1e-12);
+                proptest::prop_assert!(rmse <= max + 1e-12);
+                proptest::prop_assert!(p95 <= max);
+                proptest::prop_assert!(p95 >= 0.0);
+            }
+            proptest::prop_assert_eq!(m.boundary_mean_abs_error.is_some(), m.boundary_pixels > 0);
         }
     }
 }
