@@ -9,6 +9,7 @@
 
 use analysis::crosscheck::tiny_skia_crosscheck;
 use analysis::exact::{shadow_polygons, shadow_union, ExactCoverage};
+use analysis::pixel_class::{counts, PixelClass};
 use analysis::{Reference, ReferenceError, ReferenceImage};
 use glam::{DVec2, DVec3};
 use instrumentation::Recorder;
@@ -147,13 +148,39 @@ fn rect_area([x0, x1, y0, y1]: [f64; 4], i: usize, j: usize) -> f64 {
     w * h
 }
 
-/// Asserts `lit == 1 - shadowed(i, j)` on every pixel within `tol`; returns the number of
-/// pixels strictly between 0 and 1.
-fn assert_matches(img: &ReferenceImage, tol: f64, shadowed: impl Fn(usize, usize) -> f64) -> usize {
+/// The pixels `exact` evaluates as `planar` pixels of the scene's main planar receiver (the
+/// object the pixel centre sees).
+fn on_receiver(frame: &Frame<'_>, img: &ReferenceImage) -> Vec<bool> {
+    let receiver = frame.scene.receiver_plane().expect("a planar receiver").0 as u32;
+    let classes = img.classes.as_deref().expect("exact classifies");
+    (0..img.lit.len())
+        .map(|k| {
+            let t = frame.gbuffer.triangle[k];
+            img.evaluated[k]
+                && classes[k] == PixelClass::Planar
+                && t != methods::raster::NO_TRIANGLE
+                && frame.geometry.object[t as usize] == receiver
+        })
+        .collect()
+}
+
+/// Asserts `lit == 1 - shadowed(i, j)` within `tol` on every pixel `exact` evaluates on the
+/// main receiver ([`on_receiver`]); returns the number of those pixels strictly between 0 and
+/// 1.
+fn assert_matches(
+    frame: &Frame<'_>,
+    img: &ReferenceImage,
+    tol: f64,
+    shadowed: impl Fn(usize, usize) -> f64,
+) -> usize {
     let w = img.width as usize;
     let mut partial = 0;
     let mut worst = 0.0f64;
+    let mine = on_receiver(frame, img);
     for (k, &l) in img.lit.iter().enumerate() {
+        if !mine[k] {
+            continue;
+        }
         let (i, j) = (k % w, k / w);
         let expect = (1.0 - shadowed(i, j)).clamp(0.0, 1.0);
         let err = (l - expect).abs();
@@ -187,27 +214,40 @@ fn exact_axis_aligned_square_under_a_vertical_light_is_exact() {
             DOWN,
             vec![ground(), plane_object("square", 2.0, DVec3::ZERO, DVec3::new(tx, 1.5, tz))],
         );
-        let (_, img, rec) = exact(&s, 64, 48);
+        let (frame, img, rec) = exact(&s, 64, 48);
         let (xa, xb) = (
             ortho_screen(DVec3::new(tx - 1.0, 0.0, 0.0), from_below).x,
             ortho_screen(DVec3::new(tx + 1.0, 0.0, 0.0), from_below).x,
         );
         let rect = [xa.min(xb), xa.max(xb), 24.0 + 8.0 * (tz - 1.0), 24.0 + 8.0 * (tz + 1.0)];
-        let partial = assert_matches(&img, 1e-9, |i, j| rect_area(rect, i, j));
-        assert!(partial >= 60, "{partial} partial pixels");
-        for name in
-            ["shadow polygons", "union", "triangulation", "pixel clipping", "evaluated pixels"]
+        let partial = assert_matches(&frame, &img, 1e-9, |i, j| rect_area(rect, i, j));
+        // From above, the square hides its shadow (the light and the camera look straight
+        // down); from below, the ground shows all of it.
+        assert!(if from_below { partial >= 60 } else { partial == 0 }, "{partial} partial pixels");
+        for name in ["pixel classes", "shadow polygons", "union", "triangulation", "pixel clipping"]
         {
             assert!(rec.stages.stages.iter().any(|st| st.name == name), "stage {name} missing");
         }
-        // Seen from above, the square hides its own shadow: exactly the pixels whose closed
-        // square touches the square's screen image [26.5, 42.5] x [12.75, 28.75] are not
-        // evaluated. Seen from below, everything is.
+        // Seen from above, the square hides its own shadow: the pixels whose square overlaps
+        // the square's screen image [26.5, 42.5] x [12.75, 28.75] without lying inside it
+        // see both objects (`edge`, not evaluated); those inside see the square (`planar`, lit).
+        // Seen from below, every pixel sees the ground alone.
         let w = 64;
+        let classes = img.classes.as_deref().expect("exact classifies");
         for (k, &e) in img.evaluated.iter().enumerate() {
             let (i, j) = ((k % w) as f64, (k / w) as f64);
-            let touches = i + 1.0 >= rect[0] && i <= rect[1] && j + 1.0 >= rect[2] && j <= rect[3];
-            assert_eq!(e, from_below || !touches, "pixel {k} from below {from_below}");
+            let overlaps = i + 1.0 > rect[0] && i < rect[1] && j + 1.0 > rect[2] && j < rect[3];
+            let inside = i >= rect[0] && i + 1.0 <= rect[1] && j >= rect[2] && j + 1.0 <= rect[3];
+            let expect = if from_below || !overlaps {
+                PixelClass::Planar
+            } else if inside {
+                assert_eq!(img.lit[k], 1.0, "pixel {k} on the square is lit");
+                PixelClass::Planar
+            } else {
+                PixelClass::Edge
+            };
+            assert_eq!(classes[k], expect, "pixel {k} from below {from_below}");
+            assert_eq!(e, expect == PixelClass::Planar, "pixel {k} from below {from_below}");
         }
     }
 }
@@ -225,10 +265,10 @@ fn exact_rotated_squares_match_clipped_polygons() {
                 plane_object("square", 2.0, DVec3::new(0.0, angle, 0.0), DVec3::new(tx, 1.5, tz)),
             ],
         );
-        let (_, img, _) = exact(&s, 64, 48);
+        let (frame, img, _) = exact(&s, 64, 48);
         let footprint: Vec<DVec2> =
             quad_corners(&s, 1).iter().map(|&p| ortho_screen(p, true)).collect();
-        let partial = assert_matches(&img, 1e-9, |i, j| pixel_area(&footprint, i, j));
+        let partial = assert_matches(&frame, &img, 1e-9, |i, j| pixel_area(&footprint, i, j));
         assert!(partial > 50);
         assert!(img.evaluated.iter().all(|&e| e), "seen from below, every pixel sees the ground");
     }
@@ -241,8 +281,8 @@ fn exact_triangle_with_a_vertex_on_a_pixel_corner_and_an_edge_along_a_row() {
     let world = screen.map(|p| DVec3::new((32.0 - p.x) / 8.0, 1.0, (p.y - 24.0) / 8.0));
     let mesh = Mesh { positions: world.to_vec(), triangles: vec![[0, 1, 2]] };
     let s = scene_with_mesh(ortho_camera(true), DOWN, mesh);
-    let (_, img, _) = exact(&s, 64, 48);
-    let partial = assert_matches(&img, 1e-9, |i, j| pixel_area(&screen, i, j));
+    let (frame, img, _) = exact(&s, 64, 48);
+    let partial = assert_matches(&frame, &img, 1e-9, |i, j| pixel_area(&screen, i, j));
     assert!(partial > 20);
     // The row above the edge is untouched; the pixel below the corner is partly covered.
     assert!((0..64).all(|i| img.lit[9 * 64 + i] == 1.0));
@@ -264,7 +304,7 @@ fn exact_overlapping_occluders_count_the_overlap_once() {
             plane_object("b", 2.0, DVec3::ZERO, DVec3::new(b.0, b.2, b.1)),
         ],
     );
-    let (_, img, _) = exact(&s, 64, 48);
+    let (frame, img, _) = exact(&s, 64, 48);
     let rect = |(x, z, _): (f64, f64, f64)| {
         [
             32.0 - 8.0 * (x + 1.0),
@@ -276,7 +316,7 @@ fn exact_overlapping_occluders_count_the_overlap_once() {
     let (ra, rb) = (rect(a), rect(b));
     let both = [ra[0].max(rb[0]), ra[1].min(rb[1]), ra[2].max(rb[2]), ra[3].min(rb[3])];
     assert!(both[1] > both[0] && both[3] > both[2], "the shadows overlap");
-    assert_matches(&img, 1e-9, |i, j| {
+    assert_matches(&frame, &img, 1e-9, |i, j| {
         rect_area(ra, i, j) + rect_area(rb, i, j) - rect_area(both, i, j)
     });
     // Fully shadowed pixels inside the overlap are exactly 0, not negative.
@@ -300,7 +340,7 @@ fn exact_union_keeps_holes_lit() {
         objects.push(o);
     }
     let s = scene(ortho_camera(true), DOWN, objects);
-    let (_, img, _) = exact(&s, 64, 48);
+    let (frame, img, _) = exact(&s, 64, 48);
     let rects: Vec<[f64; 4]> = bars
         .iter()
         .map(|(t, sc)| {
@@ -316,7 +356,7 @@ fn exact_union_keeps_holes_lit() {
     // Inclusion-exclusion over four rectangles (intersections of rectangles are rectangles).
     let inter =
         |a: [f64; 4], b: [f64; 4]| [a[0].max(b[0]), a[1].min(b[1]), a[2].max(b[2]), a[3].min(b[3])];
-    assert_matches(&img, 1e-9, |i, j| {
+    assert_matches(&frame, &img, 1e-9, |i, j| {
         let mut total = 0.0;
         for mask in 1u32..16 {
             let mut r = [f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY];
@@ -350,7 +390,7 @@ fn exact_occluder_partly_outside_the_frame() {
         DOWN,
         vec![ground(), plane_object("square", 2.0, DVec3::ZERO, DVec3::new(tx, 1.5, tz))],
     );
-    let (_, img, _) = exact(&s, 64, 48);
+    let (frame, img, _) = exact(&s, 64, 48);
     let rect = [
         32.0 - 8.0 * (tx + 1.0),
         32.0 - 8.0 * (tx - 1.0),
@@ -358,7 +398,7 @@ fn exact_occluder_partly_outside_the_frame() {
         24.0 + 8.0 * (tz + 1.0),
     ];
     assert!(rect[0] < 0.0);
-    let partial = assert_matches(&img, 1e-9, |i, j| rect_area(rect, i, j));
+    let partial = assert_matches(&frame, &img, 1e-9, |i, j| rect_area(rect, i, j));
     assert!(partial > 10);
     assert_eq!(img.lit[30 * 64], 0.0);
 }
@@ -381,10 +421,10 @@ fn exact_spot_light_matches_the_central_projection() {
             light,
             vec![ground(), plane_object("square", 1.5, rot, DVec3::new(0.2, 1.5, -0.1))],
         );
-        let (_, img, _) = exact(&s, 64, 48);
+        let (frame, img, _) = exact(&s, 64, 48);
         let quad: Vec<DVec2> =
             quad_corners(&s, 1).iter().map(|&p| ortho_screen(spot_project(pos, p), true)).collect();
-        let partial = assert_matches(&img, 1e-9, |i, j| pixel_area(&quad, i, j));
+        let partial = assert_matches(&frame, &img, 1e-9, |i, j| pixel_area(&quad, i, j));
         assert!(partial > 30, "{partial}");
     }
 }
@@ -419,7 +459,7 @@ fn exact_perspective_camera_at_a_grazing_angle() {
             frame.camera.project(q).expect("in front").0
         })
         .collect();
-    let partial = assert_matches(&img, 1e-9, |i, j| pixel_area(&quad, i, j));
+    let partial = assert_matches(&frame, &img, 1e-9, |i, j| pixel_area(&quad, i, j));
     assert!(partial > 30, "{partial}");
     assert!(img.evaluated.iter().filter(|&&e| e).count() > 1000);
 }
@@ -538,9 +578,14 @@ fn brute_force(frame: &Frame<'_>, pixels: &[usize], n: usize) -> Vec<f64> {
         .collect()
 }
 
-/// Up to `boundary` evaluated pixels strictly between 0 and 1 and `others` other evaluated
-/// pixels, evenly spaced.
-fn pick_pixels(img: &ReferenceImage, boundary: usize, others: usize) -> Vec<usize> {
+/// Up to `boundary` pixels evaluated on the main receiver ([`on_receiver`]) strictly between 0
+/// and 1 and `others` other such pixels, evenly spaced.
+fn pick_pixels(
+    frame: &Frame<'_>,
+    img: &ReferenceImage,
+    boundary: usize,
+    others: usize,
+) -> Vec<usize> {
     let evenly = |v: Vec<usize>, n: usize| -> Vec<usize> {
         if v.len() <= n {
             v
@@ -548,7 +593,8 @@ fn pick_pixels(img: &ReferenceImage, boundary: usize, others: usize) -> Vec<usiz
             (0..n).map(|s| v[s * v.len() / n]).collect()
         }
     };
-    let eval: Vec<usize> = (0..img.lit.len()).filter(|&k| img.evaluated[k]).collect();
+    let mine = on_receiver(frame, img);
+    let eval: Vec<usize> = (0..img.lit.len()).filter(|&k| mine[k]).collect();
     let (b, o): (Vec<usize>, Vec<usize>) =
         eval.into_iter().partition(|&k| img.lit[k] > 0.0 && img.lit[k] < 1.0);
     let mut picked = evenly(b, boundary);
@@ -558,7 +604,7 @@ fn pick_pixels(img: &ReferenceImage, boundary: usize, others: usize) -> Vec<usiz
 
 fn check_against_sampling(scene: &Scene, w: u32, h: u32, boundary: usize, others: usize) {
     let (frame, img, _) = exact(scene, w, h);
-    let pixels = pick_pixels(&img, boundary, others);
+    let pixels = pick_pixels(&frame, &img, boundary, others);
     let n_boundary = pixels.iter().filter(|&&k| img.lit[k] > 0.0 && img.lit[k] < 1.0).count();
     assert!(n_boundary >= boundary.min(20), "{}: only {n_boundary} boundary pixels", scene.name);
     let sampled = brute_force(&frame, &pixels, 512);
@@ -718,8 +764,10 @@ fn worst_against_slab_union(name: &str, w: u32, h: u32) -> f64 {
             }
         }
     }
+    let mine = on_receiver(&frame, &img);
     let worst = (0..w * h)
         .into_par_iter()
+        .filter(|&k| mine[k])
         .map(|k| {
             let mine: Vec<Vec<DVec2>> =
                 bins[k].iter().map(|&p| polys[p as usize].clone()).collect();
@@ -751,19 +799,23 @@ fn exact_matches_an_unsnapped_slab_union_on_built_in_scenes() {
 // Applicability, cross-check
 
 #[test]
-fn exact_does_not_apply_to_transparency_or_curved_receivers() {
-    for (name, needle) in [("hairball", "transparen"), ("bumpy", "planar receiver")] {
-        let scene = scenes::load(name).expect("built-in");
-        let mut rec = Recorder::default();
-        let frame = Frame::new(&scene, 32, 24, &mut rec);
-        match ExactCoverage::default().evaluate(&frame, &mut rec) {
-            Err(ReferenceError::NotApplicable(msg)) => {
-                assert!(msg.contains(needle) && msg.contains(name), "{name}: {msg}")
-            }
-            other => panic!("{name}: expected NotApplicable, got {other:?}"),
+fn exact_does_not_apply_to_transparency_but_to_curved_receivers() {
+    let scene = scenes::load("hairball").expect("built-in");
+    let mut rec = Recorder::default();
+    let frame = Frame::new(&scene, 32, 24, &mut rec);
+    match ExactCoverage::default().evaluate(&frame, &mut rec) {
+        Err(ReferenceError::NotApplicable(msg)) => {
+            assert!(msg.contains("transparen") && msg.contains("hairball"), "{msg}")
         }
+        other => panic!("hairball: expected NotApplicable, got {other:?}"),
     }
-    assert!(!scenes::load("bumpy").expect("built-in").effects().planar_receiver);
+    // `bumpy` has no planar receiver: every pixel that sees it is `surface` or `edge`.
+    let scene = scenes::load("bumpy").expect("built-in");
+    assert!(!scene.effects().planar_receiver);
+    let (_, img, _) = exact(&scene, 64, 48);
+    let n = counts(img.classes.as_deref().expect("classes"));
+    assert_eq!(n[PixelClass::Planar as usize], 0);
+    assert!(n[PixelClass::Surface as usize] > 9 * n[PixelClass::Edge as usize], "{n:?}");
 }
 
 #[test]

@@ -386,4 +386,49 @@ mod tests {
         assert!((sum - area).abs() < 1e-12, "{sum} vs {area}");
         assert!(acc.iter().all(|&a| (-1e-15..=1.0 + 1e-15).contains(&a)));
     }
+
+    fn oriented(points: &[Pt]) -> Poly {
+        let mut p = Poly::from_slice(points);
+        if p.area2_rel(0.0, 0.0) < 0.0 {
+            p.reverse();
+        }
+        p
+    }
+
+    #[test]
+    fn convex_intersection_and_separation() {
+        let a = oriented(&[[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0, 2.0]]);
+        let b = oriented(&[[1.0, 1.0], [3.0, 1.0], [3.0, 3.0]]);
+        let c = oriented(&[[2.0, 0.0], [4.0, 0.0], [2.0, 2.0]]);
+        assert!(!separated(&a, &b));
+        assert_eq!(0.5 * intersect(&a, &b).area2_rel(0.0, 0.0), 0.5);
+        // Sharing the edge x = 2: touching counts as separated.
+        assert!(separated(&a, &c));
+        assert!(intersect(&a, &c).area2_rel(0.0, 0.0).abs() < 1e-15);
+        let px = clip_to_pixel(&b, 1, 1);
+        assert_eq!(0.5 * px.area2_rel(0.0, 0.0), 0.5);
+    }
+
+    /// A shadow polygon whose clip left two vertices 1e-14 apart: the line through them points
+    /// anywhere (here it had every vertex of the receiver on its outside), so it is neither a
+    /// separating axis nor a clip line. Found on `bumpy`, where it dropped a caster's shadow.
+    #[test]
+    fn a_tiny_edge_is_no_separating_axis() {
+        let shadow = oriented(&[
+            [104.59985017771307, 28.683719257967283],
+            [98.9302473923912, 37.52843801645953],
+            [97.38153350541533, 36.40702573351719],
+            [104.59985017771307, 28.683719257967272],
+        ]);
+        let own = oriented(&[
+            [102.92349580664977, 29.270161290279535],
+            [104.59985017771305, 28.68371925796729],
+            [104.55764574761162, 30.452236836286936],
+        ]);
+        assert!(!separated(&shadow, &own));
+        let overlap = 0.5 * intersect(&own, &shadow).area2_rel(100.0, 30.0);
+        assert!(overlap > 0.1, "{overlap}");
+        assert!(!has_direction(shadow.v[0], [shadow.v[0][0], shadow.v[0][1] + 1e-14]));
+        assert!(has_direction([0.0, 0.0], [0.0, 1e-6]));
+    }
 }

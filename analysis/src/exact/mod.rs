@@ -401,3 +401,40 @@ fn evaluate(
         classes: Some(classes.class),
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// On the scene's main planar receiver, `exact` takes the values of one union of every
+    /// caster's shadow on the receiver's plane over the whole frame, as when it covered that
+    /// receiver only: any later change to how pixels are split among receivers must keep them
+    /// within 1e-12.
+    #[test]
+    fn planar_pixels_keep_the_values_of_the_whole_plane_union() {
+        for name in ["plane-square", "cage", "random-1k", "spot-spheres"] {
+            let scene = scenes::load(name).expect("built-in");
+            let frame = Frame::new(&scene, 200, 150, &mut Recorder::default());
+            let (receiver, setup) = Setup::main_receiver(&frame).expect("planar receiver");
+            let step = union_grid_step(200, 150);
+            let (tris, _) =
+                union::triangulate(&union::union(&setup.shadow_polygons(&frame, receiver), step));
+            let whole = clip::accumulate_area_where(&tris, 200, 150, |_, _| true);
+            let img = evaluate(&frame, None, &mut Recorder::default()).expect("applies");
+            let classes = img.classes.as_deref().expect("classes");
+            let mut compared = 0;
+            for k in 0..whole.len() {
+                let t = frame.gbuffer.triangle[k];
+                let on_receiver = img.evaluated[k]
+                    && classes[k] == PixelClass::Planar
+                    && frame.geometry.object[t as usize] as usize == receiver;
+                if on_receiver {
+                    let old = (1.0 - whole[k]).clamp(0.0, 1.0);
+                    assert!((img.lit[k] - old).abs() <= 1e-12, "{name}: pixel {k}");
+                    compared += 1;
+                }
+            }
+            assert!(compared > 10_000, "{name}: {compared}");
+        }
+    }
+}
