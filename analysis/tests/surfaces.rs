@@ -11,7 +11,7 @@ use methods::pattern::{PatternKind, SamplePattern};
 use methods::raster::NO_TRIANGLE;
 use methods::Frame;
 use scenes::generators::SpheresParams;
-use scenes::scene_file::{ObjectDesc, SceneDesc, Shape};
+use scenes::scene_file::{ObjectDesc, SceneDesc, Shape, Transform};
 use scenes::{Camera, Light, Material};
 
 /// Every sub-sample of a `planar` or `surface` pixel sees one of the pixel's tiling triangles,
@@ -89,24 +89,18 @@ fn most_pixels_of_curved_receivers_are_evaluated() {
 /// shadow its front).
 #[test]
 fn a_closed_mesh_shadows_its_own_far_half() {
+    // A unit sphere at the origin; the camera looks along -z at it; the light comes from the
+    // side (+x), tilted off the axes so that no face of the icosphere holds the light direction
+    // (such a face receives light at grazing incidence only and is not evaluated).
     let sphere = ObjectDesc {
         name: Some("sphere".into()),
-        shape: Shape::Spheres(SpheresParams {
-            count: 1,
-            min_radius: 1.0,
-            max_radius: 1.0,
-            subdivisions: 4,
-            ..Default::default()
-        }),
-        transform: Default::default(),
+        shape: Shape::Spheres(SpheresParams { count: 1, subdivisions: 4, ..Default::default() }),
+        transform: Transform { fit_size: Some(2.0), ..Default::default() },
         material: Material::default(),
         casts_shadows: true,
     };
-    // The camera looks along -z at the sphere's centre; the light comes from the side (+x),
-    // tilted off the axes so that no face of the icosphere holds the light direction (such a
-    // face receives light at grazing incidence only and is not evaluated).
     let direction = DVec3::new(-1.0, -0.23, 0.11);
-    let mut desc = SceneDesc {
+    let scene = SceneDesc {
         name: Some("sphere".into()),
         resolution: [160, 120],
         camera: Camera::Perspective {
@@ -119,23 +113,10 @@ fn a_closed_mesh_shadows_its_own_far_half() {
         light: Light::Directional { direction },
         effects: Default::default(),
         objects: vec![sphere],
-    };
-    let probe = desc
-        .clone()
-        .resolve("sphere", std::path::Path::new("sphere"), std::path::Path::new("."))
-        .expect("valid scene");
-    let (lo, hi) = probe.bounds();
-    let centre = 0.5 * (lo + hi);
-    desc.camera = Camera::Perspective {
-        eye: centre + DVec3::new(0.0, 0.0, 6.0),
-        target: centre,
-        up: DVec3::Y,
-        fov_y_deg: 40.0,
-        near: 0.01,
-    };
-    let scene = desc
-        .resolve("sphere", std::path::Path::new("sphere"), std::path::Path::new("."))
-        .expect("valid scene");
+    }
+    .resolve("sphere", std::path::Path::new("sphere"), std::path::Path::new("."))
+    .expect("valid scene");
+    let centre = DVec3::ZERO;
     let frame = Frame::new(&scene, 160, 120, &mut Recorder::default());
     let img = ExactCoverage::default().evaluate(&frame, &mut Recorder::default()).expect("applies");
     let classes = classify(&frame);
