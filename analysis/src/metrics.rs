@@ -12,11 +12,12 @@
 //! definition: with the `n` errors sorted ascending, the one of rank `ceil(0.95 n)` (1-based),
 //! so it is always one of the measured errors (the largest when `n < 20`).
 
-use crate::pixel_class::PixelClass;
+use crate::pixel_class::{self, PixelClass};
 use crate::reference::ReferenceImage;
 use image::RgbImage;
 use methods::Visibility;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 
 /// Largest difference still counted as a match: half of one 8-bit step.
 pub const MATCH_TOLERANCE: f64 = 0.5 / 255.0;
@@ -167,6 +168,77 @@ pub fn per_class(result: &Visibility, truth: &ReferenceImage, classes: &[PixelCl
     }
 }
 
+/// Pixels of each class by name (every class, zeros included), as `metrics.json`'s
+/// `class_pixels` and `run.json`'s `pixel_classes` give them.
+pub fn class_pixels(classes: &[PixelClass]) -> BTreeMap<String, u64> {
+    PixelClass::ALL
+        .iter()
+        .zip(pixel_class::counts(classes))
+        .map(|(c, n)| (c.name().to_owned(), n))
+        .collect()
+}
+
+/// The pixels of the headline: those `truth` evaluated whose class is `planar` or `surface`
+/// (the same as [`ReferenceImage::shadow_only`] when `truth` carries these classes).
+///
+/// # Panics
+/// When the buffers differ in size (a caller's bug, not bad input).
+pub fn headline_pixels(truth: &ReferenceImage, classes: &[PixelClass]) -> Vec<bool> {
+    assert_eq!(classes.len(), truth.evaluated.len(), "classes and reference differ in size");
+    truth.evaluated.iter().zip(classes).map(|(&e, c)| e && c.is_shadow_only()).collect()
+}
+
+/// What `metrics.json` reports of a comparison: the shadow-only headline (the
+/// [`headline_pixels`]) at the top, then each class and the frame's class counts.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Comparison {
+    /// Headline pixels compared.
+    pub evaluated_pixels: u64,
+    /// Mean of `|value - reference|` over the headline pixels.
+    pub mean_abs_error: Option<f64>,
+    /// Root mean square error over the headline pixels.
+    pub rmse: Option<f64>,
+    /// Largest `|value - reference|` over the headline pixels.
+    pub max_abs_error: Option<f64>,
+    /// Headline pixels whose reference is strictly between 0 and 1.
+    pub boundary_pixels: u64,
+    /// Mean absolute error over those boundary pixels.
+    pub boundary_mean_abs_error: Option<f64>,
+    /// NVIDIA FLIP mean ([`crate::flip::flip_mean`]) where only the headline pixels may differ.
+    pub flip_mean: f64,
+    /// Fraction of headline pixels within half an 8-bit step ([`Metrics::pixel_match`]).
+    pub pixel_match: Option<f64>,
+    /// Each class.
+    pub classes: PerClass,
+    /// Pixels of each class in the frame ([`class_pixels`]), evaluated or not.
+    pub class_pixels: BTreeMap<String, u64>,
+}
+
+impl Comparison {
+    /// Compares `result` with `truth`; `classes` are the frame's pixel classes (the
+    /// reference's own when it computes them).
+    ///
+    /// # Panics
+    /// When the buffers differ in size (a caller's bug, not bad input).
+    pub fn new(result: &Visibility, truth: &ReferenceImage, classes: &[PixelClass]) -> Self {
+        let headline = headline_pixels(truth, classes);
+        let h = ClassMetrics::compare(result, &truth.lit, &headline);
+        let matched = Metrics::compare(result, &truth.lit, &headline).pixel_match;
+        Self {
+            evaluated_pixels: h.pixels,
+            mean_abs_error: h.mean_abs_error,
+            rmse: h.rmse,
+            max_abs_error: h.max_abs_error,
+            boundary_pixels: h.boundary_pixels,
+            boundary_mean_abs_error: h.boundary_mean_abs_error,
+            flip_mean: crate::flip::flip_mean(result, &truth.lit, &headline),
+            pixel_match: (h.pixels > 0).then_some(matched),
+            classes: per_class(result, truth, classes),
+            class_pixels: class_pixels(classes),
+        }
+    }
+}
+
 /// The error image of Pan et al. Fig. 8: `10 x |value - reference|` in grey, clamped to white;
 /// pixels not evaluated are dark blue.
 pub fn error_image(result: &Visibility, reference: &[f64], evaluated: &[bool]) -> RgbImage {
@@ -284,6 +356,28 @@ mod tests {
         for class in ["planar", "surface", "edge"] {
             assert!(json[class]["p95_abs_error"].is_number(), "{class}");
         }
+        let n = class_pixels(&classes);
+        let named = |c: &str| n.get(c).copied();
+        assert_eq!(
+            (named("uncovered"), named("planar"), named("surface"), named("edge")),
+            (Some(1), Some(2), Some(1), Some(2))
+        );
+        assert_eq!(class_pixels(&[]).values().sum::<u64>(), 0);
+        assert_eq!(class_pixels(&[]).len(), 4);
+
+        // The headline: planar and surface pixels the reference evaluated.
+        let c = Comparison::new(&v, &truth, &classes);
+        assert_eq!(headline_pixels(&truth, &classes), truth.shadow_only());
+        assert_eq!(c.evaluated_pixels, 3);
+        assert_eq!(c.max_abs_error, Some(0.25));
+        assert!((c.mean_abs_error.expect("mean") - 0.375 / 3.0).abs() < 1e-12);
+        assert_eq!((c.boundary_pixels, c.boundary_mean_abs_error), (1, Some(0.25)));
+        assert_eq!(c.pixel_match, Some(1.0 / 3.0));
+        assert_eq!(c.classes, m);
+        assert_eq!(c.class_pixels, n);
+        let json = serde_json::to_value(&c).expect("serializes");
+        assert_eq!(json["classes"]["edge"]["pixels"], 1);
+        assert_eq!(json["class_pixels"]["uncovered"], 1);
     }
 
     proptest::proptest! {
