@@ -4,7 +4,9 @@
 //! Per scene, the frame (camera G-buffer) and the reference are computed once and shared by
 //! every method, so a method's time is its own stages only; the G-buffer's time is reported
 //! per scene. The metrics come from the last timed run (every method is deterministic for
-//! its parameters, so all runs give the same image).
+//! its parameters, so all runs give the same image) and are taken over the reference's
+//! shadow-only pixels (`ReferenceImage::shadow_only`: for `exact`, its `planar` and `surface`
+//! pixels; for `raytrace`, every pixel it evaluated), as `compare`'s headline is.
 
 use crate::grids::Panel;
 use crate::output::shade;
@@ -33,9 +35,9 @@ pub struct Row {
     pub reference: String,
     /// Rate of the `raytrace` reference (absent for `exact`).
     pub ref_rate: Option<u32>,
-    /// Error metrics against the reference.
+    /// Error metrics against the reference, over its shadow-only pixels.
     pub metrics: Metrics,
-    /// NVIDIA FLIP mean over the frame.
+    /// NVIDIA FLIP mean over the frame (only the shadow-only pixels may differ).
     pub flip_mean: f64,
     /// Total time of the method's stages.
     pub total_ms: Summary,
@@ -250,9 +252,10 @@ fn grid_panels(
         }
         panels.push(Panel { label: format!("reference ({ref_name}; blue: not evaluated)"), image });
         if let Some(v) = last {
+            // Over the pixels the metrics are taken on, as `compare`'s error.png.
             panels.push(Panel {
                 label: "10x |error| of the last".into(),
-                image: error_image(&v, &truth.lit, &truth.evaluated),
+                image: error_image(&v, &truth.lit, &truth.shadow_only()),
             });
         }
     }
@@ -301,6 +304,7 @@ pub fn run_suite(
                 continue;
             }
         };
+        let shadow_only = truth.shadow_only();
         report.scenes.push(SceneInfo {
             scene: scene.name.clone(),
             triangles: frame.geometry.len() as u64,
@@ -344,8 +348,8 @@ pub fn run_suite(
                     height: h,
                     reference: ref_name.clone(),
                     ref_rate,
-                    metrics: Metrics::compare(&v, &truth.lit, &truth.evaluated),
-                    flip_mean: flip_mean(&v, &truth.lit, &truth.evaluated),
+                    metrics: Metrics::compare(&v, &truth.lit, &shadow_only),
+                    flip_mean: flip_mean(&v, &truth.lit, &shadow_only),
                     total_ms: timed.total_ms,
                     stages: timed.stages,
                     skipped_stages: timed.record.stages.skipped.clone(),
