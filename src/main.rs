@@ -10,7 +10,9 @@
 //! ([`prepare_out`]: created, and written once with a probe file). A method error is bad
 //! input, except a GPU device failure, which is internal ([`method_failure`]).
 
-use analysis::{error_image, Metrics};
+use analysis::{
+    error_image, exact::ExactCoverage, metrics::Comparison, pixel_class::PixelClass, Reference,
+};
 use anyhow::Context;
 use clap::{Parser, Subcommand, ValueEnum};
 use instrumentation::{Recorder, RunRecord};
@@ -43,9 +45,11 @@ enum Command {
         toml: Option<String>,
     },
     /// Run one method (or a reference: `exact`, `raytrace`) on one scene; write
-    /// visibility.exr, shadow.png and run.json.
+    /// visibility.exr, shadow.png and run.json (`exact` also writes its pixel classes:
+    /// classes.png and class_ids.png).
     Render(RenderArgs),
-    /// Run one method and a reference on the same frame; print the error metrics and write
+    /// Run one method and a reference on the same frame; print the error metrics (the
+    /// shadow-only headline over planar and surface pixels, then per pixel class) and write
     /// error.png (10x absolute error), error_boundary.png, metrics.json and the method's
     /// visibility.exr, shadow.png and run.json.
     Compare(CompareArgs),
@@ -122,10 +126,20 @@ impl From<DeviceArg> for Device {
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum ReferenceName {
-    /// Exact lit area per pixel on the planar receiver (pixels whose square sees it).
+    /// Exact lit area per pixel on every visible surface (planar and surface pixels); edge
+    /// pixels as --edge-reference says.
     Exact,
     /// Ray-traced supersampling at --ref-rate sub-samples per pixel.
     Raytrace,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum EdgeReference {
+    /// Ray traced at --ref-rate sub-samples per pixel; their error is reported under
+    /// `classes.edge`.
+    Raytrace,
+    /// Left out: not evaluated, `classes.edge` has no pixels (--ref-rate is not used).
+    None,
 }
 
 #[derive(clap::Args)]
@@ -135,9 +149,15 @@ struct CompareArgs {
     /// The ground truth to compare against.
     #[arg(long, value_enum, default_value_t = ReferenceName::Exact)]
     reference: ReferenceName,
-    /// Sub-samples per pixel of the `raytrace` reference (1, 4, 8, ..., 1024); default 256.
+    /// Sub-samples per pixel of the `raytrace` reference, and of `exact`'s edge pixels
+    /// (1, 4, 8, ..., 1024); default 256.
     #[arg(long, value_name = "N", allow_negative_numbers = true)]
     ref_rate: Option<u32>,
+    /// With `--reference exact`: the reference of the `edge` pixels (silhouettes, depth
+    /// discontinuities, several objects or background in the square), which `exact` does not
+    /// evaluate; default raytrace.
+    #[arg(long, value_enum, value_name = "REF")]
+    edge_reference: Option<EdgeReference>,
 }
 
 #[derive(clap::Args)]
@@ -336,6 +356,9 @@ fn scenes(json: bool, toml: Option<String>) -> Result<(), Failure> {
 struct Job {
     scene: scenes::Scene,
     technique: Box<dyn ShadowMethod>,
+    /// The technique when it is a reference (`exact`, `raytrace`), run as a reference so that
+    /// its pixel classes come with its values.
+    reference: Option<Box<dyn Reference>>,
     width: u32,
     height: u32,
 }
@@ -356,6 +379,14 @@ fn job(a: &RenderArgs) -> Result<Job, Failure> {
         device: a.device.into(),
     };
     let technique = analysis::registry::technique(&a.method, &options).map_err(method_failure)?;
+    // The same reference as `technique` wraps (`registry::technique`'s rate and pattern).
+    let reference = if analysis::registry::REFERENCES.iter().any(|(n, _)| *n == a.method) {
+        let rate = options.rate.unwrap_or(1);
+        let pattern = options.pattern.unwrap_or_default();
+        Some(analysis::registry::reference(&a.method, rate, pattern).map_err(input)?)
+    } else {
+        None
+    };
     let params = technique.params();
     for (flag, given, key) in [
         ("--rate", a.rate.is_some(), "rate"),
@@ -386,7 +417,7 @@ fn job(a: &RenderArgs) -> Result<Job, Failure> {
     if a.device == DeviceArg::Gpu {
         methods::gpu::GpuContext::shared().map_err(gpu_failure)?;
     }
-    Ok(Job { scene, technique, width, height })
+    Ok(Job { scene, technique, reference, width, height })
 }
 
 fn report(a: ReportArgs) -> Result<(), Failure> {
@@ -423,13 +454,32 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-/// Runs the job's technique on `frame`, returning its visibility and run record.
-fn run(
-    job: &Job,
-    frame: &Frame<'_>,
-    mut rec: Recorder,
-) -> Result<(Visibility, RunRecord), Failure> {
-    let visibility = job.technique.run(frame, &mut rec).map_err(method_failure)?;
+/// A method's result: its visibility, its run record, and its pixel classes when it is a
+/// reference that computes them (`exact`).
+struct Ran {
+    visibility: Visibility,
+    record: RunRecord,
+    classes: Option<Vec<PixelClass>>,
+}
+
+/// Runs the job's technique on `frame`. A reference is evaluated as such, and its values are
+/// rounded to `f32` as `analysis::registry::ReferenceMethod` does.
+fn run(job: &Job, frame: &Frame<'_>, mut rec: Recorder) -> Result<Ran, Failure> {
+    let (visibility, classes) = match &job.reference {
+        Some(r) => {
+            let image = r.evaluate(frame, &mut rec).map_err(input)?;
+            let visibility = Visibility {
+                width: image.width,
+                height: image.height,
+                lit: image.lit.iter().map(|&v| v as f32).collect(),
+                transmittance: image
+                    .transmittance
+                    .map(|t| t.iter().map(|c| c.map(|v| v as f32)).collect()),
+            };
+            (visibility, image.classes)
+        }
+        None => (job.technique.run(frame, &mut rec).map_err(method_failure)?, None),
+    };
     let record = RunRecord {
         scene: job.scene.name.clone(),
         method: job.technique.name().to_owned(),
@@ -443,11 +493,12 @@ fn run(
         skipped_stages: rec.stages.skipped,
         notes: rec.notes,
         warnings: rec.warnings,
+        pixel_classes: classes.as_deref().map(analysis::metrics::class_pixels),
     };
     for w in &record.warnings {
         eprintln!("warning: {w}");
     }
-    Ok((visibility, record))
+    Ok(Ran { visibility, record, classes })
 }
 
 /// The output folder (`--out`, or `shadowbench-out/SCENE-METHOD{suffix}`), made ready by
@@ -464,15 +515,16 @@ fn out_dir(a: &RenderArgs, job: &Job, suffix: &str) -> Result<PathBuf, Failure> 
     Ok(out)
 }
 
-fn write_run(
-    out: &Path,
-    frame: &Frame<'_>,
-    v: &Visibility,
-    record: &RunRecord,
-) -> Result<(), Failure> {
+/// Writes a run's files: visibility.exr, shadow.png, run.json, and classes.png and
+/// class_ids.png when it has pixel classes.
+fn write_run(out: &Path, frame: &Frame<'_>, ran: &Ran) -> Result<(), Failure> {
+    let v = &ran.visibility;
     reports::write_visibility_exr(&out.join("visibility.exr"), v)?;
     reports::write_shadow_png(&out.join("shadow.png"), frame, v)?;
-    reports::write_run_json(&out.join("run.json"), record)?;
+    reports::write_run_json(&out.join("run.json"), &ran.record)?;
+    if let Some(classes) = &ran.classes {
+        reports::write_class_pngs(out, v.width, v.height, classes)?;
+    }
     Ok(())
 }
 
@@ -481,8 +533,9 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
     let out = out_dir(&a, &job, "")?;
     let mut rec = Recorder::default();
     let frame = Frame::new(&job.scene, job.width, job.height, &mut rec);
-    let (visibility, record) = run(&job, &frame, rec)?;
-    write_run(&out, &frame, &visibility, &record)?;
+    let ran = run(&job, &frame, rec)?;
+    write_run(&out, &frame, &ran)?;
+    let record = &ran.record;
     if a.json {
         println!("{}", serde_json::to_string_pretty(&record)?);
     }
@@ -501,86 +554,138 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
 fn compare(c: CompareArgs) -> Result<(), Failure> {
     let a = &c.render;
     let job = job(a)?;
-    let (ref_name, ref_rate) = match c.reference {
-        ReferenceName::Exact => ("exact", None),
-        ReferenceName::Raytrace => {
-            ("raytrace", Some(c.ref_rate.unwrap_or(analysis::registry::DEFAULT_REF_RATE)))
-        }
-    };
-    if c.ref_rate.is_some() && ref_rate.is_none() {
-        eprintln!("note: exact does not use --ref-rate; ignored");
-    }
     let pattern = a.pattern.map(PatternKind::from).unwrap_or_default();
-    let reference =
-        analysis::registry::reference(ref_name, ref_rate.unwrap_or(1), pattern).map_err(input)?;
+    let rate = c.ref_rate.unwrap_or(analysis::registry::DEFAULT_REF_RATE);
+    let edge_reference = c.edge_reference.unwrap_or(EdgeReference::Raytrace);
+    let (reference, ref_rate, edge_name): (Box<dyn Reference>, _, _) =
+        match (c.reference, edge_reference) {
+            (ReferenceName::Exact, EdgeReference::Raytrace) => (
+                analysis::registry::reference("exact", rate, pattern).map_err(input)?,
+                Some(rate),
+                Some("raytrace"),
+            ),
+            (ReferenceName::Exact, EdgeReference::None) => {
+                if c.ref_rate.is_some() {
+                    eprintln!(
+                        "note: exact with --edge-reference none does not use --ref-rate; ignored"
+                    );
+                }
+                (Box::new(ExactCoverage { edge: None }), None, Some("none"))
+            }
+            (ReferenceName::Raytrace, _) => {
+                if c.edge_reference.is_some() {
+                    eprintln!("note: raytrace does not use --edge-reference; ignored");
+                }
+                (
+                    analysis::registry::reference("raytrace", rate, pattern).map_err(input)?,
+                    Some(rate),
+                    None,
+                )
+            }
+        };
+    let ref_name = reference.name();
     let out = out_dir(a, &job, &format!("-vs-{ref_name}"))?;
 
     let mut rec = Recorder::default();
     let frame = Frame::new(&job.scene, job.width, job.height, &mut rec);
-    let (visibility, record) = run(&job, &frame, rec)?;
+    let ran = run(&job, &frame, rec)?;
     let mut ref_rec = Recorder::default();
     let truth = reference.evaluate(&frame, &mut ref_rec).map_err(input)?;
-    let metrics = Metrics::compare(&visibility, &truth.lit, &truth.evaluated);
-    let flip = analysis::flip::flip_mean(&visibility, &truth.lit, &truth.evaluated);
+    // A reference without classes (`raytrace`) is measured per class all the same: the
+    // classes are the camera's view of the triangles, whatever the reference.
+    let classes = match &truth.classes {
+        Some(c) => c.clone(),
+        None => {
+            let c = ref_rec.stages.time("pixel classes", || analysis::exact::classify(&frame));
+            ref_rec.counters.pixel_triangle_overlaps += c.overlaps;
+            c.class
+        }
+    };
+    let v = &ran.visibility;
+    let comparison = Comparison::new(v, &truth, &classes);
 
-    write_run(&out, &frame, &visibility, &record)?;
+    write_run(&out, &frame, &ran)?;
+    let headline = analysis::metrics::headline_pixels(&truth, &classes);
     let boundary: Vec<bool> =
-        truth.lit.iter().zip(&truth.evaluated).map(|(&r, &e)| e && r > 0.0 && r < 1.0).collect();
-    for (name, mask) in [("error.png", &truth.evaluated), ("error_boundary.png", &boundary)] {
+        truth.lit.iter().zip(&headline).map(|(&r, &e)| e && r > 0.0 && r < 1.0).collect();
+    for (name, mask) in [("error.png", &headline), ("error_boundary.png", &boundary)] {
         let path = out.join(name);
-        error_image(&visibility, &truth.lit, mask)
+        error_image(v, &truth.lit, mask)
             .save(&path)
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
-    let mut json = serde_json::json!({
-        "scene": record.scene,
-        "method": record.method,
-        "params": record.params,
-        "width": job.width,
-        "height": job.height,
-        "reference": ref_name,
-        "ref_rate": ref_rate,
-        "method_ms": record.total_ms,
-        "reference_ms": ref_rec.stages.total_ms(),
-        "flip_mean": flip,
-    });
-    if let (Some(obj), serde_json::Value::Object(m)) =
-        (json.as_object_mut(), serde_json::to_value(metrics)?)
-    {
-        obj.extend(m);
-    }
-    let text = serde_json::to_string_pretty(&json)?;
+    let record = &ran.record;
+    let metrics = reports::MetricsRecord {
+        comparison,
+        reference: ref_name.to_owned(),
+        ref_rate,
+        edge_reference: edge_name.map(String::from),
+        scene: record.scene.clone(),
+        method: record.method.clone(),
+        params: record.params.clone(),
+        width: job.width,
+        height: job.height,
+        method_ms: record.total_ms,
+        reference_ms: ref_rec.stages.total_ms(),
+    };
+    let text = serde_json::to_string_pretty(&metrics)?;
     let path = out.join("metrics.json");
     std::fs::write(&path, format!("{text}\n"))
         .with_context(|| format!("cannot write {}", path.display()))?;
     if a.json {
         println!("{text}");
     } else {
-        println!(
-            "{} on {} at {}x{} against {}{}",
-            record.method,
-            record.scene,
-            job.width,
-            job.height,
-            ref_name,
-            ref_rate.map_or(String::new(), |r| format!(" at {r} samples/pixel"))
-        );
-        println!("  evaluated pixels        {}", metrics.evaluated_pixels);
-        println!("  mean abs error          {:.6}", metrics.mean_abs_error);
-        println!("  rmse                    {:.6}", metrics.rmse);
-        println!("  max abs error           {:.6}", metrics.max_abs_error);
-        println!("  pixel match (0.5/255)   {:.4}", metrics.pixel_match);
-        println!("  boundary pixels         {}", metrics.boundary_pixels);
-        println!("  boundary mean abs error {:.6}", metrics.boundary_mean_abs_error);
-        println!("  FLIP mean (whole frame) {:.6}", flip);
-        println!(
-            "  time: method {:.1} ms, reference {:.1} ms",
-            record.total_ms,
-            ref_rec.stages.total_ms()
-        );
+        print_metrics(&metrics, edge_name);
     }
     eprintln!("wrote {}", out.display());
     Ok(())
+}
+
+/// Prints a comparison: the shadow-only headline, then one line per class.
+fn print_metrics(m: &reports::MetricsRecord, edge_reference: Option<&str>) {
+    let c = &m.comparison;
+    let rate = |r: Option<u32>| r.map_or(String::new(), |r| format!(" at {r} samples/pixel"));
+    let against = match edge_reference {
+        Some("none") => format!("{} (edge pixels left out)", m.reference),
+        Some(_) => format!("{} (edge pixels ray traced{})", m.reference, rate(m.ref_rate)),
+        None => format!("{}{}", m.reference, rate(m.ref_rate)),
+    };
+    let num = |v: Option<f64>, digits: usize| v.map_or("-".into(), |v| format!("{v:.digits$}"));
+    println!("{} on {} at {}x{} against {against}", m.method, m.scene, m.width, m.height);
+    println!("shadow-only pixels (planar + surface the reference evaluated):");
+    println!("  evaluated pixels        {}", c.evaluated_pixels);
+    println!("  mean abs error          {}", num(c.mean_abs_error, 6));
+    println!("  rmse                    {}", num(c.rmse, 6));
+    println!("  max abs error           {}", num(c.max_abs_error, 6));
+    println!("  pixel match (0.5/255)   {}", num(c.pixel_match, 4));
+    println!("  boundary pixels         {}", c.boundary_pixels);
+    println!("  boundary mean abs error {}", num(c.boundary_mean_abs_error, 6));
+    println!("  FLIP mean (whole frame) {:.6}", c.flip_mean);
+    println!(
+        "  {:<9} {:>15} {:>10} {:>10} {:>10} {:>10} {:>9} {:>13}",
+        "class", "pixels", "mean abs", "rmse", "max abs", "p95 abs", "boundary", "boundary mean"
+    );
+    for (name, k) in
+        [("planar", &c.classes.planar), ("surface", &c.classes.surface), ("edge", &c.classes.edge)]
+    {
+        let total = c.class_pixels.get(name).copied().unwrap_or(0);
+        println!(
+            "  {:<9} {:>15} {:>10} {:>10} {:>10} {:>10} {:>9} {:>13}",
+            name,
+            format!("{}/{total}", k.pixels),
+            num(k.mean_abs_error, 6),
+            num(k.rmse, 6),
+            num(k.max_abs_error, 6),
+            num(k.p95_abs_error, 6),
+            k.boundary_pixels,
+            num(k.boundary_mean_abs_error, 6)
+        );
+    }
+    println!(
+        "  (pixels: compared/in the frame; {} uncovered)",
+        c.class_pixels.get("uncovered").copied().unwrap_or(0)
+    );
+    println!("  time: method {:.1} ms, reference {:.1} ms", m.method_ms, m.reference_ms);
 }
 
 fn main() -> ExitCode {

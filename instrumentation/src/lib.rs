@@ -7,6 +7,7 @@
 //! CPU that times were taken on.
 
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::time::Instant;
 
 macro_rules! counters {
@@ -194,6 +195,10 @@ pub struct RunRecord {
     pub warnings: Vec<String>,
     /// Sum of the stage times, milliseconds.
     pub total_ms: f64,
+    /// Pixels of each class (`uncovered`, `planar`, `surface`, `edge`), for a reference that
+    /// classifies pixels (`exact`); absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pixel_classes: Option<BTreeMap<String, u64>>,
 }
 
 /// The CPU's model name, from `/proc/cpuinfo` where there is one, for labelling times.

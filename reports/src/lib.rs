@@ -15,7 +15,10 @@ pub mod tables;
 pub mod timing;
 pub mod write;
 
-pub use output::{shade, write_run_json, write_shadow_png, write_visibility_exr, OutputError};
+pub use output::{
+    shade, write_class_pngs, write_run_json, write_shadow_png, write_visibility_exr, MetricsRecord,
+    OutputError,
+};
 pub use suite::{Suite, SuiteError, BUILTIN_SUITES};
 pub use sweep::{run_count, run_suite, Report, Row};
 pub use write::{write_plots, write_report};

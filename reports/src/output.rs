@@ -1,14 +1,19 @@
-//! Writers for a render's three files: `visibility.exr`, `shadow.png`, `run.json`.
+//! Writers for a render's three files: `visibility.exr`, `shadow.png`, `run.json`; for the
+//! pixel classes of a reference that computes them (`classes.png`, `class_ids.png`); and the
+//! record of a comparison, `metrics.json` ([`MetricsRecord`]).
 //!
 //! The same run writes the same bytes: the EXR's blocks are compressed in parallel but written
 //! in increasing order ([`ENCODING`]: without a line order the `exr` crate writes them as they
 //! finish), the PNG encoder is sequential, and the JSON's fields come in a fixed order; only
 //! the measured fields of `run.json` (the stage times and their total) differ between runs.
 
+use analysis::metrics::Comparison;
+use analysis::pixel_class::PixelClass;
 use glam::DVec3;
-use image::RgbImage;
+use image::{GrayImage, RgbImage};
 use instrumentation::RunRecord;
 use methods::{Frame, Visibility};
+use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 /// A file could not be written.
@@ -100,6 +105,60 @@ pub fn write_shadow_png(path: &Path, frame: &Frame<'_>, v: &Visibility) -> Resul
     shade(frame, v).save(path).map_err(|e| write_err(path, e))
 }
 
+/// Writes a frame's pixel classes into `dir`: `classes.png` (RGB, one colour per class,
+/// [`PixelClass::colour`]) for looking, and `class_ids.png` (8-bit grey, the value is
+/// [`PixelClass::code`]: 0 uncovered, 1 planar, 2 surface, 3 edge) for tools.
+///
+/// # Panics
+/// When `classes` does not hold `width * height` pixels (a caller's bug).
+pub fn write_class_pngs(
+    dir: &Path,
+    width: u32,
+    height: u32,
+    classes: &[PixelClass],
+) -> Result<(), OutputError> {
+    assert_eq!(classes.len(), width as usize * height as usize, "classes and frame differ");
+    let at = |x: u32, y: u32| classes[(y * width + x) as usize];
+    let path = dir.join("classes.png");
+    RgbImage::from_fn(width, height, |x, y| image::Rgb(at(x, y).colour()))
+        .save(&path)
+        .map_err(|e| write_err(&path, e))?;
+    let path = dir.join("class_ids.png");
+    GrayImage::from_fn(width, height, |x, y| image::Luma([at(x, y).code()]))
+        .save(&path)
+        .map_err(|e| write_err(&path, e))
+}
+
+/// The record of a comparison, written as `metrics.json`: the metrics first (the shadow-only
+/// headline, then each class, [`Comparison`]), then what was compared.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MetricsRecord {
+    /// The metrics.
+    #[serde(flatten)]
+    pub comparison: Comparison,
+    /// The reference's name (`exact`, `raytrace`).
+    pub reference: String,
+    /// Sub-samples per pixel of the ray-traced part of the reference: every pixel for
+    /// `raytrace`, the `edge` pixels for `exact` (`None` when nothing is ray traced).
+    pub ref_rate: Option<u32>,
+    /// How `exact`'s `edge` pixels are referenced (`raytrace`, `none`); `None` for `raytrace`.
+    pub edge_reference: Option<String>,
+    /// Scene name.
+    pub scene: String,
+    /// Method name.
+    pub method: String,
+    /// The method's parameters, as its run record gives them.
+    pub params: serde_json::Map<String, serde_json::Value>,
+    /// Frame width.
+    pub width: u32,
+    /// Frame height.
+    pub height: u32,
+    /// The method's total stage time, milliseconds.
+    pub method_ms: f64,
+    /// The reference's total stage time (pixel classes included), milliseconds.
+    pub reference_ms: f64,
+}
+
 /// Writes the run record as pretty JSON.
 pub fn write_run_json(path: &Path, record: &RunRecord) -> Result<(), OutputError> {
     let text = serde_json::to_string_pretty(record).map_err(|e| write_err(path, e))?;
@@ -109,6 +168,25 @@ pub fn write_run_json(path: &Path, record: &RunRecord) -> Result<(), OutputError
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn class_pngs_hold_each_class_colour_and_code() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let classes = [PixelClass::Uncovered, PixelClass::Planar, PixelClass::Surface]
+            .into_iter()
+            .chain([PixelClass::Edge, PixelClass::Edge, PixelClass::Planar])
+            .collect::<Vec<_>>();
+        write_class_pngs(dir.path(), 3, 2, &classes).expect("writes");
+        let rgb = image::open(dir.path().join("classes.png")).expect("reads").to_rgb8();
+        let ids = image::open(dir.path().join("class_ids.png")).expect("reads");
+        assert_eq!(ids.color(), image::ColorType::L8);
+        let ids = ids.to_luma8();
+        for (k, c) in classes.iter().enumerate() {
+            let (x, y) = (k as u32 % 3, k as u32 / 3);
+            assert_eq!(rgb.get_pixel(x, y).0, c.colour());
+            assert_eq!(ids.get_pixel(x, y).0, [c.code()]);
+        }
+    }
 
     /// The EXR is written with its blocks in increasing order, so that writing the same
     /// buffer twice gives the same bytes however the parallel compression finishes.
