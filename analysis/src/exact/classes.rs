@@ -14,7 +14,7 @@
 //! 2. The seed `s` is the triangle the camera G-buffer holds at the pixel centre (the nearest
 //!    triangle there). No seed, or a seed not in `F`: **`edge`**.
 //! 3. `C` = the triangles of `F` reachable from `s` through shared edges (two corners at
-//!    bitwise-equal positions) between triangles of `s`'s object with `s`'s winding: one
+//!    equal positions) between triangles of `s`'s object with `s`'s winding: one
 //!    continuous surface, front-facing as `s` is (a surface is judged by the consistency of
 //!    its own winding, whichever way its file winds it, so a visible back face, whose winding
 //!    on screen is the other, never joins `C`).
@@ -172,6 +172,7 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
             let mut class = vec![PixelClass::Uncovered; count];
             let (mut counts, mut tiles) = (vec![0u32; count], Vec::new());
             let mut group: Vec<Overlap> = Vec::new();
+            let mut scratch = Scratch::default();
             let mut at = 0;
             while at < entries.len() {
                 let local = entries[at].0 as usize;
@@ -182,7 +183,7 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
                 }
                 let (i, j) = (local % width, r0 + local / width);
                 let before = tiles.len();
-                class[local] = ctx.classify_pixel(i, j, &group, &mut tiles);
+                class[local] = ctx.classify_pixel(i, j, &group, &mut scratch, &mut tiles);
                 counts[local] = (tiles.len() - before) as u32;
             }
             (class, counts, tiles, entries.len() as u64)
@@ -210,6 +211,16 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
     out
 }
 
+/// Buffers the per-pixel rule reuses from pixel to pixel.
+#[derive(Default)]
+struct Scratch {
+    corners: Vec<[DVec3; 3]>,
+    polys: Vec<Poly>,
+    in_c: Vec<bool>,
+    stack: Vec<usize>,
+    members: Vec<usize>,
+}
+
 /// What the per-pixel rule reads.
 struct Context<'a> {
     frame: &'a Frame<'a>,
@@ -226,6 +237,7 @@ impl Context<'_> {
         i: usize,
         j: usize,
         group: &[Overlap],
+        scratch: &mut Scratch,
         tiles: &mut Vec<u32>,
     ) -> PixelClass {
         let g = &self.frame.geometry;
@@ -241,11 +253,15 @@ impl Context<'_> {
         };
         let winding = p.winding[group[seed].contour as usize];
         let object = g.object[seed_tri as usize];
-        let corners: Vec<[DVec3; 3]> = group.iter().map(|o| g.corners(tri(o))).collect();
+        let Scratch { corners, polys, in_c, stack, members } = scratch;
+        corners.clear();
+        corners.extend(group.iter().map(|o| g.corners(tri(o))));
         // Rule 3: the continuous surface through the seed.
-        let mut in_c = vec![false; group.len()];
+        in_c.clear();
+        in_c.resize(group.len(), false);
         in_c[seed] = true;
-        let mut stack = vec![seed];
+        stack.clear();
+        stack.push(seed);
         while let Some(m) = stack.pop() {
             for f in 0..group.len() {
                 if !in_c[f]
@@ -259,12 +275,15 @@ impl Context<'_> {
             }
         }
         // Rule 4: C tiles the square.
-        let covered: f64 = group.iter().zip(&in_c).filter(|(_, &c)| c).map(|(o, _)| o.area).sum();
+        let covered: f64 =
+            group.iter().zip(in_c.iter()).filter(|(_, &c)| c).map(|(o, _)| o.area).sum();
         if covered < MIN_TILE_COVERAGE {
             return PixelClass::Edge;
         }
-        let members: Vec<usize> = (0..group.len()).filter(|&f| in_c[f]).collect();
-        let polys: Vec<Poly> = group.iter().map(|o| p.poly(o.contour as usize)).collect();
+        members.clear();
+        members.extend((0..group.len()).filter(|&f| in_c[f]));
+        polys.clear();
+        polys.extend(group.iter().map(|o| p.poly(o.contour as usize)));
         let overlap = |a: usize, b: usize| -> Option<Poly> {
             if clip::separated(&polys[a], &polys[b]) {
                 return None;
@@ -286,7 +305,7 @@ impl Context<'_> {
         }
         // Rule 5: nothing else in front of C.
         for u in (0..group.len()).filter(|&f| !in_c[f]) {
-            for &t in &members {
+            for &t in members.iter() {
                 let Some(r) = overlap(u, t) else { continue };
                 if 0.5 * r.area2_rel(i as f64, j as f64) <= MIN_OVERLAP {
                     continue;
@@ -322,7 +341,7 @@ impl Context<'_> {
     }
 }
 
-/// Whether two triangles share an edge: two corners at bitwise-equal positions.
+/// Whether two triangles share an edge: two corners at equal positions.
 #[inline]
 fn shares_edge(a: &[DVec3; 3], b: &[DVec3; 3]) -> bool {
     a.iter().filter(|p| b.contains(p)).count() >= 2

@@ -61,7 +61,7 @@ pub(crate) fn shadows(frame: &Frame<'_>, grid: &CasterGrid, receivers: &[u32]) -
     let step = union::grid_step(screen.width, screen.height);
     let per: Vec<Receiver> = receivers
         .par_iter()
-        .map_init(Vec::new, |candidates, &r| receiver(frame, &screen, grid, step, r, candidates))
+        .map_init(Scratch::default, |scratch, &r| receiver(frame, &screen, grid, step, r, scratch))
         .collect();
     let mut out = SurfaceShadows::default();
     for (&r, res) in receivers.iter().zip(per) {
@@ -77,6 +77,13 @@ pub(crate) fn shadows(frame: &Frame<'_>, grid: &CasterGrid, receivers: &[u32]) -
     out
 }
 
+/// Buffers a worker reuses from receiver to receiver.
+#[derive(Default)]
+struct Scratch {
+    candidates: Vec<u32>,
+    pieces: ScreenPolygons,
+}
+
 /// The shadow on receiver triangle `r`.
 fn receiver(
     frame: &Frame<'_>,
@@ -84,8 +91,9 @@ fn receiver(
     grid: &CasterGrid,
     step: f64,
     r: u32,
-    candidates: &mut Vec<u32>,
+    scratch: &mut Scratch,
 ) -> Receiver {
+    let Scratch { candidates, pieces } = scratch;
     let g = &frame.geometry;
     let corners = g.corners(r as usize);
     let mut out = Receiver::default();
@@ -101,7 +109,8 @@ fn receiver(
     grid.query(&corners, candidates);
     let (x0, x1) = own.range(0);
     let (y0, y1) = own.range(1);
-    let mut pieces = ScreenPolygons::default();
+    pieces.points.clear();
+    pieces.ranges.clear();
     let mut last = Poly::new();
     let mut full = false;
     for &c in candidates.iter() {
@@ -130,7 +139,7 @@ fn receiver(
         fan(&clip::intersect(&last, &own), &mut out.tris);
     } else if pieces.len() > 1 {
         let (tris, conflicts) =
-            union::triangulate(&union::union_within(&pieces, own.points(), step));
+            union::triangulate(&union::union_within(pieces, own.points(), step));
         out.tris = tris;
         out.conflicts = conflicts;
     }
