@@ -114,6 +114,62 @@ fn render_writes_the_three_files_with_every_counter_and_named_stages() {
     assert_eq!((png.width(), png.height()), (160, 120));
 }
 
+/// `exact` writes its pixel classes: `classes.png` (a colour per class), `class_ids.png`
+/// (grey, the class's code) and the count per class in `run.json`; other methods do not.
+#[test]
+fn render_exact_writes_its_pixel_classes() {
+    use analysis::pixel_class::PixelClass;
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (w, h) = (160u32, 120u32);
+    let render = |method: &str| {
+        let out = dir.path().join(method);
+        let o = shadowbench(&[
+            "render",
+            "--scene",
+            "cage",
+            "--method",
+            method,
+            "--width",
+            &w.to_string(),
+            "--height",
+            &h.to_string(),
+            "--out",
+            out.to_str().expect("utf-8"),
+        ]);
+        assert!(o.status.success(), "{method}: {}", stderr(&o));
+        let run: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).expect("read"))
+                .expect("JSON");
+        (out, run)
+    };
+    let (out, run) = render("exact");
+    let counts = run["pixel_classes"].as_object().expect("pixel_classes in run.json");
+    let count = |c: PixelClass| counts[c.name()].as_u64().expect("count");
+    assert_eq!(PixelClass::ALL.iter().map(|&c| count(c)).sum::<u64>(), u64::from(w * h));
+    assert!(count(PixelClass::Planar) > 0 && count(PixelClass::Edge) > 0, "{counts:?}");
+
+    let ids = image::open(out.join("class_ids.png")).expect("class_ids.png reads");
+    assert_eq!(ids.color(), image::ColorType::L8);
+    let ids = ids.to_luma8();
+    let rgb = image::open(out.join("classes.png")).expect("classes.png reads").to_rgb8();
+    assert_eq!((ids.dimensions(), rgb.dimensions()), ((w, h), (w, h)));
+    let mut seen = [0u64; 4];
+    for (id, colour) in ids.pixels().zip(rgb.pixels()) {
+        let class = PixelClass::ALL
+            .get(usize::from(id.0[0]))
+            .unwrap_or_else(|| panic!("class id {} out of 0..=3", id.0[0]));
+        assert_eq!(colour.0, class.colour());
+        seen[usize::from(id.0[0])] += 1;
+    }
+    for c in PixelClass::ALL {
+        assert_eq!(seen[usize::from(c.code())], count(c), "{}", c.name());
+    }
+
+    let (out, run) = render("sm");
+    assert!(run.get("pixel_classes").is_none(), "{run}");
+    assert!(!out.join("classes.png").exists() && !out.join("class_ids.png").exists());
+}
+
 #[test]
 fn render_takes_a_mesh_file_as_scene() {
     let dir = tempfile::tempdir().expect("tempdir");

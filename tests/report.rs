@@ -64,6 +64,32 @@ fn a_suite_file_writes_tables_that_parse_back() {
         |s: &str| rows.iter().find(|r| r["scene"] == s).expect("row")["reference"].clone();
     assert_eq!(reference("plane-square"), "exact");
     assert_eq!(reference("hairball"), "raytrace");
+    // Against exact, the metrics are taken over its shadow-only pixels (planar and surface),
+    // not over the edge pixels it ray traces: as many as `exact` classifies so at 64 x 48.
+    let classes = dir.path().join("classes");
+    let o = shadowbench(&[
+        "render",
+        "--scene",
+        "plane-square",
+        "--method",
+        "exact",
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--out",
+        classes.to_str().expect("utf-8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let run: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(classes.join("run.json")).expect("read"))
+            .expect("JSON");
+    let count = |c: &str| run["pixel_classes"][c].as_u64().expect("count");
+    assert!(count("edge") > 0, "plane-square's square has silhouettes");
+    for r in rows.iter().filter(|r| r["scene"] == "plane-square") {
+        let n = r["metrics"]["evaluated_pixels"].as_u64();
+        assert_eq!(n, Some(count("planar") + count("surface")), "{}", r["metrics"]);
+    }
     assert!(json["machine"]["cores"].as_u64() >= Some(1));
 
     let csv = std::fs::read_to_string(out.join("runs.csv")).expect("runs.csv");
