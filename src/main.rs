@@ -635,17 +635,17 @@ fn compare(c: CompareArgs) -> Result<(), Failure> {
     if a.json {
         println!("{text}");
     } else {
-        print_metrics(&metrics, edge_name);
+        print_metrics(&metrics);
     }
     eprintln!("wrote {}", out.display());
     Ok(())
 }
 
 /// Prints a comparison: the shadow-only headline, then one line per class.
-fn print_metrics(m: &reports::MetricsRecord, edge_reference: Option<&str>) {
+fn print_metrics(m: &reports::MetricsRecord) {
     let c = &m.comparison;
     let rate = |r: Option<u32>| r.map_or(String::new(), |r| format!(" at {r} samples/pixel"));
-    let against = match edge_reference {
+    let against = match m.edge_reference.as_deref() {
         Some("none") => format!("{} (edge pixels left out)", m.reference),
         Some(_) => format!("{} (edge pixels ray traced{})", m.reference, rate(m.ref_rate)),
         None => format!("{}{}", m.reference, rate(m.ref_rate)),
