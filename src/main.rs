@@ -232,7 +232,8 @@ struct RenderArgs {
     /// Output folder; default `shadowbench-out/SCENE-METHOD`.
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
-    /// Also print run.json to standard output.
+    /// Also print the record written to the output folder to standard output (run.json;
+    /// metrics.json for `compare`).
     #[arg(long)]
     json: bool,
 }
@@ -462,21 +463,13 @@ struct Ran {
     classes: Option<Vec<PixelClass>>,
 }
 
-/// Runs the job's technique on `frame`. A reference is evaluated as such, and its values are
-/// rounded to `f32` as `analysis::registry::ReferenceMethod` does.
+/// Runs the job's technique on `frame`. A reference is evaluated as such (keeping its pixel
+/// classes), and its values are rounded to `f32` ([`ReferenceImage::to_visibility`]).
 fn run(job: &Job, frame: &Frame<'_>, mut rec: Recorder) -> Result<Ran, Failure> {
     let (visibility, classes) = match &job.reference {
         Some(r) => {
             let image = r.evaluate(frame, &mut rec).map_err(input)?;
-            let visibility = Visibility {
-                width: image.width,
-                height: image.height,
-                lit: image.lit.iter().map(|&v| v as f32).collect(),
-                transmittance: image
-                    .transmittance
-                    .map(|t| t.iter().map(|c| c.map(|v| v as f32)).collect()),
-            };
-            (visibility, image.classes)
+            (image.to_visibility(), image.classes)
         }
         None => (job.technique.run(frame, &mut rec).map_err(method_failure)?, None),
     };

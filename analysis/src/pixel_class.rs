@@ -76,6 +76,6 @@ mod tests {
             assert_eq!(usize::from(c.code()), k);
         }
         assert_eq!(counts(&[PixelClass::Edge, PixelClass::Planar, PixelClass::Edge]), [0, 1, 0, 2]);
-        assert_eq!(serde_json::to_string(&PixelClass::Surface).unwrap(), "\"surface\"");
+        assert_eq!(serde_json::to_string(&PixelClass::Surface).expect("serialises"), "\"surface\"");
     }
 }

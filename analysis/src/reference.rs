@@ -2,7 +2,7 @@
 
 use crate::pixel_class::PixelClass;
 use instrumentation::Recorder;
-use methods::Frame;
+use methods::{Frame, Visibility};
 
 /// A reference's per-pixel lit fraction and which pixels it vouches for.
 #[derive(Debug, Clone, PartialEq)]
@@ -22,6 +22,20 @@ pub struct ReferenceImage {
 }
 
 impl ReferenceImage {
+    /// The reference as a method's result: its lit fraction (and transmittance) rounded to
+    /// `f32`.
+    pub fn to_visibility(&self) -> Visibility {
+        Visibility {
+            width: self.width,
+            height: self.height,
+            lit: self.lit.iter().map(|&v| v as f32).collect(),
+            transmittance: self
+                .transmittance
+                .as_ref()
+                .map(|t| t.iter().map(|c| c.map(|v| v as f32)).collect()),
+        }
+    }
+
     /// The pixels the reference vouches for whose class is `planar` or `surface` (every
     /// evaluated pixel when there are no classes): the shadow-only pixels, where the error is
     /// the shadow's and not the camera's.

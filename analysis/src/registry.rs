@@ -75,14 +75,7 @@ impl ShadowMethod for ReferenceMethod {
             }
             ReferenceError::NotApplicable(m) => MethodError::NotApplicable(m),
         })?;
-        Ok(Visibility {
-            width: image.width,
-            height: image.height,
-            lit: image.lit.iter().map(|&v| v as f32).collect(),
-            transmittance: image
-                .transmittance
-                .map(|t| t.iter().map(|c| c.map(|v| v as f32)).collect()),
-        })
+        Ok(image.to_visibility())
     }
 }
 

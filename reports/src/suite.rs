@@ -9,7 +9,7 @@
 //! height = 240
 //! warmup = 1        # untimed runs before the timed ones
 //! repeats = 3       # timed runs; the report gives median, min and max
-//! reference = "auto" # exact where it applies, else raytrace at ref_rate; or "exact", "raytrace"
+//! reference = "auto" # exact where it applies (opaque casters), else raytrace at ref_rate; or "exact", "raytrace"
 //! ref_rate = 64
 //! scenes = ["plane-square", "cage"]
 //!
@@ -211,7 +211,7 @@ fn check_scene(name: &str) -> Result<(), String> {
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ReferenceChoice {
-    /// `exact` where the scene has a planar receiver and no transparency, else `raytrace`.
+    /// `exact` where the scene has no transparency (opaque casters), else `raytrace`.
     #[default]
     Auto,
     /// Always `exact` (scenes where it does not apply are reported as skipped).
