@@ -145,3 +145,25 @@ fn a_closed_mesh_shadows_its_own_far_half() {
     eprintln!("{dark} pixels on the far half, {lit} on the near half");
     assert!(dark > 500 && lit > 500, "{dark} dark, {lit} lit");
 }
+
+/// The classes, values and counters of `exact` do not depend on the number of threads (unions
+/// and pixel sums are formed in a fixed order).
+#[test]
+fn exact_does_not_depend_on_the_thread_count() {
+    for name in ["spheres", "spot-spheres", "city"] {
+        let scene = scenes::load(name).expect("built-in");
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
+            pool.install(|| {
+                let mut rec = Recorder::default();
+                let frame = Frame::new(&scene, 160, 120, &mut rec);
+                let img = ExactCoverage::default().evaluate(&frame, &mut rec).expect("applies");
+                (img, rec.counters)
+            })
+        };
+        let (one, c1) = run(1);
+        let (three, c3) = run(3);
+        assert_eq!(one, three, "{name}");
+        assert_eq!(c1, c3, "{name}");
+    }
+}
