@@ -99,7 +99,8 @@ fn exact_on_every_surface_agrees_with_raytrace_at_1024() {
 
 /// The largest difference `raytrace` at `rate` sub-samples may have from a pixel's exact lit
 /// fraction: a straight shadow edge crossing the pixel misplaces at most one column of the
-/// `sqrt(rate) x sqrt(rate)` grid, `1 / sqrt(rate)` of its area; three edges are allowed.
+/// `sqrt(rate) x sqrt(rate)` pattern, `1 / sqrt(rate)` of its area; two edges are allowed (a
+/// shadow's corner).
 fn sampling_bound(rate: u32) -> f64 {
-    3.0 / f64::from(rate).sqrt()
+    2.0 / f64::from(rate).sqrt()
 }
