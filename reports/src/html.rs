@@ -5,8 +5,9 @@
 //! A small inline script marks, once the page has loaded, every image with
 //! `data-loaded="yes"` or `"no"`, so that a headless browser can check that nothing is broken.
 
+use crate::figures::PlotFile;
 use crate::sweep::Report;
-use crate::write::{run_cells, PlotFile, RUN_COLUMNS};
+use crate::write::{run_cells, RUN_COLUMNS};
 use std::fmt::Write as _;
 
 /// Escapes text for HTML.
