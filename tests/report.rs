@@ -91,6 +91,16 @@ fn a_suite_file_writes_tables_that_parse_back() {
         assert_eq!(n, Some(count("planar") + count("surface")), "{}", r["metrics"]);
     }
     assert!(json["machine"]["cores"].as_u64() >= Some(1));
+    // Provenance: what produced the report, from which source, when, with which compiler.
+    let p = &json["provenance"];
+    let commit = p["commit"].as_str().expect("commit");
+    assert_eq!(commit.len(), 40, "the tests run in a checkout: {p}");
+    assert_eq!(p["version"], env!("CARGO_PKG_VERSION"));
+    assert!(p["dirty"].is_boolean() && p["threads"].as_u64() >= Some(1), "{p}");
+    assert!(p["rustc"].as_str().is_some_and(|r| r.starts_with("rustc ")), "{p}");
+    assert!(p["command"].as_str().is_some_and(|c| c.contains("report --suite")), "{p}");
+    assert!(p["timestamp"].as_str().is_some_and(|t| t.ends_with('Z')), "{p}");
+    assert_eq!(p["adapter"], json["machine"]["gpu"], "the GPU's adapter: {p}");
 
     let csv = std::fs::read_to_string(out.join("runs.csv")).expect("runs.csv");
     let mut lines = csv.lines();
@@ -104,12 +114,14 @@ fn a_suite_file_writes_tables_that_parse_back() {
         assert!((0.0..=1.0).contains(&err));
         let _: f64 = l[col("time_median_ms")].parse().expect("number");
         let _: u64 = l[col("shadow_map_lookups")].parse().expect("counter");
+        assert_eq!((l[col("commit")], l[col("version")]), (commit, env!("CARGO_PKG_VERSION")));
     }
     let bits: Vec<&str> = lines.iter().map(|l| l[col("depth_bits")]).collect();
     assert!(bits.contains(&"8") && bits.contains(&"32") && bits.contains(&""));
 
     let md = std::fs::read_to_string(out.join("report.md")).expect("report.md");
     assert!(md.contains("## plane-square") && md.contains("pcf-bs-fast-2x2"), "{md}");
+    assert!(md.contains(&format!("at commit {commit}")), "provenance in the header: {md}");
     // CPU and GPU side by side: each sm run on both devices, paired, the adapter named.
     let devices: Vec<&str> = lines.iter().map(|l| l[col("device")]).collect();
     assert_eq!(devices.iter().filter(|d| **d == "gpu").count(), 4, "{devices:?}");

@@ -4,11 +4,13 @@
 //! task) and sum them with [`Counters::merge`]; no string map is touched in a hot loop. A
 //! counter a method does not use stays 0. [`Stages`] times each pipeline stage under its own
 //! name and lists the stages a scene did not call for as skipped. [`cpu_model`] names the
-//! CPU that times were taken on.
+//! CPU that times were taken on, and [`Provenance`] what a result was produced by.
 
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
-use std::time::Instant;
+use std::path::Path;
+use std::process::Command;
+use std::time::{Instant, SystemTime};
 
 macro_rules! counters {
     ($($(#[doc = $doc:literal])* $name:ident),* $(,)?) => {
@@ -214,6 +216,86 @@ pub fn cpu_model() -> String {
         .unwrap_or_else(|| "unknown CPU".to_owned())
 }
 
+/// What a run or report was produced by and when, so that a result can be traced to its
+/// source and machine.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Provenance {
+    /// The workbench's crate version.
+    pub version: String,
+    /// The git commit of the source the binary was built from (`git rev-parse HEAD` in that
+    /// source folder at run time), or `unknown` when that folder is not a git checkout.
+    pub commit: String,
+    /// Whether tracked files of that checkout differ from the commit (`false` when unknown).
+    pub dirty: bool,
+    /// The compiler the binary was built with (`rustc --version` at build time).
+    pub rustc: String,
+    /// The command line that produced the result.
+    pub command: String,
+    /// When the result was produced, RFC 3339 in UTC to the second.
+    pub timestamp: String,
+    /// CPU model.
+    pub cpu: String,
+    /// Worker threads of the parallel runtime.
+    pub threads: usize,
+    /// GPU adapter, when a method ran on the GPU.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub adapter: Option<String>,
+}
+
+impl Provenance {
+    /// The provenance of a result produced now by `command` (see [`Provenance::command_line`])
+    /// on `adapter` (when a GPU was used).
+    pub fn capture(command: String, adapter: Option<String>) -> Self {
+        let source = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let (commit, dirty) = git_state(source).unwrap_or_else(|| ("unknown".to_owned(), false));
+        Self {
+            version: env!("CARGO_PKG_VERSION").to_owned(),
+            commit,
+            dirty,
+            rustc: env!("SHADOWBENCH_RUSTC").to_owned(),
+            command,
+            timestamp: humantime::format_rfc3339_seconds(SystemTime::now()).to_string(),
+            cpu: cpu_model(),
+            threads: rayon::current_num_threads(),
+            adapter,
+        }
+    }
+
+    /// This process's command line, arguments separated by spaces; an argument that is empty
+    /// or holds a character outside `[A-Za-z0-9_./=:,+-]` is single-quoted as a shell would.
+    pub fn command_line() -> String {
+        std::env::args().map(|a| shell_quote(&a)).collect::<Vec<_>>().join(" ")
+    }
+}
+
+/// `arg` as a POSIX shell reads it back: as is when plain, else single-quoted.
+fn shell_quote(arg: &str) -> String {
+    let plain = |c: char| c.is_ascii_alphanumeric() || "_./=:,+-".contains(c);
+    if !arg.is_empty() && arg.chars().all(plain) {
+        arg.to_owned()
+    } else {
+        format!("'{}'", arg.replace('\'', "'\\''"))
+    }
+}
+
+/// The commit checked out in the git repository holding `dir`, and whether tracked files
+/// differ from it; `None` when `dir` is in no repository or `git` cannot be run.
+fn git_state(dir: &Path) -> Option<(String, bool)> {
+    let git = |args: &[&str]| {
+        Command::new("git")
+            .arg("-C")
+            .arg(dir)
+            .args(args)
+            .output()
+            .ok()
+            .filter(|o| o.status.success())
+            .and_then(|o| String::from_utf8(o.stdout).ok())
+    };
+    let commit = git(&["rev-parse", "HEAD"])?.trim().to_owned();
+    let dirty = !git(&["status", "--porcelain", "--untracked-files=no"])?.trim().is_empty();
+    Some((commit, dirty))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -247,5 +329,30 @@ mod tests {
         assert_eq!(s.stages[0].name, "light depth map");
         assert!(s.stages[0].ms >= 0.0);
         assert_eq!(s.skipped, vec!["validity mask".to_string()]);
+    }
+
+    #[test]
+    fn provenance_names_version_commit_compiler_and_time() {
+        let p = Provenance::capture("shadowbench report".into(), None);
+        assert_eq!(p.version, env!("CARGO_PKG_VERSION"));
+        assert!(p.rustc.starts_with("rustc "), "{}", p.rustc);
+        // The tests run inside the checkout: a 40-digit commit.
+        assert_eq!(p.commit.len(), 40, "{}", p.commit);
+        assert!(p.commit.chars().all(|c| c.is_ascii_hexdigit()), "{}", p.commit);
+        // RFC 3339, UTC, to the second: 2026-12-02T02:07:25Z.
+        let t = p.timestamp.as_bytes();
+        assert_eq!((t.len(), t[4], t[10], t[19]), (20, b'-', b'T', b'Z'), "{}", p.timestamp);
+        assert!(p.threads >= 1);
+        let json = serde_json::to_value(&p).expect("serializes");
+        assert!(json.get("adapter").is_none(), "no adapter key without a GPU: {json}");
+        assert_eq!(json["command"], "shadowbench report");
+    }
+
+    #[test]
+    fn command_lines_quote_what_a_shell_would_split() {
+        assert_eq!(shell_quote("--out=dir/a.b"), "--out=dir/a.b");
+        assert_eq!(shell_quote("my report"), "'my report'");
+        assert_eq!(shell_quote("it's"), "'it'\\''s'");
+        assert_eq!(shell_quote(""), "''");
     }
 }

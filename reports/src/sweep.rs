@@ -14,7 +14,7 @@ use crate::suite::{GridSpec, PanelSpec, ReferenceChoice, RunSpec, Suite};
 use crate::tables::{run_table, table_run_count, Table};
 use crate::timing::{time_method, Machine, StageTimes, Summary};
 use analysis::{error_image, flip::flip_mean, Metrics, ReferenceImage};
-use instrumentation::{Counters, Recorder};
+use instrumentation::{Counters, Provenance, Recorder};
 use methods::{registry::Device, Frame, MethodOptions, Visibility};
 use serde::{Deserialize, Serialize};
 
@@ -77,6 +77,9 @@ pub struct SceneInfo {
 pub struct Report {
     /// The suite as run.
     pub suite: Suite,
+    /// What produced the report (commit, version, command line, time, machine); its adapter
+    /// is the GPU's when a method ran on one.
+    pub provenance: Provenance,
     /// Where the times were taken.
     pub machine: Machine,
     /// Per-scene shared work.
@@ -266,7 +269,8 @@ fn grid_panels(
     panels
 }
 
-/// Runs `suite`; `progress` is called once per method run with a short label. Returns the
+/// Runs `suite`; `progress` is called once per method run with a short label. The report's
+/// provenance names this process's command line ([`Provenance::command_line`]). Returns the
 /// report, every visibility buffer and the grids' panels.
 pub fn run_suite(
     suite: &Suite,
@@ -274,6 +278,7 @@ pub fn run_suite(
 ) -> (Report, Vec<Produced>, Vec<GridImages>) {
     let mut report = Report {
         suite: suite.clone(),
+        provenance: Provenance::capture(Provenance::command_line(), None),
         machine: Machine::current(),
         scenes: Vec::new(),
         rows: Vec::new(),
@@ -385,6 +390,7 @@ pub fn run_suite(
             run_table(spec, suite.warmup, suite.repeats, &mut report.skipped, &mut progress);
         report.tables.push(table);
     }
+    report.provenance.adapter = report.machine.gpu.clone();
     (report, produced, grid_images)
 }
 

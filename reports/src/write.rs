@@ -56,6 +56,8 @@ pub const CSV_COLUMNS: &[&str] = &[
     "time_median_ms",
     "time_min_ms",
     "time_max_ms",
+    "commit",
+    "version",
 ];
 
 /// `runs.csv`: a header, then one line per row; counters follow the columns of
@@ -92,6 +94,8 @@ pub fn csv(report: &Report) -> String {
             r.total_ms.median.to_string(),
             r.total_ms.min.to_string(),
             r.total_ms.max.to_string(),
+            report.provenance.commit.clone(),
+            report.provenance.version.clone(),
         ];
         cells.extend(r.counters.entries().into_iter().map(|(_, v)| v.to_string()));
         // Scene names and parameters hold no commas or quotes; quote defensively anyway.
@@ -144,6 +148,17 @@ pub fn markdown(report: &Report) -> String {
     if !report.suite.description.is_empty() {
         let _ = writeln!(s, "{}\n", report.suite.description);
     }
+    let p = &report.provenance;
+    let _ = writeln!(
+        s,
+        "Produced {} by shadowbench {} at commit {}{}, built with {}: `{}`.\n",
+        p.timestamp,
+        p.version,
+        p.commit,
+        if p.dirty { " (with uncommitted changes)" } else { "" },
+        p.rustc,
+        p.command
+    );
     let _ = writeln!(
         s,
         "Machine: {} ({} cores, {} threads, {}); GPU: {}. Times: median of {} runs after {} \
