@@ -643,7 +643,8 @@ fn print_metrics(m: &reports::MetricsRecord) {
         Some(_) => format!("{} (edge pixels ray traced{})", m.reference, rate(m.ref_rate)),
         None => format!("{}{}", m.reference, rate(m.ref_rate)),
     };
-    let num = |v: Option<f64>, digits: usize| v.map_or("-".into(), |v| format!("{v:.digits$}"));
+    // A statistic that does not apply (no pixels to take it over) is `n/a`, never 0.
+    let num = |v: Option<f64>, digits: usize| v.map_or("n/a".into(), |v| format!("{v:.digits$}"));
     println!("{} on {} at {}x{} against {against}", m.method, m.scene, m.width, m.height);
     println!("shadow-only pixels (planar + surface the reference evaluated):");
     println!("  evaluated pixels        {}", c.evaluated_pixels);
@@ -653,17 +654,31 @@ fn print_metrics(m: &reports::MetricsRecord) {
     println!("  pixel match (0.5/255)   {}", num(c.pixel_match, 4));
     println!("  boundary pixels         {}", c.boundary_pixels);
     println!("  boundary mean abs error {}", num(c.boundary_mean_abs_error, 6));
+    println!(
+        "  boundary abs error p50/p95/p99  {} / {} / {}",
+        num(c.boundary_p50_abs_error, 6),
+        num(c.boundary_p95_abs_error, 6),
+        num(c.boundary_p99_abs_error, 6)
+    );
     println!("  FLIP mean (whole frame) {:.6}", c.flip_mean);
     println!(
-        "  {:<9} {:>15} {:>10} {:>10} {:>10} {:>10} {:>9} {:>13}",
-        "class", "pixels", "mean abs", "rmse", "max abs", "p95 abs", "boundary", "boundary mean"
+        "  {:<9} {:>15} {:>10} {:>10} {:>10} {:>10} {:>9} {:>13} {:>13}",
+        "class",
+        "pixels",
+        "mean abs",
+        "rmse",
+        "max abs",
+        "p95 abs",
+        "boundary",
+        "boundary mean",
+        "boundary p95"
     );
     for (name, k) in
         [("planar", &c.classes.planar), ("surface", &c.classes.surface), ("edge", &c.classes.edge)]
     {
         let total = c.class_pixels.get(name).copied().unwrap_or(0);
         println!(
-            "  {:<9} {:>15} {:>10} {:>10} {:>10} {:>10} {:>9} {:>13}",
+            "  {:<9} {:>15} {:>10} {:>10} {:>10} {:>10} {:>9} {:>13} {:>13}",
             name,
             format!("{}/{total}", k.pixels),
             num(k.mean_abs_error, 6),
@@ -671,7 +686,8 @@ fn print_metrics(m: &reports::MetricsRecord) {
             num(k.max_abs_error, 6),
             num(k.p95_abs_error, 6),
             k.boundary_pixels,
-            num(k.boundary_mean_abs_error, 6)
+            num(k.boundary_mean_abs_error, 6),
+            num(k.boundary_p95_abs_error, 6)
         );
     }
     println!(

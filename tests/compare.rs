@@ -14,6 +14,9 @@ const METRIC_FIELDS: &[&str] = &[
     "pixel_match",
     "boundary_pixels",
     "boundary_mean_abs_error",
+    "boundary_p50_abs_error",
+    "boundary_p95_abs_error",
+    "boundary_p99_abs_error",
     "flip_mean",
     "classes",
     "class_pixels",
@@ -28,7 +31,24 @@ const CLASS_FIELDS: &[&str] = &[
     "p95_abs_error",
     "boundary_pixels",
     "boundary_mean_abs_error",
+    "boundary_p50_abs_error",
+    "boundary_p95_abs_error",
+    "boundary_p99_abs_error",
 ];
+
+/// Checks that the boundary percentiles of `stats` (the headline or a class) are null exactly
+/// when it has no boundary pixel, and ordered p50 <= p95 <= p99 <= max otherwise.
+fn check_boundary_percentiles(stats: &serde_json::Value, what: &str) {
+    let ps = ["boundary_p50_abs_error", "boundary_p95_abs_error", "boundary_p99_abs_error"]
+        .map(|f| stats[f].as_f64());
+    let nb = stats["boundary_pixels"].as_u64().expect("count");
+    assert!(ps.iter().all(|p| p.is_some() == (nb > 0)), "{what}: {stats}");
+    assert_eq!(stats["boundary_mean_abs_error"].is_null(), nb == 0, "{what}: {stats}");
+    if let [Some(p50), Some(p95), Some(p99)] = ps {
+        let max = stats["max_abs_error"].as_f64().expect("max");
+        assert!(0.0 <= p50 && p50 <= p95 && p95 <= p99 && p99 <= max, "{what}: {stats}");
+    }
+}
 
 fn metrics(dir: &tempfile::TempDir) -> serde_json::Value {
     let text = std::fs::read_to_string(dir.path().join("cmp/metrics.json")).expect("read");
@@ -54,6 +74,7 @@ fn check_classes(m: &serde_json::Value, pixels: u64) {
             assert!(f("rmse") <= f("max_abs_error") + 1e-12, "{class}");
             assert!(f("p95_abs_error") <= f("max_abs_error"), "{class}");
         }
+        check_boundary_percentiles(c, class);
     }
     let counts = m["class_pixels"].as_object().expect("class_pixels");
     assert_eq!(counts.len(), 4);
@@ -62,6 +83,9 @@ fn check_classes(m: &serde_json::Value, pixels: u64) {
     let head = m["classes"]["planar"]["pixels"].as_u64().expect("count")
         + m["classes"]["surface"]["pixels"].as_u64().expect("count");
     assert_eq!(m["evaluated_pixels"].as_u64(), Some(head));
+    if head > 0 {
+        check_boundary_percentiles(m, "headline");
+    }
 }
 
 fn compare(args: &[&str]) -> (std::process::Output, tempfile::TempDir) {
@@ -132,6 +156,48 @@ fn compare_against_raytrace_names_its_rate() {
     check_classes(&m, 64 * 48);
     assert!(m["class_pixels"]["edge"].as_u64() > Some(0));
     assert!(m["classes"]["edge"]["pixels"].as_u64() > Some(0));
+}
+
+/// A statistic that does not apply is printed `n/a`, never as 0: against `raytrace` at one
+/// sample per pixel every reference value is 0 or 1, so there is no boundary pixel; with the
+/// edge pixels left out, the edge class has no pixel at all.
+#[test]
+fn statistics_that_do_not_apply_print_n_a() {
+    let (o, dir) = compare(&[
+        "--scene",
+        "plane-square",
+        "--method",
+        "sm",
+        "--reference",
+        "raytrace",
+        "--ref-rate",
+        "1",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let m = metrics(&dir);
+    assert_eq!(m["boundary_pixels"], 0);
+    assert!(m["boundary_mean_abs_error"].is_null() && m["boundary_p99_abs_error"].is_null());
+    let printed = String::from_utf8_lossy(&o.stdout).into_owned();
+    let line = |start: &str| {
+        printed
+            .lines()
+            .find(|l| l.trim_start().starts_with(start))
+            .unwrap_or_else(|| panic!("no `{start}` line in:\n{printed}"))
+            .to_owned()
+    };
+    assert!(line("boundary mean abs error").ends_with("n/a"), "{printed}");
+    assert!(line("boundary abs error p50/p95/p99").ends_with("n/a / n/a / n/a"), "{printed}");
+    assert!(!printed.contains("0.000000 / 0.000000"), "{printed}");
+
+    let (o, _dir) = compare(&["--scene", "cage", "--method", "sm", "--edge-reference", "none"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let printed = String::from_utf8_lossy(&o.stdout).into_owned();
+    let edge = printed
+        .lines()
+        .find(|l| l.trim_start().starts_with("edge "))
+        .unwrap_or_else(|| panic!("no edge line in:\n{printed}"));
+    // pixels, then seven statistics of which only the boundary count applies.
+    assert_eq!(edge.split_whitespace().filter(|w| *w == "n/a").count(), 6, "{edge}");
 }
 
 /// `--edge-reference none` leaves `exact`'s edge pixels out (and `--ref-rate` with it);

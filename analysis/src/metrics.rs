@@ -8,9 +8,11 @@
 //! half an 8-bit step of the reference; boundary pixels are those whose reference is strictly
 //! between 0 and 1.
 //!
-//! `p95_abs_error` is the 95th percentile of the absolute error by the nearest-rank
-//! definition: with the `n` errors sorted ascending, the one of rank `ceil(0.95 n)` (1-based),
-//! so it is always one of the measured errors (the largest when `n < 20`).
+//! Percentiles (`p95_abs_error`, and `boundary_p50/p95/p99_abs_error` over the boundary
+//! pixels) follow the nearest-rank definition: with the `n` errors sorted ascending, the
+//! `p`-th percentile is the one of rank `ceil(p n / 100)` (1-based), so it is always one of
+//! the measured errors (the largest when `n < 100 / (100 - p)`). A statistic of no pixels is
+//! `None` (`null` in JSON, `n/a` when printed), never 0.
 
 use crate::pixel_class::{self, PixelClass};
 use crate::reference::ReferenceImage;
@@ -37,8 +39,31 @@ pub struct Metrics {
     pub pixel_match: f64,
     /// Evaluated pixels whose reference is strictly between 0 and 1.
     pub boundary_pixels: u64,
-    /// Mean absolute error over the boundary pixels (0 when there are none).
+    /// Mean absolute error over the boundary pixels (0 when there are none: read it through
+    /// [`Metrics::boundary_mean`], which says `None` then).
     pub boundary_mean_abs_error: f64,
+    /// Median absolute error over the boundary pixels (nearest rank).
+    pub boundary_p50_abs_error: Option<f64>,
+    /// 95th percentile of the absolute error over the boundary pixels (nearest rank).
+    pub boundary_p95_abs_error: Option<f64>,
+    /// 99th percentile of the absolute error over the boundary pixels (nearest rank).
+    pub boundary_p99_abs_error: Option<f64>,
+}
+
+/// The `p`-th percentile (0 < `p` <= 100) of `values` by nearest rank (see the module doc);
+/// `None` when there are no values. Reorders `values`.
+fn nearest_rank(values: &mut [f64], p: usize) -> Option<f64> {
+    let n = values.len();
+    (n > 0).then(|| {
+        // The ceil(p n / 100)-th smallest, computed in integers.
+        let rank = (p * n).div_ceil(100).max(1);
+        *values.select_nth_unstable_by(rank - 1, f64::total_cmp).1
+    })
+}
+
+/// The 50th, 95th and 99th percentiles of `values` (nearest rank). Reorders `values`.
+fn boundary_percentiles(values: &mut [f64]) -> [Option<f64>; 3] {
+    [50, 95, 99].map(|p| nearest_rank(values, p))
 }
 
 impl Metrics {
@@ -50,7 +75,7 @@ impl Metrics {
         assert_eq!(result.lit.len(), reference.len(), "result and reference differ in size");
         assert_eq!(result.lit.len(), evaluated.len(), "result and mask differ in size");
         let (mut n, mut sum, mut sq, mut max, mut matched) = (0u64, 0.0, 0.0, 0.0f64, 0u64);
-        let (mut nb, mut sum_b) = (0u64, 0.0);
+        let mut boundary: Vec<f64> = Vec::new();
         for ((&v, &r), _) in result.lit.iter().zip(reference).zip(evaluated).filter(|(_, &e)| e) {
             let e = (f64::from(v) - r).abs();
             n += 1;
@@ -59,11 +84,13 @@ impl Metrics {
             max = max.max(e);
             matched += u64::from(e <= MATCH_TOLERANCE);
             if r > 0.0 && r < 1.0 {
-                nb += 1;
-                sum_b += e;
+                boundary.push(e);
             }
         }
         let mean = |s: f64, n: u64| if n == 0 { 0.0 } else { s / n as f64 };
+        let nb = boundary.len() as u64;
+        let sum_b = boundary.iter().sum::<f64>();
+        let [p50, p95, p99] = boundary_percentiles(&mut boundary);
         Self {
             evaluated_pixels: n,
             mean_abs_error: mean(sum, n),
@@ -72,7 +99,16 @@ impl Metrics {
             pixel_match: if n == 0 { 1.0 } else { matched as f64 / n as f64 },
             boundary_pixels: nb,
             boundary_mean_abs_error: mean(sum_b, nb),
+            boundary_p50_abs_error: p50,
+            boundary_p95_abs_error: p95,
+            boundary_p99_abs_error: p99,
         }
+    }
+
+    /// The mean absolute error over the boundary pixels, `None` when there are none (for
+    /// printing `n/a` rather than the field's 0).
+    pub fn boundary_mean(&self) -> Option<f64> {
+        (self.boundary_pixels > 0).then_some(self.boundary_mean_abs_error)
     }
 }
 
@@ -94,6 +130,12 @@ pub struct ClassMetrics {
     pub boundary_pixels: u64,
     /// Mean absolute error over the boundary pixels.
     pub boundary_mean_abs_error: Option<f64>,
+    /// Median absolute error over the boundary pixels (nearest rank).
+    pub boundary_p50_abs_error: Option<f64>,
+    /// 95th percentile of the absolute error over the boundary pixels (nearest rank).
+    pub boundary_p95_abs_error: Option<f64>,
+    /// 99th percentile of the absolute error over the boundary pixels (nearest rank).
+    pub boundary_p99_abs_error: Option<f64>,
 }
 
 impl ClassMetrics {
@@ -105,13 +147,12 @@ impl ClassMetrics {
         assert_eq!(result.lit.len(), reference.len(), "result and reference differ in size");
         assert_eq!(result.lit.len(), mask.len(), "result and mask differ in size");
         let mut errors: Vec<f64> = Vec::new();
-        let (mut nb, mut sum_b) = (0u64, 0.0);
+        let mut boundary: Vec<f64> = Vec::new();
         for ((&v, &r), _) in result.lit.iter().zip(reference).zip(mask).filter(|(_, &m)| m) {
             let e = (f64::from(v) - r).abs();
             errors.push(e);
             if r > 0.0 && r < 1.0 {
-                nb += 1;
-                sum_b += e;
+                boundary.push(e);
             }
         }
         let n = errors.len();
@@ -119,19 +160,21 @@ impl ClassMetrics {
         let mean = errors.iter().sum::<f64>() / n as f64;
         let rmse = (errors.iter().map(|e| e * e).sum::<f64>() / n as f64).sqrt();
         let max = errors.iter().copied().fold(0.0, f64::max);
-        let p95 = (n > 0).then(|| {
-            // Nearest rank: the ceil(0.95 n)-th smallest, computed in integers.
-            let rank = (95 * n).div_ceil(100);
-            *errors.select_nth_unstable_by(rank - 1, f64::total_cmp).1
-        });
+        let p95 = nearest_rank(&mut errors, 95);
+        let nb = boundary.len();
+        let boundary_mean = (nb > 0).then(|| boundary.iter().sum::<f64>() / nb as f64);
+        let [p50_b, p95_b, p99_b] = boundary_percentiles(&mut boundary);
         Self {
             pixels: n as u64,
             mean_abs_error: some(mean),
             rmse: some(rmse),
             max_abs_error: some(max),
             p95_abs_error: p95,
-            boundary_pixels: nb,
-            boundary_mean_abs_error: (nb > 0).then(|| sum_b / nb as f64),
+            boundary_pixels: nb as u64,
+            boundary_mean_abs_error: boundary_mean,
+            boundary_p50_abs_error: p50_b,
+            boundary_p95_abs_error: p95_b,
+            boundary_p99_abs_error: p99_b,
         }
     }
 }
@@ -204,6 +247,12 @@ pub struct Comparison {
     pub boundary_pixels: u64,
     /// Mean absolute error over those boundary pixels.
     pub boundary_mean_abs_error: Option<f64>,
+    /// Median absolute error over those boundary pixels (nearest rank).
+    pub boundary_p50_abs_error: Option<f64>,
+    /// 95th percentile of the absolute error over those boundary pixels (nearest rank).
+    pub boundary_p95_abs_error: Option<f64>,
+    /// 99th percentile of the absolute error over those boundary pixels (nearest rank).
+    pub boundary_p99_abs_error: Option<f64>,
     /// NVIDIA FLIP mean ([`crate::flip::flip_mean`]) where only the headline pixels may differ.
     pub flip_mean: f64,
     /// Fraction of headline pixels within half an 8-bit step ([`Metrics::pixel_match`]).
@@ -231,6 +280,9 @@ impl Comparison {
             max_abs_error: h.max_abs_error,
             boundary_pixels: h.boundary_pixels,
             boundary_mean_abs_error: h.boundary_mean_abs_error,
+            boundary_p50_abs_error: h.boundary_p50_abs_error,
+            boundary_p95_abs_error: h.boundary_p95_abs_error,
+            boundary_p99_abs_error: h.boundary_p99_abs_error,
             flip_mean: crate::flip::flip_mean(result, &truth.lit, &headline),
             pixel_match: (h.pixels > 0).then_some(matched),
             classes: per_class(result, truth, classes),
@@ -273,6 +325,34 @@ mod tests {
         assert_eq!(m.pixel_match, 0.5);
         assert_eq!(m.boundary_pixels, 2);
         assert!((m.boundary_mean_abs_error - 0.25).abs() < 1e-12);
+        assert_eq!(m.boundary_mean(), Some(m.boundary_mean_abs_error));
+        // Boundary errors 0 and 0.5: ranks ceil(1.0) = 1, ceil(1.9) = 2, ceil(1.98) = 2.
+        assert_eq!(
+            (m.boundary_p50_abs_error, m.boundary_p95_abs_error, m.boundary_p99_abs_error),
+            (Some(0.0), Some(0.5), Some(0.5))
+        );
+
+        // No boundary pixel: the mean reads as n/a and the percentiles are null, not 0.
+        let flat = Metrics::compare(&vis(vec![1.0, 0.0]), &[1.0, 1.0], &[true, true]);
+        assert_eq!((flat.boundary_pixels, flat.boundary_mean()), (0, None));
+        assert_eq!(flat.boundary_p50_abs_error, None);
+        let json = serde_json::to_value(flat).expect("serializes");
+        for f in ["boundary_p50_abs_error", "boundary_p95_abs_error", "boundary_p99_abs_error"] {
+            assert!(json[f].is_null(), "{f}");
+        }
+    }
+
+    #[test]
+    fn nearest_rank_percentiles_are_measured_values() {
+        // 1, 2, ..., 100 in a scrambled order: the p-th percentile is p.
+        let mut values: Vec<f64> = (0..100).map(|k| f64::from((k * 37) % 100 + 1)).collect();
+        assert_eq!(boundary_percentiles(&mut values), [Some(50.0), Some(95.0), Some(99.0)]);
+        assert_eq!(nearest_rank(&mut values, 100), Some(100.0));
+        // Ten values: ranks 5, 10, 10.
+        let mut ten: Vec<f64> = (1..=10).rev().map(f64::from).collect();
+        assert_eq!(boundary_percentiles(&mut ten), [Some(5.0), Some(10.0), Some(10.0)]);
+        assert_eq!(boundary_percentiles(&mut [0.25]), [Some(0.25); 3]);
+        assert_eq!(boundary_percentiles(&mut []), [None; 3]);
     }
 
     #[test]
@@ -313,6 +393,11 @@ mod tests {
         assert_eq!(m.p95_abs_error, Some(errors[18]));
         assert_eq!(m.boundary_pixels, 20);
         assert!((m.boundary_mean_abs_error.expect("boundary") - mean).abs() < 1e-12);
+        // Ranks ceil(10) = 10, ceil(19) = 19, ceil(19.8) = 20 of the twenty boundary errors.
+        assert_eq!(
+            (m.boundary_p50_abs_error, m.boundary_p95_abs_error, m.boundary_p99_abs_error),
+            (Some(errors[9]), Some(errors[18]), Some(errors[19]))
+        );
 
         // One pixel: every statistic is its error; no boundary pixel: null, not 0.
         let one = ClassMetrics::compare(&vis(vec![0.25, 0.0]), &[0.0, 0.0], &[true, false]);
@@ -322,8 +407,10 @@ mod tests {
             (Some(0.25), Some(0.25), Some(0.25), Some(0.25))
         );
         assert_eq!((one.boundary_pixels, one.boundary_mean_abs_error), (0, None));
+        assert_eq!(one.boundary_p99_abs_error, None);
         let json = serde_json::to_value(one).expect("serializes");
         assert!(json["boundary_mean_abs_error"].is_null());
+        assert!(json["boundary_p50_abs_error"].is_null());
 
         // No pixel: every statistic null.
         let none = ClassMetrics::compare(&vis(vec![0.25]), &[0.0], &[false]);
@@ -372,6 +459,10 @@ mod tests {
         assert_eq!(c.max_abs_error, Some(0.25));
         assert!((c.mean_abs_error.expect("mean") - 0.375 / 3.0).abs() < 1e-12);
         assert_eq!((c.boundary_pixels, c.boundary_mean_abs_error), (1, Some(0.25)));
+        assert_eq!(
+            (c.boundary_p50_abs_error, c.boundary_p95_abs_error, c.boundary_p99_abs_error),
+            (Some(0.25), Some(0.25), Some(0.25))
+        );
         assert_eq!(c.pixel_match, Some(1.0 / 3.0));
         assert_eq!(c.classes, m);
         assert_eq!(c.class_pixels, n);
@@ -391,6 +482,13 @@ mod tests {
             proptest::prop_assert!(m.rmse <= m.max_abs_error + 1e-12);
             proptest::prop_assert!((0.0..=1.0).contains(&m.pixel_match));
             proptest::prop_assert!(m.boundary_pixels <= m.evaluated_pixels);
+            proptest::prop_assert_eq!(m.boundary_mean().is_some(), m.boundary_pixels > 0);
+            let ps = [m.boundary_p50_abs_error, m.boundary_p95_abs_error, m.boundary_p99_abs_error];
+            proptest::prop_assert!(ps.iter().all(|p| p.is_some() == (m.boundary_pixels > 0)));
+            if let [Some(p50), Some(p95), Some(p99)] = ps {
+                proptest::prop_assert!(0.0 <= p50 && p50 <= p95 && p95 <= p99);
+                proptest::prop_assert!(p99 <= m.max_abs_error);
+            }
         }
 
         #[test]
@@ -413,6 +511,12 @@ mod tests {
                 proptest::prop_assert!(p95 >= 0.0);
             }
             proptest::prop_assert_eq!(m.boundary_mean_abs_error.is_some(), m.boundary_pixels > 0);
+            let ps = [m.boundary_p50_abs_error, m.boundary_p95_abs_error, m.boundary_p99_abs_error];
+            proptest::prop_assert!(ps.iter().all(|p| p.is_some() == (m.boundary_pixels > 0)));
+            if let [Some(p50), Some(p95), Some(p99)] = ps {
+                proptest::prop_assert!(0.0 <= p50 && p50 <= p95 && p95 <= p99);
+                proptest::prop_assert!(p99 <= m.max_abs_error.expect("max"));
+            }
         }
     }
 }
