@@ -595,10 +595,18 @@ fn compare(c: CompareArgs) -> Result<(), Failure> {
         }
     };
     let v = &ran.visibility;
-    let comparison = Comparison::new(v, &truth, &classes);
+    let headline = analysis::metrics::headline_pixels(&truth, &classes);
+    // Lecocq et al.'s pixel match: a binary result against one ray per pixel (the grid's
+    // single sample is the pixel centre), traced only when the result is binary.
+    let raytrace1 = if analysis::metrics::is_binary(v, &headline) {
+        let one_ray = analysis::registry::reference("raytrace", 1, PatternKind::Grid);
+        Some(one_ray.map_err(input)?.evaluate(&frame, &mut Recorder::default()).map_err(input)?)
+    } else {
+        None
+    };
+    let comparison = Comparison::new(v, &truth, &classes, raytrace1.as_ref());
 
     write_run(&out, &frame, &ran)?;
-    let headline = analysis::metrics::headline_pixels(&truth, &classes);
     let boundary: Vec<bool> =
         truth.lit.iter().zip(&headline).map(|(&r, &e)| e && r > 0.0 && r < 1.0).collect();
     for (name, mask) in [("error.png", &headline), ("error_boundary.png", &boundary)] {
@@ -652,6 +660,7 @@ fn print_metrics(m: &reports::MetricsRecord) {
     println!("  rmse                    {}", num(c.rmse, 6));
     println!("  max abs error           {}", num(c.max_abs_error, 6));
     println!("  pixel match (0.5/255)   {}", num(c.pixel_match, 4));
+    println!("  pixel match (Lecocq)    {}", num(c.pixel_match_lecocq, 4));
     println!("  boundary pixels         {}", c.boundary_pixels);
     println!("  boundary mean abs error {}", num(c.boundary_mean_abs_error, 6));
     println!(

@@ -12,6 +12,7 @@ const METRIC_FIELDS: &[&str] = &[
     "rmse",
     "max_abs_error",
     "pixel_match",
+    "pixel_match_lecocq",
     "boundary_pixels",
     "boundary_mean_abs_error",
     "boundary_p50_abs_error",
@@ -158,6 +159,28 @@ fn compare_against_raytrace_names_its_rate() {
     assert!(m["classes"]["edge"]["pixels"].as_u64() > Some(0));
 }
 
+/// Lecocq et al.'s pixel match (binary against `raytrace` at one sample per pixel) is measured
+/// for a binary method (`sm`) and is null for an antialiased one (`pan09` at 32 samples).
+#[test]
+fn lecocq_pixel_match_applies_to_binary_methods_only() {
+    let (o, dir) =
+        compare(&["--scene", "plane-square", "--method", "sm", "--map-res", "256", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let sm = metrics(&dir);
+    let lecocq = sm["pixel_match_lecocq"].as_f64().expect("a number for sm");
+    // sm samples the pixel centre as the one ray does: they differ only where the map's
+    // texels alias the shadow's edge.
+    assert!((0.9..=1.0).contains(&lecocq), "{lecocq}");
+
+    let (o, dir) =
+        compare(&["--scene", "plane-square", "--method", "pan09", "--rate", "32", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let pan09 = metrics(&dir);
+    assert!(pan09["pixel_match_lecocq"].is_null(), "{pan09}");
+    // The 8-bit pixel match is still there.
+    assert!(pan09["pixel_match"].is_number());
+}
+
 /// A statistic that does not apply is printed `n/a`, never as 0: against `raytrace` at one
 /// sample per pixel every reference value is 0 or 1, so there is no boundary pixel; with the
 /// edge pixels left out, the edge class has no pixel at all.
@@ -188,6 +211,8 @@ fn statistics_that_do_not_apply_print_n_a() {
     assert!(line("boundary mean abs error").ends_with("n/a"), "{printed}");
     assert!(line("boundary abs error p50/p95/p99").ends_with("n/a / n/a / n/a"), "{printed}");
     assert!(!printed.contains("0.000000 / 0.000000"), "{printed}");
+    // sm is binary: its Lecocq pixel match is a number.
+    assert!(!line("pixel match (Lecocq)").ends_with("n/a"), "{printed}");
 
     let (o, _dir) = compare(&["--scene", "cage", "--method", "sm", "--edge-reference", "none"]);
     assert!(o.status.success(), "{}", stderr(&o));

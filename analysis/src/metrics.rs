@@ -8,6 +8,15 @@
 //! half an 8-bit step of the reference; boundary pixels are those whose reference is strictly
 //! between 0 and 1.
 //!
+//! `pixel_match_lecocq` is pixel match in the sense of Lecocq, Marvie, Sourimant and Gautron,
+//! "Sub-pixel Shadow Mapping" (I3D 2014, section 6.2, Figure 12), who compare a binary shadow
+//! against ray-traced shadows, one ray per pixel: the fraction of compared pixels whose value
+//! equals that of `raytrace` at rate 1 (a pixel-centre sample, 0 or 1), see
+//! [`lecocq_pixel_match`]. It applies only where both are binary: a result with any compared
+//! value other than exactly 0 or 1 (an antialiased method, a supersampled rate) has none, and
+//! neither does a frame where the ray-traced value is fractional (semi-transparent casters).
+//! For antialiased results the boundary error's percentiles say more.
+//!
 //! Percentiles (`p95_abs_error`, and `boundary_p50/p95/p99_abs_error` over the boundary
 //! pixels) follow the nearest-rank definition: with the `n` errors sorted ascending, the
 //! `p`-th percentile is the one of rank `ceil(p n / 100)` (1-based), so it is always one of
@@ -110,6 +119,49 @@ impl Metrics {
     pub fn boundary_mean(&self) -> Option<f64> {
         (self.boundary_pixels > 0).then_some(self.boundary_mean_abs_error)
     }
+}
+
+/// Whether every value of `result` where `mask` is true is exactly 0 or 1 (a binary shadow).
+///
+/// # Panics
+/// When the buffers differ in size (a caller's bug, not bad input).
+pub fn is_binary(result: &Visibility, mask: &[bool]) -> bool {
+    assert_eq!(result.lit.len(), mask.len(), "result and mask differ in size");
+    result.lit.iter().zip(mask).all(|(&v, &m)| !m || v == 0.0 || v == 1.0)
+}
+
+/// Pixel match as Lecocq et al. define it (see the module doc): the fraction of the pixels
+/// where `mask` is true and `raytrace1` (`raytrace` at one sample per pixel on the same frame)
+/// evaluated whose value in `result` equals the ray-traced one. `None` when no pixel is
+/// compared, when a compared value of `result` is not exactly 0 or 1, or when a compared
+/// ray-traced value is not (semi-transparent casters).
+///
+/// # Panics
+/// When the buffers differ in size (a caller's bug, not bad input).
+pub fn lecocq_pixel_match(
+    result: &Visibility,
+    raytrace1: &ReferenceImage,
+    mask: &[bool],
+) -> Option<f64> {
+    assert_eq!(result.lit.len(), raytrace1.lit.len(), "result and reference differ in size");
+    assert_eq!(result.lit.len(), mask.len(), "result and mask differ in size");
+    let binary = |v: f64| v == 0.0 || v == 1.0;
+    let (mut n, mut matched) = (0u64, 0u64);
+    for ((&v, &r), _) in result
+        .lit
+        .iter()
+        .zip(&raytrace1.lit)
+        .zip(mask.iter().zip(&raytrace1.evaluated))
+        .filter(|(_, (&m, &e))| m && e)
+    {
+        let v = f64::from(v);
+        if !binary(v) || !binary(r) {
+            return None;
+        }
+        n += 1;
+        matched += u64::from(v == r);
+    }
+    (n > 0).then(|| matched as f64 / n as f64)
 }
 
 /// Error of a result against a reference over one set of pixels (a pixel class), as written
@@ -257,6 +309,10 @@ pub struct Comparison {
     pub flip_mean: f64,
     /// Fraction of headline pixels within half an 8-bit step ([`Metrics::pixel_match`]).
     pub pixel_match: Option<f64>,
+    /// Pixel match in Lecocq et al.'s sense over the headline pixels
+    /// ([`lecocq_pixel_match`]): binary against `raytrace` at rate 1; `None` (`null`) where it
+    /// does not apply.
+    pub pixel_match_lecocq: Option<f64>,
     /// Each class.
     pub classes: PerClass,
     /// Pixels of each class in the frame ([`class_pixels`]), evaluated or not.
@@ -265,11 +321,18 @@ pub struct Comparison {
 
 impl Comparison {
     /// Compares `result` with `truth`; `classes` are the frame's pixel classes (the
-    /// reference's own when it computes them).
+    /// reference's own when it computes them). `raytrace1` is `raytrace` at one sample per
+    /// pixel on the same frame, for [`Comparison::pixel_match_lecocq`]; `None` leaves that
+    /// null (a caller that knows the result is not binary, [`is_binary`], need not trace it).
     ///
     /// # Panics
     /// When the buffers differ in size (a caller's bug, not bad input).
-    pub fn new(result: &Visibility, truth: &ReferenceImage, classes: &[PixelClass]) -> Self {
+    pub fn new(
+        result: &Visibility,
+        truth: &ReferenceImage,
+        classes: &[PixelClass],
+        raytrace1: Option<&ReferenceImage>,
+    ) -> Self {
         let headline = headline_pixels(truth, classes);
         let h = ClassMetrics::compare(result, &truth.lit, &headline);
         let matched = Metrics::compare(result, &truth.lit, &headline).pixel_match;
@@ -285,6 +348,7 @@ impl Comparison {
             boundary_p99_abs_error: h.boundary_p99_abs_error,
             flip_mean: crate::flip::flip_mean(result, &truth.lit, &headline),
             pixel_match: (h.pixels > 0).then_some(matched),
+            pixel_match_lecocq: raytrace1.and_then(|r| lecocq_pixel_match(result, r, &headline)),
             classes: per_class(result, truth, classes),
             class_pixels: class_pixels(classes),
         }
@@ -453,7 +517,7 @@ mod tests {
         assert_eq!(class_pixels(&[]).len(), 4);
 
         // The headline: planar and surface pixels the reference evaluated.
-        let c = Comparison::new(&v, &truth, &classes);
+        let c = Comparison::new(&v, &truth, &classes, None);
         assert_eq!(headline_pixels(&truth, &classes), truth.shadow_only());
         assert_eq!(c.evaluated_pixels, 3);
         assert_eq!(c.max_abs_error, Some(0.25));
@@ -464,11 +528,57 @@ mod tests {
             (Some(0.25), Some(0.25), Some(0.25))
         );
         assert_eq!(c.pixel_match, Some(1.0 / 3.0));
+        assert_eq!(c.pixel_match_lecocq, None, "not measured");
         assert_eq!(c.classes, m);
         assert_eq!(c.class_pixels, n);
         let json = serde_json::to_value(&c).expect("serializes");
         assert_eq!(json["classes"]["edge"]["pixels"], 1);
         assert_eq!(json["class_pixels"]["uncovered"], 1);
+    }
+
+    /// A reference image of one row.
+    fn row(lit: Vec<f64>, evaluated: Vec<bool>) -> ReferenceImage {
+        ReferenceImage {
+            width: lit.len() as u32,
+            height: 1,
+            lit,
+            evaluated,
+            transmittance: None,
+            classes: None,
+        }
+    }
+
+    #[test]
+    fn lecocq_pixel_match_is_binary_against_one_ray_per_pixel() {
+        let ray = row(vec![1.0, 0.0, 1.0, 0.0, 1.0], vec![true, true, true, true, false]);
+        let all = [true; 5];
+        // Three of the four evaluated pixels agree; the unevaluated one is not compared.
+        let v = vis(vec![1.0, 0.0, 0.0, 0.0, 0.0]);
+        assert!(is_binary(&v, &all));
+        assert_eq!(lecocq_pixel_match(&v, &ray, &all), Some(0.75));
+        assert_eq!(lecocq_pixel_match(&v, &ray, &[true, false, true, false, true]), Some(0.5));
+        // One fractional value among the compared pixels: not a binary method, no match.
+        let aa = vis(vec![1.0, 0.0, 0.5, 0.0, 1.0]);
+        assert!(!is_binary(&aa, &all));
+        assert_eq!(lecocq_pixel_match(&aa, &ray, &all), None);
+        // ... unless that pixel is masked out.
+        assert_eq!(lecocq_pixel_match(&aa, &ray, &[true, true, false, true, true]), Some(1.0));
+        // A fractional ray-traced value (semi-transparent casters): no match either.
+        let tinted = row(vec![1.0, 0.4, 1.0, 0.0, 1.0], vec![true; 5]);
+        assert_eq!(lecocq_pixel_match(&v, &tinted, &all), None);
+        // No pixel compared.
+        assert_eq!(lecocq_pixel_match(&v, &ray, &[false; 5]), None);
+
+        // In a comparison, over the headline pixels.
+        use PixelClass::{Edge, Planar};
+        let classes = [Planar, Planar, Planar, Edge, Planar];
+        let truth = row(vec![1.0, 0.0, 0.5, 0.5, 1.0], vec![true; 5]);
+        let c = Comparison::new(&v, &truth, &classes, Some(&ray));
+        assert_eq!(c.pixel_match_lecocq, Some(2.0 / 3.0));
+        assert_eq!(Comparison::new(&aa, &truth, &classes, Some(&ray)).pixel_match_lecocq, None);
+        let json = serde_json::to_value(Comparison::new(&aa, &truth, &classes, Some(&ray)))
+            .expect("serializes");
+        assert!(json["pixel_match_lecocq"].is_null());
     }
 
     proptest::proptest! {
