@@ -10,9 +10,7 @@
 //! ([`prepare_out`]: created, and written once with a probe file). A method error is bad
 //! input, except a GPU device failure, which is internal ([`method_failure`]).
 
-use analysis::{
-    error_image, exact::ExactCoverage, metrics::Comparison, pixel_class::PixelClass, Reference,
-};
+use analysis::{exact::ExactCoverage, metrics::Comparison, pixel_class::PixelClass, Reference};
 use anyhow::Context;
 use clap::{Parser, Subcommand, ValueEnum};
 use instrumentation::{Recorder, RunRecord};
@@ -50,8 +48,9 @@ enum Command {
     Render(RenderArgs),
     /// Run one method and a reference on the same frame; print the error metrics (the
     /// shadow-only headline over planar and surface pixels, then per pixel class) and write
-    /// error.png (10x absolute error), error_boundary.png, metrics.json and the method's
-    /// visibility.exr, shadow.png and run.json.
+    /// error.png (the absolute error in false colour with its colour bar, see
+    /// --error-scale), error_boundary.png, metrics.json and the method's visibility.exr,
+    /// shadow.png and run.json.
     Compare(CompareArgs),
     /// Run a suite (scenes x methods x parameters) under the timing protocol and write
     /// report.md, runs.csv, runs.json and every visibility buffer as EXR into --out.
@@ -158,6 +157,11 @@ struct CompareArgs {
     /// evaluate; default raytrace.
     #[arg(long, value_enum, value_name = "REF")]
     edge_reference: Option<EdgeReference>,
+    /// The absolute error at the top of the colour scale (magma) of error.png and
+    /// error_boundary.png, written on their colour bar; larger errors take the top colour;
+    /// default 0.1.
+    #[arg(long, value_name = "X", allow_negative_numbers = true)]
+    error_scale: Option<f64>,
 }
 
 #[derive(clap::Args)]
@@ -547,6 +551,9 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
 fn compare(c: CompareArgs) -> Result<(), Failure> {
     let a = &c.render;
     let job = job(a)?;
+    let error_scale = c.error_scale.unwrap_or(analysis::error_map::DEFAULT_MAX_ERROR);
+    analysis::error_map::check_scale(error_scale)
+        .map_err(|e| input(anyhow::anyhow!("--error-scale: {e}")))?;
     let pattern = a.pattern.map(PatternKind::from).unwrap_or_default();
     let rate = c.ref_rate.unwrap_or(analysis::registry::DEFAULT_REF_RATE);
     let edge_reference = c.edge_reference.unwrap_or(EdgeReference::Raytrace);
@@ -611,7 +618,7 @@ fn compare(c: CompareArgs) -> Result<(), Failure> {
         truth.lit.iter().zip(&headline).map(|(&r, &e)| e && r > 0.0 && r < 1.0).collect();
     for (name, mask) in [("error.png", &headline), ("error_boundary.png", &boundary)] {
         let path = out.join(name);
-        error_image(v, &truth.lit, mask)
+        analysis::error_map::error_map(v, &truth.lit, mask, error_scale)?
             .save(&path)
             .with_context(|| format!("cannot write {}", path.display()))?;
     }

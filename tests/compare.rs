@@ -133,6 +133,35 @@ fn compare_against_exact_writes_metrics_and_error_images() {
     assert!(m["boundary_pixels"].as_u64().expect("count") > 10);
     let flip = m["flip_mean"].as_f64().expect("number");
     assert!(flip > 0.0 && flip < 1.0, "{flip}");
+    check_error_maps(&out, 64, 48, 0.1);
+}
+
+/// Checks error.png and error_boundary.png in `out`: the frame plus the colour bar, pixels
+/// outside the compared ones grey, the compared ones in magma, the bar's ramp spanning the
+/// scale `max_error`, and the boundary map a subset of the headline map.
+fn check_error_maps(out: &std::path::Path, w: u32, h: u32, max_error: f64) {
+    use analysis::error_map::{bar_height, colour, OUTSIDE};
+    let read = |name: &str| image::open(out.join(name)).expect("a PNG").to_rgb8();
+    let (map, boundary) = (read("error.png"), read("error_boundary.png"));
+    for img in [&map, &boundary] {
+        assert_eq!(img.dimensions(), (w, h + bar_height(w)));
+        // The ramp, two rows under the frame, from no error to the top of the scale.
+        assert_eq!(img.get_pixel(0, h + 2).0, colour(0.0, max_error));
+        assert_eq!(img.get_pixel(w - 1, h + 2).0, colour(max_error, max_error));
+    }
+    let frame = |img: &image::RgbImage| {
+        (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .map(|(x, y)| img.get_pixel(x, y).0)
+            .collect::<Vec<_>>()
+    };
+    let (all, edges) = (frame(&map), frame(&boundary));
+    let grey = |p: &Vec<[u8; 3]>| p.iter().filter(|c| **c == OUTSIDE).count();
+    assert!(grey(&all) < all.len(), "some pixels are compared");
+    assert!(grey(&edges) > grey(&all), "boundary pixels are fewer than the headline's");
+    for (a, b) in all.iter().zip(&edges) {
+        assert!(*b == OUTSIDE || a == b, "a boundary pixel differs from the headline map");
+    }
 }
 
 #[test]
@@ -179,6 +208,23 @@ fn lecocq_pixel_match_applies_to_binary_methods_only() {
     assert!(pan09["pixel_match_lecocq"].is_null(), "{pan09}");
     // The 8-bit pixel match is still there.
     assert!(pan09["pixel_match"].is_number());
+}
+
+/// `--error-scale` sets the top of the error maps' colour scale; one that is not a positive
+/// number is bad input, refused before any computation.
+#[test]
+fn error_scale_sets_the_colour_bar_and_is_checked() {
+    let (o, dir) = compare(&["--scene", "cage", "--method", "sm", "--error-scale", "0.5"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    check_error_maps(&dir.path().join("cmp"), 64, 48, 0.5);
+    for bad in ["0", "-1", "nan", "inf"] {
+        let (o, dir) = compare(&["--scene", "cage", "--method", "sm", "--error-scale", bad]);
+        assert_eq!(o.status.code(), Some(2), "{bad}: {}", stderr(&o));
+        assert!(stderr(&o).contains("--error-scale"), "{bad}: {}", stderr(&o));
+        assert!(!dir.path().join("cmp/metrics.json").exists(), "{bad}");
+    }
+    let help = String::from_utf8_lossy(&shadowbench(&["compare", "--help"]).stdout).into_owned();
+    assert!(help.contains("--error-scale") && help.contains("colour bar"), "{help}");
 }
 
 /// A statistic that does not apply is printed `n/a`, never as 0: against `raytrace` at one

@@ -1,7 +1,8 @@
 //! Accuracy against ground truth: references (the [`reference::Reference`] seam), the metrics
-//! of DESIGN.md (`metrics.json`) and error images.
+//! of DESIGN.md (`metrics.json`) and error images (the false-colour [`error_map`]).
 
 pub mod crosscheck;
+pub mod error_map;
 pub mod exact;
 pub mod flip;
 pub mod metrics;
