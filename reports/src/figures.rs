@@ -116,27 +116,40 @@ fn device_label(row: &Row, adapter: Option<&str>) -> String {
     if value(row, "device") != "gpu" {
         return String::new();
     }
-    match adapter {
-        Some(a) if is_software_adapter(a) => format!("gpu ({a}, software)"),
-        Some(a) => format!("gpu ({a})"),
+    // The adapter's name without its details in parentheses (`llvmpipe (LLVM 15.0.6, 256
+    // bits)` is `llvmpipe`); the report's header gives the whole name.
+    match adapter.map(|a| (a, a.split(" (").next().unwrap_or(a).trim())) {
+        Some((a, short)) if is_software_adapter(a) => format!("gpu ({short}, software)"),
+        Some((_, short)) => format!("gpu ({short})"),
         None => "gpu".into(),
     }
 }
 
-/// The parameter the runs of `method` sweep most: the one with the most distinct values.
+/// How many values parameter `key` takes over the runs of `method`.
+fn values_of(rows: &[&Row], method: &str, key: &str) -> usize {
+    let mut v: Vec<String> =
+        rows.iter().filter(|r| r.method == method).map(|r| value(r, key)).collect();
+    v.sort();
+    v.dedup();
+    v.len()
+}
+
+/// Whether parameter `key` takes more than one value over the runs of `method`.
+fn varies(rows: &[&Row], method: &str, key: &str) -> bool {
+    values_of(rows, method, key) > 1
+}
+
+/// The parameter the runs of `method` sweep most: the one with the most distinct values (the
+/// first of [`PARAMS`] on a tie).
 fn swept(rows: &[&Row], method: &str) -> Option<&'static str> {
-    PARAMS
-        .iter()
-        .map(|&k| {
-            let mut v: Vec<String> =
-                rows.iter().filter(|r| r.method == method).map(|r| value(r, k)).collect();
-            v.sort();
-            v.dedup();
-            (k, v.len())
-        })
-        .filter(|&(_, n)| n > 1)
-        .max_by_key(|&(_, n)| n)
-        .map(|(k, _)| k)
+    let mut best: Option<(&'static str, usize)> = None;
+    for &k in &PARAMS {
+        let n = values_of(rows, method, k);
+        if n > 1 && best.is_none_or(|(_, m)| n > m) {
+            best = Some((k, n));
+        }
+    }
+    best.map(|(k, _)| k)
 }
 
 /// The series of `y` against `x`: rows grouped by method, device and every parameter but the
@@ -150,9 +163,10 @@ pub fn series(rows: &[&Row], x: Measure, y: Measure, adapter: Option<&str>) -> V
             Measure::Param(k) => Some(k),
             _ => swept(rows, &r.method),
         };
+        // Parameters with one value over the method's runs are left out of the name.
         let fixed: Vec<String> = PARAMS
             .iter()
-            .filter(|&&k| Some(k) != sweep && !value(r, k).is_empty())
+            .filter(|&&k| Some(k) != sweep && !value(r, k).is_empty() && varies(rows, &r.method, k))
             .map(|k| format!("{k}={}", value(r, k)))
             .collect();
         let device = device_label(r, adapter);
@@ -386,7 +400,7 @@ fn draw_budgets<DB: DrawingBackend>(
             .draw()
             .map_err(e)?;
         for (k, m) in methods.iter().enumerate() {
-            let colour = Palette99::pick(k).to_rgba();
+            let colour = crate::plots::colour(k);
             let pts: Vec<(f64, f64)> = BUDGETS_MS
                 .iter()
                 .zip(&best)
@@ -404,7 +418,7 @@ fn draw_budgets<DB: DrawingBackend>(
     // One legend for every panel, below them: a method has the same colour everywhere.
     let font = ("sans-serif", 12).into_font();
     for (k, m) in methods.iter().enumerate() {
-        let colour = Palette99::pick(k).to_rgba();
+        let colour = crate::plots::colour(k);
         let (x, y) =
             (20 + 290 * (k % LEGEND_COLUMNS) as i32, 15 + 18 * (k / LEGEND_COLUMNS) as i32);
         legend

@@ -153,6 +153,13 @@ fn log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     }
 }
 
+/// The colour of series `k`: Tableau's ten colours, then ColorBrewer's Dark2 (colorous), none
+/// of them too pale to read on white; after 18 series the colours repeat.
+pub fn colour(k: usize) -> RGBAColor {
+    let c = if k % 18 < 10 { colorous::TABLEAU10[k % 18] } else { colorous::DARK2[k % 18 - 10] };
+    RGBColor(c.r, c.g, c.b).to_rgba()
+}
+
 /// Width, in pixels, of the legend beside the plotting area.
 const LEGEND_WIDTH: u32 = 300;
 
@@ -197,7 +204,7 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, chart: &Chart) -> Resu
         .map_err(e)?;
     let mut legend: Vec<(String, RGBAColor, Option<Marker>)> = Vec::new();
     for (k, s) in chart.series.iter().enumerate() {
-        let colour = Palette99::pick(k).to_rgba();
+        let colour = colour(k);
         let pts: Vec<(f64, f64)> = s.points.iter().map(|p| (floor(p.x), floor(p.y))).collect();
         c.draw_series(LineSeries::new(pts.clone(), colour.stroke_width(2))).map_err(e)?;
         for p in &s.points {
