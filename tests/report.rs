@@ -43,6 +43,13 @@ fn a_suite_file_writes_tables_that_parse_back() {
     let out = dir.path().join("out");
     let o = shadowbench(&["report", "--suite", &suite, "--out", out.to_str().expect("utf-8")]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    // Standard error is a pipe here: a progress line per scene and table, and one at the end.
+    let log = stderr(&o);
+    let starts = |p: &str| log.lines().filter(|l| l.starts_with(p)).count();
+    assert_eq!(starts("scene 1/2 plane-square: 0/14 runs done, "), 1, "{log}");
+    assert_eq!(starts("scene 2/2 hairball: 6/14 runs done, "), 1, "{log}");
+    assert_eq!(starts("table 1/1 aila-laine-table1: 12/14 runs done, "), 1, "{log}");
+    assert_eq!(starts("done: 14/14 runs done, "), 1, "{log}");
 
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("runs.json")).expect("runs.json"))
@@ -102,28 +109,55 @@ fn a_suite_file_writes_tables_that_parse_back() {
     assert!(p["timestamp"].as_str().is_some_and(|t| t.ends_with('Z')), "{p}");
     assert_eq!(p["adapter"], json["machine"]["gpu"], "the GPU's adapter: {p}");
 
-    let csv = std::fs::read_to_string(out.join("runs.csv")).expect("runs.csv");
-    let mut lines = csv.lines();
-    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
-    let col = |name: &str| header.iter().position(|h| *h == name).expect(name);
-    let lines: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    // runs.csv is tidy: unique column names, a line per run, numeric cells under units.
+    let mut reader = csv::Reader::from_path(out.join("runs.csv")).expect("runs.csv");
+    let header: Vec<String> = reader.headers().expect("header").iter().map(str::to_owned).collect();
+    let unique: std::collections::BTreeSet<&String> = header.iter().collect();
+    assert_eq!(unique.len(), header.len(), "duplicate column names: {header:?}");
+    let col = |name: &str| header.iter().position(|h| h == name).expect(name);
+    let lines: Vec<csv::StringRecord> =
+        reader.records().map(|r| r.expect("a well-formed CSV line")).collect();
     assert_eq!(lines.len(), rows.len());
+    let numeric = |h: &str| {
+        h.ends_with("_ms")
+            || h.ends_with("_px")
+            || h.ends_with("_error")
+            || h.starts_with("stage_ms.")
+            || ["rmse", "pixel_match", "flip_mean", "evaluated_pixels", "boundary_pixels"]
+                .contains(&h)
+    };
+    assert!(header.iter().filter(|h| h.starts_with("stage_ms.")).count() >= 2, "{header:?}");
+    assert!(header.contains(&"counter.boundary_pixels".to_owned()), "{header:?}");
     for l in &lines {
         assert_eq!(l.len(), header.len());
+        for (h, cell) in header.iter().zip(l.iter()) {
+            if numeric(h) {
+                assert!(cell.is_empty() || cell.parse::<f64>().is_ok(), "{h}: `{cell}`");
+            }
+            if h.starts_with("counter.") {
+                let _: u64 = cell.parse().unwrap_or_else(|_| panic!("{h}: `{cell}`"));
+            }
+        }
         let err: f64 = l[col("mean_abs_error")].parse().expect("number");
         assert!((0.0..=1.0).contains(&err));
-        let _: f64 = l[col("time_median_ms")].parse().expect("number");
-        let _: u64 = l[col("shadow_map_lookups")].parse().expect("counter");
-        assert_eq!((l[col("commit")], l[col("version")]), (commit, env!("CARGO_PKG_VERSION")));
+        let ms = |c: &str| -> f64 { l[col(c)].parse().expect(c) };
+        assert!(ms("time_min_ms") <= ms("time_ci_low_ms"));
+        assert!(ms("time_ci_low_ms") <= ms("time_median_ms"));
+        assert!(ms("time_median_ms") <= ms("time_ci_high_ms"));
+        assert!(ms("time_ci_high_ms") <= ms("time_max_ms"));
+        // A run without boundary pixels has no boundary error: an empty cell, not 0.
+        let boundary: u64 = l[col("boundary_pixels")].parse().expect("count");
+        assert_eq!(boundary == 0, l[col("boundary_mean_abs_error")].is_empty());
+        assert_eq!((&l[col("commit")], &l[col("version")]), (commit, env!("CARGO_PKG_VERSION")));
     }
-    let bits: Vec<&str> = lines.iter().map(|l| l[col("depth_bits")]).collect();
+    let bits: Vec<&str> = lines.iter().map(|l| &l[col("depth_bits")]).collect();
     assert!(bits.contains(&"8") && bits.contains(&"32") && bits.contains(&""));
 
     let md = std::fs::read_to_string(out.join("report.md")).expect("report.md");
     assert!(md.contains("## plane-square") && md.contains("pcf-bs-fast-2x2"), "{md}");
     assert!(md.contains(&format!("at commit {commit}")), "provenance in the header: {md}");
     // CPU and GPU side by side: each sm run on both devices, paired, the adapter named.
-    let devices: Vec<&str> = lines.iter().map(|l| l[col("device")]).collect();
+    let devices: Vec<&str> = lines.iter().map(|l| &l[col("device")]).collect();
     assert_eq!(devices.iter().filter(|d| **d == "gpu").count(), 4, "{devices:?}");
     assert!(json["machine"]["gpu"].as_str().is_some_and(|g| !g.is_empty()), "{}", json["machine"]);
     let side = md.split("## CPU and GPU").nth(1).expect("a CPU and GPU section");
@@ -161,8 +195,22 @@ fn a_suite_file_writes_tables_that_parse_back() {
     assert!(total > 0.0);
     assert_eq!(cell(8, 2), "675");
     assert!(md.contains("Paper's figures measured on: 1.6 GHz Mobile Pentium 4"), "{md}");
-    let csv = std::fs::read_to_string(out.join("tables/aila-laine-table1.csv")).expect("csv");
-    assert_eq!(csv.lines().count(), 1 + 9);
+    // The table's CSV: the same cells as numbers in full, the paper's in their own columns.
+    let mut reader =
+        csv::Reader::from_path(out.join("tables/aila-laine-table1.csv")).expect("table CSV");
+    let header: Vec<String> = reader.headers().expect("header").iter().map(str::to_owned).collect();
+    assert_eq!(header, ["", "random-1k ours", "paper (1K)", "plane-square ours", "paper (10K)"]);
+    let records: Vec<csv::StringRecord> = reader.records().map(|r| r.expect("a line")).collect();
+    assert_eq!(records.len(), 9);
+    for r in &records {
+        for cell in r.iter().skip(1) {
+            assert!(cell.is_empty() || cell.parse::<f64>().is_ok(), "`{cell}` in {r:?}");
+        }
+    }
+    let triangles: f64 = records[0][1].parse().expect("our triangles");
+    assert!((950.0..1050.0).contains(&triangles), "1.0K in full: {triangles}");
+    assert_eq!(&records[0][2], "1000", "the paper's 1K in full");
+    assert_eq!(&records[0][3], "4");
 }
 
 #[test]

@@ -7,6 +7,11 @@
 //! its parameters, so all runs give the same image) and are taken over the reference's
 //! shadow-only pixels (`ReferenceImage::shadow_only`: for `exact`, its `planar` and `surface`
 //! pixels; for `raytrace`, every pixel it evaluated), as `compare`'s headline is.
+//!
+//! When standard error is not a terminal (a log, a pipe), the sweep prints a line there as it
+//! starts each scene and each paper's table, and when it ends: the runs done of the total, the
+//! time elapsed and an estimate of the time left from the mean time per run so far
+//! ([`ProgressLog`]). On a terminal the caller's progress bar shows the same.
 
 use crate::grids::Panel;
 use crate::output::shade;
@@ -17,6 +22,9 @@ use analysis::{error_image, flip::flip_mean, Metrics, ReferenceImage};
 use instrumentation::{Counters, Provenance, Recorder};
 use methods::{registry::Device, Frame, MethodOptions, Visibility};
 use serde::{Deserialize, Serialize};
+use std::cell::Cell;
+use std::io::IsTerminal;
+use std::time::{Duration, Instant};
 
 /// One method with one parameter combination on one scene.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -269,6 +277,51 @@ fn grid_panels(
     panels
 }
 
+/// `d` as `1h02m03s`, `2m03s` or `3s`.
+fn hms(d: Duration) -> String {
+    let s = d.as_secs();
+    match (s / 3600, s / 60 % 60, s % 60) {
+        (0, 0, s) => format!("{s}s"),
+        (0, m, s) => format!("{m}m{s:02}s"),
+        (h, m, s) => format!("{h}h{m:02}m{s:02}s"),
+    }
+}
+
+/// Progress lines of a sweep for a log: what starts, the runs done of the total, the time
+/// elapsed and the time left at the mean time per run so far.
+pub struct ProgressLog {
+    start: Instant,
+    total: u64,
+    /// Printed only when standard error is not a terminal.
+    enabled: bool,
+}
+
+impl ProgressLog {
+    /// A log of `total` runs, starting now; it prints when standard error is not a terminal.
+    pub fn new(total: u64) -> Self {
+        Self { start: Instant::now(), total, enabled: !std::io::stderr().is_terminal() }
+    }
+
+    /// The line for `what` (e.g. `scene 2/5 cage`) after `done` runs in `elapsed`.
+    pub fn line(&self, what: &str, done: u64, elapsed: Duration) -> String {
+        let left = if done == 0 {
+            "time left unknown".to_owned()
+        } else {
+            let per_run = elapsed.as_secs_f64() / done as f64;
+            let left = per_run * self.total.saturating_sub(done) as f64;
+            format!("about {} left", hms(Duration::from_secs_f64(left)))
+        };
+        format!("{what}: {done}/{} runs done, {} elapsed, {left}", self.total, hms(elapsed))
+    }
+
+    /// Prints the line for `what` after `done` runs, when enabled.
+    pub fn print(&self, what: &str, done: u64) {
+        if self.enabled {
+            eprintln!("{}", self.line(what, done, self.start.elapsed()));
+        }
+    }
+}
+
 /// Runs `suite`; `progress` is called once per method run with a short label. The report's
 /// provenance names this process's command line ([`Provenance::command_line`]). Returns the
 /// report, every visibility buffer and the grids' panels.
@@ -276,6 +329,12 @@ pub fn run_suite(
     suite: &Suite,
     mut progress: impl FnMut(&str),
 ) -> (Report, Vec<Produced>, Vec<GridImages>) {
+    let log = ProgressLog::new(run_count(suite));
+    let done = Cell::new(0u64);
+    let mut progress = |label: &str| {
+        done.set(done.get() + 1);
+        progress(label);
+    };
     let mut report = Report {
         suite: suite.clone(),
         provenance: Provenance::capture(Provenance::command_line(), None),
@@ -289,7 +348,8 @@ pub fn run_suite(
     let mut produced = Vec::new();
     let mut grid_images = Vec::new();
     let combos: usize = suite.runs.iter().map(|r| expand(r).len()).sum();
-    for scene_name in &suite.scenes {
+    for (k, scene_name) in suite.scenes.iter().enumerate() {
+        log.print(&format!("scene {}/{} {scene_name}", k + 1, suite.scenes.len()), done.get());
         let scene = match scenes::load(scene_name) {
             Ok(s) => s,
             Err(e) => {
@@ -385,11 +445,14 @@ pub fn run_suite(
             });
         }
     }
-    for spec in &suite.tables {
+    for (k, spec) in suite.tables.iter().enumerate() {
+        let name = spec.paper.name();
+        log.print(&format!("table {}/{} {name}", k + 1, suite.tables.len()), done.get());
         let table =
             run_table(spec, suite.warmup, suite.repeats, &mut report.skipped, &mut progress);
         report.tables.push(table);
     }
+    log.print("done", done.get());
     report.provenance.adapter = report.machine.gpu.clone();
     (report, produced, grid_images)
 }
@@ -397,6 +460,20 @@ pub fn run_suite(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn progress_lines_estimate_the_time_left_from_the_mean_run() {
+        let log = ProgressLog { start: Instant::now(), total: 120, enabled: false };
+        assert_eq!(
+            log.line("scene 2/5 cage", 40, Duration::from_secs(72)),
+            "scene 2/5 cage: 40/120 runs done, 1m12s elapsed, about 2m24s left"
+        );
+        assert_eq!(
+            log.line("scene 1/5 cage", 0, Duration::from_millis(300)),
+            "scene 1/5 cage: 0/120 runs done, 0s elapsed, time left unknown"
+        );
+        assert_eq!(hms(Duration::from_secs(3723)), "1h02m03s");
+    }
 
     #[test]
     fn specs_expand_to_every_combination() {

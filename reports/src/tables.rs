@@ -30,6 +30,11 @@
 //!
 //! The papers' times include rendering the scene; ours give the method's own stages, and the
 //! camera G-buffer (our scene rendering) apart, so that both overheads can be read.
+//!
+//! Each figure of ours and each of the paper's has a column of its own (`SM 1K ms`, `SM 1K
+//! paper ms`). A table is built from typed [`Cell`]s and kept twice: as the text the report
+//! prints (counts as the papers print them, `32.8K`; the paper's figures as printed) and as
+//! the numbers `tables/*.csv` holds (`32768`; an empty cell where a figure is missing).
 
 use crate::timing::{time_method, StageTimes, Timed};
 use instrumentation::Recorder;
@@ -67,6 +72,71 @@ pub struct TableSpec {
     pub height: u32,
 }
 
+/// A cell of a table, typed so that it prints as the papers do and writes as a number.
+#[derive(Debug, Clone, PartialEq)]
+enum Cell {
+    /// A name.
+    Text(String),
+    /// A count, printed with a K or M suffix.
+    Count(f64),
+    /// An integer printed in full (a map size, a sample rate).
+    Int(u64),
+    /// A time in milliseconds, printed to 0.1.
+    Ms(f64),
+    /// A percentage, printed to 1.
+    Percent(f64),
+    /// A figure of a paper as printed there (`16K`, `2.3M`, `4.2`).
+    Paper(&'static str),
+    /// No figure (a run that failed, a paper without this scene).
+    Missing,
+}
+
+impl Cell {
+    /// The cell as the report prints it.
+    fn text(&self) -> String {
+        match self {
+            Cell::Text(t) => t.clone(),
+            Cell::Count(v) => si(*v),
+            Cell::Int(v) => v.to_string(),
+            Cell::Ms(v) => format!("{v:.1}"),
+            Cell::Percent(v) => format!("{v:.0}"),
+            Cell::Paper(p) => (*p).to_owned(),
+            Cell::Missing => "–".to_owned(),
+        }
+    }
+
+    /// The cell as `tables/*.csv` holds it: a number in full, a name, or empty.
+    fn value(&self) -> String {
+        match self {
+            Cell::Text(t) => t.clone(),
+            Cell::Count(v) | Cell::Ms(v) | Cell::Percent(v) => v.to_string(),
+            Cell::Int(v) => v.to_string(),
+            Cell::Paper(p) => paper_number(p).map_or_else(String::new, |v| v.to_string()),
+            Cell::Missing => String::new(),
+        }
+    }
+}
+
+/// A paper's printed figure as a number: `16K` is 16000, `2.3M` 2300000.
+fn paper_number(printed: &str) -> Option<f64> {
+    let (digits, scale) = match printed.strip_suffix('K') {
+        Some(d) => (d, 1e3),
+        None => match printed.strip_suffix('M') {
+            Some(d) => (d, 1e6),
+            None => (printed, 1.0),
+        },
+    };
+    digits.parse::<f64>().ok().map(|v| v * scale)
+}
+
+fn ms_or_missing(v: Option<f64>) -> Cell {
+    v.map_or(Cell::Missing, Cell::Ms)
+}
+
+fn paper_or_missing(v: Option<&&'static str>) -> Cell {
+    v.map_or(Cell::Missing, |p| Cell::Paper(p))
+}
+
 /// A measured table, ready to print.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Table {
@@ -78,10 +148,13 @@ pub struct Table {
     pub paper_hardware: String,
     /// How our figures were taken, and what differs from the paper's.
     pub notes: Vec<String>,
-    /// Column headings.
+    /// Column headings; each figure of ours and of the paper has its own column, its unit in
+    /// the heading (or, where rows are quantities, in the row's label).
     pub header: Vec<String>,
-    /// Rows of cells.
+    /// Rows of cells as printed (counts as `32.8K`, `–` for a missing figure).
     pub rows: Vec<Vec<String>>,
+    /// The same rows as numbers in full for `tables/*.csv` (empty for a missing figure).
+    pub values: Vec<Vec<String>>,
 }
 
 impl PaperTable {
@@ -167,7 +240,7 @@ struct SceneRuns {
 
 /// Measures the table: every scene of `spec`, every run the table needs, `warmup` untimed and
 /// `repeats` timed runs each. Runs that cannot be made are listed in `skipped` and shown as
-/// "–".
+/// "–" (empty in the CSV).
 pub fn run_table(
     spec: &TableSpec,
     warmup: u32,
@@ -235,7 +308,8 @@ pub fn run_table(
         paper_hardware: paper.hardware().to_owned(),
         notes,
         header,
-        rows,
+        values: rows.iter().map(|r| r.iter().map(Cell::value).collect()).collect(),
+        rows: rows.iter().map(|r| r.iter().map(Cell::text).collect()).collect(),
     }
 }
 
@@ -259,11 +333,7 @@ fn stage_ms(stages: &[StageTimes], name: &str) -> Option<f64> {
     stages.iter().find(|s| s.name == name).map(|s| s.ms.median)
 }
 
-fn ms(v: Option<f64>) -> String {
-    v.map_or_else(|| "–".to_owned(), |v| format!("{v:.1}"))
-}
-
-fn aila_laine(measured: &[SceneRuns], notes: &mut Vec<String>) -> (Vec<String>, Vec<Vec<String>>) {
+fn aila_laine(measured: &[SceneRuns], notes: &mut Vec<String>) -> (Vec<String>, Vec<Vec<Cell>>) {
     use methods::afsm::{PAPER_TABLE1, STAGE_BSP, STAGE_RASTERIZATION, STAGE_TRANSFORMATION};
     notes.push(
         "BSP nodes: ours counts every node (the leaves are about half); the paper's count is of \
@@ -291,14 +361,16 @@ fn aila_laine(measured: &[SceneRuns], notes: &mut Vec<String>) -> (Vec<String>, 
         .iter()
         .enumerate()
         .map(|(row, label)| {
-            let mut cells = vec![(*label).to_owned()];
+            let mut cells = vec![Cell::Text((*label).to_owned())];
             for (k, s) in measured.iter().enumerate() {
                 let t = s.runs.first().and_then(Option::as_ref);
-                let c =
-                    |name| t.and_then(|t| counter(t, name)).map_or("–".into(), |v| si(v as f64));
-                let st = |name| ms(t.and_then(|t| stage_ms(&t.stages, name)));
+                let c = |name| {
+                    t.and_then(|t| counter(t, name))
+                        .map_or(Cell::Missing, |v| Cell::Count(v as f64))
+                };
+                let st = |name| ms_or_missing(t.and_then(|t| stage_ms(&t.stages, name)));
                 cells.push(match row {
-                    0 => si(s.triangles as f64),
+                    0 => Cell::Count(s.triangles as f64),
                     1 => c("bsp_nodes"),
                     2 => c("bsp_nodes_visited"),
                     3 => c("nodes_occlusion_culled"),
@@ -306,9 +378,9 @@ fn aila_laine(measured: &[SceneRuns], notes: &mut Vec<String>) -> (Vec<String>, 
                     5 => st(STAGE_TRANSFORMATION),
                     6 => st(STAGE_BSP),
                     7 => st(STAGE_RASTERIZATION),
-                    _ => ms(t.map(|t| t.total_ms.median)),
+                    _ => ms_or_missing(t.map(|t| t.total_ms.median)),
                 });
-                cells.push(PAPER_TABLE1[row].get(k).map_or("–".into(), |v| (*v).to_owned()));
+                cells.push(paper_or_missing(PAPER_TABLE1[row].get(k)));
             }
             cells
         })
@@ -323,36 +395,34 @@ const LECOCQ1: [(&str, &str, [&str; 4]); 3] = [
     ("City", "2.3M", ["31.2", "32.2", "40", "41.6"]),
 ];
 
-fn lecocq1(measured: &[SceneRuns], notes: &mut Vec<String>) -> (Vec<String>, Vec<Vec<String>>) {
+fn lecocq1(measured: &[SceneRuns], notes: &mut Vec<String>) -> (Vec<String>, Vec<Vec<Cell>>) {
     notes.push(
         "The paper's times include the shadow map and the scene's rendering; ours are the \
          method's own stages, with our scene rendering (the camera G-buffer) in its own column."
             .into(),
     );
-    let header = [
-        "scene (paper's model)",
-        "triangles ours / paper",
-        "G-buffer ms",
-        "SM 1K ours / paper",
-        "SM 2K ours / paper",
-        "SPSM 1K ours / paper",
-        "SPSM 2K ours / paper",
-    ]
-    .map(String::from)
-    .to_vec();
+    let mut header = ["scene", "paper's model", "triangles", "paper triangles", "G-buffer ms"]
+        .map(String::from)
+        .to_vec();
+    for run in ["SM 1K", "SM 2K", "SPSM 1K", "SPSM 2K"] {
+        header.push(format!("{run} ms"));
+        header.push(format!("{run} paper ms"));
+    }
     let rows = measured
         .iter()
         .enumerate()
         .map(|(k, s)| {
             let paper = LECOCQ1.get(k);
             let mut cells = vec![
-                format!("{} ({})", s.name, paper.map_or("–", |p| p.0)),
-                format!("{} / {}", si(s.triangles as f64), paper.map_or("–", |p| p.1)),
-                format!("{:.1}", s.gbuffer_ms),
+                Cell::Text(s.name.clone()),
+                paper.map_or(Cell::Missing, |p| Cell::Text(p.0.to_owned())),
+                Cell::Count(s.triangles as f64),
+                paper_or_missing(paper.map(|p| &p.1)),
+                Cell::Ms(s.gbuffer_ms),
             ];
             for (j, t) in s.runs.iter().enumerate() {
-                let ours = ms(t.as_ref().map(|t| t.total_ms.median));
-                cells.push(format!("{ours} / {}", paper.map_or("–", |p| p.2[j])));
+                cells.push(ms_or_missing(t.as_ref().map(|t| t.total_ms.median)));
+                cells.push(paper_or_missing(paper.map(|p| &p.2[j])));
             }
             cells
         })
@@ -368,7 +438,7 @@ const LECOCQ2: [(u32, &str, &str, &str); 4] = [
     (4096, "14.2", "18.1", "27"),
 ];
 
-fn lecocq2(measured: &[SceneRuns], notes: &mut Vec<String>) -> (Vec<String>, Vec<Vec<String>>) {
+fn lecocq2(measured: &[SceneRuns], notes: &mut Vec<String>) -> (Vec<String>, Vec<Vec<Cell>>) {
     notes.push(
         "Overhead = SPSM / SM - 1. The paper's times include rendering the scene, so its \
          overhead compares with ours including the G-buffer; without it, ours is the methods' \
@@ -376,12 +446,16 @@ fn lecocq2(measured: &[SceneRuns], notes: &mut Vec<String>) -> (Vec<String>, Vec
             .into(),
     );
     let header = [
-        "scene (paper's model)",
-        "map",
-        "SM ms ours / paper",
-        "SPSM ms ours / paper",
+        "scene",
+        "paper's model",
+        "map_res",
+        "SM ms",
+        "SM paper ms",
+        "SPSM ms",
+        "SPSM paper ms",
         "overhead % (methods)",
-        "overhead % (with G-buffer) / paper",
+        "overhead % (with G-buffer)",
+        "paper overhead %",
     ]
     .map(String::from)
     .to_vec();
@@ -391,16 +465,20 @@ fn lecocq2(measured: &[SceneRuns], notes: &mut Vec<String>) -> (Vec<String>, Vec
             let t = |j: usize| s.runs.get(j).and_then(Option::as_ref).map(|t| t.total_ms.median);
             let (sm, spsm) = (t(2 * k), t(2 * k + 1));
             let over = |extra: f64| match (sm, spsm) {
-                (Some(a), Some(b)) => format!("{:.0}", 100.0 * ((b + extra) / (a + extra) - 1.0)),
-                _ => "–".into(),
+                (Some(a), Some(b)) => Cell::Percent(100.0 * ((b + extra) / (a + extra) - 1.0)),
+                _ => Cell::Missing,
             };
             rows.push(vec![
-                format!("{} (YeahRight)", s.name),
-                format!("{res}²"),
-                format!("{} / {sm_paper}", ms(sm)),
-                format!("{} / {spsm_paper}", ms(spsm)),
+                Cell::Text(s.name.clone()),
+                Cell::Text("YeahRight".to_owned()),
+                Cell::Int(u64::from(*res)),
+                ms_or_missing(sm),
+                Cell::Paper(sm_paper),
+                ms_or_missing(spsm),
+                Cell::Paper(spsm_paper),
                 over(0.0),
-                format!("{} / {over_paper}", over(s.gbuffer_ms)),
+                over(s.gbuffer_ms),
+                Cell::Paper(over_paper),
             ]);
         }
     }
@@ -413,7 +491,7 @@ fn pan_rate(scene: &str) -> u32 {
     PAN_TABLE1.iter().find(|(n, ..)| *n == scene).map_or(32, |r| r.1)
 }
 
-fn pan1(measured: &[SceneRuns], notes: &mut Vec<String>) -> (Vec<String>, Vec<Vec<String>>) {
+fn pan1(measured: &[SceneRuns], notes: &mut Vec<String>) -> (Vec<String>, Vec<Vec<Cell>>) {
     use methods::pan09::TABLE1;
     notes.push(
         "pan09 in table mode with a 512x512 map, at the paper's rate for the scenes it lists \
@@ -422,23 +500,31 @@ fn pan1(measured: &[SceneRuns], notes: &mut Vec<String>) -> (Vec<String>, Vec<Ve
          stages' medians); the camera G-buffer and the per-scene edge adjacency are not in them."
             .into(),
     );
-    let mut header = ["scene (paper's)", "triangles", "silhouette texels", "silhouette pixels"]
-        .map(String::from)
-        .to_vec();
-    header.push("visibility evaluations".into());
-    header.push("sample rate".into());
-    header.extend(TABLE1.iter().map(|(name, _)| format!("{name} (ms)")));
-    header.push("total (ms)".into());
+    // The paper's figures follow ours, column by column; `PAN_TABLE1`'s entries 1..=9 are
+    // the paper's in the order of these columns.
+    let mut quantities: Vec<String> = [
+        "triangles",
+        "silhouette texels",
+        "silhouette pixels",
+        "visibility evaluations",
+        "sample rate",
+    ]
+    .map(String::from)
+    .to_vec();
+    quantities.extend(TABLE1.iter().map(|(name, _)| format!("{name} ms")));
+    let mut header = vec!["scene".to_owned(), "paper's scene".to_owned()];
+    for q in &quantities {
+        header.push(q.clone());
+        header.push(format!("paper {q}"));
+    }
+    header.push("total ms".into());
+    header.push("paper total ms".into());
     let rows = measured
         .iter()
         .map(|s| {
             let paper = PAN_TABLE1.iter().find(|(n, ..)| *n == s.name).and_then(|r| r.2);
-            let beside = |ours: String, k: usize| match paper {
-                Some(p) => format!("{ours} / {}", p[k]),
-                None => ours,
-            };
             let t = s.runs.first().and_then(Option::as_ref);
-            let c = |name| t.and_then(|t| counter(t, name)).map_or("–".into(), |v| v.to_string());
+            let c = |name| t.and_then(|t| counter(t, name)).map_or(Cell::Missing, Cell::Int);
             let groups: Vec<Option<f64>> = TABLE1
                 .iter()
                 .map(|(_, names)| {
@@ -447,22 +533,26 @@ fn pan1(measured: &[SceneRuns], notes: &mut Vec<String>) -> (Vec<String>, Vec<Ve
                 .collect();
             let total = groups.iter().copied().sum::<Option<f64>>();
             let paper_total =
-                paper.map(|p| p[6..9].iter().filter_map(|v| v.parse::<f64>().ok()).sum::<f64>());
+                paper.map(|p| p[6..9].iter().filter_map(|v| paper_number(v)).sum::<f64>());
+            let ours = [
+                Cell::Int(s.triangles as u64),
+                c("silhouette_texels"),
+                c("silhouette_pixels"),
+                c("visibility_evaluations"),
+                Cell::Int(u64::from(pan_rate(&s.name))),
+            ]
+            .into_iter()
+            .chain(groups.iter().map(|g| ms_or_missing(*g)));
             let mut cells = vec![
-                format!("{} ({})", s.name, paper.map_or("–", |p| p[0])),
-                beside(s.triangles.to_string(), 1),
-                beside(c("silhouette_texels"), 2),
-                beside(c("silhouette_pixels"), 3),
-                beside(c("visibility_evaluations"), 4),
-                beside(pan_rate(&s.name).to_string(), 5),
+                Cell::Text(s.name.clone()),
+                paper.map_or(Cell::Missing, |p| Cell::Text(p[0].to_owned())),
             ];
-            for (k, g) in groups.iter().enumerate() {
-                cells.push(beside(ms(*g), 6 + k));
+            for (k, cell) in ours.enumerate() {
+                cells.push(cell);
+                cells.push(paper_or_missing(paper.as_ref().map(|p| &p[1 + k])));
             }
-            cells.push(match paper_total {
-                Some(p) => format!("{} / {p:.1}", ms(total)),
-                None => ms(total),
-            });
+            cells.push(ms_or_missing(total));
+            cells.push(ms_or_missing(paper_total));
             cells
         })
         .collect();
@@ -489,19 +579,16 @@ pub fn markdown(t: &Table) -> String {
     s
 }
 
-/// The table as CSV (header row first).
-pub fn csv(t: &Table) -> String {
-    let quote = |c: &String| {
-        if c.contains([',', '"', '\n']) {
-            format!("\"{}\"", c.replace('"', "\"\""))
-        } else {
-            c.clone()
-        }
-    };
-    std::iter::once(&t.header)
-        .chain(&t.rows)
-        .map(|r| r.iter().map(quote).collect::<Vec<_>>().join(",") + "\n")
-        .collect()
+/// The table as CSV: the header, then [`Table::values`] (numbers in full, empty where a
+/// figure is missing).
+pub fn csv(t: &Table) -> Result<String, csv::Error> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(&t.header)?;
+    for r in &t.values {
+        w.write_record(r)?;
+    }
+    let bytes = w.into_inner().map_err(|e| csv::Error::from(e.into_error()))?;
+    Ok(String::from_utf8_lossy(&bytes).into_owned())
 }
 
 #[cfg(test)]
@@ -516,19 +603,38 @@ mod tests {
     }
 
     #[test]
-    fn csv_quotes_cells_with_commas() {
+    fn paper_figures_read_as_numbers() {
+        assert_eq!(paper_number("16K"), Some(16_000.0));
+        assert_eq!(paper_number("2.3M"), Some(2_300_000.0));
+        assert_eq!(paper_number("4.2"), Some(4.2));
+        assert_eq!(paper_number("–"), None);
+        assert_eq!(
+            (Cell::Paper("5.3K").text(), Cell::Paper("5.3K").value()),
+            ("5.3K".into(), "5300".into())
+        );
+        assert_eq!(
+            (Cell::Count(32_768.0).text(), Cell::Count(32_768.0).value()),
+            ("32.8K".into(), "32768".into())
+        );
+        assert_eq!((Cell::Missing.text(), Cell::Missing.value()), ("–".into(), String::new()));
+    }
+
+    #[test]
+    fn csv_holds_the_values_and_quotes_cells_with_commas() {
+        let cells = vec![vec![Cell::Text("1, 2".into()), Cell::Count(1500.0), Cell::Missing]];
         let t = Table {
             paper: PaperTable::LecocqTable2,
             title: "t".into(),
             paper_hardware: "h".into(),
             notes: vec![],
-            header: vec!["a".into(), "b".into()],
-            rows: vec![vec!["1, 2".into(), "x\"y".into()]],
+            header: vec!["a".into(), "b".into(), "c".into()],
+            values: cells.iter().map(|r| r.iter().map(Cell::value).collect()).collect(),
+            rows: cells.iter().map(|r| r.iter().map(Cell::text).collect()).collect(),
         };
-        assert_eq!(csv(&t), "a,b\n\"1, 2\",\"x\"\"y\"\n");
+        assert_eq!(csv(&t).expect("writes"), "a,b,c\n\"1, 2\",1500,\n");
         let md = markdown(&t);
         assert!(md.contains("Paper's figures measured on: h."), "{md}");
-        assert!(md.contains("| 1, 2 | x\"y |"), "{md}");
+        assert!(md.contains("| 1, 2 | 1.5K | – |"), "{md}");
     }
 
     #[test]

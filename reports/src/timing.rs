@@ -1,33 +1,80 @@
 //! The timing protocol: untimed warm-up runs, then repeated timed runs summarised by median,
 //! minimum and maximum, for the whole method and for each of its stages; and the machine the
 //! times were taken on.
+//!
+//! The median comes with a 95 % confidence interval from a percentile bootstrap (Efron and
+//! Tibshirani, *An Introduction to the Bootstrap*, Chapman & Hall 1993, section 13.3):
+//! [`BOOTSTRAP_RESAMPLES`] resamples of the timed runs drawn with replacement, each resample's
+//! median taken, and the interval's ends are the 2.5th and 97.5th percentiles of those
+//! medians. The resamples are drawn from a generator with a fixed seed ([`BOOTSTRAP_SEED`]), so
+//! the same times give the same interval and a report is reproducible from its times. The
+//! interval never leaves [min, max]; with few timed runs (a suite's `repeats` below about 5)
+//! it is wide and coarse, and with one run it is that run's time.
 
 use instrumentation::Recorder;
 use methods::{Frame, ShadowMethod, Visibility};
 use serde::{Deserialize, Serialize};
 
-/// Median, minimum and maximum of repeated measurements, in milliseconds.
+/// Resamples of the bootstrap confidence interval of a median.
+pub const BOOTSTRAP_RESAMPLES: usize = 1000;
+
+/// Seed of the bootstrap's generator, fixed so that intervals are reproducible.
+pub const BOOTSTRAP_SEED: u64 = 0x5eed_b007;
+
+/// Median with its bootstrap 95 % confidence interval, minimum and maximum of repeated
+/// measurements, in milliseconds.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Summary {
     /// Median (mean of the two middle values for an even count).
     pub median: f64,
+    /// Lower end of the median's 95 % confidence interval (percentile bootstrap).
+    pub ci_low: f64,
+    /// Upper end of the median's 95 % confidence interval (percentile bootstrap).
+    pub ci_high: f64,
     /// Smallest.
     pub min: f64,
     /// Largest.
     pub max: f64,
 }
 
+/// Median of sorted values (mean of the two middle values for an even count); `v` not empty.
+fn median_of_sorted(v: &[f64]) -> f64 {
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// The 95 % percentile-bootstrap confidence interval of the median of `v` (not empty).
+fn bootstrap_median_ci(v: &[f64]) -> (f64, f64) {
+    let mut rng = fastrand::Rng::with_seed(BOOTSTRAP_SEED);
+    let mut resample = vec![0.0; v.len()];
+    let mut medians: Vec<f64> = (0..BOOTSTRAP_RESAMPLES)
+        .map(|_| {
+            for x in &mut resample {
+                *x = v[rng.usize(..v.len())];
+            }
+            resample.sort_by(f64::total_cmp);
+            median_of_sorted(&resample)
+        })
+        .collect();
+    medians.sort_by(f64::total_cmp);
+    let tail = BOOTSTRAP_RESAMPLES * 25 / 1000;
+    (medians[tail], medians[BOOTSTRAP_RESAMPLES - 1 - tail])
+}
+
 impl Summary {
-    /// Summarises `values`; `None` when there are none.
+    /// Summarises the finite ones of `values`; `None` when there are none.
     pub fn of(values: &[f64]) -> Option<Self> {
         let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
         if v.is_empty() {
             return None;
         }
         v.sort_by(f64::total_cmp);
-        let n = v.len();
-        let median = if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) };
-        Some(Self { median, min: v[0], max: v[n - 1] })
+        let (ci_low, ci_high) = bootstrap_median_ci(&v);
+        Some(Self { median: median_of_sorted(&v), ci_low, ci_high, min: v[0], max: v[v.len() - 1] })
     }
 }
 
@@ -132,6 +179,21 @@ mod tests {
         let s = Summary::of(&[4.0, 1.0, 2.0, 3.0]).expect("values");
         assert_eq!(s.median, 2.5);
         assert_eq!(Summary::of(&[]), None);
+    }
+
+    #[test]
+    fn the_median_interval_is_reproducible_and_within_the_range() {
+        let times: Vec<f64> = (0..20).map(|k| 10.0 + ((k * 7) % 20) as f64).collect();
+        let s = Summary::of(&times).expect("values");
+        assert_eq!(Summary::of(&times), Some(s), "a fixed seed: the same interval");
+        assert!(s.min <= s.ci_low && s.ci_low <= s.median, "{s:?}");
+        assert!(s.median <= s.ci_high && s.ci_high <= s.max, "{s:?}");
+        // 20 evenly spread values: the median's interval is narrower than the range.
+        assert!(s.ci_high - s.ci_low < 0.6 * (s.max - s.min), "{s:?}");
+        let one = Summary::of(&[4.0]).expect("a value");
+        assert_eq!((one.ci_low, one.ci_high), (4.0, 4.0));
+        let same = Summary::of(&[3.0; 9]).expect("values");
+        assert_eq!((same.ci_low, same.ci_high), (3.0, 3.0));
     }
 
     #[test]

@@ -1,6 +1,11 @@
 //! A report's files: `runs.json` (everything), `runs.csv` (one line per run: parameters,
 //! metrics, times, counters), `report.md` (the tables), and `visibility/*.exr` (every
 //! visibility buffer).
+//!
+//! A report folder holds its own files only. [`write_report`] lists every file it leaves in
+//! the folder in a manifest, [`MANIFEST`]; before anything is computed, [`prepare_out_dir`]
+//! refuses a folder that holds a file no manifest lists (naming the first, in path order), and
+//! removes an earlier report's files so that none of them outlives the report that wrote it.
 
 use crate::figures::write_plots;
 use crate::grids::write_grid;
@@ -8,7 +13,7 @@ use crate::output::{write_visibility_exr, OutputError};
 use crate::sweep::{GridImages, Produced, Report, Row};
 use instrumentation::Counters;
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// A parameter of a row as text (empty when the method has no such parameter).
 fn param(row: &Row, key: &str) -> String {
@@ -32,7 +37,8 @@ pub fn row_stem(row: &Row) -> String {
     stem.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' }).collect()
 }
 
-/// Columns of `runs.csv` before the counters.
+/// Columns of `runs.csv` before the stage times and the counters: parameters, frame size,
+/// reference, metrics (over the reference's shadow-only pixels), total time and provenance.
 pub const CSV_COLUMNS: &[&str] = &[
     "scene",
     "method",
@@ -41,8 +47,8 @@ pub const CSV_COLUMNS: &[&str] = &[
     "depth_bits",
     "pattern",
     "device",
-    "width",
-    "height",
+    "width_px",
+    "height_px",
     "reference",
     "ref_rate",
     "evaluated_pixels",
@@ -52,25 +58,52 @@ pub const CSV_COLUMNS: &[&str] = &[
     "pixel_match",
     "boundary_pixels",
     "boundary_mean_abs_error",
+    "boundary_p50_abs_error",
+    "boundary_p95_abs_error",
+    "boundary_p99_abs_error",
     "flip_mean",
     "time_median_ms",
+    "time_ci_low_ms",
+    "time_ci_high_ms",
     "time_min_ms",
     "time_max_ms",
     "commit",
     "version",
 ];
 
-/// `runs.csv`: a header, then one line per row; counters follow the columns of
-/// [`CSV_COLUMNS`] under their own names.
-pub fn csv(report: &Report) -> String {
-    let mut out = CSV_COLUMNS.join(",");
-    for name in Counters::NAMES {
-        out.push(',');
-        out.push_str(name);
+/// Stage names over every row of `report`, in the order they first appear.
+fn stage_names(report: &Report) -> Vec<&str> {
+    let mut names: Vec<&str> = Vec::new();
+    for s in report.rows.iter().flat_map(|r| &r.stages) {
+        if !names.contains(&s.name.as_str()) {
+            names.push(&s.name);
+        }
     }
-    out.push('\n');
+    names
+}
+
+/// `runs.csv`, tidy: a header, then one line per run, one column per quantity. Cells are
+/// numbers (or text for names), with no thousands suffix; an empty cell is a quantity that
+/// does not apply (a parameter the method has not, the boundary error of a run without
+/// boundary pixels, a stage the run did not have). After [`CSV_COLUMNS`], the median time of
+/// every stage of the report as `stage_ms.NAME` and every counter as `counter.NAME`.
+pub fn csv(report: &Report) -> Result<String, OutputError> {
+    let fail = |e: &dyn std::fmt::Display| OutputError::Write {
+        path: "runs.csv".into(),
+        message: e.to_string(),
+    };
+    let stages = stage_names(report);
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let header = CSV_COLUMNS
+        .iter()
+        .map(|c| (*c).to_owned())
+        .chain(stages.iter().map(|s| format!("stage_ms.{s}")))
+        .chain(Counters::NAMES.iter().map(|c| format!("counter.{c}")));
+    w.write_record(header).map_err(|e| fail(&e))?;
+    let opt = |v: Option<f64>| v.map_or_else(String::new, |v| v.to_string());
     for r in &report.rows {
         let m = &r.metrics;
+        let boundary = m.boundary_pixels > 0;
         let mut cells = vec![
             r.scene.clone(),
             r.method.clone(),
@@ -89,31 +122,29 @@ pub fn csv(report: &Report) -> String {
             m.max_abs_error.to_string(),
             m.pixel_match.to_string(),
             m.boundary_pixels.to_string(),
-            m.boundary_mean_abs_error.to_string(),
+            opt(boundary.then_some(m.boundary_mean_abs_error)),
+            opt(m.boundary_p50_abs_error),
+            opt(m.boundary_p95_abs_error),
+            opt(m.boundary_p99_abs_error),
             r.flip_mean.to_string(),
             r.total_ms.median.to_string(),
+            r.total_ms.ci_low.to_string(),
+            r.total_ms.ci_high.to_string(),
             r.total_ms.min.to_string(),
             r.total_ms.max.to_string(),
             report.provenance.commit.clone(),
             report.provenance.version.clone(),
         ];
+        cells.extend(
+            stages
+                .iter()
+                .map(|name| opt(r.stages.iter().find(|s| s.name == *name).map(|s| s.ms.median))),
+        );
         cells.extend(r.counters.entries().into_iter().map(|(_, v)| v.to_string()));
-        // Scene names and parameters hold no commas or quotes; quote defensively anyway.
-        let line: Vec<String> =
-            cells
-                .into_iter()
-                .map(|c| {
-                    if c.contains([',', '"']) {
-                        format!("\"{}\"", c.replace('"', "\"\""))
-                    } else {
-                        c
-                    }
-                })
-                .collect();
-        out.push_str(&line.join(","));
-        out.push('\n');
+        w.write_record(&cells).map_err(|e| fail(&e))?;
     }
-    out
+    let bytes = w.into_inner().map_err(|e| fail(&e))?;
+    String::from_utf8(bytes).map_err(|e| fail(&e))
 }
 
 /// Column heads of the per-scene run tables.
@@ -124,7 +155,7 @@ pub const RUN_COLUMNS: [&str; 7] = [
     "boundary error",
     "pixel match",
     "FLIP",
-    "time ms [min, max]",
+    "time ms (95 % CI) [min, max]",
 ];
 
 /// A row's cells in the per-scene run tables, under [`RUN_COLUMNS`].
@@ -133,10 +164,21 @@ pub fn run_cells(r: &Row) -> [String; 7] {
         r.method.clone(),
         param_label(r),
         format!("{:.5}", r.metrics.mean_abs_error),
-        format!("{:.4}", r.metrics.boundary_mean_abs_error),
+        if r.metrics.boundary_pixels == 0 {
+            "n/a".to_owned()
+        } else {
+            format!("{:.4}", r.metrics.boundary_mean_abs_error)
+        },
         format!("{:.2} %", 100.0 * r.metrics.pixel_match),
         format!("{:.4}", r.flip_mean),
-        format!("{:.1} [{:.1}, {:.1}]", r.total_ms.median, r.total_ms.min, r.total_ms.max),
+        format!(
+            "{:.1} ({:.1}–{:.1}) [{:.1}, {:.1}]",
+            r.total_ms.median,
+            r.total_ms.ci_low,
+            r.total_ms.ci_high,
+            r.total_ms.min,
+            r.total_ms.max
+        ),
     ]
 }
 
@@ -162,8 +204,9 @@ pub fn markdown(report: &Report) -> String {
     let _ = writeln!(
         s,
         "Machine: {} ({} cores, {} threads, {}); GPU: {}. Times: median of {} runs after {} \
-         warm-up, [min, max]; a method's time is its own stages (the camera G-buffer is shared \
-         and listed per scene).\n",
+         warm-up, its 95 % confidence interval (percentile bootstrap) and [min, max]; a \
+         method's time is its own stages (the camera G-buffer is shared and listed per \
+         scene).\n",
         m.cpu,
         m.cores,
         m.threads,
@@ -227,8 +270,130 @@ pub fn markdown(report: &Report) -> String {
     s
 }
 
+/// The manifest of a report folder: the files the report wrote, one path a line, relative to
+/// the folder with `/` between names, after a comment line.
+pub const MANIFEST: &str = ".shadowbench-report";
+
+/// A report folder cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum OutDirError {
+    /// The folder holds a file that no report wrote.
+    #[error(
+        "holds {file}, which no report wrote; a report folder holds only its report's files \
+         (remove them, or choose another folder)"
+    )]
+    Foreign {
+        /// The first such file, in path order.
+        file: PathBuf,
+    },
+    /// The folder could not be listed or cleaned.
+    #[error("{path}: {message}")]
+    Io {
+        /// The file or folder.
+        path: PathBuf,
+        /// Why.
+        message: String,
+    },
+}
+
+fn io_err(path: &Path, e: &std::io::Error) -> OutDirError {
+    OutDirError::Io { path: path.to_owned(), message: e.to_string() }
+}
+
+/// Every file under `dir` (links count as files and are not followed), as paths relative to
+/// `dir`, sorted; empty when `dir` does not exist.
+fn files_under(dir: &Path) -> Result<Vec<PathBuf>, OutDirError> {
+    let mut files = Vec::new();
+    let mut folders = vec![PathBuf::new()];
+    while let Some(rel) = folders.pop() {
+        let here = dir.join(&rel);
+        let entries = match std::fs::read_dir(&here) {
+            Ok(e) => e,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound && rel.as_os_str().is_empty() => {
+                return Ok(files)
+            }
+            Err(e) => return Err(io_err(&here, &e)),
+        };
+        for entry in entries {
+            let entry = entry.map_err(|e| io_err(&here, &e))?;
+            let kind = entry.file_type().map_err(|e| io_err(&entry.path(), &e))?;
+            let name = rel.join(entry.file_name());
+            if kind.is_dir() {
+                folders.push(name);
+            } else {
+                files.push(name);
+            }
+        }
+    }
+    files.sort();
+    Ok(files)
+}
+
+/// The files `dir`'s manifest lists (empty without a manifest).
+fn manifest_files(dir: &Path) -> Result<Vec<PathBuf>, OutDirError> {
+    let path = dir.join(MANIFEST);
+    match std::fs::read_to_string(&path) {
+        Ok(text) => Ok(text
+            .lines()
+            .filter(|l| !l.is_empty() && !l.starts_with('#'))
+            .map(|l| l.split('/').collect())
+            .collect()),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(Vec::new()),
+        Err(e) => Err(io_err(&path, &e)),
+    }
+}
+
+/// Makes `dir` ready for a report, before anything is computed: refuses it when it holds a
+/// file that its manifest ([`MANIFEST`]) does not list, else removes the files the manifest
+/// lists (an earlier report's), the manifest, and the folders they leave empty. A folder that
+/// does not exist or is empty is ready as it is.
+pub fn prepare_out_dir(dir: &Path) -> Result<(), OutDirError> {
+    let ours = manifest_files(dir)?;
+    let manifest = PathBuf::from(MANIFEST);
+    if let Some(file) = files_under(dir)?.into_iter().find(|f| *f != manifest && !ours.contains(f))
+    {
+        return Err(OutDirError::Foreign { file: dir.join(file) });
+    }
+    for f in ours.iter().chain([&manifest]) {
+        let path = dir.join(f);
+        match std::fs::remove_file(&path) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(io_err(&path, &e)),
+            _ => {}
+        }
+    }
+    // The folders the files were in, deepest first; one that still holds something stays.
+    let mut folders: Vec<&Path> = ours
+        .iter()
+        .flat_map(|f| f.ancestors().skip(1))
+        .filter(|a| !a.as_os_str().is_empty())
+        .collect();
+    folders.sort_by(|a, b| b.components().count().cmp(&a.components().count()).then(a.cmp(b)));
+    folders.dedup();
+    for f in folders {
+        let _ = std::fs::remove_dir(dir.join(f));
+    }
+    Ok(())
+}
+
+/// Writes the manifest of `dir`: every file in it (the folder having been made ready by
+/// [`prepare_out_dir`], each is the report's).
+fn write_manifest(dir: &Path) -> Result<(), OutputError> {
+    let path = dir.join(MANIFEST);
+    let files = files_under(dir)
+        .map_err(|e| OutputError::Write { path: path.clone(), message: e.to_string() })?;
+    let mut text = String::from("# shadowbench report: the files it wrote (see reports::write)\n");
+    for f in files.iter().filter(|f| **f != Path::new(MANIFEST)) {
+        let names: Vec<String> =
+            f.components().map(|c| c.as_os_str().to_string_lossy().into_owned()).collect();
+        text.push_str(&names.join("/"));
+        text.push('\n');
+    }
+    std::fs::write(&path, text).map_err(|e| OutputError::Write { path, message: e.to_string() })
+}
+
 /// Writes `index.html`, `report.md`, `runs.csv`, `runs.json`, `plots/*.png|svg`,
-/// `tables/*.csv` (the papers' tables) and `visibility/*.exr` into `dir`.
+/// `tables/*.csv` (the papers' tables) and `visibility/*.exr` into `dir`, then the manifest
+/// listing them ([`MANIFEST`]); `dir` is to have been made ready by [`prepare_out_dir`].
 pub fn write_report(
     dir: &Path,
     report: &Report,
@@ -251,7 +416,7 @@ pub fn write_report(
     let html = crate::html::index_html(report, &plots);
     for (name, text) in [
         ("runs.json", json),
-        ("runs.csv", csv(report)),
+        ("runs.csv", csv(report)?),
         ("report.md", markdown(report)),
         ("index.html", html),
     ] {
@@ -263,12 +428,56 @@ pub fn write_report(
         std::fs::create_dir_all(&tables).map_err(|e| err(&tables, &e))?;
         for t in &report.tables {
             let path = tables.join(format!("{}.csv", t.paper.name()));
-            std::fs::write(&path, crate::tables::csv(t)).map_err(|e| err(&path, &e))?;
+            let text = crate::tables::csv(t).map_err(|e| err(&path, &e))?;
+            std::fs::write(&path, text).map_err(|e| err(&path, &e))?;
         }
     }
     for p in produced {
         let path = images.join(format!("{}.exr", row_stem(&report.rows[p.row])));
         write_visibility_exr(&path, &p.visibility)?;
     }
-    Ok(())
+    write_manifest(dir)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn put(dir: &Path, rel: &str) {
+        let path = dir.join(rel);
+        std::fs::create_dir_all(path.parent().expect("a parent")).expect("folder");
+        std::fs::write(path, b"x").expect("file");
+    }
+
+    #[test]
+    fn an_earlier_report_is_removed_and_a_foreign_file_refused() {
+        let tmp = tempfile::tempdir().expect("tempdir");
+        let dir = tmp.path().join("out");
+        prepare_out_dir(&dir).expect("a folder that does not exist is ready");
+        for f in ["runs.json", "visibility/a.exr", "runs/r1/run.json"] {
+            put(&dir, f);
+        }
+        write_manifest(&dir).expect("manifest");
+        let listed = std::fs::read_to_string(dir.join(MANIFEST)).expect("manifest");
+        assert!(listed.lines().any(|l| l == "runs/r1/run.json"), "{listed}");
+        prepare_out_dir(&dir).expect("an earlier report is cleaned");
+        assert_eq!(files_under(&dir).expect("files"), Vec::<PathBuf>::new());
+        assert!(!dir.join("visibility").exists() && !dir.join("runs").exists());
+
+        // A file of the user's beside a report: refused, named, nothing removed.
+        put(&dir, "runs.json");
+        write_manifest(&dir).expect("manifest");
+        put(&dir, "notes/mine.txt");
+        match prepare_out_dir(&dir) {
+            Err(OutDirError::Foreign { file }) => assert_eq!(file, dir.join("notes/mine.txt")),
+            other => panic!("not refused: {other:?}"),
+        }
+        assert!(dir.join("runs.json").is_file() && dir.join(MANIFEST).is_file());
+        // A folder without a manifest holding anything is refused too.
+        let other = tmp.path().join("other");
+        put(&other, "b.txt");
+        put(&other, "a.txt");
+        let e = prepare_out_dir(&other).expect_err("refused");
+        assert!(e.to_string().contains("a.txt"), "the first in path order: {e}");
+    }
 }
