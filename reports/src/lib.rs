@@ -4,6 +4,7 @@
 //! [`write`] as JSON, CSV, Markdown tables and EXR images, with the charts chosen by [`figures`]
 //! and drawn by [`plots`]; the papers' tables are measured by [`tables`].
 
+pub mod baseline;
 pub mod devices;
 pub mod figures;
 pub mod grids;
