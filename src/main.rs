@@ -233,6 +233,13 @@ struct RenderArgs {
     /// Image height in pixels; default: the scene's.
     #[arg(long, value_name = "H", allow_negative_numbers = true)]
     height: Option<u32>,
+    /// Timed runs of the method (1 to 1000): with N > 1 it runs N + 1 times, G-buffer
+    /// included, the first as an untimed warm-up; run.json (and metrics.json's method_ms) then
+    /// holds the run of median total time (the lower middle one for even N) and the printed
+    /// line its total with the min and max of the N; default 1 (one cold run).
+    #[arg(long, value_name = "N", default_value_t = 1, allow_negative_numbers = true,
+          value_parser = clap::value_parser!(u32).range(1..=1000))]
+    repeat: u32,
     /// Output folder; default `shadowbench-out/SCENE-METHOD`.
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
@@ -477,7 +484,17 @@ fn run(job: &Job, frame: &Frame<'_>, mut rec: Recorder) -> Result<Ran, Failure> 
         }
         None => (job.technique.run(frame, &mut rec).map_err(method_failure)?, None),
     };
-    let record = RunRecord {
+    Ok(Ran { visibility, record: record(job, frame, rec, classes.as_deref()), classes })
+}
+
+/// The run record of `rec`, a run of the job's technique on `frame`.
+fn record(
+    job: &Job,
+    frame: &Frame<'_>,
+    rec: Recorder,
+    classes: Option<&[PixelClass]>,
+) -> RunRecord {
+    RunRecord {
         scene: job.scene.name.clone(),
         method: job.technique.name().to_owned(),
         params: job.technique.params(),
@@ -490,12 +507,59 @@ fn run(job: &Job, frame: &Frame<'_>, mut rec: Recorder) -> Result<Ran, Failure> 
         skipped_stages: rec.stages.skipped,
         notes: rec.notes,
         warnings: rec.warnings,
-        pixel_classes: classes.as_deref().map(analysis::metrics::class_pixels),
+        pixel_classes: classes.map(analysis::metrics::class_pixels),
+    }
+}
+
+/// The spread of the total times of repeated runs (`--repeat`).
+struct Spread {
+    /// Timed runs.
+    runs: u32,
+    /// Shortest total, milliseconds.
+    min_ms: f64,
+    /// Longest total, milliseconds.
+    max_ms: f64,
+}
+
+impl Spread {
+    /// How the time printed beside it was taken.
+    fn describe(&self) -> String {
+        format!(
+            "median of {} runs after a warm-up, min {:.1} ms, max {:.1} ms",
+            self.runs, self.min_ms, self.max_ms
+        )
+    }
+}
+
+/// Runs the job's technique `repeat` times (see `--repeat`), each on a frame of its own so
+/// that the G-buffer is timed too: once, cold, for 1; else after an untimed warm-up. Gives
+/// the last frame, the result with the record of median total time, and the spread of the
+/// totals when there was more than one timed run. Prints the record's warnings.
+fn run_repeated(job: &Job, repeat: u32) -> Result<(Frame<'_>, Ran, Option<Spread>), Failure> {
+    let once = || {
+        let mut rec = Recorder::default();
+        let frame = Frame::new(&job.scene, job.width, job.height, &mut rec);
+        run(job, &frame, rec).map(|ran| (frame, ran))
     };
-    for w in &record.warnings {
+    let (mut frame, mut ran) = once()?;
+    // With one run it is the timed one; else it is the warm-up, and `repeat` runs follow.
+    let (mut records, more) =
+        if repeat > 1 { (Vec::new(), repeat) } else { (vec![ran.record.clone()], 0) };
+    for _ in 0..more {
+        (frame, ran) = once()?;
+        records.push(ran.record.clone());
+    }
+    records.sort_by(|a, b| a.total_ms.total_cmp(&b.total_ms));
+    let spread = (records.len() > 1).then(|| Spread {
+        runs: records.len() as u32,
+        min_ms: records[0].total_ms,
+        max_ms: records[records.len() - 1].total_ms,
+    });
+    ran.record = records.swap_remove((records.len() - 1) / 2);
+    for w in &ran.record.warnings {
         eprintln!("warning: {w}");
     }
-    Ok(Ran { visibility, record, classes })
+    Ok((frame, ran, spread))
 }
 
 /// The output folder (`--out`, or `shadowbench-out/SCENE-METHOD{suffix}`), made ready by
@@ -528,16 +592,15 @@ fn write_run(out: &Path, frame: &Frame<'_>, ran: &Ran) -> Result<(), Failure> {
 fn render(a: RenderArgs) -> Result<(), Failure> {
     let job = job(&a)?;
     let out = out_dir(&a, &job, "")?;
-    let mut rec = Recorder::default();
-    let frame = Frame::new(&job.scene, job.width, job.height, &mut rec);
-    let ran = run(&job, &frame, rec)?;
+    let (frame, ran, spread) = run_repeated(&job, a.repeat)?;
     write_run(&out, &frame, &ran)?;
     let record = &ran.record;
     if a.json {
         println!("{}", serde_json::to_string_pretty(&record)?);
     }
+    let spread = spread.map_or(String::new(), |s| format!(" ({})", s.describe()));
     eprintln!(
-        "{} on {} at {}x{}: {:.1} ms; wrote {}",
+        "{} on {} at {}x{}: {:.1} ms{spread}; wrote {}",
         record.method,
         record.scene,
         job.width,
@@ -586,9 +649,7 @@ fn compare(c: CompareArgs) -> Result<(), Failure> {
     let ref_name = reference.name();
     let out = out_dir(a, &job, &format!("-vs-{ref_name}"))?;
 
-    let mut rec = Recorder::default();
-    let frame = Frame::new(&job.scene, job.width, job.height, &mut rec);
-    let ran = run(&job, &frame, rec)?;
+    let (frame, ran, spread) = run_repeated(&job, a.repeat)?;
     let mut ref_rec = Recorder::default();
     let truth = reference.evaluate(&frame, &mut ref_rec).map_err(input)?;
     // A reference without classes (`raytrace`) is measured per class all the same: the
@@ -643,14 +704,15 @@ fn compare(c: CompareArgs) -> Result<(), Failure> {
     if a.json {
         println!("{text}");
     } else {
-        print_metrics(&metrics);
+        print_metrics(&metrics, spread.as_ref());
     }
     eprintln!("wrote {}", out.display());
     Ok(())
 }
 
-/// Prints a comparison: the shadow-only headline, then one line per class.
-fn print_metrics(m: &reports::MetricsRecord) {
+/// Prints a comparison: the shadow-only headline, then one line per class; `spread` is that
+/// of the method's repeated runs (`--repeat`).
+fn print_metrics(m: &reports::MetricsRecord, spread: Option<&Spread>) {
     let c = &m.comparison;
     let rate = |r: Option<u32>| r.map_or(String::new(), |r| format!(" at {r} samples/pixel"));
     let against = match m.edge_reference.as_deref() {
@@ -710,7 +772,8 @@ fn print_metrics(m: &reports::MetricsRecord) {
         "  (pixels: compared/in the frame; {} uncovered)",
         c.class_pixels.get("uncovered").copied().unwrap_or(0)
     );
-    println!("  time: method {:.1} ms, reference {:.1} ms", m.method_ms, m.reference_ms);
+    let spread = spread.map_or(String::new(), |s| format!(" ({})", s.describe()));
+    println!("  time: method {:.1} ms{spread}, reference {:.1} ms", m.method_ms, m.reference_ms);
 }
 
 fn main() -> ExitCode {

@@ -269,6 +269,7 @@ fn help_explains_every_render_flag() {
         "--width",
         "--height",
         "--device",
+        "--repeat",
         "--out",
         "--json",
     ] {
@@ -288,6 +289,73 @@ fn help_explains_every_render_flag() {
             "{flag} is not explained: {explanation:?}"
         );
     }
+}
+
+/// `--repeat N` times N runs after a warm-up: run.json keeps its shape and holds the run of
+/// median total, whose counters are one run's; the printed line gives the median with the
+/// min and max. N must be 1 to 1000.
+#[test]
+fn render_repeat_reports_the_median_run_with_its_spread() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let render = |name: &str, repeat: &str| {
+        let out = dir.path().join(name);
+        let o = shadowbench(&[
+            "render",
+            "--scene",
+            "cage",
+            "--method",
+            "sm",
+            "--width",
+            "96",
+            "--height",
+            "72",
+            "--repeat",
+            repeat,
+            "--out",
+            out.to_str().expect("utf-8"),
+        ]);
+        let text = std::fs::read_to_string(out.join("run.json")).unwrap_or_default();
+        (o, serde_json::from_str::<serde_json::Value>(&text).ok())
+    };
+    let (o, once) = render("once", "1");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("median"), "{}", stderr(&o));
+    let (o, thrice) = render("thrice", "3");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (once, thrice) = (once.expect("run.json"), thrice.expect("run.json"));
+    let keys =
+        |v: &serde_json::Value| v.as_object().expect("object").keys().cloned().collect::<Vec<_>>();
+    assert_eq!(keys(&once), keys(&thrice));
+    assert_eq!(once["counters"], thrice["counters"], "one run's counters");
+    let names = |v: &serde_json::Value| {
+        v["stages"]
+            .as_array()
+            .expect("stages")
+            .iter()
+            .map(|s| s["name"].clone())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(names(&once), names(&thrice));
+    // `sm on cage at 96x72: T ms (median of 3 runs after a warm-up, min A ms, max B ms); ...`
+    let err = stderr(&o);
+    let ms = |after: &str| -> f64 {
+        let rest = &err
+            [err.find(after).unwrap_or_else(|| panic!("no `{after}` in {err}")) + after.len()..];
+        rest.split(" ms").next().and_then(|t| t.trim().parse().ok()).expect("a time")
+    };
+    assert!(err.contains("median of 3 runs after a warm-up"), "{err}");
+    let (total, min, max) = (ms("96x72:"), ms("min"), ms("max"));
+    let recorded = thrice["total_ms"].as_f64().expect("total");
+    assert!((total - recorded).abs() < 0.06, "printed {total}, run.json {recorded}");
+    assert!(min <= total && total <= max, "{err}");
+
+    for bad in ["0", "-1", "1001", "many"] {
+        let (o, _) = render(&format!("bad{bad}"), bad);
+        assert_eq!(o.status.code(), Some(2), "{bad}: {}", stderr(&o));
+        assert!(stderr(&o).contains("--repeat"), "{bad}: {}", stderr(&o));
+    }
+    let help = String::from_utf8_lossy(&shadowbench(&["render", "--help"]).stdout).into_owned();
+    assert!(help.contains("warm-up") && help.contains("median"), "{help}");
 }
 
 /// Two identical runs write the same bytes (the EXR's blocks used to come in the order their

@@ -210,6 +210,22 @@ fn lecocq_pixel_match_applies_to_binary_methods_only() {
     assert!(pan09["pixel_match"].is_number());
 }
 
+/// `compare --repeat N` records the method's run of median total time: metrics.json's
+/// `method_ms` is run.json's total, and the printed time says how it was taken.
+#[test]
+fn compare_repeat_records_the_median_run() {
+    let (o, dir) = compare(&["--scene", "cage", "--method", "sm", "--repeat", "2"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let m = metrics(&dir);
+    let run: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("cmp/run.json")).expect("read"),
+    )
+    .expect("JSON");
+    assert_eq!(m["method_ms"], run["total_ms"]);
+    let printed = String::from_utf8_lossy(&o.stdout);
+    assert!(printed.contains("median of 2 runs after a warm-up"), "{printed}");
+}
+
 /// `--error-scale` sets the top of the error maps' colour scale; one that is not a positive
 /// number is bad input, refused before any computation.
 #[test]
