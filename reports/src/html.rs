@@ -1,13 +1,22 @@
 //! `index.html`: the report as one page that opens in any browser from the file system (no
-//! server, no script from elsewhere): the machine, the scenes, and per scene its charts and
-//! its table of runs. Images are files beside the page (`plots/*.png`, with the SVG linked).
+//! server, no script from elsewhere): a header with the machine, a contents list, the scenes,
+//! per scene its charts and its table of runs (each run linked to its page, `runs/ID.html`,
+//! [`crate::run_pages`]), CPU and GPU side by side, the papers' tables, a glossary of the
+//! metrics, and what did not run. Images are files beside the page (`plots/*.png`, with the
+//! SVG linked).
 //!
-//! A small inline script marks, once the page has loaded, every image with
-//! `data-loaded="yes"` or `"no"`, so that a headless browser can check that nothing is broken.
+//! The style and the script are embedded in the page (`reports/assets/report.css` and
+//! `report.js`): tables sort by clicking a header (numbers as numbers, `n/a` last) and filter
+//! by a text box; parameters that are the same over a whole table are stated once above it,
+//! and a method's parameters that are the same over all its rows once per method. The script
+//! marks every image `data-loaded="yes"` or `"no"` once the page has loaded, and the page
+//! opened as `index.html#selftest` sorts and filters its first run table and writes what it
+//! found into `<pre id="selftest">`, for a headless browser to check.
 
 use crate::figures::PlotFile;
-use crate::sweep::Report;
-use crate::write::{run_cells, RUN_COLUMNS};
+use crate::sweep::{Report, Row};
+use crate::write::row_stem;
+use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 /// Escapes text for HTML.
@@ -15,122 +24,437 @@ pub fn escape(s: &str) -> String {
     s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
 }
 
-const STYLE: &str = "body{font-family:sans-serif;margin:2em;max-width:1100px}\
-table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;padding:3px 8px;\
-text-align:right}td:first-child,th:first-child{text-align:left}img{max-width:100%;\
-border:1px solid #ddd}figure{margin:1em 0}";
+/// The pages' style sheet.
+pub const STYLE: &str = include_str!("../assets/report.css");
 
-const CHECK: &str = "window.addEventListener('load',function(){for(const i of document.images)\
-{i.setAttribute('data-loaded',i.complete&&i.naturalWidth>0?'yes':'no');}\
-document.body.setAttribute('data-checked','yes');});";
+/// The pages' script: sortable and filterable tables, the run pages' comparison view, and
+/// the self-test.
+pub const SCRIPT: &str = include_str!("../assets/report.js");
+
+/// The start of a page, through `<body>`: title, style and script.
+pub fn page_head(title: &str) -> String {
+    format!(
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{}</title>\
+         <style>{STYLE}</style><script>{SCRIPT}</script></head><body>\n",
+        escape(title)
+    )
+}
+
+/// An identifier usable as an HTML anchor: letters and digits kept, the rest `-`.
+pub fn anchor(s: &str) -> String {
+    s.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '-' }).collect()
+}
+
+/// Whether a GPU adapter is a software rasterizer running on the CPU (Mesa's llvmpipe, or
+/// lavapipe, its Vulkan driver, or any adapter that says it is software).
+pub fn is_software_adapter(name: &str) -> bool {
+    let n = name.to_lowercase();
+    ["llvmpipe", "lavapipe", "software"].iter().any(|k| n.contains(k))
+}
+
+/// The adapter's name as HTML, marked when it is a software rasterizer.
+pub fn adapter_html(name: Option<&str>) -> String {
+    match name {
+        None => "none used".to_owned(),
+        Some(n) if is_software_adapter(n) => format!(
+            "{} <span class=\"software\">(a software rasterizer: its \"GPU\" runs on the CPU, \
+             so its times say nothing of a hardware GPU's)</span>",
+            escape(n)
+        ),
+        Some(n) => escape(n),
+    }
+}
+
+/// One table cell: its text, and the number it sorts by (none for text and `n/a`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Cell {
+    /// What the cell shows.
+    pub text: String,
+    /// The value it sorts by.
+    pub value: Option<f64>,
+}
+
+impl Cell {
+    /// A text cell.
+    pub fn text(s: impl Into<String>) -> Self {
+        Self { text: s.into(), value: None }
+    }
+
+    /// A number shown with `decimals` decimals.
+    pub fn num(v: f64, decimals: usize) -> Self {
+        Self { text: format!("{v:.decimals$}"), value: Some(v) }
+    }
+
+    /// `n/a`: the quantity does not apply.
+    pub fn na() -> Self {
+        Self::text("n/a")
+    }
+
+    /// The cell as `<td>`, its text escaped.
+    pub fn td(&self) -> String {
+        match self.value {
+            Some(v) if v.is_finite() => format!("<td data-v=\"{v}\">{}</td>", escape(&self.text)),
+            _ => format!("<td class=\"text\">{}</td>", escape(&self.text)),
+        }
+    }
+}
+
+/// Heads of the metric columns, under [`metric_cells`].
+pub const METRIC_COLUMNS: [&str; 9] = [
+    "mean abs error",
+    "RMSE",
+    "boundary pixels",
+    "boundary error",
+    "boundary p50",
+    "boundary p95",
+    "boundary p99",
+    "pixel match %",
+    "FLIP",
+];
+
+/// A row's metrics under [`METRIC_COLUMNS`]: `n/a` where nothing was compared, and the
+/// boundary statistics `n/a` where the reference has no boundary pixel.
+pub fn metric_cells(r: &Row) -> Vec<Cell> {
+    let m = &r.metrics;
+    if m.evaluated_pixels == 0 {
+        return vec![Cell::na(); METRIC_COLUMNS.len()];
+    }
+    let or_na = |v: Option<f64>| v.map_or_else(Cell::na, |v| Cell::num(v, 4));
+    vec![
+        Cell::num(m.mean_abs_error, 5),
+        Cell::num(m.rmse, 5),
+        Cell::num(m.boundary_pixels as f64, 0),
+        or_na(m.boundary_mean()),
+        or_na(m.boundary_p50_abs_error),
+        or_na(m.boundary_p95_abs_error),
+        or_na(m.boundary_p99_abs_error),
+        Cell::num(100.0 * m.pixel_match, 2),
+        Cell::num(r.flip_mean, 4),
+    ]
+}
+
+/// A parameter value as text (strings without their quotes).
+pub fn value_text(v: &serde_json::Value) -> String {
+    match v {
+        serde_json::Value::String(s) => s.clone(),
+        other => other.to_string(),
+    }
+}
+
+/// A row's parameters as text, with the device (`cpu` or `gpu`) always present.
+pub fn params_of(r: &Row) -> BTreeMap<String, String> {
+    let mut p: BTreeMap<String, String> =
+        r.params.iter().map(|(k, v)| (k.clone(), value_text(v))).collect();
+    let device = if crate::devices::is_gpu(r) { "gpu" } else { "cpu" };
+    p.insert("device".into(), device.into());
+    p
+}
+
+/// Parameters given a column of their own when they vary over a table (the ones suites sweep).
+const COLUMN_KEYS: [&str; 5] = ["map_res", "rate", "depth_bits", "pattern", "device"];
+
+/// Where each parameter of a table's rows is stated.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ParamSplit {
+    /// Same in every row: stated once above the table.
+    pub constant: BTreeMap<String, String>,
+    /// Per method, the rest that is the same in all its rows: stated once per method.
+    pub per_method: BTreeMap<String, BTreeMap<String, String>>,
+    /// Swept parameters that vary: a column each.
+    pub columns: Vec<&'static str>,
+    /// Whether some row has a parameter left for the "other parameters" column.
+    pub others: bool,
+}
+
+impl ParamSplit {
+    /// Splits the parameters of `rows`.
+    pub fn of(rows: &[&Row]) -> Self {
+        let params: Vec<BTreeMap<String, String>> = rows.iter().map(|r| params_of(r)).collect();
+        let same = |ps: &[&BTreeMap<String, String>], k: &str| -> Option<String> {
+            let first = ps.first()?.get(k)?;
+            ps.iter().all(|p| p.get(k) == Some(first)).then(|| first.clone())
+        };
+        let all: Vec<&BTreeMap<String, String>> = params.iter().collect();
+        let keys: std::collections::BTreeSet<&String> =
+            params.iter().flat_map(|p| p.keys()).collect();
+        let constant: BTreeMap<String, String> =
+            keys.iter().filter_map(|k| same(&all, k).map(|v| ((*k).clone(), v))).collect();
+        let columns: Vec<&'static str> = COLUMN_KEYS
+            .into_iter()
+            .filter(|k| keys.contains(&k.to_string()) && !constant.contains_key(*k))
+            .collect();
+        let mut per_method = BTreeMap::new();
+        for r in rows {
+            if per_method.contains_key(&r.method) {
+                continue;
+            }
+            let mine: Vec<&BTreeMap<String, String>> = rows
+                .iter()
+                .zip(&params)
+                .filter(|(s, _)| s.method == r.method)
+                .map(|x| x.1)
+                .collect();
+            let fixed: BTreeMap<String, String> = mine[0]
+                .keys()
+                .filter(|k| !constant.contains_key(*k) && !columns.contains(&k.as_str()))
+                .filter_map(|k| same(&mine, k).map(|v| (k.clone(), v)))
+                .collect();
+            per_method.insert(r.method.clone(), fixed);
+        }
+        let mut split = Self { constant, per_method, columns, others: false };
+        split.others = rows.iter().any(|r| !split.other_params(r).is_empty());
+        split
+    }
+
+    /// The parameters of `r` stated neither above the table nor in a column.
+    pub fn other_params(&self, r: &Row) -> String {
+        let fixed = self.per_method.get(&r.method);
+        params_of(r)
+            .into_iter()
+            .filter(|(k, _)| {
+                !self.constant.contains_key(k)
+                    && !self.columns.contains(&k.as_str())
+                    && !fixed.is_some_and(|f| f.contains_key(k))
+            })
+            .map(|(k, v)| format!("{k}={v}"))
+            .collect::<Vec<_>>()
+            .join(" ")
+    }
+
+    /// The paragraph above the table: the constant parameters, then each method's.
+    pub fn html(&self) -> String {
+        let kv = |m: &BTreeMap<String, String>| {
+            m.iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join(", ")
+        };
+        let mut s = String::new();
+        if !self.constant.is_empty() {
+            let _ = write!(s, "Every row: {}.", escape(&kv(&self.constant)));
+        }
+        for (method, fixed) in self.per_method.iter().filter(|(_, f)| !f.is_empty()) {
+            let _ = write!(s, " <code>{}</code>: {}.", escape(method), escape(&kv(fixed)));
+        }
+        format!("<p class=\"constant\">{}</p>\n", s.trim())
+    }
+}
+
+/// A sortable, filterable table: the filter box, the head and the body rows.
+fn sortable_table(class: &str, heads: &[(String, bool)], rows: &[String]) -> String {
+    let mut s = String::from(
+        "<input type=\"search\" class=\"filter\" placeholder=\"filter rows (words)\" \
+         aria-label=\"filter rows\">\n",
+    );
+    let _ = write!(s, "<table class=\"sortable {class}\"><thead><tr>");
+    for (h, numeric) in heads {
+        let _ =
+            write!(s, "<th class=\"{}\">{}</th>", if *numeric { "num" } else { "text" }, escape(h));
+    }
+    s.push_str("</tr></thead><tbody>\n");
+    for r in rows {
+        let _ = writeln!(s, "<tr>{r}</tr>");
+    }
+    s.push_str("</tbody></table>\n");
+    s
+}
+
+/// The table of one scene's runs.
+fn runs_table(rows: &[&Row]) -> String {
+    let split = ParamSplit::of(rows);
+    let mut heads: Vec<(String, bool)> = vec![("method".into(), false)];
+    heads
+        .extend(split.columns.iter().map(|c| (c.to_string(), !matches!(*c, "pattern" | "device"))));
+    if split.others {
+        heads.push(("other parameters".into(), false));
+    }
+    heads.extend(METRIC_COLUMNS.iter().map(|c| (c.to_string(), true)));
+    heads.extend(["time ms (median)", "min", "max"].iter().map(|c| (c.to_string(), true)));
+    let body: Vec<String> = rows
+        .iter()
+        .map(|r| {
+            let p = params_of(r);
+            let mut s = format!(
+                "<td><a href=\"runs/{}.html\">{}</a></td>",
+                escape(&row_stem(r)),
+                escape(&r.method)
+            );
+            for c in &split.columns {
+                let v = p.get(*c).cloned().unwrap_or_default();
+                let cell = match v.parse::<f64>() {
+                    Ok(x) => Cell { text: v, value: Some(x) },
+                    Err(_) => Cell::text(v),
+                };
+                s.push_str(&cell.td());
+            }
+            if split.others {
+                s.push_str(&Cell::text(split.other_params(r)).td());
+            }
+            for c in metric_cells(r) {
+                s.push_str(&c.td());
+            }
+            for t in [r.total_ms.median, r.total_ms.min, r.total_ms.max] {
+                s.push_str(&Cell::num(t, 2).td());
+            }
+            s
+        })
+        .collect();
+    split.html() + &sortable_table("runs", &heads, &body)
+}
+
+/// The glossary: what every quantity of the report means.
+const GLOSSARY: &str = "<h2 id=\"glossary\">Glossary</h2>\n<dl class=\"glossary\">\n\
+<dt>lit fraction</dt><dd>The fraction of a pixel's square that the light reaches, in [0, 1]: \
+what every method computes and every reference gives exactly (<code>exact</code>) or by \
+sampling (<code>raytrace</code>).</dd>\n\
+<dt>pixel classes</dt><dd>What a pixel's square sees, decided exactly from the camera's view \
+of the triangles: <b>planar</b>, the square sees one planar object and nothing else; \
+<b>surface</b>, the square is tiled without gap or overlap by front-facing triangles of one \
+continuous surface with nothing in front of them; <b>edge</b>, anything else (a silhouette, a \
+depth discontinuity, several objects, background, a visible back face); <b>uncovered</b>, the \
+square sees no geometry.</dd>\n\
+<dt>shadow-only pixels</dt><dd>The pixels the metrics are taken over: the planar and surface \
+pixels the reference evaluated (every pixel it evaluated for <code>raytrace</code>). On edge \
+pixels the error is the camera's aliasing, not the shadow's, so they are left out.</dd>\n\
+<dt>mean abs error</dt><dd>The mean of |method - reference| of the lit fraction over the \
+shadow-only pixels.</dd>\n\
+<dt>RMSE</dt><dd>The root mean square of method - reference over the same pixels: it weighs \
+large errors more than the mean does.</dd>\n\
+<dt>boundary pixels</dt><dd>Shadow-only pixels whose reference lit fraction is strictly \
+between 0 and 1: the penumbra and the shadow's edges, where antialiasing matters.</dd>\n\
+<dt>boundary error</dt><dd>The mean abs error over the boundary pixels only.</dd>\n\
+<dt>p50 / p95 / p99 of the boundary error</dt><dd>The 50th, 95th and 99th percentiles of \
+|method - reference| over the boundary pixels, by the nearest-rank definition (with the n \
+errors sorted, the one of rank ceil(p n)): the typical and the worst errors at the shadow's \
+edges.</dd>\n\
+<dt>FLIP</dt><dd>NVIDIA's FLIP (Andersson et al., \"FLIP: A Difference Evaluator for \
+Alternating Images\", HPG 2020): the perceived difference between the shaded method image and \
+the shaded reference, per pixel in [0, 1], averaged over the frame; only shadow-only pixels \
+may differ.</dd>\n\
+<dt>pixel match</dt><dd>As reported here: the share of shadow-only pixels within half an \
+8-bit step (0.5/255) of the reference. Against an exact reference an antialiased value hits \
+a pixel's coverage only by luck, so this mostly measures how much of the frame is fully lit \
+or fully shadowed. In Lecocq et al.'s sense (\"Sub-Pixel Shadow Mapping\", I3D 2014): the \
+share of pixels whose binary lit/shadowed value equals that of <code>raytrace</code> at rate \
+1 (one sample per pixel), for methods whose output is binary at that setting.</dd>\n\
+<dt>n/a</dt><dd>The quantity does not apply: no pixel was compared, or (boundary error) the \
+reference has no boundary pixel.</dd>\n\
+<dt>time</dt><dd>The method's own stages, median of the timed runs after the warm-up, with \
+their minimum and maximum; the camera G-buffer, shared by every method of a scene, is listed \
+per scene.</dd>\n</dl>\n";
 
 /// The page.
 pub fn index_html(report: &Report, plots: &[PlotFile]) -> String {
-    let mut s = String::new();
-    let m = &report.machine;
+    let mut s = page_head(&format!("shadowbench report: {}", report.suite.name));
+    let (m, p) = (&report.machine, &report.provenance);
     let _ = write!(
         s,
-        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>shadowbench \
-         report: {name}</title><style>{STYLE}</style><script>{CHECK}</script></head><body>\n\
-         <h1>shadowbench report: suite <code>{name}</code></h1>\n<p>{desc}</p>\n<p>Machine: {cpu} \
-         ({cores} cores, {threads} threads, {os}); GPU: {gpu}. Times: median of {rep} runs after \
-         {warm} warm-up, [min, max]; a method's time is its own stages (the camera G-buffer is \
-         shared and listed per scene). Tables as CSV: <a href=\"runs.csv\">runs.csv</a>, \
-         everything as JSON: <a href=\"runs.json\">runs.json</a>.</p>\n",
+        "<header><h1>shadowbench report: suite <code>{name}</code></h1>\n<p>{desc}</p>\n\
+         <p id=\"machine\">Machine: {cpu} ({cores} cores, {threads} threads, {os}); GPU: {gpu}. \
+         Times: median of {rep} runs after {warm} warm-up, [min, max].</p>\n<p \
+         id=\"provenance\">Produced by shadowbench {version}, commit <code>{commit}</code>{dirty}, \
+         built with {rustc}, at {time}, by <code>{command}</code>. Everything as CSV: <a \
+         href=\"runs.csv\">runs.csv</a>, as JSON: <a href=\"runs.json\">runs.json</a>.</p>\
+         </header>\n",
         name = escape(&report.suite.name),
         desc = escape(&report.suite.description),
         cpu = escape(&m.cpu),
         cores = m.cores,
         threads = m.threads,
         os = escape(&m.os),
-        gpu = escape(m.gpu.as_deref().unwrap_or("none used")),
+        gpu = adapter_html(m.gpu.as_deref()),
         rep = report.suite.repeats,
         warm = report.suite.warmup,
+        version = escape(&p.version),
+        commit = escape(&p.commit),
+        dirty = if p.dirty { " (with local changes)" } else { "" },
+        rustc = escape(&p.rustc),
+        time = escape(&p.timestamp),
+        command = escape(&p.command),
     );
-    s.push_str(
-        "<h2>Scenes</h2>\n<table><tr><th>scene</th><th>triangles</th><th>effects</th>\
-         <th>frame</th><th>G-buffer ms</th><th>reference</th><th>reference ms</th></tr>\n",
-    );
+    s.push_str(&contents(report, plots));
+    s.push_str("<h2 id=\"scenes\">Scenes</h2>\n");
+    let heads: Vec<(String, bool)> = [
+        ("scene", false),
+        ("triangles", true),
+        ("effects", false),
+        ("frame", false),
+        ("G-buffer ms", true),
+        ("reference", false),
+        ("reference ms", true),
+    ]
+    .iter()
+    .map(|(h, n)| (h.to_string(), *n))
+    .collect();
+    let body: Vec<String> = report
+        .scenes
+        .iter()
+        .map(|sc| {
+            format!(
+                "<td><a href=\"#scene-{id}\">{name}</a></td>{}{}{}{}{}{}",
+                Cell::num(sc.triangles as f64, 0).td(),
+                Cell::text(sc.effects.join(", ")).td(),
+                Cell::text(format!("{}x{}", sc.width, sc.height)).td(),
+                Cell::num(sc.gbuffer_ms, 1).td(),
+                Cell::text(&sc.reference).td(),
+                Cell::num(sc.reference_ms, 1).td(),
+                id = anchor(&sc.scene),
+                name = escape(&sc.scene),
+            )
+        })
+        .collect();
+    s.push_str(&sortable_table("scenes", &heads, &body));
     for sc in &report.scenes {
-        let _ = writeln!(
-            s,
-            "<tr><td><a href=\"#{id}\">{name}</a></td><td>{}</td><td>{}</td><td>{}x{}</td>\
-             <td>{:.1}</td><td>{}</td><td>{:.1}</td></tr>",
-            sc.triangles,
-            escape(&sc.effects.join(", ")),
-            sc.width,
-            sc.height,
-            sc.gbuffer_ms,
-            escape(&sc.reference),
-            sc.reference_ms,
-            id = escape(&sc.scene),
-            name = escape(&sc.scene),
-        );
-    }
-    s.push_str("</table>\n");
-    for sc in &report.scenes {
-        let _ = writeln!(s, "<h2 id=\"{0}\">{0}</h2>", escape(&sc.scene));
-        for g in report.grids.iter().filter(|g| g.scene == sc.scene) {
+        let id = anchor(&sc.scene);
+        let _ = writeln!(s, "<h2 id=\"scene-{id}\">{}</h2>", escape(&sc.scene));
+        for (k, g) in report.grids.iter().filter(|g| g.scene == sc.scene).enumerate() {
             let _ = writeln!(
                 s,
-                "<figure><img src=\"{png}\" alt=\"{t}\"><figcaption>{t}</figcaption></figure>",
+                "<figure id=\"scene-{id}-grid-{k}\"><img src=\"{png}\" alt=\"{t}\">\
+                 <figcaption>{t}</figcaption></figure>",
                 png = escape(&g.png),
                 t = escape(&g.title)
             );
         }
-        for p in plots.iter().filter(|p| p.scene == sc.scene) {
+        for (k, p) in plots.iter().filter(|p| p.scene == sc.scene).enumerate() {
             let svg = p.png.trim_end_matches(".png").to_owned() + ".svg";
             let _ = writeln!(
                 s,
-                "<figure><img src=\"{png}\" alt=\"{t}\"><figcaption>{t} (<a href=\"{svg}\">SVG</a>)\
-                 </figcaption></figure>",
+                "<figure id=\"scene-{id}-plot-{k}\"><img src=\"{png}\" alt=\"{t}\"><figcaption>{t} \
+                 (<a href=\"{svg}\">SVG</a>)</figcaption></figure>",
                 png = escape(&p.png),
                 svg = escape(&svg),
                 t = escape(&p.title)
             );
         }
-        let head: Vec<String> =
-            RUN_COLUMNS.iter().map(|c| format!("<th>{}</th>", escape(c))).collect();
-        let _ = writeln!(s, "<table><tr>{}</tr>", head.concat());
-        for r in report.rows.iter().filter(|r| r.scene == sc.scene) {
-            let cells: Vec<String> =
-                run_cells(r).iter().map(|c| format!("<td>{}</td>", escape(c))).collect();
-            let _ = writeln!(s, "<tr>{}</tr>", cells.concat());
-        }
-        s.push_str("</table>\n");
-    }
-    let pairs = crate::devices::pairs(&report.rows);
-    if !pairs.is_empty() {
+        let rows: Vec<&Row> = report.rows.iter().filter(|r| r.scene == sc.scene).collect();
+        let ref_rate = rows.first().and_then(|r| r.ref_rate);
         let _ = writeln!(
             s,
-            "<h2 id=\"devices\">CPU and GPU</h2>\n<p>The same method and parameters on both \
-             devices; GPU: {}.</p>",
-            escape(report.machine.gpu.as_deref().unwrap_or("none"))
+            "<h3 id=\"scene-{id}-runs\">Runs on {name}</h3>\n<p class=\"constant\">Frame {w}x{h}; \
+             reference <code>{reference}</code>{rate}; metrics over the shadow-only pixels (see \
+             the <a href=\"#glossary\">glossary</a>). Each method links to its run's page.</p>",
+            name = escape(&sc.scene),
+            w = sc.width,
+            h = sc.height,
+            reference = escape(&sc.reference),
+            rate = ref_rate.map_or_else(String::new, |r| format!(" at {r} samples per pixel")),
         );
-        let head: Vec<String> =
-            crate::devices::COLUMNS.iter().map(|c| format!("<th>{}</th>", escape(c))).collect();
-        let _ = writeln!(s, "<table><tr>{}</tr>", head.concat());
-        for p in &pairs {
-            let cells: Vec<String> = crate::devices::cells(p)
-                .iter()
-                .map(|c| format!("<td>{}</td>", escape(c)))
-                .collect();
-            let _ = writeln!(s, "<tr>{}</tr>", cells.concat());
+        if !rows.is_empty() {
+            s.push_str(&runs_table(&rows));
         }
-        s.push_str("</table>\n");
     }
+    s.push_str(&devices_section(report));
     if !report.tables.is_empty() {
         s.push_str("<h2 id=\"tables\">The papers' tables</h2>\n");
         for t in &report.tables {
             let _ = writeln!(
                 s,
-                "<h3>{}</h3>\n<p>Paper's figures measured on: {}. {} (<a href=\"tables/{}.csv\">CSV\
-                 </a>)</p>\n<table><tr>{}</tr>",
+                "<h3 id=\"table-{id}\">{}</h3>\n<p>Paper's figures measured on: {}. {} (<a \
+                 href=\"tables/{}.csv\">CSV</a>)</p>\n<table><tr>{}</tr>",
                 escape(&t.title),
                 escape(&t.paper_hardware),
                 escape(&t.notes.join(" ")),
                 t.paper.name(),
-                t.header.iter().map(|c| format!("<th>{}</th>", escape(c))).collect::<String>()
+                t.header.iter().map(|c| format!("<th>{}</th>", escape(c))).collect::<String>(),
+                id = t.paper.name(),
             );
             for r in &t.rows {
                 let cells: String = r.iter().map(|c| format!("<td>{}</td>", escape(c))).collect();
@@ -139,8 +463,9 @@ pub fn index_html(report: &Report, plots: &[PlotFile]) -> String {
             s.push_str("</table>\n");
         }
     }
+    s.push_str(GLOSSARY);
     if !report.skipped.is_empty() {
-        s.push_str("<h2>Not run</h2>\n<ul>\n");
+        s.push_str("<h2 id=\"skipped\">Not run</h2>\n<ul>\n");
         for k in &report.skipped {
             let _ = writeln!(s, "<li>{}</li>", escape(k));
         }
@@ -150,6 +475,85 @@ pub fn index_html(report: &Report, plots: &[PlotFile]) -> String {
     s
 }
 
+/// The contents list: every section, and under each scene its figures and its table.
+fn contents(report: &Report, plots: &[PlotFile]) -> String {
+    let mut s = String::from(
+        "<nav class=\"contents\"><b>Contents</b><ul>\n<li><a href=\"#scenes\">Scenes</a></li>\n",
+    );
+    for sc in &report.scenes {
+        let id = anchor(&sc.scene);
+        let _ = write!(s, "<li><a href=\"#scene-{id}\">{}</a><ul>", escape(&sc.scene));
+        for (k, g) in report.grids.iter().filter(|g| g.scene == sc.scene).enumerate() {
+            let _ = write!(s, "<li><a href=\"#scene-{id}-grid-{k}\">{}</a></li>", escape(&g.title));
+        }
+        for (k, p) in plots.iter().filter(|p| p.scene == sc.scene).enumerate() {
+            let _ = write!(s, "<li><a href=\"#scene-{id}-plot-{k}\">{}</a></li>", escape(&p.title));
+        }
+        let _ = writeln!(s, "<li><a href=\"#scene-{id}-runs\">runs</a></li></ul></li>");
+    }
+    if !crate::devices::pairs(&report.rows).is_empty() {
+        s.push_str("<li><a href=\"#devices\">CPU and GPU</a></li>\n");
+    }
+    if !report.tables.is_empty() {
+        s.push_str("<li><a href=\"#tables\">The papers' tables</a><ul>");
+        for t in &report.tables {
+            let _ = write!(
+                s,
+                "<li><a href=\"#table-{}\">{}</a></li>",
+                t.paper.name(),
+                escape(&t.title)
+            );
+        }
+        s.push_str("</ul></li>\n");
+    }
+    s.push_str("<li><a href=\"#glossary\">Glossary</a></li>\n");
+    if !report.skipped.is_empty() {
+        s.push_str("<li><a href=\"#skipped\">Not run</a></li>\n");
+    }
+    s.push_str("</ul></nav>\n");
+    s
+}
+
+/// CPU and GPU side by side, the parameters common to every pair stated once.
+fn devices_section(report: &Report) -> String {
+    let pairs = crate::devices::pairs(&report.rows);
+    if pairs.is_empty() {
+        return String::new();
+    }
+    let cpu_rows: Vec<&Row> = pairs.iter().map(|p| p.cpu).collect();
+    let split = ParamSplit::of(&cpu_rows);
+    let mut s = format!(
+        "<h2 id=\"devices\">CPU and GPU</h2>\n<p>The same method and parameters on both devices; \
+         GPU: {}.</p>\n",
+        adapter_html(report.machine.gpu.as_deref())
+    );
+    if !split.constant.is_empty() {
+        let kv: Vec<String> = split
+            .constant
+            .iter()
+            .filter(|(k, _)| *k != "device")
+            .map(|(k, v)| format!("{k}={v}"))
+            .collect();
+        let _ = writeln!(s, "<p class=\"constant\">Every pair: {}.</p>", escape(&kv.join(", ")));
+    }
+    let heads: Vec<(String, bool)> =
+        crate::devices::COLUMNS.iter().enumerate().map(|(k, c)| (c.to_string(), k >= 3)).collect();
+    let body: Vec<String> = pairs
+        .iter()
+        .map(|p| {
+            let mut cells = crate::devices::cells(p);
+            cells[2] = params_of(p.cpu)
+                .into_iter()
+                .filter(|(k, _)| k != "device" && !split.constant.contains_key(k))
+                .map(|(k, v)| format!("{k}={v}"))
+                .collect::<Vec<_>>()
+                .join(" ");
+            cells.iter().map(|c| format!("<td>{}</td>", escape(c))).collect()
+        })
+        .collect();
+    s + &sortable_table("devices", &heads, &body)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -157,5 +561,80 @@ mod tests {
     #[test]
     fn escapes_markup() {
         assert_eq!(escape("<a href=\"x\">&</a>"), "&lt;a href=&quot;x&quot;&gt;&amp;&lt;/a&gt;");
+    }
+
+    #[test]
+    fn software_adapters_are_marked() {
+        for n in [
+            "llvmpipe (LLVM 15.0.6, 256 bits) via Vulkan",
+            "Lavapipe",
+            "Microsoft Basic Render Driver (Software)",
+        ] {
+            assert!(is_software_adapter(n), "{n}");
+            assert!(adapter_html(Some(n)).contains("software rasterizer"), "{n}");
+        }
+        assert!(!is_software_adapter("NVIDIA H200"));
+        assert_eq!(adapter_html(Some("NVIDIA H200")), "NVIDIA H200");
+    }
+    fn row(method: &str, params: serde_json::Value) -> Row {
+        let v =
+            methods::Visibility { width: 10, height: 1, lit: vec![0.25; 10], transmittance: None };
+        let metrics = analysis::Metrics::compare(&v, &[0.0; 10], &[true; 10]);
+        Row {
+            scene: "cage".into(),
+            method: method.into(),
+            params: params.as_object().expect("object").clone(),
+            width: 10,
+            height: 1,
+            reference: "exact".into(),
+            ref_rate: None,
+            metrics,
+            flip_mean: 0.01,
+            total_ms: crate::timing::Summary::of(&[1.0, 2.0, 3.0]).expect("times"),
+            stages: Vec::new(),
+            skipped_stages: Vec::new(),
+            counters: Default::default(),
+            notes: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn parameters_are_stated_where_they_vary() {
+        use serde_json::json;
+        let rows = [
+            row("sm", json!({"constant_bias": 1e-5, "map_res": 256, "slope_bias": 1.0})),
+            row("sm", json!({"constant_bias": 1e-5, "map_res": 512, "slope_bias": 1.0})),
+            row("spsm", json!({"constant_bias": 1e-5, "map_res": 256, "rate": 4, "texel": "f32"})),
+            row(
+                "spsm",
+                json!({"constant_bias": 1e-5, "map_res": 256, "rate": 4, "texel": "packed"}),
+            ),
+        ];
+        let refs: Vec<&Row> = rows.iter().collect();
+        let split = ParamSplit::of(&refs);
+        let constant: Vec<&str> = split.constant.keys().map(String::as_str).collect();
+        assert_eq!(constant, ["constant_bias", "device"]);
+        assert_eq!(split.columns, ["map_res", "rate"]);
+        assert_eq!(split.per_method["sm"].keys().collect::<Vec<_>>(), ["slope_bias"]);
+        assert!(split.per_method["spsm"].is_empty(), "texel varies within spsm");
+        assert!(split.others);
+        assert_eq!(split.other_params(&rows[0]), "");
+        assert_eq!(split.other_params(&rows[2]), "texel=f32");
+        let above = split.html();
+        assert!(above.contains("Every row: constant_bias=0.00001, device=cpu."), "{above}");
+        assert!(above.contains("<code>sm</code>: slope_bias=1.0."), "{above}");
+    }
+
+    #[test]
+    fn metrics_that_do_not_apply_are_na() {
+        let r = row("sm", serde_json::json!({}));
+        let cells = metric_cells(&r);
+        assert!(
+            cells[3..7].iter().all(|c| *c == Cell::na()),
+            "no boundary pixel: no boundary error"
+        );
+        assert_eq!(cells[0].value, Some(0.25));
+        let none = Row { metrics: analysis::Metrics { evaluated_pixels: 0, ..r.metrics }, ..r };
+        assert!(metric_cells(&none).iter().all(|c| c.text == "n/a"));
     }
 }

@@ -1,0 +1,231 @@
+// The pages' behaviour, in plain JavaScript (no network, nothing loaded from elsewhere).
+// index.html: tables sorted by clicking a header (numbers as numbers, "n/a" last) and
+// filtered by a text box. Run pages: a comparison view with zoom (wheel, + and -), pan (drag)
+// and flipping between images (buttons, arrows or n/p, f flips back to this run).
+// Every page marks each image's data-loaded attribute (yes or no) once loaded; opened with
+// #selftest it exercises itself and writes what it found into a pre element of id selftest,
+// one "key: value" line each, for a headless browser's --dump-dom.
+(function () {
+  'use strict';
+
+  function cellValue(td) {
+    var v = td.getAttribute('data-v');
+    if (v !== null && v !== '') return parseFloat(v);
+    var t = td.textContent.trim();
+    return /^[-+]?[0-9]*\.?[0-9]+([eE][-+]?[0-9]+)?/.test(t) ? parseFloat(t) : t;
+  }
+
+  function compare(a, b, dir) {
+    var na = typeof a === 'number', nb = typeof b === 'number';
+    if (na && nb) return dir * (a - b);
+    if (na) return -1; // numbers before text ("n/a", empty) in either direction
+    if (nb) return 1;
+    return dir * String(a).localeCompare(String(b), undefined, {numeric: true});
+  }
+
+  function sortTable(table, col, dir) {
+    var body = table.tBodies[0];
+    var rows = Array.prototype.slice.call(body.rows);
+    rows.sort(function (r, s) {
+      return compare(cellValue(r.cells[col]), cellValue(s.cells[col]), dir);
+    });
+    rows.forEach(function (r) { body.appendChild(r); });
+    var heads = table.tHead.rows[0].cells;
+    for (var i = 0; i < heads.length; i++) {
+      heads[i].setAttribute('aria-sort', i === col ? (dir > 0 ? 'ascending' : 'descending') : 'none');
+    }
+  }
+
+  function clickSort(table, col) {
+    var th = table.tHead.rows[0].cells[col];
+    sortTable(table, col, th.getAttribute('aria-sort') === 'ascending' ? -1 : 1);
+  }
+
+  function filterTable(table, text) {
+    var words = text.toLowerCase().split(/\s+/).filter(Boolean);
+    var rows = table.tBodies[0].rows, shown = 0;
+    for (var i = 0; i < rows.length; i++) {
+      var t = rows[i].textContent.toLowerCase();
+      var keep = words.every(function (w) { return t.indexOf(w) >= 0; });
+      rows[i].style.display = keep ? '' : 'none';
+      shown += keep ? 1 : 0;
+    }
+    return shown;
+  }
+
+  function setupTables() {
+    document.querySelectorAll('table.sortable').forEach(function (table) {
+      var heads = table.tHead.rows[0].cells;
+      Array.prototype.forEach.call(heads, function (th, col) {
+        th.tabIndex = 0;
+        th.title = 'sort by this column';
+        th.addEventListener('click', function () { clickSort(table, col); });
+        th.addEventListener('keydown', function (e) {
+          if (e.key === 'Enter') clickSort(table, col);
+        });
+      });
+      var box = table.previousElementSibling;
+      if (box && box.classList.contains('filter')) {
+        box.addEventListener('input', function () { filterTable(table, box.value); });
+      }
+    });
+  }
+
+  // The comparison view of a run page.
+  function setupViewer() {
+    var viewer = document.getElementById('viewer');
+    if (!viewer) return null;
+    var stage = viewer.querySelector('.stage');
+    var views = Array.prototype.slice.call(stage.querySelectorAll('img.view'));
+    var select = document.getElementById('view-select');
+    var label = document.getElementById('view-label');
+    var st = {scale: 1, x: 0, y: 0, active: 0, other: views.length > 1 ? 1 : 0};
+    function apply() {
+      stage.style.transform = 'translate(' + st.x + 'px,' + st.y + 'px) scale(' + st.scale + ')';
+    }
+    function fit() {
+      var img = views[st.active];
+      var w = img.naturalWidth || 1, h = img.naturalHeight || 1;
+      st.scale = Math.min(viewer.clientWidth / w, viewer.clientHeight / h);
+      st.x = (viewer.clientWidth - w * st.scale) / 2;
+      st.y = (viewer.clientHeight - h * st.scale) / 2;
+      apply();
+    }
+    function show(k) {
+      k = (k + views.length) % views.length;
+      views[st.active].classList.remove('active');
+      st.active = k;
+      if (k !== 0) st.other = k;
+      views[k].classList.add('active');
+      select.value = String(k);
+      label.textContent = views[k].getAttribute('data-label');
+    }
+    function zoom(factor, cx, cy) {
+      st.x = cx - (cx - st.x) * factor;
+      st.y = cy - (cy - st.y) * factor;
+      st.scale *= factor;
+      apply();
+    }
+    viewer.addEventListener('wheel', function (e) {
+      e.preventDefault();
+      var r = viewer.getBoundingClientRect();
+      zoom(e.deltaY < 0 ? 1.25 : 0.8, e.clientX - r.left, e.clientY - r.top);
+    }, {passive: false});
+    var drag = null;
+    viewer.addEventListener('mousedown', function (e) {
+      drag = {x: e.clientX - st.x, y: e.clientY - st.y};
+      viewer.focus();
+      e.preventDefault();
+    });
+    window.addEventListener('mousemove', function (e) {
+      if (!drag) return;
+      st.x = e.clientX - drag.x;
+      st.y = e.clientY - drag.y;
+      apply();
+    });
+    window.addEventListener('mouseup', function () { drag = null; });
+    function flip() { show(st.active === 0 ? st.other : 0); }
+    document.addEventListener('keydown', function (e) {
+      if (e.target.tagName === 'SELECT' || e.target.tagName === 'INPUT') return;
+      var c = viewer.clientWidth / 2, m = viewer.clientHeight / 2;
+      switch (e.key) {
+        case 'ArrowRight': case 'n': show(st.active + 1); break;
+        case 'ArrowLeft': case 'p': show(st.active - 1); break;
+        case 'f': case ' ': flip(); break;
+        case '+': case '=': zoom(1.25, c, m); break;
+        case '-': zoom(0.8, c, m); break;
+        case '0': fit(); break;
+        default: return;
+      }
+      e.preventDefault();
+    });
+    document.getElementById('prev').addEventListener('click', function () { show(st.active - 1); });
+    document.getElementById('next').addEventListener('click', function () { show(st.active + 1); });
+    document.getElementById('flip').addEventListener('click', flip);
+    document.getElementById('fit').addEventListener('click', fit);
+    select.addEventListener('change', function () { show(parseInt(select.value, 10)); });
+    show(0);
+    return {state: st, views: views, fit: fit, viewer: viewer};
+  }
+
+  function selftest(v) {
+    var out = [];
+    var images = Array.prototype.slice.call(document.images);
+    var bad = images.filter(function (i) { return !(i.complete && i.naturalWidth > 0); });
+    out.push('images: ' + (images.length - bad.length) + ' of ' + images.length + ' loaded');
+    bad.forEach(function (i) { out.push('broken image: ' + i.getAttribute('src')); });
+    var table = document.querySelector('table.runs') || document.querySelector('table.sortable');
+    if (table) {
+      var col = Array.prototype.findIndex.call(table.tHead.rows[0].cells, function (th) {
+        return th.classList.contains('num');
+      });
+      var values = function () {
+        return Array.prototype.map.call(table.tBodies[0].rows, function (r) {
+          return cellValue(r.cells[col]);
+        }).filter(function (x) { return typeof x === 'number'; });
+      };
+      var ordered = function (dir) {
+        var xs = values();
+        for (var i = 1; i < xs.length; i++) if (dir * (xs[i] - xs[i - 1]) < 0) return false;
+        return xs.length > 1;
+      };
+      var before = values().join(' ');
+      clickSort(table, col);
+      var up = ordered(1), upValues = values().join(' ');
+      clickSort(table, col);
+      var down = ordered(-1);
+      out.push('sort column: ' + table.tHead.rows[0].cells[col].textContent);
+      out.push('sort: ' + (up && down ? 'ok' : 'FAILED') + ' (before ' + before + '; ascending ' +
+        upValues + '; descending ' + values().join(' ') + ')');
+      var first = table.tBodies[0].rows[0].cells[0].textContent.trim();
+      var total = table.tBodies[0].rows.length;
+      var shown = filterTable(table, first);
+      var none = filterTable(table, 'no row holds this text');
+      filterTable(table, '');
+      out.push('filter: ' + (shown >= 1 && shown <= total && none === 0 ? 'ok' : 'FAILED') +
+        ' (' + shown + ' of ' + total + ' rows hold "' + first + '")');
+    }
+    if (v) {
+      var st = v.state, start = st.active;
+      var src = function () { return v.views[st.active].getAttribute('src'); };
+      var a = src();
+      document.dispatchEvent(new KeyboardEvent('keydown', {key: 'ArrowRight', bubbles: true}));
+      var b = src();
+      document.getElementById('flip').click();
+      var c = src();
+      out.push('views: ' + v.views.length);
+      out.push('flip: ' + (v.views.length > 1 && a !== b && c === a && start === 0 ? 'ok' : 'FAILED') +
+        ' (' + a + ' -> ' + b + ' -> ' + c + ')');
+      var s0 = st.scale, r = v.viewer.getBoundingClientRect();
+      v.viewer.dispatchEvent(new WheelEvent('wheel', {deltaY: -100, clientX: r.left + 10,
+        clientY: r.top + 10, bubbles: true, cancelable: true}));
+      var zoomed = st.scale > s0;
+      var x0 = st.x;
+      v.viewer.dispatchEvent(new MouseEvent('mousedown', {clientX: 50, clientY: 50, bubbles: true}));
+      window.dispatchEvent(new MouseEvent('mousemove', {clientX: 80, clientY: 60}));
+      window.dispatchEvent(new MouseEvent('mouseup', {}));
+      var panned = Math.abs(st.x - x0 - 30) < 1e-6;
+      out.push('zoom and pan: ' + (zoomed && panned ? 'ok' : 'FAILED'));
+    }
+    document.querySelectorAll('a[href]').forEach(function (l) {
+      var h = l.getAttribute('href');
+      if (!/^(#|[a-z]+:)/i.test(h)) out.push('link: ' + h.split('#')[0]);
+    });
+    var pre = document.createElement('pre');
+    pre.id = 'selftest';
+    pre.textContent = out.join('\n');
+    document.body.appendChild(pre);
+  }
+
+  window.addEventListener('load', function () {
+    for (var k = 0; k < document.images.length; k++) {
+      var i = document.images[k];
+      i.setAttribute('data-loaded', i.complete && i.naturalWidth > 0 ? 'yes' : 'no');
+    }
+    setupTables();
+    var v = setupViewer();
+    if (v) v.fit();
+    if (location.hash === '#selftest') selftest(v);
+    document.body.setAttribute('data-checked', 'yes');
+  });
+})();
