@@ -11,6 +11,7 @@ pub mod grids;
 pub mod html;
 pub mod output;
 pub mod plots;
+pub mod run_pages;
 pub mod suite;
 pub mod sweep;
 pub mod tables;

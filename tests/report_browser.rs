@@ -1,0 +1,145 @@
+//! A report's pages in headless Chromium: index.html and a run page open from the file system,
+//! every image loads, every local link names a file that exists and every anchor a section,
+//! clicking a table header sorts the table (ascending, then descending), the filter box hides
+//! rows, and the run page's comparison view flips between images, zooms and pans.
+//!
+//! The pages test themselves when opened with `#selftest` (`reports/assets/report.js`) and
+//! write what they found into `<pre id="selftest">`, which `--dump-dom` prints. Chromium must
+//! be installed (`scripts/install-chromium`); without it the test fails.
+
+use reports::{run_pages::write_run_pages, run_suite, write_report, Suite};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const CHROMIUM: &str = "/usr/bin/chromium";
+
+const SUITE: &str = r#"
+name = "browser"
+width = 96
+height = 72
+warmup = 1
+repeats = 2
+scenes = ["plane-square"]
+
+[[run]]
+method = "sm"
+map_res = [64, 128]
+
+[[run]]
+method = "pcf-gems4"
+map_res = [64]
+"#;
+
+/// The text of `<pre id="selftest">` in `page` opened with `#selftest`, one line per finding.
+fn selftest(page: &Path) -> Vec<String> {
+    assert!(
+        Path::new(CHROMIUM).is_file(),
+        "{CHROMIUM} is missing: run scripts/install-chromium (it installs Debian's chromium)"
+    );
+    let profile = tempfile::tempdir().expect("tempdir");
+    let url = format!("file://{}#selftest", page.display());
+    let o = Command::new(CHROMIUM)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            &format!("--user-data-dir={}", profile.path().display()),
+            "--virtual-time-budget=5000",
+            "--dump-dom",
+            &url,
+        ])
+        .output()
+        .expect("chromium runs");
+    let dom = String::from_utf8_lossy(&o.stdout);
+    // The last one: the script's comments name the element too.
+    let text = dom
+        .rsplit_once("<pre id=\"selftest\">")
+        .and_then(|(_, t)| t.split("</pre>").next())
+        .unwrap_or_else(|| {
+            panic!(
+                "{}: no self-test output; stderr: {}\n{dom}",
+                page.display(),
+                String::from_utf8_lossy(&o.stderr)
+            )
+        });
+    text.replace("&lt;", "<")
+        .replace("&gt;", ">")
+        .replace("&quot;", "\"")
+        .replace("&amp;", "&")
+        .lines()
+        .map(str::to_owned)
+        .collect()
+}
+
+/// The value of the line `key: value`.
+fn finding<'a>(lines: &'a [String], key: &str) -> &'a str {
+    let prefix = format!("{key}: ");
+    lines
+        .iter()
+        .find_map(|l| l.strip_prefix(&prefix))
+        .unwrap_or_else(|| panic!("no `{key}` in {lines:#?}"))
+}
+
+/// Checks the findings every page reports: its images (as many as the page has) all loaded,
+/// and every local link it holds names a file beside it.
+fn images_and_links(page: &Path, lines: &[String]) {
+    let html = std::fs::read_to_string(page).expect("page");
+    let n = html.matches("<img ").count();
+    assert!(n > 0, "{}: no image", page.display());
+    assert_eq!(finding(lines, "images"), format!("{n} of {n} loaded"), "{lines:#?}");
+    let dir = page.parent().expect("folder");
+    let links: Vec<PathBuf> =
+        lines.iter().filter_map(|l| l.strip_prefix("link: ")).map(|l| dir.join(l)).collect();
+    assert!(!links.is_empty(), "{lines:#?}");
+    for l in links {
+        assert!(l.is_file(), "{}: link to {} that does not exist", page.display(), l.display());
+    }
+    // Every anchor of the page is a section of it.
+    for a in html.split("href=\"#").skip(1).filter_map(|s| s.split('"').next()) {
+        assert!(html.contains(&format!("id=\"{a}\"")), "{}: #{a} leads nowhere", page.display());
+    }
+}
+
+#[test]
+fn index_and_run_pages_work_in_headless_chromium() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let suite = Suite::parse(SUITE, Path::new("browser.toml")).expect("suite");
+    let (report, produced, grids) = run_suite(&suite, |_| {});
+    assert_eq!(report.rows.len(), 3, "{:?}", report.skipped);
+    let out = dir.path();
+    write_report(out, &report, &produced, &grids).expect("report written");
+    let pages = write_run_pages(out, &report, &produced).expect("run pages written");
+    assert_eq!(pages.len(), 3);
+
+    let index = out.join("index.html");
+    let html = std::fs::read_to_string(&index).expect("index.html");
+    // Parameters the same in every row are stated once, above the table.
+    assert_eq!(html.matches("constant_bias=").count(), 1, "{html}");
+    for term in ["RMSE", "boundary pixels", "p50 / p95 / p99", "FLIP", "pixel match", "n/a"] {
+        assert!(html.contains(&format!("<dt>{term}")), "glossary lacks {term}");
+    }
+    let lines = selftest(&index);
+    images_and_links(&index, &lines);
+    assert!(finding(&lines, "sort").starts_with("ok"), "{lines:#?}");
+    assert!(finding(&lines, "filter").starts_with("ok"), "{lines:#?}");
+    for p in &pages {
+        assert!(lines.iter().any(|l| l == &format!("link: {p}")), "index does not link {p}");
+    }
+
+    let run = out.join(&pages[0]);
+    let lines = selftest(&run);
+    images_and_links(&run, &lines);
+    assert_eq!(finding(&lines, "views"), "3", "this run and the scene's two others");
+    assert!(finding(&lines, "flip").starts_with("ok"), "{lines:#?}");
+    assert_eq!(finding(&lines, "zoom and pan"), "ok", "{lines:#?}");
+    let exr = format!(
+        "link: ../visibility/{}",
+        Path::new(&pages[0]).with_extension("exr").file_name().expect("name").to_string_lossy()
+    );
+    assert!(lines.contains(&exr), "the page does not link its EXR: {lines:#?}");
+}
