@@ -1,5 +1,5 @@
 //! `afsm` and `afsm-ss`: alias-free shadow maps (Aila and Laine 2004, "Alias-Free Shadow
-//! Maps", EGSR 2004, `../shared/papers/aila-laine2004-alias-free-shadow-maps.txt`).
+//! Maps", Eurographics Symposium on Rendering (EGSR) 2004).
 //!
 //! The visible samples themselves are the shadow map's sampling points (section 3): each is
 //! moved to the light's image plane with its light depth, without discretisation; the samples

@@ -1,5 +1,5 @@
 //! `afsm` on the GPU: the alias-free shadow map (Aila and Laine 2004, "Alias-Free Shadow
-//! Maps", EGSR 2004, sections 3 and 5; `../shared/papers/`) as an irregular z-buffer, the
+//! Maps", EGSR 2004, sections 3 and 5) as an irregular z-buffer, the
 //! form GPU versions of the technique take: the sampling points are binned into a regular
 //! grid of light-space cells instead of the paper's 2D BSP, and each caster triangle visits
 //! the cells its light-space bounding box covers.

@@ -1,6 +1,5 @@
 //! `pan09`: fast sub-pixel antialiased shadow maps (Pan, Wang, Chen, Zhou and Bao 2009, "Fast,
-//! Sub-pixel Antialiased Shadow Maps", Pacific Graphics 2009,
-//! `../shared/papers/pan2009-fast-subpixel-antialiased-shadow-maps.txt`).
+//! Sub-pixel Antialiased Shadow Maps", Computer Graphics Forum 28(7), Pacific Graphics 2009).
 //!
 //! Alias-free shadows at the pixel centres, extended to `rate` sub-samples per pixel without
 //! supersampling the screen: each pixel is approximated by a *facet* on its tangent plane

@@ -1,7 +1,6 @@
 //! `pcf-bs-2x2`, `pcf-bs-fast-2x2`, `pcf-bs-fast-4x4`: Brabec and Seidel's percentage-closer
 //! filtering with packed multi-component shadow maps ("Hardware-accelerated rendering of
-//! antialiased shadows with shadow maps", CGI 2001;
-//! `../shared/papers/brabec-seidel-hardware-pcf-antialiased-shadows.txt`).
+//! antialiased shadows with shadow maps", Computer Graphics International (CGI) 2001).
 //!
 //! Depth is stored as colour through a linear ramp (section 2), quantized to `depth_bits`
 //! bits (`--depth-bits 8|12|24|32`, default 32; the paper's workstations had 8 bits per

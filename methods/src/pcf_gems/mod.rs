@@ -1,6 +1,6 @@
 //! `pcf-gems16` and `pcf-gems4`: percentage-closer filtering over a fixed 4x4-texel region
 //! with hardware bilinear PCF lookups (Bunnell and Pellacini, "Shadow Map Antialiasing",
-//! GPU Gems, chapter 11, 2004; `../shared/papers/gpu-gems-ch11-shadow-map-antialiasing.txt`).
+//! GPU Gems, chapter 11, Addison-Wesley 2004).
 //!
 //! - **Bilinear PCF lookup** (section 11.3, Fig. 11-3): the hardware compares the point's depth
 //!   against the four texels around the lookup point and interpolates the four results

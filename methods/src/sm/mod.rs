@@ -1,5 +1,5 @@
 //! `sm`: the standard shadow map (Williams 1978, "Casting curved shadows on curved surfaces",
-//! as cited by every paper in `../shared/papers/`).
+//! SIGGRAPH 1978, as cited by every paper the other methods follow).
 //!
 //! Stages: **light depth map** (the nearest caster depth at each texel centre, see
 //! [`crate::depth_map`]) and **depth test** (each pixel's surface point, taken at the pixel

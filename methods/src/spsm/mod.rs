@@ -1,5 +1,6 @@
 //! `spsm`, `spsm-f32`: sub-pixel shadow maps (Lecocq, Marvie, Sourimant and Gautron,
-//! "Sub-Pixel Shadow Mapping", ACM i3D 2014; `../shared/papers/lecocq2014-sub-pixel-shadow-maps.txt`).
+//! "Sub-Pixel Shadow Mapping", ACM SIGGRAPH Symposium on Interactive 3D Graphics and Games
+//! (I3D) 2014).
 //!
 //! The map stores, per texel, the closest triangle touching it instead of a depth, and each
 //! pixel's shadow is decided from that partial geometry with sub-pixel precision.

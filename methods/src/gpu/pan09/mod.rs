@@ -1,5 +1,5 @@
 //! `pan09` on the GPU: Pan, Wang, Chen, Zhou and Bao 2009, "Fast, Sub-pixel Antialiased
-//! Shadow Maps" (`../shared/papers/pan2009-fast-subpixel-antialiased-shadow-maps.txt`), the
+//! Shadow Maps", Computer Graphics Forum 28(7), Pacific Graphics 2009), the
 //! pipeline of its Fig. 2 as compute passes, stage by stage the CPU twin's
 //! ([`crate::pan09`], whose module doc lists every choice), in `f64` with the CPU's
 //! operations in the CPU's order.
