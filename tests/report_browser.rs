@@ -1,7 +1,7 @@
 //! A report's pages in headless Chromium: index.html and a run page open from the file system,
 //! every image loads, every local link names a file that exists and every anchor a section,
 //! clicking a table header sorts the table (ascending, then descending), the filter box hides
-//! rows, and the run page's comparison view flips between images, zooms and pans.
+//! rows, and the run page's comparison view flips between images, zooms, pans and swipes.
 //!
 //! The pages test themselves when opened with `#selftest` (`reports/assets/report.js`) and
 //! write what they found into `<pre id="selftest">`, which `--dump-dom` prints. Chromium must
@@ -137,6 +137,7 @@ fn index_and_run_pages_work_in_headless_chromium() {
     assert_eq!(finding(&lines, "views"), "3", "this run and the scene's two others");
     assert!(finding(&lines, "flip").starts_with("ok"), "{lines:#?}");
     assert_eq!(finding(&lines, "zoom and pan"), "ok", "{lines:#?}");
+    assert!(finding(&lines, "swipe").starts_with("ok"), "{lines:#?}");
     let exr = format!(
         "link: ../visibility/{}",
         Path::new(&pages[0]).with_extension("exr").file_name().expect("name").to_string_lossy()

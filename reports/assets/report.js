@@ -1,7 +1,8 @@
 // The pages' behaviour, in plain JavaScript (no network, nothing loaded from elsewhere).
 // index.html: tables sorted by clicking a header (numbers as numbers, "n/a" last) and
 // filtered by a text box. Run pages: a comparison view with zoom (wheel, + and -), pan (drag)
-// and flipping between images (buttons, arrows or n/p, f flips back to this run).
+// and flipping between images (buttons, arrows or n/p, f flips back to this run), or swiping
+// between this run and another (s: this run left of the pointer, the other right of it).
 // Every page marks each image's data-loaded attribute (yes or no) once loaded; opened with
 // #selftest it exercises itself and writes what it found into a pre element of id selftest,
 // one "key: value" line each, for a headless browser's --dump-dom.
@@ -79,7 +80,8 @@
     var views = Array.prototype.slice.call(stage.querySelectorAll('img.view'));
     var select = document.getElementById('view-select');
     var label = document.getElementById('view-label');
-    var st = {scale: 1, x: 0, y: 0, active: 0, other: views.length > 1 ? 1 : 0};
+    var st = {scale: 1, x: 0, y: 0, active: 0, other: views.length > 1 ? 1 : 0,
+      swipe: false, split: 0.5};
     function apply() {
       stage.style.transform = 'translate(' + st.x + 'px,' + st.y + 'px) scale(' + st.scale + ')';
     }
@@ -91,14 +93,30 @@
       st.y = (viewer.clientHeight - h * st.scale) / 2;
       apply();
     }
+    // Shows the active view; in swipe mode, this run left of the split and the other view
+    // right of it, laid over it.
+    function render() {
+      views.forEach(function (img, k) {
+        var over = st.swipe && k === st.other && k !== 0;
+        img.classList.toggle('active', st.swipe ? k === 0 || over : k === st.active);
+        img.classList.toggle('overlay', over);
+        img.style.clipPath = over ? 'inset(0 0 0 ' + (100 * st.split).toFixed(2) + '%)' : '';
+      });
+      var k = st.swipe ? st.other : st.active;
+      select.value = String(k);
+      label.textContent = st.swipe
+        ? 'left: this run, right: ' + views[st.other].getAttribute('data-label')
+        : views[k].getAttribute('data-label');
+    }
     function show(k) {
       k = (k + views.length) % views.length;
-      views[st.active].classList.remove('active');
       st.active = k;
       if (k !== 0) st.other = k;
-      views[k].classList.add('active');
-      select.value = String(k);
-      label.textContent = views[k].getAttribute('data-label');
+      render();
+    }
+    function swipe() {
+      st.swipe = !st.swipe && views.length > 1;
+      render();
     }
     function zoom(factor, cx, cy) {
       st.x = cx - (cx - st.x) * factor;
@@ -117,6 +135,12 @@
       viewer.focus();
       e.preventDefault();
     });
+    viewer.addEventListener('mousemove', function (e) {
+      if (drag || !st.swipe) return;
+      var r = viewer.getBoundingClientRect(), w = views[0].naturalWidth * st.scale;
+      st.split = Math.min(1, Math.max(0, (e.clientX - r.left - st.x) / (w || 1)));
+      render();
+    });
     window.addEventListener('mousemove', function (e) {
       if (!drag) return;
       st.x = e.clientX - drag.x;
@@ -132,6 +156,7 @@
         case 'ArrowRight': case 'n': show(st.active + 1); break;
         case 'ArrowLeft': case 'p': show(st.active - 1); break;
         case 'f': case ' ': flip(); break;
+        case 's': swipe(); break;
         case '+': case '=': zoom(1.25, c, m); break;
         case '-': zoom(0.8, c, m); break;
         case '0': fit(); break;
@@ -143,6 +168,7 @@
     document.getElementById('next').addEventListener('click', function () { show(st.active + 1); });
     document.getElementById('flip').addEventListener('click', flip);
     document.getElementById('fit').addEventListener('click', fit);
+    document.getElementById('swipe').addEventListener('click', swipe);
     select.addEventListener('change', function () { show(parseInt(select.value, 10)); });
     show(0);
     return {state: st, views: views, fit: fit, viewer: viewer};
@@ -206,6 +232,16 @@
       window.dispatchEvent(new MouseEvent('mouseup', {}));
       var panned = Math.abs(st.x - x0 - 30) < 1e-6;
       out.push('zoom and pan: ' + (zoomed && panned ? 'ok' : 'FAILED'));
+      var shown = function () {
+        return v.views.filter(function (i) { return getComputedStyle(i).display !== 'none'; });
+      };
+      var single = shown().length;
+      document.getElementById('swipe').click();
+      var two = shown(), clip = two.length === 2 ? getComputedStyle(two[1]).clipPath : '';
+      document.getElementById('swipe').click();
+      out.push('swipe: ' + (single === 1 && two.length === 2 && two[0] === v.views[0] &&
+        /inset/.test(clip) && shown().length === 1 ? 'ok' : 'FAILED') + ' (' + single + ', ' +
+        two.length + ' images shown, ' + clip + ')');
     }
     document.querySelectorAll('a[href]').forEach(function (l) {
       var h = l.getAttribute('href');

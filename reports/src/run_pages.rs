@@ -7,8 +7,9 @@
 //! view (plain JavaScript from `reports/assets/report.js`, nothing from the network): zoom
 //! with the wheel or `+`/`-`, pan by dragging, `0` to fit; flip between this run's image and
 //! those of the scene's other runs with the buttons, the list, the arrow keys or `n`/`p`, and
-//! back to this run with `f`. Opened as `ID.html#selftest`, the page flips, zooms and pans
-//! itself and writes what it found into `<pre id="selftest">`.
+//! back to this run with `f`; `s` swipes between the two (this run left of the pointer, the
+//! other right of it). Opened as `ID.html#selftest`, the page flips, zooms, pans and
+//! swipes itself and writes what it found into `<pre id="selftest">`.
 
 use crate::html::{anchor, escape, metric_cells, page_head, params_of, Cell, METRIC_COLUMNS};
 use crate::output::OutputError;
@@ -68,7 +69,8 @@ pub fn run_page(report: &Report, row: usize, views: &[usize]) -> String {
         "<h2 id=\"compare\">Comparison</h2>\n<p>Lit fraction, black in shadow, white lit. Wheel \
          or <kbd>+</kbd>/<kbd>-</kbd> zoom, drag pans, <kbd>0</kbd> fits; <kbd>&larr;</kbd> \
          <kbd>&rarr;</kbd> (or <kbd>p</kbd> <kbd>n</kbd>) step through the scene's runs, \
-         <kbd>f</kbd> flips between this run and the last one viewed.</p>\n<div \
+         <kbd>f</kbd> flips between this run and the last one viewed, <kbd>s</kbd> swipes \
+         between them (this run left of the pointer, the other right of it).</p>\n<div \
          class=\"controls\"><button id=\"prev\">&larr; previous</button><select \
          id=\"view-select\" aria-label=\"image shown\">",
     );
@@ -79,7 +81,8 @@ pub fn run_page(report: &Report, row: usize, views: &[usize]) -> String {
     }
     s.push_str(
         "</select><button id=\"next\">next &rarr;</button><button id=\"flip\">flip (f)</button>\
-         <button id=\"fit\">fit (0)</button> <span id=\"view-label\"></span></div>\n<div \
+         <button id=\"swipe\">swipe (s)</button><button id=\"fit\">fit (0)</button> <span \
+         id=\"view-label\"></span></div>\n<div \
          class=\"viewer\" id=\"viewer\" tabindex=\"0\"><div class=\"stage\">",
     );
     for (k, &v) in views.iter().enumerate() {
