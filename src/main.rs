@@ -64,9 +64,15 @@ struct ReportArgs {
     /// (.toml; copy one from reports/suites/ and edit it).
     #[arg(long, default_value = "quick", value_name = "SUITE")]
     suite: String,
-    /// Output folder; default `shadowbench-out/report-SUITE`.
+    /// Output folder; default `shadowbench-out/report-SUITE`. It must be empty or hold an
+    /// earlier report (whose files are removed first); a folder holding other files is refused.
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
+    /// An earlier report's folder: every run present in both is compared (error change, time
+    /// ratio with its 95 % interval) and regressions are flagged at the top of report.md and
+    /// index.html, and in baseline.md. Read before anything is computed.
+    #[arg(long, value_name = "DIR")]
+    baseline: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -441,7 +447,13 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
             (PathBuf::from(format!("shadowbench-out/report-{}", suite.name)), "--out (default)")
         }
     };
+    let before = match &a.baseline {
+        Some(dir) => Some(reports::baseline::load(dir).map_err(|e| input(anyhow::anyhow!("{e}")))?),
+        None => None,
+    };
     prepare_out(&out, flag)?;
+    reports::write::prepare_out_dir(&out)
+        .map_err(|e| input(anyhow::anyhow!("{flag} {}: {e}", out.display())))?;
     let bar = indicatif::ProgressBar::new(reports::run_count(&suite));
     bar.set_style(
         indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} runs, {elapsed} {msg}")
@@ -452,7 +464,28 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
         bar.inc(1);
     });
     bar.finish_and_clear();
-    reports::write_report(&out, &report, &produced, &grids)?;
+    let comparison = match (&before, &a.baseline) {
+        (Some(b), Some(dir)) => Some(reports::baseline::compare(
+            &report,
+            b,
+            dir,
+            reports::baseline::BaselineOptions::default(),
+        )),
+        _ => None,
+    };
+    reports::write_report(&out, &report, &produced, &grids, comparison.as_ref())?;
+    if let Some(c) = &comparison {
+        println!("{}", reports::baseline::summary_line(c));
+        for r in c.regressions() {
+            println!(
+                "  regression: {} {} on {}: {}",
+                r.method,
+                r.params,
+                r.scene,
+                reports::baseline::flags(r)
+            );
+        }
+    }
     for skipped in &report.skipped {
         eprintln!("note: not run: {skipped}");
     }
@@ -508,7 +541,17 @@ fn record(
         notes: rec.notes,
         warnings: rec.warnings,
         pixel_classes: classes.map(analysis::metrics::class_pixels),
+        provenance: Some(instrumentation::Provenance::capture(
+            instrumentation::Provenance::command_line(),
+            gpu_adapter(job),
+        )),
     }
+}
+
+/// The GPU adapter a job ran on (`--device gpu`), for its provenance.
+fn gpu_adapter(job: &Job) -> Option<String> {
+    let on_gpu = job.technique.params().get("device").and_then(|d| d.as_str()) == Some("gpu");
+    on_gpu.then(|| methods::gpu::GpuContext::shared().ok().map(|c| c.adapter_name())).flatten()
 }
 
 /// The spread of the total times of repeated runs (`--repeat`).

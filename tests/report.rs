@@ -336,3 +336,49 @@ fn index_html_loads_every_image_in_headless_chromium() {
     assert_eq!(dom.matches("data-loaded=\"yes\"").count(), images, "{dom}");
     assert!(!dom.contains("data-loaded=\"no\""));
 }
+
+/// `report --baseline DIR` sets the report against an earlier one: a summary at the top of
+/// report.md and index.html, every run in baseline.md, the counts on standard output; a
+/// baseline folder without a report, or an output folder holding a foreign file, is bad input.
+#[test]
+fn a_report_is_set_against_its_baseline_and_foreign_folders_are_refused() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let suite = write(
+        dir.path(),
+        "base.toml",
+        "name = \"base\"\nwidth = 48\nheight = 36\nwarmup = 0\nrepeats = 1\n\
+         scenes = [\"plane-square\"]\n[[run]]\nmethod = \"sm\"\nmap_res = [64, 128]\n",
+    );
+    let first = dir.path().join("first");
+    let second = dir.path().join("second");
+    let run = |out: &std::path::Path, baseline: Option<&std::path::Path>| {
+        let mut args = vec!["report", "--suite", &suite, "--out", out.to_str().expect("utf-8")];
+        if let Some(b) = baseline {
+            args.extend(["--baseline", b.to_str().expect("utf-8")]);
+        }
+        shadowbench(&args)
+    };
+    assert!(run(&first, None).status.success());
+    let o = run(&second, Some(&first));
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("2 runs compared (0 new, 0 dropped)"), "{out}");
+    let md = std::fs::read_to_string(second.join("report.md")).expect("report.md");
+    assert!(md.contains("## Against the baseline"), "{md}");
+    assert!(second.join("baseline.md").exists());
+    let html = std::fs::read_to_string(second.join("index.html")).expect("index.html");
+    assert!(html.contains("id=\"baseline\""));
+    // Writing again into a report's folder replaces it; a foreign file is refused.
+    assert!(run(&second, Some(&first)).status.success());
+    std::fs::write(second.join("notes.txt"), "mine").expect("writes");
+    let o = run(&second, None);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("notes.txt"), "{}", stderr(&o));
+    let o = run(&dir.path().join("third"), Some(&dir.path().join("nowhere")));
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("--baseline") && stderr(&o).contains("runs.json"),
+        "{}",
+        stderr(&o)
+    );
+}

@@ -112,7 +112,7 @@ fn index_and_run_pages_work_in_headless_chromium() {
     let (report, produced, grids) = run_suite(&suite, |_| {});
     assert_eq!(report.rows.len(), 3, "{:?}", report.skipped);
     let out = dir.path();
-    write_report(out, &report, &produced, &grids).expect("report written");
+    write_report(out, &report, &produced, &grids, None).expect("report written");
     let pages = write_run_pages(out, &report, &produced).expect("run pages written");
     assert_eq!(pages.len(), 3);
 

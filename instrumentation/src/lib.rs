@@ -201,6 +201,10 @@ pub struct RunRecord {
     /// classifies pixels (`exact`); absent otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pixel_classes: Option<BTreeMap<String, u64>>,
+    /// What produced the run (commit, version, command line, time, machine); absent when not
+    /// recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub provenance: Option<Provenance>,
 }
 
 /// The CPU's model name, from `/proc/cpuinfo` where there is one, for labelling times.

@@ -151,23 +151,27 @@ pub fn compare(now: &Report, before: &Report, dir: &Path, options: BaselineOptio
     }
 }
 
-/// The comparison as Markdown: the summary first (counts and every regression), then every
-/// run.
-pub fn markdown(c: &Comparison) -> String {
-    let mut s = String::new();
-    let slower = c.runs.iter().filter(|r| r.slower).count();
-    let faster = c.runs.iter().filter(|r| r.faster).count();
-    let worse = c.runs.iter().filter(|r| r.less_accurate).count();
-    let _ = writeln!(
-        s,
-        "Against the baseline `{}` (commit {}): {} runs compared ({} new, {} dropped); {slower} \
-         slower, {worse} less accurate, {faster} faster.\n",
+/// One sentence on the comparison: the baseline, the runs compared and the flags counted.
+pub fn summary_line(c: &Comparison) -> String {
+    let count = |f: fn(&RunChange) -> bool| c.runs.iter().filter(|r| f(r)).count();
+    format!(
+        "Against the baseline {} (commit {}): {} runs compared ({} new, {} dropped); {} slower, \
+         {} less accurate, {} faster",
         c.dir.display(),
         c.commit,
         c.runs.len(),
         c.new_runs,
-        c.dropped_runs
-    );
+        c.dropped_runs,
+        count(|r| r.slower),
+        count(|r| r.less_accurate),
+        count(|r| r.faster)
+    )
+}
+
+/// The comparison as Markdown: the summary first (counts and every regression), then every
+/// run.
+pub fn markdown(c: &Comparison) -> String {
+    let mut s = format!("{}.\n\n", summary_line(c));
     let regressions: Vec<&RunChange> = c.regressions().collect();
     if regressions.is_empty() {
         s.push_str("No regression.\n\n");

@@ -13,6 +13,7 @@
 //! opened as `index.html#selftest` sorts and filters its first run table and writes what it
 //! found into `<pre id="selftest">`, for a headless browser to check.
 
+use crate::baseline::Comparison;
 use crate::figures::PlotFile;
 use crate::sweep::{Report, Row};
 use crate::write::row_stem;
@@ -341,7 +342,7 @@ their minimum and maximum; the camera G-buffer, shared by every method of a scen
 per scene.</dd>\n</dl>\n";
 
 /// The page.
-pub fn index_html(report: &Report, plots: &[PlotFile]) -> String {
+pub fn index_html(report: &Report, plots: &[PlotFile], baseline: Option<&Comparison>) -> String {
     let mut s = page_head(&format!("shadowbench report: {}", report.suite.name));
     let (m, p) = (&report.machine, &report.provenance);
     let _ = write!(
@@ -369,7 +370,10 @@ pub fn index_html(report: &Report, plots: &[PlotFile]) -> String {
         time = escape(&p.timestamp),
         command = escape(&p.command),
     );
-    s.push_str(&contents(report, plots));
+    s.push_str(&contents(report, plots, baseline.is_some()));
+    if let Some(c) = baseline {
+        s.push_str(&baseline_section(c));
+    }
     s.push_str("<h2 id=\"scenes\">Scenes</h2>\n");
     let heads: Vec<(String, bool)> = [
         ("scene", false),
@@ -401,6 +405,16 @@ pub fn index_html(report: &Report, plots: &[PlotFile]) -> String {
         })
         .collect();
     s.push_str(&sortable_table("scenes", &heads, &body));
+    for (k, p) in plots.iter().filter(|p| p.scene.is_empty()).enumerate() {
+        let _ = writeln!(
+            s,
+            "<figure id=\"summary-plot-{k}\"><img src=\"{png}\" alt=\"{t}\"><figcaption>{t} (<a \
+             href=\"{svg}\">SVG</a>)</figcaption></figure>",
+            png = escape(&p.png),
+            svg = escape(&(p.png.trim_end_matches(".png").to_owned() + ".svg")),
+            t = escape(&p.title)
+        );
+    }
     for sc in &report.scenes {
         let id = anchor(&sc.scene);
         let _ = writeln!(s, "<h2 id=\"scene-{id}\">{}</h2>", escape(&sc.scene));
@@ -417,11 +431,13 @@ pub fn index_html(report: &Report, plots: &[PlotFile]) -> String {
             let svg = p.png.trim_end_matches(".png").to_owned() + ".svg";
             let _ = writeln!(
                 s,
-                "<figure id=\"scene-{id}-plot-{k}\"><img src=\"{png}\" alt=\"{t}\"><figcaption>{t} \
-                 (<a href=\"{svg}\">SVG</a>)</figcaption></figure>",
+                "<div class=\"beside\"><figure id=\"scene-{id}-plot-{k}\"><img src=\"{png}\" \
+                 alt=\"{t}\"><figcaption>{t} (<a href=\"{svg}\">SVG</a>)</figcaption></figure>{pareto}\
+                 </div>",
                 png = escape(&p.png),
                 svg = escape(&svg),
-                t = escape(&p.title)
+                t = escape(&p.title),
+                pareto = pareto_table(p),
             );
         }
         let rows: Vec<&Row> = report.rows.iter().filter(|r| r.scene == sc.scene).collect();
@@ -476,10 +492,15 @@ pub fn index_html(report: &Report, plots: &[PlotFile]) -> String {
 }
 
 /// The contents list: every section, and under each scene its figures and its table.
-fn contents(report: &Report, plots: &[PlotFile]) -> String {
-    let mut s = String::from(
-        "<nav class=\"contents\"><b>Contents</b><ul>\n<li><a href=\"#scenes\">Scenes</a></li>\n",
-    );
+fn contents(report: &Report, plots: &[PlotFile], baseline: bool) -> String {
+    let mut s = String::from("<nav class=\"contents\"><b>Contents</b><ul>\n");
+    if baseline {
+        s.push_str("<li><a href=\"#baseline\">Against the baseline</a></li>\n");
+    }
+    s.push_str("<li><a href=\"#scenes\">Scenes</a></li>\n");
+    for (k, p) in plots.iter().filter(|p| p.scene.is_empty()).enumerate() {
+        let _ = writeln!(s, "<li><a href=\"#summary-plot-{k}\">{}</a></li>", escape(&p.title));
+    }
     for sc in &report.scenes {
         let id = anchor(&sc.scene);
         let _ = write!(s, "<li><a href=\"#scene-{id}\">{}</a><ul>", escape(&sc.scene));
@@ -511,6 +532,65 @@ fn contents(report: &Report, plots: &[PlotFile]) -> String {
         s.push_str("<li><a href=\"#skipped\">Not run</a></li>\n");
     }
     s.push_str("</ul></nav>\n");
+    s
+}
+
+/// The runs on a chart's Pareto front as a table (empty for charts without one).
+fn pareto_table(p: &PlotFile) -> String {
+    if p.pareto.is_empty() {
+        return String::new();
+    }
+    let mut s = String::from(
+        "<table class=\"pareto\"><caption>Pareto front: no run is both faster and more \
+         accurate</caption><tr><th>method</th><th>parameters</th><th>time ms</th><th>mean \
+         error</th></tr>",
+    );
+    for e in &p.pareto {
+        let _ = write!(
+            s,
+            "<tr><td>{}</td><td>{}</td><td>{:.1}</td><td>{:.6}</td></tr>",
+            escape(&e.method),
+            escape(&e.params),
+            e.time_ms,
+            e.error
+        );
+    }
+    s.push_str("</table>");
+    s
+}
+
+/// The comparison with an earlier report: counts, every regression, and a link to the whole
+/// comparison (`baseline.md`).
+fn baseline_section(c: &Comparison) -> String {
+    let mut s = String::from("<section id=\"baseline\"><h2>Against the baseline</h2>\n");
+    let _ = writeln!(
+        s,
+        "<p>{}. The whole comparison, run by run: <a href=\"baseline.md\">baseline.md</a>.</p>",
+        escape(&crate::baseline::summary_line(c))
+    );
+    let regressions: Vec<_> = c.regressions().collect();
+    if regressions.is_empty() {
+        s.push_str("<p>No regression.</p>\n");
+    } else {
+        s.push_str("<ul class=\"regressions\">\n");
+        for r in regressions {
+            let _ = writeln!(
+                s,
+                "<li><b>{}</b> {} on {}: {} (time x{:.2} [{:.2}, {:.2}], error {:.6} -> {:.6})</li>",
+                escape(&r.method),
+                escape(&r.params),
+                escape(&r.scene),
+                escape(&crate::baseline::flags(r)),
+                r.time_ratio,
+                r.time_ratio_ci.0,
+                r.time_ratio_ci.1,
+                r.error.0,
+                r.error.1
+            );
+        }
+        s.push_str("</ul>\n");
+    }
+    s.push_str("</section>\n");
     s
 }
 

@@ -399,6 +399,7 @@ pub fn write_report(
     report: &Report,
     produced: &[Produced],
     grids: &[GridImages],
+    baseline: Option<&crate::baseline::Comparison>,
 ) -> Result<(), OutputError> {
     let err = |path: &Path, e: &dyn std::fmt::Display| OutputError::Write {
         path: path.to_owned(),
@@ -413,13 +414,23 @@ pub fn write_report(
     }
     let json = serde_json::to_string_pretty(report).map_err(|e| err(dir, &e))?;
     let plots = write_plots(dir, report)?;
-    let html = crate::html::index_html(report, &plots);
-    for (name, text) in [
-        ("runs.json", json),
-        ("runs.csv", csv(report)?),
-        ("report.md", markdown(report)),
-        ("index.html", html),
-    ] {
+    let html = crate::html::index_html(report, &plots, baseline);
+    let mut md = markdown(report);
+    if let Some(c) = baseline {
+        // The comparison's summary first, under the title; the whole of it in baseline.md.
+        let summary = format!(
+            "## Against the baseline\n\n{}.\n\nRegressions: {}. Run by run: `baseline.md`.\n\n",
+            crate::baseline::summary_line(c),
+            c.regressions().count()
+        );
+        let at = md.find("\n\n").map_or(md.len(), |k| k + 2);
+        md.insert_str(at, &summary);
+        let path = dir.join("baseline.md");
+        std::fs::write(&path, crate::baseline::markdown(c)).map_err(|e| err(&path, &e))?;
+    }
+    for (name, text) in
+        [("runs.json", json), ("runs.csv", csv(report)?), ("report.md", md), ("index.html", html)]
+    {
         let path = dir.join(name);
         std::fs::write(&path, text).map_err(|e| err(&path, &e))?;
     }
@@ -436,6 +447,7 @@ pub fn write_report(
         let path = images.join(format!("{}.exr", row_stem(&report.rows[p.row])));
         write_visibility_exr(&path, &p.visibility)?;
     }
+    crate::run_pages::write_run_pages(dir, report, produced)?;
     write_manifest(dir)
 }
 
