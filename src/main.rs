@@ -73,6 +73,11 @@ struct ReportArgs {
     /// index.html, and in baseline.md. Read before anything is computed.
     #[arg(long, value_name = "DIR")]
     baseline: Option<PathBuf>,
+    /// With --baseline: the relative slow-down the whole 95 % interval of a run's time ratio
+    /// must exceed for the run to be flagged slower; default 0.5 (enough for the timing noise
+    /// of a shared machine at a few repeats; lower it on a quiet machine with more repeats).
+    #[arg(long, value_name = "T", allow_negative_numbers = true)]
+    baseline_tolerance: Option<f64>,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -447,6 +452,18 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
             (PathBuf::from(format!("shadowbench-out/report-{}", suite.name)), "--out (default)")
         }
     };
+    let mut options = reports::baseline::BaselineOptions::default();
+    if let Some(t) = a.baseline_tolerance {
+        if !(t.is_finite() && t >= 0.0) {
+            return Err(input(anyhow::anyhow!(
+                "--baseline-tolerance: {t} is not a relative tolerance (a finite number >= 0)"
+            )));
+        }
+        if a.baseline.is_none() {
+            eprintln!("note: --baseline-tolerance applies only with --baseline; ignored");
+        }
+        options.time_tolerance = t;
+    }
     let before = match &a.baseline {
         Some(dir) => Some(reports::baseline::load(dir).map_err(|e| input(anyhow::anyhow!("{e}")))?),
         None => None,
@@ -465,12 +482,7 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
     });
     bar.finish_and_clear();
     let comparison = match (&before, &a.baseline) {
-        (Some(b), Some(dir)) => Some(reports::baseline::compare(
-            &report,
-            b,
-            dir,
-            reports::baseline::BaselineOptions::default(),
-        )),
+        (Some(b), Some(dir)) => Some(reports::baseline::compare(&report, b, dir, options)),
         _ => None,
     };
     reports::write_report(&out, &report, &produced, &grids, comparison.as_ref())?;
