@@ -63,6 +63,16 @@ fn a_suite_file_writes_tables_that_parse_back() {
         assert!(t["min"].as_f64() <= t["median"].as_f64());
         assert!(t["median"].as_f64() <= t["max"].as_f64());
         assert!(!r["stages"].as_array().expect("stages").is_empty());
+        // Lecocq et al.'s pixel match: a number for binary results (`sm`), null for filtered
+        // ones (`pcf-bs-fast-2x2`).
+        let lecocq = &r["pixel_match_lecocq"];
+        match r["method"].as_str() {
+            Some("sm") if r["scene"] == "plane-square" => {
+                assert!(lecocq.as_f64().is_some_and(|p| (0.9..=1.0).contains(&p)), "{r}")
+            }
+            Some("pcf-bs-fast-2x2") => assert!(lecocq.is_null(), "{r}"),
+            _ => {}
+        }
     }
     let by_scene = |s: &str| rows.iter().filter(|r| r["scene"] == s).count();
     assert_eq!((by_scene("plane-square"), by_scene("hairball")), (6, 6));

@@ -101,7 +101,7 @@ impl Cell {
 }
 
 /// Heads of the metric columns, under [`metric_cells`].
-pub const METRIC_COLUMNS: [&str; 9] = [
+pub const METRIC_COLUMNS: [&str; 10] = [
     "mean abs error",
     "RMSE",
     "boundary pixels",
@@ -110,6 +110,7 @@ pub const METRIC_COLUMNS: [&str; 9] = [
     "boundary p95",
     "boundary p99",
     "pixel match %",
+    "pixel match (Lecocq) %",
     "FLIP",
 ];
 
@@ -130,6 +131,7 @@ pub fn metric_cells(r: &Row) -> Vec<Cell> {
         or_na(m.boundary_p95_abs_error),
         or_na(m.boundary_p99_abs_error),
         Cell::num(100.0 * m.pixel_match, 2),
+        r.pixel_match_lecocq.map_or_else(Cell::na, |v| Cell::num(100.0 * v, 2)),
         Cell::num(r.flip_mean, 4),
     ]
 }
@@ -670,6 +672,7 @@ mod tests {
             ref_rate: None,
             metrics,
             flip_mean: 0.01,
+            pixel_match_lecocq: None,
             total_ms: crate::timing::Summary::of(&[1.0, 2.0, 3.0]).expect("times"),
             stages: Vec::new(),
             skipped_stages: Vec::new(),

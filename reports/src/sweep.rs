@@ -47,6 +47,11 @@ pub struct Row {
     pub metrics: Metrics,
     /// NVIDIA FLIP mean over the frame (only the shadow-only pixels may differ).
     pub flip_mean: f64,
+    /// Pixel match in Lecocq et al.'s sense (`analysis::metrics::lecocq_pixel_match`): binary
+    /// results against `raytrace` at one sample per pixel, over the shadow-only pixels;
+    /// `None` for a result that is not binary there.
+    #[serde(default)]
+    pub pixel_match_lecocq: Option<f64>,
     /// Total time of the method's stages.
     pub total_ms: Summary,
     /// Each stage's time.
@@ -374,6 +379,8 @@ pub fn run_suite(
             }
         };
         let shadow_only = truth.shadow_only();
+        // `raytrace` at one sample per pixel, traced the first time a binary result needs it.
+        let mut raytrace1: Option<Option<ReferenceImage>> = None;
         report.scenes.push(SceneInfo {
             scene: scene.name.clone(),
             triangles: frame.geometry.len() as u64,
@@ -409,6 +416,19 @@ pub fn run_suite(
                     report.machine.gpu =
                         methods::gpu::GpuContext::shared().ok().map(|c| c.adapter_name());
                 }
+                let pixel_match_lecocq = if analysis::metrics::is_binary(&v, &shadow_only) {
+                    raytrace1
+                        .get_or_insert_with(|| {
+                            analysis::registry::reference("raytrace", 1, Default::default())
+                                .ok()?
+                                .evaluate(&frame, &mut Recorder::default())
+                                .ok()
+                        })
+                        .as_ref()
+                        .and_then(|rt| analysis::metrics::lecocq_pixel_match(&v, rt, &shadow_only))
+                } else {
+                    None
+                };
                 report.rows.push(Row {
                     scene: scene.name.clone(),
                     method: technique.name().to_owned(),
@@ -419,6 +439,7 @@ pub fn run_suite(
                     ref_rate,
                     metrics: Metrics::compare(&v, &truth.lit, &shadow_only),
                     flip_mean: flip_mean(&v, &truth.lit, &shadow_only),
+                    pixel_match_lecocq,
                     total_ms: timed.total_ms,
                     stages: timed.stages,
                     skipped_stages: timed.record.stages.skipped.clone(),
