@@ -235,7 +235,6 @@ fn describe(r: &RunChange) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::suite::Suite;
 
     fn small_report() -> Report {
         let toml = r#"
@@ -252,8 +251,7 @@ mod tests {
             method = "pcf-gems4"
             map_res = [256, 512]
         "#;
-        let suite = Suite::parse(toml, Path::new("baseline.toml")).expect("a valid suite");
-        crate::sweep::run_suite(&suite, |_| {}).0
+        crate::sweep::report_of(toml)
     }
 
     #[test]

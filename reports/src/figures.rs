@@ -452,7 +452,6 @@ fn methods_of(report: &Report) -> Vec<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::suite::Suite;
 
     /// A small report: `sm` at three map sizes and `pcf-reeves` at two rates and two map sizes
     /// on one scene.
@@ -472,8 +471,7 @@ mod tests {
             map_res = [256, 512]
             rate = [4, 16]
         "#;
-        let suite = Suite::parse(toml, Path::new("figures.toml")).expect("a valid suite");
-        crate::sweep::run_suite(&suite, |_| {}).0
+        crate::sweep::report_of(toml)
     }
 
     #[test]

@@ -327,6 +327,13 @@ impl ProgressLog {
     }
 }
 
+/// The report of the suite written as `toml`, for tests of what is made from reports.
+#[cfg(test)]
+pub(crate) fn report_of(toml: &str) -> Report {
+    let suite = Suite::parse(toml, std::path::Path::new("test.toml")).expect("a valid suite");
+    run_suite(&suite, |_| {}).0
+}
+
 /// Runs `suite`; `progress` is called once per method run with a short label. The report's
 /// provenance names this process's command line ([`Provenance::command_line`]). Returns the
 /// report, every visibility buffer and the grids' panels.
