@@ -621,7 +621,7 @@ mod tests {
 
     #[test]
     fn csv_holds_the_values_and_quotes_cells_with_commas() {
-        let cells = vec![vec![Cell::Text("1, 2".into()), Cell::Count(1500.0), Cell::Missing]];
+        let cells = [vec![Cell::Text("1, 2".into()), Cell::Count(1500.0), Cell::Missing]];
         let t = Table {
             paper: PaperTable::LecocqTable2,
             title: "t".into(),

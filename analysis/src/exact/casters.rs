@@ -63,7 +63,8 @@ impl Space {
                 Self::Spot { pos, right, up, forward } => {
                     let v = p - pos;
                     let w = v.dot(forward);
-                    if !(w > 0.0) {
+                    // At or behind the light's plane (or NaN): no bounded image.
+                    if w.is_nan() || w <= 0.0 {
                         return None;
                     }
                     (v.dot(right) / w, v.dot(up) / w, v.length())

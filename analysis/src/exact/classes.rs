@@ -152,7 +152,7 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
     });
     let bands = height.div_ceil(clip::BAND);
     let ctx = Context { frame, screen: &screen, projected: &projected, planar: &planar };
-    let results: Vec<(Vec<PixelClass>, Vec<u32>, Vec<u32>, u64)> = (0..bands)
+    let results: Vec<Band> = (0..bands)
         .into_par_iter()
         .map(|band| {
             let r0 = band * clip::BAND;
@@ -220,6 +220,10 @@ struct Scratch {
     stack: Vec<usize>,
     members: Vec<usize>,
 }
+
+/// One band of rows' result: each pixel's class and number of tiles, the tiles, and the
+/// pixel-triangle overlaps measured.
+type Band = (Vec<PixelClass>, Vec<u32>, Vec<u32>, u64);
 
 /// What the per-pixel rule reads.
 struct Context<'a> {
