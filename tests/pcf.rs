@@ -155,8 +155,9 @@ fn exact_pcf_error_falls_as_the_map_grows() {
     for scene in ["plane-square", "cage"] {
         let scene = scenes::load(scene).expect("built-in");
         let frame = Frame::new(&scene, 1600, 1200, &mut Recorder::default());
-        let reference =
-            ExactCoverage::default().evaluate(&frame, &mut Recorder::default()).expect("planar receiver");
+        let reference = ExactCoverage::default()
+            .evaluate(&frame, &mut Recorder::default())
+            .expect("planar receiver");
         for name in methods {
             let mut errors = Vec::new();
             for map_res in [256, 512, 1024, 2048] {

@@ -218,7 +218,9 @@ fn stages_counters_and_the_fig14_class_image() {
     }
     // Uncertain pixels lie along the square's shadow border (99% of them at least): within
     // a few pixels of a pixel whose exact lit fraction is strictly between 0 and 1.
-    let exact = ExactCoverage::default().evaluate(&frame, &mut Recorder::default()).expect("planar receiver");
+    let exact = ExactCoverage::default()
+        .evaluate(&frame, &mut Recorder::default())
+        .expect("planar receiver");
     let (w, h) = (frame.width() as i64, frame.height() as i64);
     let near_border = |k: usize| {
         let (x, y) = (k as i64 % w, k as i64 / w);
@@ -249,7 +251,9 @@ fn exact_antialiasing_uncertain_pixels_lowers_the_error() {
     // Section 5: the recovered function evaluated at 16 sub-samples, uncertain pixels only.
     let scene = scenes::load("plane-square").expect("built-in");
     let frame = Frame::new(&scene, 400, 300, &mut Recorder::default());
-    let exact = ExactCoverage::default().evaluate(&frame, &mut Recorder::default()).expect("planar receiver");
+    let exact = ExactCoverage::default()
+        .evaluate(&frame, &mut Recorder::default())
+        .expect("planar receiver");
     let error = |v: &Visibility| Metrics::compare(v, &exact.lit, &exact.evaluated);
     let (sm, _) = run("sm", &frame, map(512));
     let (aliased, _) = run("spsm", &frame, map(512));
