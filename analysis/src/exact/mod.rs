@@ -99,7 +99,6 @@ mod union;
 use crate::pixel_class::{self, PixelClass};
 use crate::raytrace::RayTrace;
 use crate::reference::{Reference, ReferenceError, ReferenceImage};
-use classes::Classes;
 use instrumentation::Recorder;
 use methods::Frame;
 use shadow::Setup;
@@ -240,11 +239,6 @@ fn snap(lit: f64) -> f64 {
     }
 }
 
-/// The object whose surface pixel `k` sees (for `planar` and `surface` pixels).
-fn object_of(frame: &Frame<'_>, classes: &Classes, k: usize) -> Option<u32> {
-    classes.tiles_of(k).first().map(|&t| frame.geometry.object[t as usize])
-}
-
 fn evaluate(
     frame: &Frame<'_>,
     edge: Option<&RayTrace>,
@@ -260,11 +254,16 @@ fn evaluate(
     let mut evaluated = vec![false; w * h];
     let mut grazing_pixels = 0u64;
 
-    // Planar objects.
-    let mut objects: Vec<u32> = (0..w * h)
-        .filter(|&k| class[k] == PixelClass::Planar)
-        .filter_map(|k| object_of(frame, &classes, k))
+    // Planar objects: the object each `planar` pixel sees (that of its tiles), found once.
+    let planar_object: Vec<Option<u32>> = (0..w * h)
+        .map(|k| {
+            let first = classes.tiles_of(k).first();
+            first
+                .filter(|_| class[k] == PixelClass::Planar)
+                .map(|&t| frame.geometry.object[t as usize])
+        })
         .collect();
+    let mut objects: Vec<u32> = planar_object.iter().flatten().copied().collect();
     objects.sort_unstable();
     objects.dedup();
     let mut planes = Vec::new();
@@ -276,11 +275,7 @@ fn evaluate(
         match setup {
             Some(s) => planes.push((o, s)),
             None => {
-                grazing_pixels += (0..w * h)
-                    .filter(|&k| {
-                        class[k] == PixelClass::Planar && object_of(frame, &classes, k) == Some(o)
-                    })
-                    .count() as u64;
+                grazing_pixels += planar_object.iter().filter(|&&p| p == Some(o)).count() as u64;
             }
         }
     }
@@ -301,9 +296,7 @@ fn evaluate(
             .time(planar_stages[2], || unions.iter().map(union::triangulate).collect::<Vec<_>>());
         rec.stages.time(planar_stages[3], || {
             for ((o, _), (t, _)) in planes.iter().zip(&tris) {
-                let mine = |k: usize| {
-                    class[k] == PixelClass::Planar && object_of(frame, &classes, k) == Some(*o)
-                };
+                let mine = |k: usize| planar_object[k] == Some(*o);
                 let area = clip::accumulate_area_where(t, w, h, |_, k| mine(k));
                 for k in (0..w * h).filter(|&k| mine(k)) {
                     shadowed[k] = area[k];
