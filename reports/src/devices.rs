@@ -36,6 +36,14 @@ impl DevicePair<'_> {
     }
 }
 
+/// Whether a GPU adapter is a software rasterizer running on the CPU (Mesa's llvmpipe or
+/// softpipe, lavapipe, its Vulkan driver, SwiftShader, or any adapter that says it is
+/// software).
+pub fn is_software_adapter(name: &str) -> bool {
+    let n = name.to_lowercase();
+    ["llvmpipe", "lavapipe", "softpipe", "swiftshader", "software"].iter().any(|k| n.contains(k))
+}
+
 /// Whether a row ran on the GPU (its parameters say `"device": "gpu"`).
 pub fn is_gpu(row: &Row) -> bool {
     row.params.get("device").and_then(|d| d.as_str()) == Some("gpu")

@@ -89,14 +89,9 @@ impl Measure {
     }
 }
 
-/// A parameter's value as text (empty when the row has none).
-fn value(row: &Row, key: &str) -> String {
-    row.params.get(key).map_or_else(String::new, |v| v.to_string().trim_matches('"').to_owned())
-}
-
 /// A point's label: the value of the parameter its series sweeps (`32x` for a rate).
 fn point_label(row: &Row, key: &str) -> String {
-    match (key, value(row, key)) {
+    match (key, row.param(key)) {
         (_, v) if v.is_empty() => String::new(),
         ("rate", v) => format!("{v}x"),
         ("depth_bits", v) => format!("{v} bits"),
@@ -104,22 +99,18 @@ fn point_label(row: &Row, key: &str) -> String {
     }
 }
 
-/// Whether a GPU adapter's name is a software rasterizer's.
-pub fn is_software_adapter(name: &str) -> bool {
-    let n = name.to_ascii_lowercase();
-    ["llvmpipe", "lavapipe", "softpipe", "swiftshader", "software"].iter().any(|s| n.contains(s))
-}
-
 /// The device part of a series' name: empty on the CPU, `gpu (ADAPTER)` on a GPU, with
 /// `software` when the adapter is one.
 fn device_label(row: &Row, adapter: Option<&str>) -> String {
-    if value(row, "device") != "gpu" {
+    if row.param("device") != "gpu" {
         return String::new();
     }
     // The adapter's name without its details in parentheses (`llvmpipe (LLVM 15.0.6, 256
     // bits)` is `llvmpipe`); the report's header gives the whole name.
     match adapter.map(|a| (a, a.split(" (").next().unwrap_or(a).trim())) {
-        Some((a, short)) if is_software_adapter(a) => format!("gpu ({short}, software)"),
+        Some((a, short)) if crate::devices::is_software_adapter(a) => {
+            format!("gpu ({short}, software)")
+        }
         Some((_, short)) => format!("gpu ({short})"),
         None => "gpu".into(),
     }
@@ -128,7 +119,7 @@ fn device_label(row: &Row, adapter: Option<&str>) -> String {
 /// How many values parameter `key` takes over the runs of `method`.
 fn values_of(rows: &[&Row], method: &str, key: &str) -> usize {
     let mut v: Vec<String> =
-        rows.iter().filter(|r| r.method == method).map(|r| value(r, key)).collect();
+        rows.iter().filter(|r| r.method == method).map(|r| r.param(key)).collect();
     v.sort();
     v.dedup();
     v.len()
@@ -166,8 +157,8 @@ pub fn series(rows: &[&Row], x: Measure, y: Measure, adapter: Option<&str>) -> V
         // Parameters with one value over the method's runs are left out of the name.
         let fixed: Vec<String> = PARAMS
             .iter()
-            .filter(|&&k| Some(k) != sweep && !value(r, k).is_empty() && varies(rows, &r.method, k))
-            .map(|k| format!("{k}={}", value(r, k)))
+            .filter(|&&k| Some(k) != sweep && !r.param(k).is_empty() && varies(rows, &r.method, k))
+            .map(|k| format!("{k}={}", r.param(k)))
             .collect();
         let device = device_label(r, adapter);
         let label = [r.method.clone(), fixed.join(" "), device.clone()]
@@ -218,8 +209,8 @@ pub fn pareto_runs(rows: &[&Row]) -> Vec<ParetoEntry> {
                 let params = PARAMS
                     .iter()
                     .chain(&["device"])
-                    .filter(|k| !value(r, k).is_empty())
-                    .map(|k| format!("{k}={}", value(r, k)))
+                    .filter(|k| !r.param(k).is_empty())
+                    .map(|k| format!("{k}={}", r.param(k)))
                     .collect::<Vec<_>>()
                     .join(" ");
                 ParetoEntry { method: r.method.clone(), params, time_ms: t, error: e }
@@ -253,15 +244,7 @@ pub fn write_plots(dir: &Path, report: &Report) -> Result<Vec<PlotFile>, OutputE
     let mut files = Vec::new();
     for sc in &report.scenes {
         let rows: Vec<&Row> = report.rows.iter().filter(|r| r.scene == sc.scene).collect();
-        let rate_swept = |m: &str| {
-            swept(&rows, m) == Some("rate") || {
-                let mut rates: Vec<String> =
-                    rows.iter().filter(|r| r.method == m).map(|r| value(r, "rate")).collect();
-                rates.sort();
-                rates.dedup();
-                rates.len() > 1
-            }
-        };
+        let rate_swept = |m: &str| varies(&rows, m, "rate");
         let rate_rows: Vec<&Row> = rows.iter().copied().filter(|r| rate_swept(&r.method)).collect();
         let reference = format!("against {} at {}x{}", sc.reference, sc.width, sc.height);
         let specs = [
@@ -518,12 +501,5 @@ mod tests {
             assert_eq!(*best, Some(least));
         }
         assert!(best_within(&rows, 0.0).iter().all(|(_, b)| b.is_none()));
-    }
-
-    #[test]
-    fn software_adapters_are_recognised() {
-        assert!(is_software_adapter("llvmpipe (LLVM 19.1.7, 256 bits)"));
-        assert!(is_software_adapter("Lavapipe"));
-        assert!(!is_software_adapter("NVIDIA H200"));
     }
 }

@@ -14,6 +14,7 @@
 //! found into `<pre id="selftest">`, for a headless browser to check.
 
 use crate::baseline::Comparison;
+use crate::devices::is_software_adapter;
 use crate::figures::PlotFile;
 use crate::sweep::{Report, Row};
 use crate::write::row_stem;
@@ -44,13 +45,6 @@ pub fn page_head(title: &str) -> String {
 /// An identifier usable as an HTML anchor: letters and digits kept, the rest `-`.
 pub fn anchor(s: &str) -> String {
     s.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '-' }).collect()
-}
-
-/// Whether a GPU adapter is a software rasterizer running on the CPU (Mesa's llvmpipe, or
-/// lavapipe, its Vulkan driver, or any adapter that says it is software).
-pub fn is_software_adapter(name: &str) -> bool {
-    let n = name.to_lowercase();
-    ["llvmpipe", "lavapipe", "software"].iter().any(|k| n.contains(k))
 }
 
 /// The adapter's name as HTML, marked when it is a software rasterizer.

@@ -64,6 +64,16 @@ pub struct Row {
     pub notes: Vec<String>,
 }
 
+impl Row {
+    /// A parameter as text, strings without their quotes (empty when the method has no such
+    /// parameter).
+    pub fn param(&self, key: &str) -> String {
+        self.params
+            .get(key)
+            .map_or_else(String::new, |v| v.to_string().trim_matches('"').to_owned())
+    }
+}
+
 /// One scene's shared work.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SceneInfo {

@@ -15,17 +15,12 @@ use instrumentation::Counters;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-/// A parameter of a row as text (empty when the method has no such parameter).
-fn param(row: &Row, key: &str) -> String {
-    row.params.get(key).map_or_else(String::new, |v| v.to_string().trim_matches('"').to_owned())
-}
-
 /// A short label of the row's parameters, e.g. `map_res=1024 rate=16`.
 pub fn param_label(row: &Row) -> String {
     ["map_res", "rate", "depth_bits", "pattern", "device"]
         .iter()
         .filter(|k| row.params.contains_key(**k))
-        .map(|k| format!("{k}={}", param(row, k)))
+        .map(|k| format!("{k}={}", row.param(k)))
         .collect::<Vec<_>>()
         .join(" ")
 }
@@ -108,10 +103,10 @@ pub fn csv(report: &Report) -> Result<String, OutputError> {
         let mut cells = vec![
             r.scene.clone(),
             r.method.clone(),
-            param(r, "map_res"),
-            param(r, "rate"),
-            param(r, "depth_bits"),
-            param(r, "pattern"),
+            r.param("map_res"),
+            r.param("rate"),
+            r.param("depth_bits"),
+            r.param("pattern"),
             if crate::devices::is_gpu(r) { "gpu" } else { "cpu" }.to_owned(),
             r.width.to_string(),
             r.height.to_string(),
