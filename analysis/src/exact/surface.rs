@@ -111,7 +111,6 @@ fn receiver(
     let (y0, y1) = own.range(1);
     pieces.points.clear();
     pieces.ranges.clear();
-    let mut last = Poly::new();
     let mut full = false;
     for &c in candidates.iter() {
         if c == r {
@@ -130,13 +129,12 @@ fn receiver(
         let piece = clip::keep(&clip::keep(&piece, 1, y0, true), 1, y1, false);
         if piece.n >= 3 && !clip::separated(&piece, &own) && clip::intersect(&piece, &own).n >= 3 {
             pieces.push(piece.points());
-            last = piece;
         }
     }
     if full {
         fan(&own, &mut out.tris);
     } else if pieces.len() == 1 {
-        fan(&clip::intersect(&last, &own), &mut out.tris);
+        fan(&clip::intersect(&Poly::from_slice(&pieces.points), &own), &mut out.tris);
     } else if pieces.len() > 1 {
         let (tris, conflicts) =
             union::triangulate(&union::union_within(pieces, own.points(), step));
