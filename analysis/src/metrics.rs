@@ -130,6 +130,34 @@ pub fn is_binary(result: &Visibility, mask: &[bool]) -> bool {
     result.lit.iter().zip(mask).all(|(&v, &m)| !m || v == 0.0 || v == 1.0)
 }
 
+/// The error thresholds of [`exceedance`]: 1, 2 and 5 times each power of ten from 1e-4 to
+/// 0.5, with half an 8-bit step (0.5 / 255, where [`Metrics::pixel_match`] draws its line)
+/// between 1e-3 and 2e-3.
+pub const EXCEEDANCE_THRESHOLDS: [f64; 14] =
+    [1e-4, 2e-4, 5e-4, 1e-3, MATCH_TOLERANCE, 2e-3, 5e-3, 1e-2, 2e-2, 5e-2, 0.1, 0.2, 0.5, 0.9];
+
+/// The error's distribution as the share of compared pixels (`mask` true) whose
+/// `|value - reference|` exceeds each of [`EXCEEDANCE_THRESHOLDS`] (the complementary
+/// cumulative distribution at those points; at `0.5 / 255` it is one minus the pixel match).
+/// `None` when no pixel is compared.
+///
+/// # Panics
+/// When the buffers differ in size (a caller's bug, not bad input).
+pub fn exceedance(result: &Visibility, reference: &[f64], mask: &[bool]) -> Option<Vec<f64>> {
+    assert_eq!(result.lit.len(), reference.len(), "result and reference differ in size");
+    assert_eq!(result.lit.len(), mask.len(), "result and mask differ in size");
+    let mut over = [0u64; EXCEEDANCE_THRESHOLDS.len()];
+    let mut n = 0u64;
+    for ((&v, &r), _) in result.lit.iter().zip(reference).zip(mask).filter(|(_, &m)| m) {
+        n += 1;
+        let e = (f64::from(v) - r).abs();
+        for (c, &t) in over.iter_mut().zip(&EXCEEDANCE_THRESHOLDS) {
+            *c += u64::from(e > t);
+        }
+    }
+    (n > 0).then(|| over.iter().map(|&c| c as f64 / n as f64).collect())
+}
+
 /// Pixel match as Lecocq et al. define it (see the module doc): the fraction of the pixels
 /// where `mask` is true and `raytrace1` (`raytrace` at one sample per pixel on the same frame)
 /// evaluated whose value in `result` equals the ray-traced one. `None` when no pixel is
@@ -372,6 +400,23 @@ pub fn error_image(result: &Visibility, reference: &[f64], evaluated: &[bool]) -
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn exceedance_counts_the_compared_pixels_over_each_threshold() {
+        // Errors 0, 0.001 (not over 1e-3), 0.3 and 1.0 on compared pixels; a fifth pixel with
+        // error 1 is not compared.
+        let v = vis(vec![0.5, 0.501, 0.2, 1.0, 1.0]);
+        let r = [0.5, 0.5, 0.5, 0.0, 0.0];
+        let e = exceedance(&v, &r, &[true, true, true, true, false]).expect("compared");
+        let at = |t: f64| e[EXCEEDANCE_THRESHOLDS.iter().position(|&x| x == t).expect("t")];
+        assert_eq!(at(1e-4), 0.75, "0.001 (as f32) exceeds 1e-4");
+        assert_eq!(at(0.5 / 255.0), 0.5);
+        assert_eq!(at(0.2), 0.5);
+        assert_eq!(at(0.5), 0.25);
+        assert_eq!(at(0.9), 0.25);
+        assert!(EXCEEDANCE_THRESHOLDS.windows(2).all(|w| w[0] < w[1]));
+        assert_eq!(exceedance(&v, &r, &[false; 5]), None);
+    }
 
     fn vis(lit: Vec<f32>) -> Visibility {
         Visibility { width: lit.len() as u32, height: 1, lit, transmittance: None }
