@@ -476,7 +476,7 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
         indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} runs, {elapsed} {msg}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
-    let (report, produced, grids) = reports::run_suite(&suite, |label| {
+    let (report, images) = reports::run_suite(&suite, |label| {
         bar.set_message(label.to_owned());
         bar.inc(1);
     });
@@ -485,7 +485,7 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
         (Some(b), Some(dir)) => Some(reports::baseline::compare(&report, b, dir, options)),
         _ => None,
     };
-    reports::write_report(&out, &report, &produced, &grids, comparison.as_ref())?;
+    reports::write_report(&out, &report, &images, comparison.as_ref())?;
     if let Some(c) = &comparison {
         println!("{}", reports::baseline::summary_line(c));
         for r in c.regressions() {

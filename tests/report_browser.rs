@@ -109,11 +109,11 @@ fn images_and_links(page: &Path, lines: &[String]) {
 fn index_and_run_pages_work_in_headless_chromium() {
     let dir = tempfile::tempdir().expect("tempdir");
     let suite = Suite::parse(SUITE, Path::new("browser.toml")).expect("suite");
-    let (report, produced, grids) = run_suite(&suite, |_| {});
+    let (report, images) = run_suite(&suite, |_| {});
     assert_eq!(report.rows.len(), 3, "{:?}", report.skipped);
     let out = dir.path();
-    write_report(out, &report, &produced, &grids, None).expect("report written");
-    let pages = write_run_pages(out, &report, &produced).expect("run pages written");
+    write_report(out, &report, &images, None).expect("report written");
+    let pages = write_run_pages(out, &report, &images).expect("run pages written");
     assert_eq!(pages.len(), 3);
 
     let index = out.join("index.html");
@@ -134,8 +134,38 @@ fn index_and_run_pages_work_in_headless_chromium() {
     let run = out.join(&pages[0]);
     let lines = selftest(&run);
     images_and_links(&run, &lines);
-    assert_eq!(finding(&lines, "views"), "3", "this run and the scene's two others");
-    assert!(finding(&lines, "flip").starts_with("ok"), "{lines:#?}");
+    assert_eq!(
+        finding(&lines, "views"),
+        "6",
+        "this run, the reference, its error map, the class map and the scene's two other runs"
+    );
+    // The first step and the flip go from the run to the reference and back.
+    let flip = finding(&lines, "flip");
+    assert!(flip.starts_with("ok"), "{lines:#?}");
+    assert!(flip.contains("-> ../scenes/plane-square.reference.png ->"), "{flip}");
+    let stem = Path::new(&pages[0]).file_stem().expect("stem").to_string_lossy().into_owned();
+    for file in [
+        format!("{stem}.error.png"),
+        format!("{stem}.run.json"),
+        format!("{stem}.metrics.json"),
+        "../scenes/plane-square.reference.exr".to_owned(),
+        "../scenes/plane-square.classes.png".to_owned(),
+    ] {
+        assert!(lines.contains(&format!("link: {file}")), "no link to {file}: {lines:#?}");
+    }
+    // The error map is the frame with its colour bar below; metrics.json is compare's, per
+    // class.
+    let runs = out.join("runs");
+    let error = image::open(runs.join(format!("{stem}.error.png"))).expect("error map");
+    assert_eq!(error.width(), 96);
+    assert!(error.height() > 72, "no colour bar");
+    let metrics: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(runs.join(format!("{stem}.metrics.json"))).expect("metrics"),
+    )
+    .expect("metrics.json parses");
+    assert_eq!(metrics["reference"], "exact");
+    assert_eq!(metrics["evaluated_pixels"], report.rows[0].metrics.evaluated_pixels);
+    assert!(metrics["classes"]["planar"]["pixels"].as_u64().expect("planar") > 0);
     assert_eq!(finding(&lines, "zoom and pan"), "ok", "{lines:#?}");
     assert!(finding(&lines, "swipe").starts_with("ok"), "{lines:#?}");
     let exr = format!(

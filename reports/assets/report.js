@@ -170,7 +170,9 @@
     document.getElementById('fit').addEventListener('click', fit);
     document.getElementById('swipe').addEventListener('click', swipe);
     select.addEventListener('change', function () { show(parseInt(select.value, 10)); });
-    show(0);
+    // `#view=N` opens the page on view N (0: this run, 1: the reference, 2: the error map).
+    var m = /^#view=(\d+)$/.exec(location.hash);
+    show(m ? parseInt(m[1], 10) : 0);
     return {state: st, views: views, fit: fit, viewer: viewer};
   }
 

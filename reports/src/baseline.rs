@@ -11,7 +11,7 @@
 //! tolerance (see [`BaselineOptions::time_tolerance`] for how it was chosen). Errors are deterministic for a given commit and machine (seeded sampling), so a
 //! run is flagged **less accurate** when its mean error grows by more than `error_tolerance`.
 
-use crate::sweep::{Report, Row};
+use crate::model::{Report, Row};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 

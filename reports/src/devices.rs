@@ -5,7 +5,7 @@
 //! listed per scene); a GPU method renders its own G-buffer as its first stage, so its time is
 //! given both ways: with that stage, and without it (the figure to set against the CPU's).
 
-use crate::sweep::Row;
+use crate::model::Row;
 use std::fmt::Write as _;
 
 /// One method run on both devices.
@@ -44,11 +44,6 @@ pub fn is_software_adapter(name: &str) -> bool {
     ["llvmpipe", "lavapipe", "softpipe", "swiftshader", "software"].iter().any(|k| n.contains(k))
 }
 
-/// Whether a row ran on the GPU (its parameters say `"device": "gpu"`).
-pub fn is_gpu(row: &Row) -> bool {
-    row.params.get("device").and_then(|d| d.as_str()) == Some("gpu")
-}
-
 /// The parameters without the device.
 fn key(row: &Row) -> (String, String, String) {
     let mut p = row.params.clone();
@@ -59,10 +54,10 @@ fn key(row: &Row) -> (String, String, String) {
 /// Every GPU row with the CPU row of the same scene, method and parameters, in report order.
 pub fn pairs(rows: &[Row]) -> Vec<DevicePair<'_>> {
     rows.iter()
-        .filter(|r| is_gpu(r))
+        .filter(|r| r.on_gpu())
         .filter_map(|gpu| {
             let k = key(gpu);
-            rows.iter().find(|r| !is_gpu(r) && key(r) == k).map(|cpu| DevicePair { cpu, gpu })
+            rows.iter().find(|r| !r.on_gpu() && key(r) == k).map(|cpu| DevicePair { cpu, gpu })
         })
         .collect()
 }

@@ -8,7 +8,12 @@
 //!   horizontal bar spans each run's [min, max] time; the Pareto front is drawn and listed
 //!   ([`PlotFile::pareto`]);
 //! - **error against shadow-map size** and **error against sample rate** (and time against
-//!   rate), one series per method, device and other parameters.
+//!   rate), one series per method, device and other parameters;
+//! - **error distribution of the Pareto runs**: for each run on the front, the share of the
+//!   shadow-only pixels whose error exceeds x, at the thresholds of
+//!   `analysis::metrics::EXCEEDANCE_THRESHOLDS` (log-log: the tail of large errors stays
+//!   visible beside the many small ones; at x = 0.5/255 the share is one minus the pixel
+//!   match).
 //!
 //! Across scenes, **best error within a time budget**: per scene a panel, per method the least
 //! error among its runs whose median time fits each budget of [`BUDGETS_MS`].
@@ -17,9 +22,10 @@
 //! GPU runs are separate series marked with triangles, named with the adapter, and a software
 //! adapter (llvmpipe, lavapipe) is said to be one.
 
+use crate::model::{Report, Row};
 use crate::output::OutputError;
 use crate::plots::{pareto_front, write_chart, Chart, Marker, Point, Series};
-use crate::sweep::{Report, Row};
+use analysis::metrics::EXCEEDANCE_THRESHOLDS;
 use plotters::prelude::*;
 use std::path::Path;
 
@@ -198,23 +204,59 @@ pub fn series(rows: &[&Row], x: Measure, y: Measure, adapter: Option<&str>) -> V
         .collect()
 }
 
-/// The runs of `rows` on the Pareto front of error against time, fastest first.
-pub fn pareto_runs(rows: &[&Row]) -> Vec<ParetoEntry> {
+/// The rows on the Pareto front of error against time, fastest first.
+pub fn pareto_rows<'a>(rows: &[&'a Row]) -> Vec<&'a Row> {
     let points: Vec<(f64, f64)> =
         rows.iter().map(|r| (r.total_ms.median, r.metrics.mean_abs_error)).collect();
     pareto_front(&points)
         .into_iter()
         .filter_map(|(t, e)| {
-            rows.iter().find(|r| r.total_ms.median == t && r.metrics.mean_abs_error == e).map(|r| {
-                let params = PARAMS
-                    .iter()
-                    .chain(&["device"])
-                    .filter(|k| !r.param(k).is_empty())
-                    .map(|k| format!("{k}={}", r.param(k)))
-                    .collect::<Vec<_>>()
-                    .join(" ");
-                ParetoEntry { method: r.method.clone(), params, time_ms: t, error: e }
-            })
+            rows.iter().find(|r| r.total_ms.median == t && r.metrics.mean_abs_error == e).copied()
+        })
+        .collect()
+}
+
+/// A row's swept parameters and device, as `map_res=1024 rate=16 device=gpu`.
+fn params_text(r: &Row) -> String {
+    PARAMS
+        .iter()
+        .chain(&["device"])
+        .filter(|k| !r.param(k).is_empty())
+        .map(|k| format!("{k}={}", r.param(k)))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// The runs of `rows` on the Pareto front of error against time, fastest first.
+pub fn pareto_runs(rows: &[&Row]) -> Vec<ParetoEntry> {
+    pareto_rows(rows)
+        .into_iter()
+        .map(|r| ParetoEntry {
+            method: r.method.clone(),
+            params: params_text(r),
+            time_ms: r.total_ms.median,
+            error: r.metrics.mean_abs_error,
+        })
+        .collect()
+}
+
+/// The error distributions of `rows` (their [`Row::error_exceedance`]) as series of the share
+/// of compared pixels over each threshold, a series per row named with its method and
+/// parameters. A series stops before its first threshold no pixel exceeds, since a log axis
+/// has no place for zero; a row without compared pixels has no series.
+pub fn exceedance_series(rows: &[&Row]) -> Vec<Series> {
+    rows.iter()
+        .filter(|r| r.error_exceedance.len() == EXCEEDANCE_THRESHOLDS.len())
+        .filter_map(|r| {
+            let points: Vec<Point> = EXCEEDANCE_THRESHOLDS
+                .iter()
+                .zip(&r.error_exceedance)
+                .take_while(|(_, &share)| share > 0.0)
+                .map(|(&t, &share)| Point::at(t, share))
+                .collect();
+            let label = [r.method.clone(), params_text(r)].join(" ").trim().to_owned();
+            let marker = if r.on_gpu() { Marker::Triangle } else { Marker::Circle };
+            (!points.is_empty()).then_some(Series { label, marker, points })
         })
         .collect()
 }
@@ -298,6 +340,25 @@ pub fn write_plots(dir: &Path, report: &Report) -> Result<Vec<PlotFile>, OutputE
                 title,
                 png: format!("plots/{stem}.png"),
                 pareto: if pareto { pareto_runs(subset) } else { Vec::new() },
+            });
+        }
+        let lines = exceedance_series(&pareto_rows(&rows));
+        if !lines.is_empty() {
+            let stem = format!("error-distribution-{}", sc.scene);
+            let title = format!("{}: error distribution of the Pareto runs, {reference}", sc.scene);
+            let chart = Chart {
+                title: title.clone(),
+                x_label: "absolute error x (lit fraction)".into(),
+                y_label: "share of compared pixels with |error| > x".into(),
+                series: lines,
+                pareto: false,
+            };
+            write_chart(&plots.join(&stem), &chart)?;
+            files.push(PlotFile {
+                scene: sc.scene.clone(),
+                title,
+                png: format!("plots/{stem}.png"),
+                pareto: Vec::new(),
             });
         }
     }
@@ -501,5 +562,30 @@ mod tests {
             assert_eq!(*best, Some(least));
         }
         assert!(best_within(&rows, 0.0).iter().all(|(_, b)| b.is_none()));
+    }
+
+    #[test]
+    fn error_distributions_are_drawn_for_the_pareto_runs_until_no_pixel_is_left() {
+        let report = small_report();
+        let rows: Vec<&Row> = report.rows.iter().collect();
+        let front = pareto_rows(&rows);
+        let lines = exceedance_series(&front);
+        assert_eq!(lines.len(), front.len(), "every run compared pixels");
+        for (s, r) in lines.iter().zip(&front) {
+            assert!(s.label.starts_with(&r.method), "{}", s.label);
+            let n = s.points.len();
+            assert!(n >= 1 && n <= EXCEEDANCE_THRESHOLDS.len());
+            assert!(s.points.iter().all(|p| p.y > 0.0), "no zero on a log axis");
+            assert!(s.points.windows(2).all(|w| w[0].x < w[1].x && w[0].y >= w[1].y));
+            // The series ends where the share first reaches zero.
+            assert!(n == EXCEEDANCE_THRESHOLDS.len() || r.error_exceedance[n] == 0.0);
+        }
+        // A run with a single compared pixel off by 0.01 is over the thresholds up to 5e-3.
+        let mut one = report.rows[0].clone();
+        one.error_exceedance = EXCEEDANCE_THRESHOLDS.iter().map(|&t| f64::from(0.01 > t)).collect();
+        let s = exceedance_series(&[&one]);
+        assert_eq!(s[0].points.last().map(|p| p.x), Some(5e-3));
+        one.error_exceedance.clear();
+        assert!(exceedance_series(&[&one]).is_empty(), "nothing compared, nothing drawn");
     }
 }

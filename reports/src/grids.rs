@@ -3,21 +3,11 @@
 //! the whole frame on top with the inset's region outlined in red, the region magnified below
 //! (nearest neighbour, so single pixels stay visible), and the panel's label above.
 
+use crate::model::{Panel, Region};
 use crate::output::OutputError;
 use image::{Rgb, RgbImage};
 use plotters::prelude::*;
 use std::path::Path;
-
-/// The inset's region, as fractions of the frame: `[x, y, width, height]`.
-pub type Region = [f64; 4];
-
-/// One panel of a grid.
-pub struct Panel {
-    /// Label drawn above the panel.
-    pub label: String,
-    /// The image (all panels of a grid have the frame's size).
-    pub image: RgbImage,
-}
 
 /// Height of the label band, in pixels.
 const LABEL: u32 = 28;

@@ -1,5 +1,5 @@
 //! Plots of a report (plotters, PNG and SVG): log-log charts of one measure against another,
-//! what to draw given by [`crate::figures`]. Each series is a line through its points in the
+//! what to draw given by the caller (the report's charts: `figures`). Each series is a line through its points in the
 //! order of the parameter it sweeps, each point may carry a label (the parameter's value) and
 //! a horizontal bar (the spread of a time), CPU runs are marked with circles and GPU runs
 //! with triangles, the legend sits beside the plot, never over the data, and both log axes

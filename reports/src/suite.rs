@@ -35,7 +35,7 @@
 //! has not been fetched is the one thing left to the run, which lists it as not run.
 
 use crate::tables::TableSpec;
-use methods::MethodOptions;
+use methods::{registry::Device, MethodOptions};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use toml::Spanned;
@@ -241,6 +241,39 @@ pub struct RunSpec {
     pub device: Vec<methods::registry::Device>,
 }
 
+impl RunSpec {
+    /// The parameter combinations of one run spec.
+    pub fn expand(&self) -> Vec<MethodOptions> {
+        let spec = self;
+        let or_default = |v: &[u32]| -> Vec<Option<u32>> {
+            if v.is_empty() {
+                vec![None]
+            } else {
+                v.iter().copied().map(Some).collect()
+            }
+        };
+        let mut out = Vec::new();
+        for map_res in or_default(&spec.map_res) {
+            for rate in or_default(&spec.rate) {
+                for depth_bits in or_default(&spec.depth_bits) {
+                    let devices =
+                        if spec.device.is_empty() { &[Device::Cpu][..] } else { &spec.device };
+                    for &device in devices {
+                        out.push(MethodOptions {
+                            map_res,
+                            rate,
+                            depth_bits,
+                            device,
+                            ..Default::default()
+                        });
+                    }
+                }
+            }
+        }
+        out
+    }
+}
+
 /// One panel of an image grid: a method and its parameters.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -424,7 +457,7 @@ impl Suite {
         }
         for (k, spec) in self.runs.iter().enumerate() {
             let span = spans.runs.get(k);
-            for options in crate::sweep::expand(spec) {
+            for options in spec.expand() {
                 if let Err((option, message)) = check_method(&spec.method, &options) {
                     let key = format!("run[{k}].{}", key_of(option));
                     return Err(at(span.and_then(|s| s.of(option)), &key, message));
@@ -500,6 +533,26 @@ impl Suite {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn specs_expand_to_every_combination() {
+        let spec = RunSpec {
+            method: "pcf-bs-fast-2x2".into(),
+            map_res: vec![256, 512],
+            rate: vec![],
+            depth_bits: vec![8, 12, 32],
+            device: vec![],
+        };
+        let all = spec.expand();
+        assert_eq!(all.len(), 6);
+        assert!(all.iter().all(|o| o.rate.is_none() && o.device == Device::Cpu));
+        assert_eq!(all[5].map_res, Some(512));
+        assert_eq!(all[5].depth_bits, Some(32));
+        let both = RunSpec { device: vec![Device::Cpu, Device::Gpu], ..spec }.expand();
+        assert_eq!(both.len(), 12);
+        assert_eq!((both[0].device, both[1].device), (Device::Cpu, Device::Gpu));
+        assert_eq!(both[0].depth_bits, both[1].depth_bits);
+    }
 
     #[test]
     fn builtin_suites_parse() {

@@ -5,180 +5,36 @@
 //! every method, so a method's time is its own stages only; the G-buffer's time is reported
 //! per scene. The metrics come from the last timed run (every method is deterministic for
 //! its parameters, so all runs give the same image) and are taken over the reference's
-//! shadow-only pixels (`ReferenceImage::shadow_only`: for `exact`, its `planar` and `surface`
-//! pixels; for `raytrace`, every pixel it evaluated), as `compare`'s headline is.
+//! shadow-only pixels (`analysis::metrics::headline_pixels`: the `planar` and `surface` pixels
+//! the reference evaluated, by its own classes or, for `raytrace`, by the camera's view of the
+//! triangles), as `compare`'s headline is. Each run also keeps its run record and its
+//! comparison per pixel class (`compare`'s `metrics.json`), and each scene its reference and
+//! classes, for the run pages ([`Images`]).
 //!
 //! When standard error is not a terminal (a log, a pipe), the sweep prints a line there as it
 //! starts each scene and each paper's table, and when it ends: the runs done of the total, the
 //! time elapsed and an estimate of the time left from the mean time per run so far
 //! ([`ProgressLog`]). On a terminal the caller's progress bar shows the same.
 
-use crate::grids::Panel;
+use crate::model::{
+    GridFile, GridImages, Images, Panel, Produced, Report, Row, SceneImages, SceneInfo,
+};
 use crate::output::shade;
-use crate::suite::{GridSpec, PanelSpec, ReferenceChoice, RunSpec, Suite};
-use crate::tables::{run_table, table_run_count, Table};
-use crate::timing::{time_method, Machine, StageTimes, Summary};
-use analysis::{error_image, flip::flip_mean, Metrics, ReferenceImage};
-use instrumentation::{Counters, Provenance, Recorder};
+use crate::output::MetricsRecord;
+use crate::suite::{GridSpec, PanelSpec, ReferenceChoice, Suite};
+use crate::tables::{run_table, table_run_count};
+use crate::timing::{time_method, Machine};
+use analysis::metrics::{exceedance, Comparison};
+use analysis::{error_image, Metrics, ReferenceImage};
+use instrumentation::{Provenance, Recorder, RunRecord};
 use methods::{registry::Device, Frame, MethodOptions, Visibility};
-use serde::{Deserialize, Serialize};
 use std::cell::Cell;
 use std::io::IsTerminal;
 use std::time::{Duration, Instant};
 
-/// One method with one parameter combination on one scene.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Row {
-    /// Scene name.
-    pub scene: String,
-    /// Method name.
-    pub method: String,
-    /// The method's parameters, as its run record gives them.
-    pub params: serde_json::Map<String, serde_json::Value>,
-    /// Frame width.
-    pub width: u32,
-    /// Frame height.
-    pub height: u32,
-    /// Reference measured against (`exact` or `raytrace`).
-    pub reference: String,
-    /// Rate of the `raytrace` reference (absent for `exact`).
-    pub ref_rate: Option<u32>,
-    /// Error metrics against the reference, over its shadow-only pixels.
-    pub metrics: Metrics,
-    /// NVIDIA FLIP mean over the frame (only the shadow-only pixels may differ).
-    pub flip_mean: f64,
-    /// Pixel match in Lecocq et al.'s sense (`analysis::metrics::lecocq_pixel_match`): binary
-    /// results against `raytrace` at one sample per pixel, over the shadow-only pixels;
-    /// `None` for a result that is not binary there.
-    #[serde(default)]
-    pub pixel_match_lecocq: Option<f64>,
-    /// Total time of the method's stages.
-    pub total_ms: Summary,
-    /// Each stage's time.
-    pub stages: Vec<StageTimes>,
-    /// Stages the scene did not call for.
-    pub skipped_stages: Vec<String>,
-    /// Counters of the last run.
-    pub counters: Counters,
-    /// The method's notes.
-    pub notes: Vec<String>,
-}
-
-impl Row {
-    /// A parameter as text, strings without their quotes (empty when the method has no such
-    /// parameter).
-    pub fn param(&self, key: &str) -> String {
-        self.params
-            .get(key)
-            .map_or_else(String::new, |v| v.to_string().trim_matches('"').to_owned())
-    }
-}
-
-/// One scene's shared work.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct SceneInfo {
-    /// Scene name.
-    pub scene: String,
-    /// Triangles.
-    pub triangles: u64,
-    /// Effects.
-    pub effects: Vec<String>,
-    /// Frame size.
-    pub width: u32,
-    /// Frame size.
-    pub height: u32,
-    /// Camera G-buffer time (shared by every method).
-    pub gbuffer_ms: f64,
-    /// Reference used and its time.
-    pub reference: String,
-    /// Reference time.
-    pub reference_ms: f64,
-}
-
-/// Everything a report is made of.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Report {
-    /// The suite as run.
-    pub suite: Suite,
-    /// What produced the report (commit, version, command line, time, machine); its adapter
-    /// is the GPU's when a method ran on one.
-    pub provenance: Provenance,
-    /// Where the times were taken.
-    pub machine: Machine,
-    /// Per-scene shared work.
-    pub scenes: Vec<SceneInfo>,
-    /// Every measured run.
-    pub rows: Vec<Row>,
-    /// What could not run, and why.
-    pub skipped: Vec<String>,
-    /// Image grids, by title and file.
-    pub grids: Vec<GridFile>,
-    /// The papers' tables, measured.
-    pub tables: Vec<Table>,
-}
-
-/// An image grid of a report.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct GridFile {
-    /// Scene.
-    pub scene: String,
-    /// Title.
-    pub title: String,
-    /// PNG file, relative to the report folder.
-    pub png: String,
-}
-
-/// A grid's panels, to be written.
-pub struct GridImages {
-    /// Index into [`Report::grids`].
-    pub grid: usize,
-    /// The panels.
-    pub panels: Vec<crate::grids::Panel>,
-    /// The inset.
-    pub inset: crate::grids::Region,
-}
-
-/// A visibility buffer a sweep produced, for the image outputs.
-pub struct Produced {
-    /// Index of its row in [`Report::rows`].
-    pub row: usize,
-    /// The buffer.
-    pub visibility: Visibility,
-}
-
-/// The parameter combinations of one run spec.
-pub fn expand(spec: &RunSpec) -> Vec<MethodOptions> {
-    let or_default = |v: &[u32]| -> Vec<Option<u32>> {
-        if v.is_empty() {
-            vec![None]
-        } else {
-            v.iter().copied().map(Some).collect()
-        }
-    };
-    let mut out = Vec::new();
-    for map_res in or_default(&spec.map_res) {
-        for rate in or_default(&spec.rate) {
-            for depth_bits in or_default(&spec.depth_bits) {
-                let devices =
-                    if spec.device.is_empty() { &[Device::Cpu][..] } else { &spec.device };
-                for &device in devices {
-                    out.push(MethodOptions {
-                        map_res,
-                        rate,
-                        depth_bits,
-                        device,
-                        ..Default::default()
-                    });
-                }
-            }
-        }
-    }
-    out
-}
-
 /// Number of method runs a suite makes (scenes times combinations), for progress bars.
 pub fn run_count(suite: &Suite) -> u64 {
-    (suite.scenes.len() * suite.runs.iter().map(|r| expand(r).len()).sum::<usize>()) as u64
+    (suite.scenes.len() * suite.runs.iter().map(|r| r.expand().len()).sum::<usize>()) as u64
         + suite.tables.iter().map(table_run_count).sum::<u64>()
 }
 
@@ -234,6 +90,7 @@ fn grid_panels(
     grid: &GridSpec,
     frame: &Frame<'_>,
     truth: &ReferenceImage,
+    compared: &[bool],
     ref_name: &str,
     skipped: &mut Vec<String>,
 ) -> Vec<Panel> {
@@ -285,7 +142,7 @@ fn grid_panels(
             // Over the pixels the metrics are taken on, as `compare`'s error.png.
             panels.push(Panel {
                 label: "10x |error| of the last".into(),
-                image: error_image(&v, &truth.lit, &truth.shadow_only()),
+                image: error_image(&v, &truth.lit, compared),
             });
         }
     }
@@ -346,11 +203,8 @@ pub(crate) fn report_of(toml: &str) -> Report {
 
 /// Runs `suite`; `progress` is called once per method run with a short label. The report's
 /// provenance names this process's command line ([`Provenance::command_line`]). Returns the
-/// report, every visibility buffer and the grids' panels.
-pub fn run_suite(
-    suite: &Suite,
-    mut progress: impl FnMut(&str),
-) -> (Report, Vec<Produced>, Vec<GridImages>) {
+/// report and what its image outputs need ([`Images`]).
+pub fn run_suite(suite: &Suite, mut progress: impl FnMut(&str)) -> (Report, Images) {
     let log = ProgressLog::new(run_count(suite));
     let done = Cell::new(0u64);
     let mut progress = |label: &str| {
@@ -367,9 +221,8 @@ pub fn run_suite(
         grids: Vec::new(),
         tables: Vec::new(),
     };
-    let mut produced = Vec::new();
-    let mut grid_images = Vec::new();
-    let combos: usize = suite.runs.iter().map(|r| expand(r).len()).sum();
+    let mut images = Images::default();
+    let combos: usize = suite.runs.iter().map(|r| r.expand().len()).sum();
     for (k, scene_name) in suite.scenes.iter().enumerate() {
         log.print(&format!("scene {}/{} {scene_name}", k + 1, suite.scenes.len()), done.get());
         let scene = match scenes::load(scene_name) {
@@ -395,13 +248,22 @@ pub fn run_suite(
                 continue;
             }
         };
-        let shadow_only = truth.shadow_only();
+        // The metrics are taken over the shadow-only pixels, by the frame's pixel classes
+        // (the reference's own, or the camera's view of the triangles when it has none), as
+        // `compare`'s headline is.
+        let classes = match &truth.classes {
+            Some(c) => c.clone(),
+            None => analysis::exact::classify(&frame).class,
+        };
+        let shadow_only = analysis::metrics::headline_pixels(&truth, &classes);
+        let scene_images = images.scenes.len();
+        let effects: Vec<String> = frame.effects.names().into_iter().map(String::from).collect();
         // `raytrace` at one sample per pixel, traced the first time a binary result needs it.
         let mut raytrace1: Option<Option<ReferenceImage>> = None;
         report.scenes.push(SceneInfo {
             scene: scene.name.clone(),
             triangles: frame.geometry.len() as u64,
-            effects: frame.effects.names().into_iter().map(String::from).collect(),
+            effects: effects.clone(),
             width: w,
             height: h,
             gbuffer_ms: rec.stages.total_ms(),
@@ -409,7 +271,7 @@ pub fn run_suite(
             reference_ms,
         });
         for spec in &suite.runs {
-            for options in expand(spec) {
+            for options in spec.expand() {
                 progress(&format!("{} {}", scene.name, spec.method));
                 let technique = match analysis::registry::technique(&spec.method, &options) {
                     Ok(t) => t,
@@ -433,7 +295,7 @@ pub fn run_suite(
                     report.machine.gpu =
                         methods::gpu::GpuContext::shared().ok().map(|c| c.adapter_name());
                 }
-                let pixel_match_lecocq = if analysis::metrics::is_binary(&v, &shadow_only) {
+                let rt1 = if analysis::metrics::is_binary(&v, &shadow_only) {
                     raytrace1
                         .get_or_insert_with(|| {
                             analysis::registry::reference("raytrace", 1, Default::default())
@@ -442,32 +304,70 @@ pub fn run_suite(
                                 .ok()
                         })
                         .as_ref()
-                        .and_then(|rt| analysis::metrics::lecocq_pixel_match(&v, rt, &shadow_only))
                 } else {
                     None
                 };
-                report.rows.push(Row {
+                let comparison = Comparison::new(&v, &truth, &classes, rt1);
+                let rec = timed.record;
+                let record = RunRecord {
                     scene: scene.name.clone(),
                     method: technique.name().to_owned(),
                     params: technique.params(),
                     width: w,
                     height: h,
+                    effects: effects.clone(),
+                    counters: rec.counters,
+                    total_ms: rec.stages.total_ms(),
+                    stages: rec.stages.stages,
+                    skipped_stages: rec.stages.skipped,
+                    notes: rec.notes,
+                    warnings: rec.warnings,
+                    pixel_classes: None,
+                    provenance: Some(report.provenance.clone()),
+                };
+                let metrics = MetricsRecord {
+                    comparison: comparison.clone(),
+                    reference: ref_name.clone(),
+                    ref_rate,
+                    edge_reference: (ref_name == "exact").then(|| "none".to_owned()),
+                    scene: scene.name.clone(),
+                    method: record.method.clone(),
+                    params: record.params.clone(),
+                    width: w,
+                    height: h,
+                    method_ms: record.total_ms,
+                    reference_ms,
+                };
+                report.rows.push(Row {
+                    scene: scene.name.clone(),
+                    method: record.method.clone(),
+                    params: record.params.clone(),
+                    width: w,
+                    height: h,
                     reference: ref_name.clone(),
                     ref_rate,
                     metrics: Metrics::compare(&v, &truth.lit, &shadow_only),
-                    flip_mean: flip_mean(&v, &truth.lit, &shadow_only),
-                    pixel_match_lecocq,
+                    flip_mean: comparison.flip_mean,
+                    pixel_match_lecocq: comparison.pixel_match_lecocq,
+                    error_exceedance: exceedance(&v, &truth.lit, &shadow_only).unwrap_or_default(),
                     total_ms: timed.total_ms,
                     stages: timed.stages,
-                    skipped_stages: timed.record.stages.skipped.clone(),
-                    counters: timed.record.counters,
-                    notes: timed.record.notes,
+                    skipped_stages: record.skipped_stages.clone(),
+                    counters: record.counters,
+                    notes: record.notes.clone(),
                 });
-                produced.push(Produced { row: report.rows.len() - 1, visibility: v });
+                images.runs.push(Produced {
+                    row: report.rows.len() - 1,
+                    scene: scene_images,
+                    visibility: v,
+                    record,
+                    metrics,
+                });
             }
         }
         for grid in suite.grids.iter().filter(|g| g.scene == *scene_name) {
-            let panels = grid_panels(grid, &frame, &truth, &ref_name, &mut report.skipped);
+            let panels =
+                grid_panels(grid, &frame, &truth, &shadow_only, &ref_name, &mut report.skipped);
             if panels.is_empty() {
                 continue;
             }
@@ -476,12 +376,18 @@ pub fn run_suite(
                 title: grid.title.clone(),
                 png: format!("grids/grid-{}.png", report.grids.len() + 1),
             });
-            grid_images.push(GridImages {
+            images.grids.push(GridImages {
                 grid: report.grids.len() - 1,
                 panels,
                 inset: grid.inset,
             });
         }
+        images.scenes.push(SceneImages {
+            scene: report.scenes.len() - 1,
+            reference: truth,
+            classes,
+            compared: shadow_only,
+        });
     }
     for (k, spec) in suite.tables.iter().enumerate() {
         let name = spec.paper.name();
@@ -492,7 +398,7 @@ pub fn run_suite(
     }
     log.print("done", done.get());
     report.provenance.adapter = report.machine.gpu.clone();
-    (report, produced, grid_images)
+    (report, images)
 }
 
 #[cfg(test)]
@@ -511,25 +417,5 @@ mod tests {
             "scene 1/5 cage: 0/120 runs done, 0s elapsed, time left unknown"
         );
         assert_eq!(hms(Duration::from_secs(3723)), "1h02m03s");
-    }
-
-    #[test]
-    fn specs_expand_to_every_combination() {
-        let spec = RunSpec {
-            method: "pcf-bs-fast-2x2".into(),
-            map_res: vec![256, 512],
-            rate: vec![],
-            depth_bits: vec![8, 12, 32],
-            device: vec![],
-        };
-        let all = expand(&spec);
-        assert_eq!(all.len(), 6);
-        assert!(all.iter().all(|o| o.rate.is_none() && o.device == Device::Cpu));
-        assert_eq!(all[5].map_res, Some(512));
-        assert_eq!(all[5].depth_bits, Some(32));
-        let both = expand(&RunSpec { device: vec![Device::Cpu, Device::Gpu], ..spec });
-        assert_eq!(both.len(), 12);
-        assert_eq!((both[0].device, both[1].device), (Device::Cpu, Device::Gpu));
-        assert_eq!(both[0].depth_bits, both[1].depth_bits);
     }
 }

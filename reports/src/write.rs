@@ -9,28 +9,12 @@
 
 use crate::figures::write_plots;
 use crate::grids::write_grid;
+use crate::model::{param_label, row_stem, Images, Report, Row};
 use crate::output::{write_visibility_exr, OutputError};
-use crate::sweep::{GridImages, Produced, Report, Row};
+use analysis::metrics::EXCEEDANCE_THRESHOLDS;
 use instrumentation::Counters;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-
-/// A short label of the row's parameters, e.g. `map_res=1024 rate=16`.
-pub fn param_label(row: &Row) -> String {
-    ["map_res", "rate", "depth_bits", "pattern", "device"]
-        .iter()
-        .filter(|k| row.params.contains_key(**k))
-        .map(|k| format!("{k}={}", row.param(k)))
-        .collect::<Vec<_>>()
-        .join(" ")
-}
-
-/// The file stem of a row's visibility buffer.
-pub fn row_stem(row: &Row) -> String {
-    let label = param_label(row).replace(['=', ' '], "-");
-    let stem = format!("{}-{}-{label}", row.scene, row.method);
-    stem.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' }).collect()
-}
 
 /// Columns of `runs.csv` before the stage times and the counters: parameters, frame size,
 /// reference, metrics (over the reference's shadow-only pixels), total time and provenance.
@@ -81,7 +65,9 @@ fn stage_names(report: &Report) -> Vec<&str> {
 /// `runs.csv`, tidy: a header, then one line per run, one column per quantity. Cells are
 /// numbers (or text for names), with no thousands suffix; an empty cell is a quantity that
 /// does not apply (a parameter the method has not, the boundary error of a run without
-/// boundary pixels, a stage the run did not have). After [`CSV_COLUMNS`], the median time of
+/// boundary pixels, a stage the run did not have). After [`CSV_COLUMNS`], the error's
+/// distribution as `share_error_over.X` (the share of compared pixels whose absolute error
+/// exceeds X, for each X of `analysis::metrics::EXCEEDANCE_THRESHOLDS`), the median time of
 /// every stage of the report as `stage_ms.NAME` and every counter as `counter.NAME`.
 pub fn csv(report: &Report) -> Result<String, OutputError> {
     let fail = |e: &dyn std::fmt::Display| OutputError::Write {
@@ -93,6 +79,7 @@ pub fn csv(report: &Report) -> Result<String, OutputError> {
     let header = CSV_COLUMNS
         .iter()
         .map(|c| (*c).to_owned())
+        .chain(EXCEEDANCE_THRESHOLDS.iter().map(|t| format!("share_error_over.{t}")))
         .chain(stages.iter().map(|s| format!("stage_ms.{s}")))
         .chain(Counters::NAMES.iter().map(|c| format!("counter.{c}")));
     w.write_record(header).map_err(|e| fail(&e))?;
@@ -107,7 +94,7 @@ pub fn csv(report: &Report) -> Result<String, OutputError> {
             r.param("rate"),
             r.param("depth_bits"),
             r.param("pattern"),
-            if crate::devices::is_gpu(r) { "gpu" } else { "cpu" }.to_owned(),
+            if r.on_gpu() { "gpu" } else { "cpu" }.to_owned(),
             r.width.to_string(),
             r.height.to_string(),
             r.reference.clone(),
@@ -132,6 +119,8 @@ pub fn csv(report: &Report) -> Result<String, OutputError> {
             report.provenance.commit.clone(),
             report.provenance.version.clone(),
         ];
+        let shares = r.error_exceedance.iter().map(|v| Some(*v)).chain(std::iter::repeat(None));
+        cells.extend(shares.take(EXCEEDANCE_THRESHOLDS.len()).map(opt));
         cells.extend(
             stages
                 .iter()
@@ -394,24 +383,23 @@ fn write_manifest(dir: &Path) -> Result<(), OutputError> {
 pub fn write_report(
     dir: &Path,
     report: &Report,
-    produced: &[Produced],
-    grids: &[GridImages],
+    images: &Images,
     baseline: Option<&crate::baseline::Comparison>,
 ) -> Result<(), OutputError> {
     let err = |path: &Path, e: &dyn std::fmt::Display| OutputError::Write {
         path: path.to_owned(),
         message: e.to_string(),
     };
-    let images = dir.join("visibility");
-    std::fs::create_dir_all(&images).map_err(|e| err(&images, &e))?;
+    let exr_dir = dir.join("visibility");
+    std::fs::create_dir_all(&exr_dir).map_err(|e| err(&exr_dir, &e))?;
     let grid_dir = dir.join("grids");
     std::fs::create_dir_all(&grid_dir).map_err(|e| err(&grid_dir, &e))?;
-    for g in grids {
+    for g in &images.grids {
         write_grid(&dir.join(&report.grids[g.grid].png), &g.panels, g.inset)?;
     }
     let json = serde_json::to_string_pretty(report).map_err(|e| err(dir, &e))?;
     let plots = write_plots(dir, report)?;
-    let html = crate::html::index_html(report, &plots, baseline);
+    let html = crate::index::index_html(report, &plots, baseline);
     let mut md = markdown(report);
     if let Some(c) = baseline {
         // The comparison's summary first, under the title; the whole of it in baseline.md.
@@ -440,11 +428,12 @@ pub fn write_report(
             std::fs::write(&path, text).map_err(|e| err(&path, &e))?;
         }
     }
-    for p in produced {
-        let path = images.join(format!("{}.exr", row_stem(&report.rows[p.row])));
+    for p in &images.runs {
+        let path = exr_dir.join(format!("{}.exr", row_stem(&report.rows[p.row])));
         write_visibility_exr(&path, &p.visibility)?;
     }
-    crate::run_pages::write_run_pages(dir, report, produced)?;
+    crate::run_pages::scene_files(dir, report, images)?;
+    crate::run_pages::write_run_pages(dir, report, images)?;
     write_manifest(dir)
 }
 

@@ -1,0 +1,234 @@
+//! What a report is made of, the types every part of `reports` shares: the runs ([`Row`]),
+//! the scenes' shared work ([`SceneInfo`]), the whole [`Report`] as `runs.json` holds it, the
+//! image grids' panels ([`Panel`]), what a sweep leaves for the image outputs ([`Images`]),
+//! and the helpers that name a run and its parameters the same way in every output
+//! ([`param_label`], [`row_stem`], [`params_of`]).
+//!
+//! Everything here is data and its formatting; nothing here runs a method or writes a file,
+//! so that the sweep, the figures, the pages and the writers depend on the model and never on
+//! one another through it.
+
+use crate::output::MetricsRecord;
+use crate::suite::Suite;
+use crate::tables::Table;
+use crate::timing::{Machine, StageTimes, Summary};
+use analysis::{pixel_class::PixelClass, Metrics, ReferenceImage};
+use image::RgbImage;
+use instrumentation::{Counters, Provenance, RunRecord};
+use methods::Visibility;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// One method with one parameter combination on one scene.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Row {
+    /// Scene name.
+    pub scene: String,
+    /// Method name.
+    pub method: String,
+    /// The method's parameters, as its run record gives them.
+    pub params: serde_json::Map<String, serde_json::Value>,
+    /// Frame width.
+    pub width: u32,
+    /// Frame height.
+    pub height: u32,
+    /// Reference measured against (`exact` or `raytrace`).
+    pub reference: String,
+    /// Rate of the `raytrace` reference (absent for `exact`).
+    pub ref_rate: Option<u32>,
+    /// Error metrics against the reference, over its shadow-only pixels.
+    pub metrics: Metrics,
+    /// NVIDIA FLIP mean over the frame (only the shadow-only pixels may differ).
+    pub flip_mean: f64,
+    /// Pixel match in Lecocq et al.'s sense (`analysis::metrics::lecocq_pixel_match`): binary
+    /// results against `raytrace` at one sample per pixel, over the shadow-only pixels;
+    /// `None` for a result that is not binary there.
+    #[serde(default)]
+    pub pixel_match_lecocq: Option<f64>,
+    /// The error's distribution: the share of compared pixels whose error exceeds each of
+    /// `analysis::metrics::EXCEEDANCE_THRESHOLDS` (empty when no pixel was compared).
+    #[serde(default)]
+    pub error_exceedance: Vec<f64>,
+    /// Total time of the method's stages.
+    pub total_ms: Summary,
+    /// Each stage's time.
+    pub stages: Vec<StageTimes>,
+    /// Stages the scene did not call for.
+    pub skipped_stages: Vec<String>,
+    /// Counters of the last run.
+    pub counters: Counters,
+    /// The method's notes.
+    pub notes: Vec<String>,
+}
+
+impl Row {
+    /// Whether the run was on a GPU (its parameters say `"device": "gpu"`).
+    pub fn on_gpu(&self) -> bool {
+        self.params.get("device").and_then(|d| d.as_str()) == Some("gpu")
+    }
+
+    /// A parameter as text, strings without their quotes (empty when the method has no such
+    /// parameter).
+    pub fn param(&self, key: &str) -> String {
+        self.params
+            .get(key)
+            .map_or_else(String::new, |v| v.to_string().trim_matches('"').to_owned())
+    }
+}
+
+/// One scene's shared work.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SceneInfo {
+    /// Scene name.
+    pub scene: String,
+    /// Triangles.
+    pub triangles: u64,
+    /// Effects.
+    pub effects: Vec<String>,
+    /// Frame size.
+    pub width: u32,
+    /// Frame size.
+    pub height: u32,
+    /// Camera G-buffer time (shared by every method).
+    pub gbuffer_ms: f64,
+    /// Reference used and its time.
+    pub reference: String,
+    /// Reference time.
+    pub reference_ms: f64,
+}
+
+/// Everything a report is made of.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Report {
+    /// The suite as run.
+    pub suite: Suite,
+    /// What produced the report (commit, version, command line, time, machine); its adapter
+    /// is the GPU's when a method ran on one.
+    pub provenance: Provenance,
+    /// Where the times were taken.
+    pub machine: Machine,
+    /// Per-scene shared work.
+    pub scenes: Vec<SceneInfo>,
+    /// Every measured run.
+    pub rows: Vec<Row>,
+    /// What could not run, and why.
+    pub skipped: Vec<String>,
+    /// Image grids, by title and file.
+    pub grids: Vec<GridFile>,
+    /// The papers' tables, measured.
+    pub tables: Vec<Table>,
+}
+
+/// An image grid of a report.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GridFile {
+    /// Scene.
+    pub scene: String,
+    /// Title.
+    pub title: String,
+    /// PNG file, relative to the report folder.
+    pub png: String,
+}
+
+/// A grid's panels, to be written.
+pub struct GridImages {
+    /// Index into [`Report::grids`].
+    pub grid: usize,
+    /// The panels.
+    pub panels: Vec<Panel>,
+    /// The inset.
+    pub inset: Region,
+}
+
+/// A visibility buffer a sweep produced, for the image outputs.
+pub struct Produced {
+    /// Index of its row in [`Report::rows`].
+    pub row: usize,
+    /// Index of its scene's images in [`Images::scenes`].
+    pub scene: usize,
+    /// The buffer.
+    pub visibility: Visibility,
+    /// The run record of its last timed run, as `render` writes it (`run.json`).
+    pub record: RunRecord,
+    /// Its comparison with the reference, as `compare` writes it (`metrics.json`).
+    pub metrics: MetricsRecord,
+}
+
+/// A scene's reference, as the image outputs need it.
+pub struct SceneImages {
+    /// Index of the scene in [`Report::scenes`].
+    pub scene: usize,
+    /// The reference.
+    pub reference: ReferenceImage,
+    /// Each pixel's class (the reference's own, or the camera's view when it computes none).
+    pub classes: Vec<PixelClass>,
+    /// The pixels the metrics are taken over (the shadow-only pixels the reference evaluated,
+    /// [`analysis::metrics::headline_pixels`]).
+    pub compared: Vec<bool>,
+}
+
+/// What a sweep leaves for the image outputs beside the [`Report`]: every run's visibility
+/// buffer, every scene's reference and classes, and the image grids' panels.
+#[derive(Default)]
+pub struct Images {
+    /// Every run's visibility buffer.
+    pub runs: Vec<Produced>,
+    /// Every scene's reference.
+    pub scenes: Vec<SceneImages>,
+    /// The grids' panels.
+    pub grids: Vec<GridImages>,
+}
+
+/// A short label of the row's parameters, e.g. `map_res=1024 rate=16`.
+pub fn param_label(row: &Row) -> String {
+    ["map_res", "rate", "depth_bits", "pattern", "device"]
+        .iter()
+        .filter(|k| row.params.contains_key(**k))
+        .map(|k| format!("{k}={}", row.param(k)))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// A scene's name as a file stem: ASCII letters, digits and `-` kept, the rest `_`.
+pub fn scene_stem(scene: &str) -> String {
+    scene.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' }).collect()
+}
+
+/// The file stem of a row's visibility buffer.
+pub fn row_stem(row: &Row) -> String {
+    let label = param_label(row).replace(['=', ' '], "-");
+    let stem = [row.scene.as_str(), &row.method, &label]
+        .into_iter()
+        .filter(|s| !s.is_empty())
+        .collect::<Vec<_>>()
+        .join("-");
+    stem.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' }).collect()
+}
+
+/// A parameter value as text (strings without their quotes).
+pub fn value_text(v: &serde_json::Value) -> String {
+    match v {
+        serde_json::Value::String(s) => s.clone(),
+        other => other.to_string(),
+    }
+}
+
+/// A row's parameters as text, with the device (`cpu` or `gpu`) always present.
+pub fn params_of(r: &Row) -> BTreeMap<String, String> {
+    let mut p: BTreeMap<String, String> =
+        r.params.iter().map(|(k, v)| (k.clone(), value_text(v))).collect();
+    let device = if r.on_gpu() { "gpu" } else { "cpu" };
+    p.insert("device".into(), device.into());
+    p
+}
+
+/// The inset's region, as fractions of the frame: `[x, y, width, height]`.
+pub type Region = [f64; 4];
+
+/// One panel of a grid.
+pub struct Panel {
+    /// Label drawn above the panel.
+    pub label: String,
+    /// The image (all panels of a grid have the frame's size).
+    pub image: RgbImage,
+}
