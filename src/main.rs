@@ -78,6 +78,12 @@ struct ReportArgs {
     /// of a shared machine at a few repeats; lower it on a quiet machine with more repeats).
     #[arg(long, value_name = "T", allow_negative_numbers = true)]
     baseline_tolerance: Option<f64>,
+    /// With --baseline: milliseconds by which a run's time interval must lie above the
+    /// baseline's for the run to be flagged slower (or below, faster); default 5 (a scheduler
+    /// time slice or two, which delays short runs on a shared machine whatever the method; 0
+    /// compares ratios alone).
+    #[arg(long, value_name = "MS", allow_negative_numbers = true)]
+    baseline_min_ms: Option<f64>,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -463,6 +469,17 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
             eprintln!("note: --baseline-tolerance applies only with --baseline; ignored");
         }
         options.time_tolerance = t;
+    }
+    if let Some(ms) = a.baseline_min_ms {
+        if !(ms.is_finite() && ms >= 0.0) {
+            return Err(input(anyhow::anyhow!(
+                "--baseline-min-ms: {ms} is not a time in milliseconds (a finite number >= 0)"
+            )));
+        }
+        if a.baseline.is_none() {
+            eprintln!("note: --baseline-min-ms applies only with --baseline; ignored");
+        }
+        options.min_change_ms = ms;
     }
     let before = match &a.baseline {
         Some(dir) => Some(reports::baseline::load(dir).map_err(|e| input(anyhow::anyhow!("{e}")))?),

@@ -363,6 +363,19 @@ fn a_report_is_set_against_its_baseline_and_foreign_folders_are_refused() {
     ]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("--baseline-tolerance"), "{}", stderr(&o));
+    let o = shadowbench(&[
+        "report",
+        "--suite",
+        &suite,
+        "--out",
+        dir.path().join("fourth").to_str().expect("utf-8"),
+        "--baseline",
+        first.to_str().expect("utf-8"),
+        "--baseline-min-ms",
+        "NaN",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--baseline-min-ms"), "{}", stderr(&o));
     let o = run(&dir.path().join("third"), Some(&dir.path().join("nowhere")));
     assert_eq!(o.status.code(), Some(2));
     assert!(

@@ -6,10 +6,12 @@
 //! `median_now / median_before`, and its interval `[ci_low_now / ci_high_before,
 //! ci_high_now / ci_low_before]` combines the two medians' 95 % bootstrap intervals
 //! ([`crate::timing`]) conservatively: a run is flagged **slower** only when the whole interval
-//! lies above `1 + time_tolerance` (and **faster**, an improvement, only when it lies below
-//! `1 / (1 + time_tolerance)`), so the noise of repeated timing flags nothing at the default
-//! tolerance (see [`BaselineOptions::time_tolerance`] for how it was chosen). Errors are deterministic for a given commit and machine (seeded sampling), so a
-//! run is flagged **less accurate** when its mean error grows by more than `error_tolerance`.
+//! lies above `1 + time_tolerance` and the two intervals lie more than `min_change_ms` apart
+//! (and **faster**, an improvement, only when the interval lies below `1 / (1 + time_tolerance)`
+//! and the intervals lie as far apart the other way), so the noise of repeated timing flags
+//! nothing at the defaults (see [`BaselineOptions`] for how they were chosen). Errors are
+//! deterministic for a given commit and machine (seeded sampling), so a run is flagged **less
+//! accurate** when its mean error grows by more than `error_tolerance`.
 
 use crate::model::{Report, Row};
 use std::fmt::Write as _;
@@ -25,6 +27,14 @@ pub struct BaselineOptions {
     /// regression worth flagging in a sweep is a factor, not a few per cent. On a quiet machine
     /// with more repeats, lower it (`report --baseline-tolerance`).
     pub time_tolerance: f64,
+    /// Milliseconds by which the run's time interval must lie above the baseline's (its
+    /// lower bound over the baseline's upper bound) to flag it as slower. Default 5 ms: on a
+    /// shared machine a run of a few milliseconds is delayed by a scheduler time slice or two
+    /// whenever another process takes a core, whatever the method; in two `quick` reports one
+    /// after the other, a `pcf-gems4` run of 3.4-3.6 ms took 5.6-7.4 ms in the second (a ratio
+    /// interval of [1.58, 2.20], 2 ms apart), and no run with a real difference under 5 ms
+    /// was seen. `report --baseline-min-ms 0` compares ratios alone.
+    pub min_change_ms: f64,
     /// Growth of the mean error (lit fraction) that flags a run as less accurate. Default
     /// 1e-6.
     pub error_tolerance: f64,
@@ -32,7 +42,7 @@ pub struct BaselineOptions {
 
 impl Default for BaselineOptions {
     fn default() -> Self {
-        Self { time_tolerance: 0.5, error_tolerance: 1e-6 }
+        Self { time_tolerance: 0.5, min_change_ms: 5.0, error_tolerance: 1e-6 }
     }
 }
 
@@ -136,8 +146,10 @@ pub fn compare(now: &Report, before: &Report, dir: &Path, options: BaselineOptio
             error: (e0, e1),
             time_ratio: ratio,
             time_ratio_ci: ci,
-            slower: ci.0 > 1.0 + options.time_tolerance,
-            faster: ci.1 < 1.0 / (1.0 + options.time_tolerance),
+            slower: ci.0 > 1.0 + options.time_tolerance
+                && t.ci_low - tb.ci_high > options.min_change_ms,
+            faster: ci.1 < 1.0 / (1.0 + options.time_tolerance)
+                && tb.ci_low - t.ci_high > options.min_change_ms,
             less_accurate: e1 - e0 > options.error_tolerance,
         });
     }
@@ -297,6 +309,32 @@ mod tests {
         // And the other way round the slowed method got faster.
         let back = compare(&report, &slowed, dir, BaselineOptions::default());
         assert!(back.runs.iter().filter(|r| r.method == "pcf-gems4").all(|r| r.faster));
+    }
+
+    #[test]
+    fn a_short_run_is_flagged_only_when_it_slows_by_more_than_the_time_slice_floor() {
+        // A 3.5 ms run taking twice as long: a time slice of a shared machine at the default
+        // floor, a regression when the floor is 0.
+        let mut report = small_report();
+        report.rows.truncate(1);
+        let at = |ms: f64| crate::timing::Summary {
+            median: ms,
+            ci_low: ms - 0.1,
+            ci_high: ms + 0.1,
+            min: ms - 0.2,
+            max: ms + 0.2,
+        };
+        report.rows[0].total_ms = at(3.5);
+        let mut slowed = report.clone();
+        slowed.rows[0].total_ms = at(7.0);
+        let dir = Path::new("earlier");
+        let default = compare(&slowed, &report, dir, BaselineOptions::default());
+        assert!(!default.runs[0].slower, "{:?}", default.runs[0]);
+        let strict = BaselineOptions { min_change_ms: 0.0, ..Default::default() };
+        assert!(compare(&slowed, &report, dir, strict).runs[0].slower);
+        // 3.5 ms to 14 ms is more than the floor.
+        slowed.rows[0].total_ms = at(14.0);
+        assert!(compare(&slowed, &report, dir, BaselineOptions::default()).runs[0].slower);
     }
 
     #[test]
