@@ -168,6 +168,46 @@ pub struct Recorder {
     pub warnings: Vec<String>,
 }
 
+/// Who ran, on what: the part of a run record the recorder does not hold.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunIdentity {
+    /// Scene name.
+    pub scene: String,
+    /// Method name.
+    pub method: String,
+    /// Method parameters.
+    pub params: serde_json::Map<String, serde_json::Value>,
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Effects the scene calls for.
+    pub effects: Vec<String>,
+}
+
+impl Recorder {
+    /// The run record of what this recorder holds, for the run `who`; without pixel classes
+    /// or provenance, which the caller adds when it has them.
+    pub fn into_record(self, who: RunIdentity) -> RunRecord {
+        RunRecord {
+            scene: who.scene,
+            method: who.method,
+            params: who.params,
+            width: who.width,
+            height: who.height,
+            effects: who.effects,
+            counters: self.counters,
+            total_ms: self.stages.total_ms(),
+            stages: self.stages.stages,
+            skipped_stages: self.stages.skipped,
+            notes: self.notes,
+            warnings: self.warnings,
+            pixel_classes: None,
+            provenance: None,
+        }
+    }
+}
+
 /// The run record written as `run.json`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RunRecord {
