@@ -53,12 +53,18 @@ enum Command {
     /// shadow.png and run.json.
     Compare(CompareArgs),
     /// Run a suite (scenes x methods x parameters) under the timing protocol and write
-    /// report.md, runs.csv, runs.json and every visibility buffer as EXR into --out.
+    /// index.html, report.md, runs.csv, runs.json, a page per run and every visibility buffer
+    /// as EXR into --out; or plan it (--plan), run one shard of it (--shard K/N), or merge
+    /// shards (`report merge`).
     Report(ReportArgs),
 }
 
 #[derive(clap::Args)]
+#[command(args_conflicts_with_subcommands = true)]
 struct ReportArgs {
+    /// Merge shards instead of running a suite.
+    #[command(subcommand)]
+    action: Option<ReportAction>,
     /// A built-in suite (`quick`: every method on small frames, a few minutes; `papers`: the
     /// papers' frame and map sizes; `full`: every scene and parameter) or a suite file
     /// (.toml; copy one from reports/suites/ and edit it).
@@ -84,6 +90,39 @@ struct ReportArgs {
     /// compares ratios alone).
     #[arg(long, value_name = "MS", allow_negative_numbers = true)]
     baseline_min_ms: Option<f64>,
+    /// Print the suite's work list and stop: one JSON line per item (scene, frame, reference,
+    /// runs, estimated cost), in the order a report runs them, then a summary on standard
+    /// error (with --shard K/N, of that shard's items).
+    #[arg(long)]
+    plan: bool,
+    /// Run only share K of N of the work (K from 0, as Slurm's array task id: `--shard
+    /// $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT`), into a shard folder for `report
+    /// merge`. Shards are balanced by the items' estimated cost; the same suite and N always
+    /// give the same shares.
+    #[arg(long, value_name = "K/N")]
+    shard: Option<reports::plan::Shard>,
+    /// Reference cache folder, shared by shards and reports (content-addressed, verified on
+    /// read, safe for several writers); default `cache/` in the output folder.
+    #[arg(long, value_name = "DIR")]
+    cache: Option<PathBuf>,
+}
+
+#[derive(clap::Subcommand)]
+enum ReportAction {
+    /// Merge the shard folders of one suite (`report --shard K/N`, every K of one N) into
+    /// the report an unsharded run writes; refuses, naming them, when shards are missing or
+    /// did not finish.
+    Merge(MergeArgs),
+}
+
+#[derive(clap::Args)]
+struct MergeArgs {
+    /// The shards' folders.
+    #[arg(required = true, value_name = "DIR")]
+    dirs: Vec<PathBuf>,
+    /// Output folder (the same rules as `report --out`).
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -450,13 +489,23 @@ fn job(a: &RenderArgs) -> Result<Job, Failure> {
 }
 
 fn report(a: ReportArgs) -> Result<(), Failure> {
+    if let Some(ReportAction::Merge(m)) = a.action {
+        return report_merge(m);
+    }
     let suite =
         reports::Suite::load(&a.suite).map_err(|e| input(anyhow::anyhow!("--suite: {e}")))?;
-    let (out, flag) = match a.out {
-        Some(out) => (out, "--out"),
-        None => {
+    if a.plan {
+        return print_plan(&suite, a.shard);
+    }
+    let (out, flag) = match (a.out, a.shard) {
+        (Some(out), _) => (out, "--out"),
+        (None, None) => {
             (PathBuf::from(format!("shadowbench-out/report-{}", suite.name)), "--out (default)")
         }
+        (None, Some(s)) => (
+            PathBuf::from(format!("shadowbench-out/report-{}/shards/{}", suite.name, s.index)),
+            "--out (default)",
+        ),
     };
     let mut options = reports::baseline::BaselineOptions::default();
     if let Some(t) = a.baseline_tolerance {
@@ -488,16 +537,50 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
     prepare_out(&out, flag)?;
     reports::write::prepare_out_dir(&out)
         .map_err(|e| input(anyhow::anyhow!("{flag} {}: {e}", out.display())))?;
-    let bar = indicatif::ProgressBar::new(reports::run_count(&suite));
+    let cache_dir = a.cache.clone().unwrap_or_else(|| out.join(reports::write::CACHE_DIR));
+    let mut cache = reports::cache::ReferenceCache::open(&cache_dir).map_err(|e| {
+        input(anyhow::anyhow!("--cache {}: cannot create the folder: {e}", cache_dir.display()))
+    })?;
+    let plan = reports::plan::plan(&suite);
+    let items = match a.shard {
+        Some(s) => s.items(&plan),
+        None => (0..plan.len()).collect(),
+    };
+    if let Some(shard) = a.shard {
+        let start = reports::merge::ShardStart {
+            suite: suite.name.clone(),
+            shard,
+            started: instrumentation::Provenance::capture(String::new(), None).timestamp,
+        };
+        let path = out.join(reports::merge::SHARD_START);
+        std::fs::write(&path, serde_json::to_string_pretty(&start)? + "\n")
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    let started = std::time::Instant::now();
+    let bar = indicatif::ProgressBar::new(reports::sweep::items_run_count(&suite, &plan, &items));
     bar.set_style(
         indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} runs, {elapsed} {msg}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
-    let (report, images) = reports::run_suite(&suite, |label| {
-        bar.set_message(label.to_owned());
-        bar.inc(1);
-    });
+    let (mut report, images) =
+        reports::sweep::run_items(&suite, &plan, &items, Some(&mut cache), |label| {
+            bar.set_message(label.to_owned());
+            bar.inc(1);
+        });
     bar.finish_and_clear();
+    if let Some(shard) = a.shard {
+        for r in &mut report.rows {
+            r.shard = Some(shard.index);
+        }
+        report.shards = vec![reports::model::ShardInfo {
+            shard,
+            items: items.clone(),
+            provenance: report.provenance.clone(),
+            machine: report.machine.clone(),
+            cache: report.cache,
+            wall_s: started.elapsed().as_secs_f64(),
+        }];
+    }
     let comparison = match (&before, &a.baseline) {
         (Some(b), Some(dir)) => Some(reports::baseline::compare(&report, b, dir, options)),
         _ => None,
@@ -518,11 +601,86 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
     for skipped in &report.skipped {
         eprintln!("note: not run: {skipped}");
     }
+    let what = match a.shard {
+        Some(s) => {
+            format!("shard {s} of suite {} ({} of {} items)", suite.name, items.len(), plan.len())
+        }
+        None => format!("suite {}", suite.name),
+    };
     println!(
-        "suite {}: {} runs on {} scenes; wrote {}",
-        suite.name,
+        "{what}: {} runs on {} scenes; {}; wrote {}",
         report.rows.len(),
         report.scenes.len(),
+        cache_line(cache.dir(), cache.stats),
+        out.display()
+    );
+    Ok(())
+}
+
+/// What a reference cache did, in words.
+fn cache_line(dir: &Path, s: reports::cache::CacheStats) -> String {
+    let mut line =
+        format!("reference cache {}: {} hits, {} misses", dir.display(), s.hits, s.misses);
+    if s.invalid > 0 {
+        line += &format!(", {} entries failed verification and were recomputed", s.invalid);
+    }
+    if s.write_failures > 0 {
+        line += &format!(", {} entries could not be written", s.write_failures);
+    }
+    line
+}
+
+/// `report --plan`: the work list as JSON lines, and a summary on standard error.
+fn print_plan(suite: &reports::Suite, shard: Option<reports::plan::Shard>) -> Result<(), Failure> {
+    let plan = reports::plan::plan(suite);
+    let items = match shard {
+        Some(s) => s.items(&plan),
+        None => (0..plan.len()).collect(),
+    };
+    let mut out = String::new();
+    for &k in &items {
+        out += &serde_json::to_string(&plan[k])?;
+        out.push('\n');
+    }
+    print!("{out}");
+    let cost: f64 = items.iter().map(|&k| plan[k].cost).sum();
+    let total: f64 = plan.iter().map(|i| i.cost).sum();
+    let runs = reports::sweep::items_run_count(suite, &plan, &items);
+    let whose = shard.map_or_else(String::new, |s| format!("shard {s}: "));
+    eprintln!(
+        "{whose}{} items, {runs} runs, {:.1} % of the suite's estimated cost",
+        items.len(),
+        if total > 0.0 { 100.0 * cost / total } else { 100.0 }
+    );
+    Ok(())
+}
+
+/// `report merge DIR... --out OUT`.
+fn report_merge(m: MergeArgs) -> Result<(), Failure> {
+    let out = m.out;
+    prepare_out(&out, "--out")?;
+    reports::write::prepare_out_dir(&out)
+        .map_err(|e| input(anyhow::anyhow!("--out {}: {e}", out.display())))?;
+    let (report, dirs) = reports::merge::merge(&m.dirs).map_err(input)?;
+    reports::merge::copy_shard_files(&dirs, &out)
+        .with_context(|| format!("cannot copy the shards' files into {}", out.display()))?;
+    reports::write::write_summary(&out, &report, None)?;
+    for skipped in &report.skipped {
+        eprintln!("note: not run: {skipped}");
+    }
+    let walls: Vec<String> =
+        report.shards.iter().map(|s| format!("{} {:.1} s", s.shard, s.wall_s)).collect();
+    let cache = report.cache.unwrap_or_default();
+    println!(
+        "merged {} shards of suite {}: {} runs on {} scenes; shards' wall times: {}; \
+         reference caches: {} hits, {} misses; wrote {}",
+        report.shards.len(),
+        report.suite.name,
+        report.rows.len(),
+        report.scenes.len(),
+        walls.join(", "),
+        cache.hits,
+        cache.misses,
         out.display()
     );
     Ok(())
@@ -556,25 +714,20 @@ fn record(
     rec: Recorder,
     classes: Option<&[PixelClass]>,
 ) -> RunRecord {
-    RunRecord {
+    let mut record = rec.into_record(instrumentation::RunIdentity {
         scene: job.scene.name.clone(),
         method: job.technique.name().to_owned(),
         params: job.technique.params(),
         width: job.width,
         height: job.height,
         effects: frame.effects.names().into_iter().map(String::from).collect(),
-        counters: rec.counters,
-        total_ms: rec.stages.total_ms(),
-        stages: rec.stages.stages,
-        skipped_stages: rec.stages.skipped,
-        notes: rec.notes,
-        warnings: rec.warnings,
-        pixel_classes: classes.map(analysis::metrics::class_pixels),
-        provenance: Some(instrumentation::Provenance::capture(
-            instrumentation::Provenance::command_line(),
-            gpu_adapter(job),
-        )),
-    }
+    });
+    record.pixel_classes = classes.map(analysis::metrics::class_pixels);
+    record.provenance = Some(instrumentation::Provenance::capture(
+        instrumentation::Provenance::command_line(),
+        gpu_adapter(job),
+    ));
+    record
 }
 
 /// The GPU adapter a job ran on (`--device gpu`), for its provenance.

@@ -113,7 +113,7 @@ fn index_and_run_pages_work_in_headless_chromium() {
     assert_eq!(report.rows.len(), 3, "{:?}", report.skipped);
     let out = dir.path();
     write_report(out, &report, &images, None).expect("report written");
-    let pages = write_run_pages(out, &report, &images).expect("run pages written");
+    let pages = write_run_pages(out, &report).expect("run pages written");
     assert_eq!(pages.len(), 3);
 
     let index = out.join("index.html");

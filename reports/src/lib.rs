@@ -1,17 +1,22 @@
 //! What runs and reports write. A single run: the visibility buffer as EXR, a shaded PNG for
 //! looking, and the run record as JSON ([`output`]). A report: a [`suite`] of scenes, methods
-//! and parameters, run by [`sweep`] under the timing protocol of [`timing`], written by
-//! [`write`] as JSON, CSV, Markdown tables and EXR images, with the charts chosen by [`figures`]
-//! and drawn by [`plots`]; the papers' tables are measured by [`tables`].
+//! and parameters, planned as items by [`plan`] (and split into shards there), run by [`sweep`]
+//! under the timing protocol of [`timing`] with references from the [`cache`], held in the
+//! [`model`], written by [`write`] as JSON, CSV, Markdown tables, EXR images and HTML pages
+//! ([`index`], [`run_pages`]), with the charts chosen by [`figures`] and drawn by [`plots`];
+//! the papers' tables are measured by [`tables`]; shards are put back together by [`merge`].
 
 pub mod baseline;
+pub mod cache;
 pub mod devices;
 pub mod figures;
 pub mod grids;
 pub mod html;
 pub mod index;
+pub mod merge;
 pub mod model;
 pub mod output;
+pub mod plan;
 pub mod plots;
 pub mod run_pages;
 pub mod suite;
@@ -27,7 +32,7 @@ pub use output::{
     OutputError,
 };
 pub use suite::{Suite, SuiteError, BUILTIN_SUITES};
-pub use sweep::{run_count, run_suite};
+pub use sweep::run_suite;
 pub use write::write_report;
 
 #[cfg(test)]

@@ -8,11 +8,13 @@
 //! so that the sweep, the figures, the pages and the writers depend on the model and never on
 //! one another through it.
 
+use crate::cache::CacheStats;
 use crate::output::MetricsRecord;
+use crate::plan::Shard;
 use crate::suite::Suite;
 use crate::tables::Table;
 use crate::timing::{Machine, StageTimes, Summary};
-use analysis::{pixel_class::PixelClass, Metrics, ReferenceImage};
+use analysis::{metrics::PerClass, pixel_class::PixelClass, Metrics, ReferenceImage};
 use image::RgbImage;
 use instrumentation::{Counters, Provenance, RunRecord};
 use methods::Visibility;
@@ -49,6 +51,15 @@ pub struct Row {
     /// `analysis::metrics::EXCEEDANCE_THRESHOLDS` (empty when no pixel was compared).
     #[serde(default)]
     pub error_exceedance: Vec<f64>,
+    /// The metrics of each pixel class (`metrics.json`'s `classes`).
+    #[serde(default)]
+    pub classes: Option<PerClass>,
+    /// The plan's item that ran it ([`crate::plan`]).
+    #[serde(default)]
+    pub item: usize,
+    /// The shard that ran it, in a merged report ([`Report::shards`]); `None` when unsharded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shard: Option<u32>,
     /// Total time of the method's stages.
     pub total_ms: Summary,
     /// Each stage's time.
@@ -117,11 +128,38 @@ pub struct Report {
     pub grids: Vec<GridFile>,
     /// The papers' tables, measured.
     pub tables: Vec<Table>,
+    /// What the reference cache did (`None` without a cache).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cache: Option<CacheStats>,
+    /// The shards this report was run as: one for a shard's own report, every shard for a
+    /// merged one, none for an unsharded one.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub shards: Vec<ShardInfo>,
+}
+
+/// Where and how one shard of a report ran.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ShardInfo {
+    /// The shard.
+    pub shard: Shard,
+    /// The plan's items it ran.
+    pub items: Vec<usize>,
+    /// What produced it.
+    pub provenance: Provenance,
+    /// Where its times were taken.
+    pub machine: Machine,
+    /// What its reference cache did.
+    pub cache: Option<CacheStats>,
+    /// Its wall time, seconds, from the start of the sweep to the last file written.
+    pub wall_s: f64,
 }
 
 /// An image grid of a report.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct GridFile {
+    /// The plan's item that drew it ([`crate::plan`]).
+    #[serde(default)]
+    pub item: usize,
     /// Scene.
     pub scene: String,
     /// Title.

@@ -28,7 +28,7 @@
 use crate::html::{anchor, escape, metric_cells, page_head, Cell, METRIC_COLUMNS};
 use crate::model::{param_label, params_of, row_stem, scene_stem, Images, Report, Row};
 use crate::output::{write_run_json, write_visibility_exr, OutputError};
-use analysis::metrics::Comparison;
+use analysis::metrics::PerClass;
 use methods::Visibility;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -70,11 +70,11 @@ pub struct View {
     pub label: String,
 }
 
-/// The views of the run `images.runs[k]`: its image, the reference, its error map, the class
-/// map, then the images of the scene's other runs in report order.
-pub fn views(report: &Report, images: &Images, k: usize) -> Vec<View> {
-    let p = &images.runs[k];
-    let r = &report.rows[p.row];
+/// The views of the run `report.rows[row]`: its image, the reference, its error map, the
+/// class map, then the images of the scene's other runs (same scene and frame) in report
+/// order.
+pub fn views(report: &Report, row: usize) -> Vec<View> {
+    let r = &report.rows[row];
     let stem = row_stem(r);
     let scene = scene_stem(&r.scene);
     let mut v = vec![
@@ -95,10 +95,15 @@ pub fn views(report: &Report, images: &Images, k: usize) -> Vec<View> {
             label: "pixel classes (blue planar, green surface, red edge, black uncovered)".into(),
         },
     ];
-    v.extend(images.runs.iter().filter(|q| q.row != p.row && q.scene == p.scene).map(|q| {
-        let o = &report.rows[q.row];
-        View { src: format!("{}.png", row_stem(o)), label: title(o) }
-    }));
+    let same = |o: &Row| o.scene == r.scene && (o.width, o.height) == (r.width, r.height);
+    v.extend(
+        report
+            .rows
+            .iter()
+            .enumerate()
+            .filter(|(k, o)| *k != row && same(o))
+            .map(|(_, o)| View { src: format!("{}.png", row_stem(o)), label: title(o) }),
+    );
     v
 }
 
@@ -110,10 +115,9 @@ fn reference_text(r: &Row) -> String {
     }
 }
 
-/// The page of the run `images.runs[k]`.
-pub fn run_page(report: &Report, images: &Images, k: usize) -> String {
-    let p = &images.runs[k];
-    let r = &report.rows[p.row];
+/// The page of the run `report.rows[row]`.
+pub fn run_page(report: &Report, row: usize) -> String {
+    let r = &report.rows[row];
     let stem = row_stem(r);
     let scene = scene_stem(&r.scene);
     let mut s = page_head(&format!("{} on {}", title(r), r.scene));
@@ -136,7 +140,7 @@ pub fn run_page(report: &Report, images: &Images, k: usize) -> String {
         stem = escape(&stem),
         scene = escape(&scene),
     );
-    let views = views(report, images, k);
+    let views = views(report, row);
     s.push_str(
         "<h2 id=\"compare\">Comparison</h2>\n<p>Lit fraction in grey, black in shadow, white \
          lit; the error map in magma from black (no error) to pale yellow (0.1 or more), dark \
@@ -191,7 +195,9 @@ pub fn run_page(report: &Report, images: &Images, k: usize) -> String {
     ];
     metrics.extend(METRIC_COLUMNS.iter().map(|c| c.to_string()).zip(metric_cells(r)));
     s.push_str(&key_value_table(&metrics));
-    s.push_str(&class_table(&p.metrics.comparison));
+    if let Some(classes) = &r.classes {
+        s.push_str(&class_table(classes));
+    }
 
     let _ = writeln!(
         s,
@@ -249,7 +255,7 @@ pub fn run_page(report: &Report, images: &Images, k: usize) -> String {
 
 /// Each pixel class's metrics (`metrics.json`'s `classes`), `n/a` where a class has no
 /// compared pixel.
-fn class_table(c: &Comparison) -> String {
+fn class_table(classes: &PerClass) -> String {
     let mut s = String::from(
         "<h3 id=\"classes\">By pixel class</h3>\n<p>Pixels the reference evaluated, by class; \
          the headline above is planar and surface together. Edge pixels are not referenced in \
@@ -258,7 +264,6 @@ fn class_table(c: &Comparison) -> String {
          <th>max</th><th>p95</th><th>boundary pixels</th><th>boundary error</th>\
          <th>boundary p95</th></tr>\n",
     );
-    let classes = &c.classes;
     for (name, m) in
         [("planar", &classes.planar), ("surface", &classes.surface), ("edge", &classes.edge)]
     {
@@ -307,17 +312,11 @@ pub fn scene_files(dir: &Path, report: &Report, images: &Images) -> Result<(), O
 }
 
 /// Writes, for every produced run, into `dir/runs/`: `ID.png` (its lit fraction),
-/// `ID.error.png` (its error map), `ID.run.json`, `ID.metrics.json` and `ID.html` (its page).
-/// Returns the pages' paths relative to `dir`, in the order of `images.runs`.
-pub fn write_run_pages(
-    dir: &Path,
-    report: &Report,
-    images: &Images,
-) -> Result<Vec<String>, OutputError> {
+/// `ID.error.png` (its error map), `ID.run.json` and `ID.metrics.json`.
+pub fn run_files(dir: &Path, report: &Report, images: &Images) -> Result<(), OutputError> {
     let runs = dir.join("runs");
     std::fs::create_dir_all(&runs).map_err(|e| write_err(&runs, &e))?;
-    let mut pages = Vec::with_capacity(images.runs.len());
-    for (k, p) in images.runs.iter().enumerate() {
+    for p in &images.runs {
         let stem = row_stem(&report.rows[p.row]);
         let sc = &images.scenes[p.scene];
         let path = runs.join(format!("{stem}.png"));
@@ -332,9 +331,20 @@ pub fn write_run_pages(
         let path = runs.join(format!("{stem}.metrics.json"));
         let text = serde_json::to_string_pretty(&p.metrics).map_err(|e| write_err(&path, &e))?;
         std::fs::write(&path, text + "\n").map_err(|e| write_err(&path, &e))?;
-        let name = format!("runs/{stem}.html");
+    }
+    Ok(())
+}
+
+/// Writes every run's page, `dir/runs/ID.html` (its files are to be there or to follow:
+/// [`run_files`]). Returns the pages' paths relative to `dir`, in report order.
+pub fn write_run_pages(dir: &Path, report: &Report) -> Result<Vec<String>, OutputError> {
+    let runs = dir.join("runs");
+    std::fs::create_dir_all(&runs).map_err(|e| write_err(&runs, &e))?;
+    let mut pages = Vec::with_capacity(report.rows.len());
+    for row in 0..report.rows.len() {
+        let name = format!("runs/{}.html", row_stem(&report.rows[row]));
         let path = dir.join(&name);
-        std::fs::write(&path, run_page(report, images, k)).map_err(|e| write_err(&path, &e))?;
+        std::fs::write(&path, run_page(report, row)).map_err(|e| write_err(&path, &e))?;
         pages.push(name);
     }
     Ok(pages)

@@ -16,31 +16,32 @@
 //! time elapsed and an estimate of the time left from the mean time per run so far
 //! ([`ProgressLog`]). On a terminal the caller's progress bar shows the same.
 
+use crate::cache::ReferenceCache;
 use crate::model::{
     GridFile, GridImages, Images, Panel, Produced, Report, Row, SceneImages, SceneInfo,
 };
 use crate::output::shade;
 use crate::output::MetricsRecord;
+use crate::plan::{Work, WorkItem};
 use crate::suite::{GridSpec, PanelSpec, ReferenceChoice, Suite};
 use crate::tables::{run_table, table_run_count};
 use crate::timing::{time_method, Machine};
 use analysis::metrics::{exceedance, Comparison};
-use analysis::{error_image, Metrics, ReferenceImage};
-use instrumentation::{Provenance, Recorder, RunRecord};
+use analysis::{error_image, pixel_class::PixelClass, Metrics, ReferenceImage};
+use instrumentation::{Provenance, Recorder, RunIdentity};
 use methods::{registry::Device, Frame, MethodOptions, Visibility};
 use std::cell::Cell;
 use std::io::IsTerminal;
 use std::time::{Duration, Instant};
 
-/// Number of method runs a suite makes (scenes times combinations), for progress bars.
-pub fn run_count(suite: &Suite) -> u64 {
-    (suite.scenes.len() * suite.runs.iter().map(|r| r.expand().len()).sum::<usize>()) as u64
-        + suite.tables.iter().map(table_run_count).sum::<u64>()
-}
-
+/// The scene's reference on `frame`, from `cache` when it holds it (and stored there when it
+/// does not), with its name, rate and the time it took to compute.
 fn reference_for(
     suite: &Suite,
+    scene: &scenes::Scene,
     frame: &Frame<'_>,
+    cache: Option<&mut ReferenceCache>,
+    commit: &str,
 ) -> Result<(String, Option<u32>, ReferenceImage, f64), String> {
     let use_exact = match suite.reference {
         ReferenceChoice::Auto => !frame.effects.transparency,
@@ -55,9 +56,16 @@ fn reference_for(
         analysis::registry::reference(name, suite.ref_rate, Default::default())
             .map_err(|e| e.to_string())?
     };
-    let t = std::time::Instant::now();
-    let image = r.evaluate(frame, &mut Recorder::default()).map_err(|e| e.to_string())?;
-    Ok((name.to_owned(), rate, image, t.elapsed().as_secs_f64() * 1e3))
+    let compute = || {
+        let t = std::time::Instant::now();
+        let image = r.evaluate(frame, &mut Recorder::default()).map_err(|e| e.to_string())?;
+        Ok::<_, String>((image, t.elapsed().as_secs_f64() * 1e3))
+    };
+    let (image, ms) = match cache {
+        Some(c) => c.get_or_compute(scene, frame, name, rate, commit, compute)?,
+        None => compute()?,
+    };
+    Ok((name.to_owned(), rate, image, ms))
 }
 
 /// A panel of the sub-pixel shadow map's pixel classes (Lecocq et al. Fig. 14).
@@ -204,8 +212,54 @@ pub(crate) fn report_of(toml: &str) -> Report {
 /// Runs `suite`; `progress` is called once per method run with a short label. The report's
 /// provenance names this process's command line ([`Provenance::command_line`]). Returns the
 /// report and what its image outputs need ([`Images`]).
-pub fn run_suite(suite: &Suite, mut progress: impl FnMut(&str)) -> (Report, Images) {
-    let log = ProgressLog::new(run_count(suite));
+pub fn run_suite(suite: &Suite, progress: impl FnMut(&str)) -> (Report, Images) {
+    let plan = crate::plan::plan(suite);
+    let all: Vec<usize> = (0..plan.len()).collect();
+    run_items(suite, &plan, &all, None, progress)
+}
+
+/// How many method runs the items of `plan` numbered in `items` make.
+pub fn items_run_count(suite: &Suite, plan: &[WorkItem], items: &[usize]) -> u64 {
+    items
+        .iter()
+        .map(|&k| match &plan[k].work {
+            Work::Runs { runs, .. } => runs.len() as u64,
+            Work::Grid { .. } => 0,
+            Work::Table { table, .. } => table_run_count(&suite.tables[*table]),
+        })
+        .sum()
+}
+
+/// What every item of one scene shares: the frame, the reference and the pixel classes.
+struct SceneRun<'s> {
+    scene: &'s scenes::Scene,
+    frame: Frame<'s>,
+    effects: Vec<String>,
+    ref_name: String,
+    ref_rate: Option<u32>,
+    reference_ms: f64,
+    truth: ReferenceImage,
+    classes: Vec<PixelClass>,
+    /// The shadow-only pixels the metrics are taken over.
+    compared: Vec<bool>,
+    /// `raytrace` at one sample per pixel, traced the first time a binary result needs it.
+    raytrace1: Option<Option<ReferenceImage>>,
+    /// Index of its images in [`Images::scenes`].
+    images: usize,
+}
+
+/// Runs the items of `plan` numbered in `items` (in plan order; a scene's frame and reference
+/// are prepared once for its consecutive items, and taken from `cache` when it holds them);
+/// `progress` is called once per method run. Running every item of the plan is running the
+/// suite ([`run_suite`]); a shard runs its own ([`crate::plan::Shard::items`]).
+pub fn run_items(
+    suite: &Suite,
+    plan: &[WorkItem],
+    items: &[usize],
+    mut cache: Option<&mut ReferenceCache>,
+    mut progress: impl FnMut(&str),
+) -> (Report, Images) {
+    let log = ProgressLog::new(items_run_count(suite, plan, items));
     let done = Cell::new(0u64);
     let mut progress = |label: &str| {
         done.set(done.get() + 1);
@@ -220,16 +274,56 @@ pub fn run_suite(suite: &Suite, mut progress: impl FnMut(&str)) -> (Report, Imag
         skipped: Vec::new(),
         grids: Vec::new(),
         tables: Vec::new(),
+        cache: None,
+        shards: Vec::new(),
     };
     let mut images = Images::default();
-    let combos: usize = suite.runs.iter().map(|r| r.expand().len()).sum();
-    for (k, scene_name) in suite.scenes.iter().enumerate() {
-        log.print(&format!("scene {}/{} {scene_name}", k + 1, suite.scenes.len()), done.get());
+    let scene_count = items
+        .iter()
+        .filter_map(|&k| plan[k].scene_index)
+        .collect::<std::collections::BTreeSet<_>>()
+        .len();
+    let table_count = items.iter().filter(|&&k| matches!(plan[k].work, Work::Table { .. })).count();
+    let mut tables_started = 0;
+    let mut scenes_started = 0;
+    let mut at = 0;
+    while at < items.len() {
+        let first = &plan[items[at]];
+        let Some(scene_index) = first.scene_index else {
+            if let Work::Table { table, paper } = &first.work {
+                tables_started += 1;
+                log.print(&format!("table {tables_started}/{table_count} {paper}"), done.get());
+                let spec = &suite.tables[*table];
+                let t = run_table(
+                    spec,
+                    suite.warmup,
+                    suite.repeats,
+                    &mut report.skipped,
+                    &mut progress,
+                );
+                report.tables.push(t);
+            }
+            at += 1;
+            continue;
+        };
+        let end = at
+            + items[at..].iter().take_while(|&&k| plan[k].scene_index == Some(scene_index)).count();
+        let group: Vec<&WorkItem> = items[at..end].iter().map(|&k| &plan[k]).collect();
+        at = end;
+        scenes_started += 1;
+        let scene_name = &suite.scenes[scene_index];
+        log.print(&format!("scene {scenes_started}/{scene_count} {scene_name}"), done.get());
+        let runs_in_group = |group: &[&WorkItem]| -> usize {
+            group
+                .iter()
+                .map(|i| if let Work::Runs { runs, .. } = &i.work { runs.len() } else { 0 })
+                .sum()
+        };
         let scene = match scenes::load(scene_name) {
             Ok(s) => s,
             Err(e) => {
                 report.skipped.push(format!("scene {scene_name}: {e}"));
-                (0..combos).for_each(|_| progress(scene_name));
+                (0..runs_in_group(&group)).for_each(|_| progress(scene_name));
                 continue;
             }
         };
@@ -240,11 +334,13 @@ pub fn run_suite(suite: &Suite, mut progress: impl FnMut(&str)) -> (Report, Imag
         };
         let mut rec = Recorder::default();
         let frame = Frame::new(&scene, w, h, &mut rec);
-        let (ref_name, ref_rate, truth, reference_ms) = match reference_for(suite, &frame) {
+        let commit = report.provenance.commit.clone();
+        let reference = reference_for(suite, &scene, &frame, cache.as_deref_mut(), &commit);
+        let (ref_name, ref_rate, truth, reference_ms) = match reference {
             Ok(r) => r,
             Err(e) => {
                 report.skipped.push(format!("scene {}: reference: {e}", scene.name));
-                (0..combos).for_each(|_| progress(&scene.name));
+                (0..runs_in_group(&group)).for_each(|_| progress(&scene.name));
                 continue;
             }
         };
@@ -255,11 +351,8 @@ pub fn run_suite(suite: &Suite, mut progress: impl FnMut(&str)) -> (Report, Imag
             Some(c) => c.clone(),
             None => analysis::exact::classify(&frame).class,
         };
-        let shadow_only = analysis::metrics::headline_pixels(&truth, &classes);
-        let scene_images = images.scenes.len();
+        let compared = analysis::metrics::headline_pixels(&truth, &classes);
         let effects: Vec<String> = frame.effects.names().into_iter().map(String::from).collect();
-        // `raytrace` at one sample per pixel, traced the first time a binary result needs it.
-        let mut raytrace1: Option<Option<ReferenceImage>> = None;
         report.scenes.push(SceneInfo {
             scene: scene.name.clone(),
             triangles: frame.geometry.len() as u64,
@@ -270,135 +363,167 @@ pub fn run_suite(suite: &Suite, mut progress: impl FnMut(&str)) -> (Report, Imag
             reference: ref_name.clone(),
             reference_ms,
         });
-        for spec in &suite.runs {
-            for options in spec.expand() {
-                progress(&format!("{} {}", scene.name, spec.method));
-                let technique = match analysis::registry::technique(&spec.method, &options) {
-                    Ok(t) => t,
-                    Err(e) => {
-                        report.skipped.push(format!("{} on {}: {e}", spec.method, scene.name));
-                        continue;
+        let mut ctx = SceneRun {
+            scene: &scene,
+            frame,
+            effects,
+            ref_name,
+            ref_rate,
+            reference_ms,
+            truth,
+            classes,
+            compared,
+            raytrace1: None,
+            images: images.scenes.len(),
+        };
+        for item in &group {
+            match &item.work {
+                Work::Runs { spec, .. } => {
+                    let spec = &suite.runs[*spec];
+                    for options in spec.expand() {
+                        progress(&format!("{} {}", scene.name, spec.method));
+                        let at = (item.item, &options);
+                        run_one(suite, &mut ctx, spec, at, &mut report, &mut images);
                     }
-                };
-                let timed =
-                    match time_method(technique.as_ref(), &frame, suite.warmup, suite.repeats) {
-                        Ok(t) => t,
-                        Err(why) => {
-                            report
-                                .skipped
-                                .push(format!("{} on {}: {why}", spec.method, scene.name));
-                            continue;
-                        }
-                    };
-                let v = timed.visibility;
-                if options.device == Device::Gpu && report.machine.gpu.is_none() {
-                    report.machine.gpu =
-                        methods::gpu::GpuContext::shared().ok().map(|c| c.adapter_name());
                 }
-                let rt1 = if analysis::metrics::is_binary(&v, &shadow_only) {
-                    raytrace1
-                        .get_or_insert_with(|| {
-                            analysis::registry::reference("raytrace", 1, Default::default())
-                                .ok()?
-                                .evaluate(&frame, &mut Recorder::default())
-                                .ok()
-                        })
-                        .as_ref()
-                } else {
-                    None
-                };
-                let comparison = Comparison::new(&v, &truth, &classes, rt1);
-                let rec = timed.record;
-                let record = RunRecord {
-                    scene: scene.name.clone(),
-                    method: technique.name().to_owned(),
-                    params: technique.params(),
-                    width: w,
-                    height: h,
-                    effects: effects.clone(),
-                    counters: rec.counters,
-                    total_ms: rec.stages.total_ms(),
-                    stages: rec.stages.stages,
-                    skipped_stages: rec.stages.skipped,
-                    notes: rec.notes,
-                    warnings: rec.warnings,
-                    pixel_classes: None,
-                    provenance: Some(report.provenance.clone()),
-                };
-                let metrics = MetricsRecord {
-                    comparison: comparison.clone(),
-                    reference: ref_name.clone(),
-                    ref_rate,
-                    edge_reference: (ref_name == "exact").then(|| "none".to_owned()),
-                    scene: scene.name.clone(),
-                    method: record.method.clone(),
-                    params: record.params.clone(),
-                    width: w,
-                    height: h,
-                    method_ms: record.total_ms,
-                    reference_ms,
-                };
-                report.rows.push(Row {
-                    scene: scene.name.clone(),
-                    method: record.method.clone(),
-                    params: record.params.clone(),
-                    width: w,
-                    height: h,
-                    reference: ref_name.clone(),
-                    ref_rate,
-                    metrics: Metrics::compare(&v, &truth.lit, &shadow_only),
-                    flip_mean: comparison.flip_mean,
-                    pixel_match_lecocq: comparison.pixel_match_lecocq,
-                    error_exceedance: exceedance(&v, &truth.lit, &shadow_only).unwrap_or_default(),
-                    total_ms: timed.total_ms,
-                    stages: timed.stages,
-                    skipped_stages: record.skipped_stages.clone(),
-                    counters: record.counters,
-                    notes: record.notes.clone(),
-                });
-                images.runs.push(Produced {
-                    row: report.rows.len() - 1,
-                    scene: scene_images,
-                    visibility: v,
-                    record,
-                    metrics,
-                });
+                Work::Grid { grid, .. } => {
+                    let g = &suite.grids[*grid];
+                    let panels = grid_panels(
+                        g,
+                        &ctx.frame,
+                        &ctx.truth,
+                        &ctx.compared,
+                        &ctx.ref_name,
+                        &mut report.skipped,
+                    );
+                    if !panels.is_empty() {
+                        report.grids.push(GridFile {
+                            item: item.item,
+                            scene: scene.name.clone(),
+                            title: g.title.clone(),
+                            png: format!("grids/grid-{}.png", grid + 1),
+                        });
+                        images.grids.push(GridImages {
+                            grid: report.grids.len() - 1,
+                            panels,
+                            inset: g.inset,
+                        });
+                    }
+                }
+                Work::Table { .. } => {}
             }
-        }
-        for grid in suite.grids.iter().filter(|g| g.scene == *scene_name) {
-            let panels =
-                grid_panels(grid, &frame, &truth, &shadow_only, &ref_name, &mut report.skipped);
-            if panels.is_empty() {
-                continue;
-            }
-            report.grids.push(GridFile {
-                scene: scene.name.clone(),
-                title: grid.title.clone(),
-                png: format!("grids/grid-{}.png", report.grids.len() + 1),
-            });
-            images.grids.push(GridImages {
-                grid: report.grids.len() - 1,
-                panels,
-                inset: grid.inset,
-            });
         }
         images.scenes.push(SceneImages {
             scene: report.scenes.len() - 1,
-            reference: truth,
-            classes,
-            compared: shadow_only,
+            reference: ctx.truth,
+            classes: ctx.classes,
+            compared: ctx.compared,
         });
     }
-    for (k, spec) in suite.tables.iter().enumerate() {
-        let name = spec.paper.name();
-        log.print(&format!("table {}/{} {name}", k + 1, suite.tables.len()), done.get());
-        let table =
-            run_table(spec, suite.warmup, suite.repeats, &mut report.skipped, &mut progress);
-        report.tables.push(table);
-    }
     log.print("done", done.get());
+    // A scene that cannot be loaded is said once, however many of its items there are.
+    let mut seen = std::collections::HashSet::new();
+    report.skipped.retain(|s| seen.insert(s.clone()));
     report.provenance.adapter = report.machine.gpu.clone();
+    report.cache = cache.map(|c| c.stats);
     (report, images)
+}
+
+/// Times one combination of `spec` on the scene, measures it against the reference, and adds
+/// its row and images; a method that cannot run is added to the report's skipped runs.
+fn run_one(
+    suite: &Suite,
+    ctx: &mut SceneRun<'_>,
+    spec: &crate::suite::RunSpec,
+    (item, options): (usize, &MethodOptions),
+    report: &mut Report,
+    images: &mut Images,
+) {
+    let scene = ctx.scene;
+    let (w, h) = (ctx.frame.width(), ctx.frame.height());
+    let technique = match analysis::registry::technique(&spec.method, options) {
+        Ok(t) => t,
+        Err(e) => {
+            report.skipped.push(format!("{} on {}: {e}", spec.method, scene.name));
+            return;
+        }
+    };
+    let timed = match time_method(technique.as_ref(), &ctx.frame, suite.warmup, suite.repeats) {
+        Ok(t) => t,
+        Err(why) => {
+            report.skipped.push(format!("{} on {}: {why}", spec.method, scene.name));
+            return;
+        }
+    };
+    let v = timed.visibility;
+    if options.device == Device::Gpu && report.machine.gpu.is_none() {
+        report.machine.gpu = methods::gpu::GpuContext::shared().ok().map(|c| c.adapter_name());
+    }
+    let frame = &ctx.frame;
+    let rt1 = if analysis::metrics::is_binary(&v, &ctx.compared) {
+        ctx.raytrace1
+            .get_or_insert_with(|| {
+                analysis::registry::reference("raytrace", 1, Default::default())
+                    .ok()?
+                    .evaluate(frame, &mut Recorder::default())
+                    .ok()
+            })
+            .as_ref()
+    } else {
+        None
+    };
+    let comparison = Comparison::new(&v, &ctx.truth, &ctx.classes, rt1);
+    let rec = timed.record;
+    let mut record = rec.into_record(RunIdentity {
+        scene: scene.name.clone(),
+        method: technique.name().to_owned(),
+        params: technique.params(),
+        width: w,
+        height: h,
+        effects: ctx.effects.clone(),
+    });
+    record.provenance = Some(report.provenance.clone());
+    let metrics = MetricsRecord {
+        comparison: comparison.clone(),
+        reference: ctx.ref_name.clone(),
+        ref_rate: ctx.ref_rate,
+        edge_reference: (ctx.ref_name == "exact").then(|| "none".to_owned()),
+        scene: scene.name.clone(),
+        method: record.method.clone(),
+        params: record.params.clone(),
+        width: w,
+        height: h,
+        method_ms: record.total_ms,
+        reference_ms: ctx.reference_ms,
+    };
+    report.rows.push(Row {
+        scene: scene.name.clone(),
+        method: record.method.clone(),
+        params: record.params.clone(),
+        width: w,
+        height: h,
+        reference: ctx.ref_name.clone(),
+        ref_rate: ctx.ref_rate,
+        metrics: Metrics::compare(&v, &ctx.truth.lit, &ctx.compared),
+        flip_mean: comparison.flip_mean,
+        pixel_match_lecocq: comparison.pixel_match_lecocq,
+        error_exceedance: exceedance(&v, &ctx.truth.lit, &ctx.compared).unwrap_or_default(),
+        classes: Some(comparison.classes),
+        item,
+        shard: None,
+        total_ms: timed.total_ms,
+        stages: timed.stages,
+        skipped_stages: record.skipped_stages.clone(),
+        counters: record.counters,
+        notes: record.notes.clone(),
+    });
+    images.runs.push(Produced {
+        row: report.rows.len() - 1,
+        scene: ctx.images,
+        visibility: v,
+        record,
+        metrics,
+    });
 }
 
 #[cfg(test)]

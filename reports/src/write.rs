@@ -6,6 +6,8 @@
 //! the folder in a manifest, [`MANIFEST`]; before anything is computed, [`prepare_out_dir`]
 //! refuses a folder that holds a file no manifest lists (naming the first, in path order), and
 //! removes an earlier report's files so that none of them outlives the report that wrote it.
+//! The one exception is the default reference cache, [`CACHE_DIR`], kept from report to report
+//! (its entries are verified on read, `crate::cache`).
 
 use crate::figures::write_plots;
 use crate::grids::write_grid;
@@ -260,6 +262,10 @@ pub fn markdown(report: &Report) -> String {
 /// the folder with `/` between names, after a comment line.
 pub const MANIFEST: &str = ".shadowbench-report";
 
+/// The default reference cache's folder in a report folder (`report --cache`): neither listed
+/// in the manifest nor removed with an earlier report's files, nor foreign.
+pub const CACHE_DIR: &str = "cache";
+
 /// A report folder cannot be used.
 #[derive(Debug, thiserror::Error)]
 pub enum OutDirError {
@@ -304,6 +310,10 @@ fn files_under(dir: &Path) -> Result<Vec<PathBuf>, OutDirError> {
             let entry = entry.map_err(|e| io_err(&here, &e))?;
             let kind = entry.file_type().map_err(|e| io_err(&entry.path(), &e))?;
             let name = rel.join(entry.file_name());
+            if kind.is_dir() && rel.as_os_str().is_empty() && entry.file_name() == CACHE_DIR {
+                // The default reference cache is the report's and outlives it.
+                continue;
+            }
             if kind.is_dir() {
                 folders.push(name);
             } else {
@@ -378,14 +388,23 @@ fn write_manifest(dir: &Path) -> Result<(), OutputError> {
 }
 
 /// Writes `index.html`, `report.md`, `runs.csv`, `runs.json`, `plots/*.png|svg`,
-/// `tables/*.csv` (the papers' tables) and `visibility/*.exr` into `dir`, then the manifest
-/// listing them ([`MANIFEST`]); `dir` is to have been made ready by [`prepare_out_dir`].
+/// `tables/*.csv` (the papers' tables), `visibility/*.exr`, the grids, the scenes' and runs'
+/// images and records, and every run's page into `dir`, then the manifest listing them
+/// ([`MANIFEST`]); `dir` is to have been made ready by [`prepare_out_dir`].
 pub fn write_report(
     dir: &Path,
     report: &Report,
     images: &Images,
     baseline: Option<&crate::baseline::Comparison>,
 ) -> Result<(), OutputError> {
+    write_run_files(dir, report, images)?;
+    write_summary(dir, report, baseline)
+}
+
+/// The files made from a sweep's images: `visibility/ID.exr`, `grids/*.png`, `scenes/*` and
+/// `runs/ID.{png,error.png,run.json,metrics.json}` (a merged report copies them from its
+/// shards).
+pub fn write_run_files(dir: &Path, report: &Report, images: &Images) -> Result<(), OutputError> {
     let err = |path: &Path, e: &dyn std::fmt::Display| OutputError::Write {
         path: path.to_owned(),
         message: e.to_string(),
@@ -397,6 +416,25 @@ pub fn write_report(
     for g in &images.grids {
         write_grid(&dir.join(&report.grids[g.grid].png), &g.panels, g.inset)?;
     }
+    for p in &images.runs {
+        let path = exr_dir.join(format!("{}.exr", row_stem(&report.rows[p.row])));
+        write_visibility_exr(&path, &p.visibility)?;
+    }
+    crate::run_pages::scene_files(dir, report, images)?;
+    crate::run_pages::run_files(dir, report, images)
+}
+
+/// The files made from the report alone: `runs.json`, `runs.csv`, `report.md`, `index.html`,
+/// `plots/*`, `tables/*.csv`, `baseline.md`, every run's page, and the manifest.
+pub fn write_summary(
+    dir: &Path,
+    report: &Report,
+    baseline: Option<&crate::baseline::Comparison>,
+) -> Result<(), OutputError> {
+    let err = |path: &Path, e: &dyn std::fmt::Display| OutputError::Write {
+        path: path.to_owned(),
+        message: e.to_string(),
+    };
     let json = serde_json::to_string_pretty(report).map_err(|e| err(dir, &e))?;
     let plots = write_plots(dir, report)?;
     let html = crate::index::index_html(report, &plots, baseline);
@@ -428,12 +466,7 @@ pub fn write_report(
             std::fs::write(&path, text).map_err(|e| err(&path, &e))?;
         }
     }
-    for p in &images.runs {
-        let path = exr_dir.join(format!("{}.exr", row_stem(&report.rows[p.row])));
-        write_visibility_exr(&path, &p.visibility)?;
-    }
-    crate::run_pages::scene_files(dir, report, images)?;
-    crate::run_pages::write_run_pages(dir, report, images)?;
+    crate::run_pages::write_run_pages(dir, report)?;
     write_manifest(dir)
 }
 

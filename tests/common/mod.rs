@@ -68,3 +68,54 @@ pub fn lone_plane(light: Light) -> Scene {
     .resolve("lone-plane", Path::new("test"), Path::new("."))
     .expect("valid scene")
 }
+
+/// A report's `runs.json` without what depends on where and when it ran: its provenance,
+/// machine, shards and cache counts, every run's times and shard, every scene's times, and
+/// every paper's table (whose cells are times).
+pub fn report_without_times(dir: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(dir.join("runs.json")).expect("runs.json");
+    let mut v: serde_json::Value = serde_json::from_str(&text).expect("runs.json parses");
+    let o = v.as_object_mut().expect("an object");
+    for k in ["provenance", "machine", "shards", "cache", "tables"] {
+        o.remove(k);
+    }
+    for row in o["rows"].as_array_mut().expect("rows") {
+        let row = row.as_object_mut().expect("a row");
+        for k in ["total_ms", "stages", "shard"] {
+            row.remove(k);
+        }
+    }
+    for scene in o["scenes"].as_array_mut().expect("scenes") {
+        let scene = scene.as_object_mut().expect("a scene");
+        for k in ["gbuffer_ms", "reference_ms"] {
+            scene.remove(k);
+        }
+    }
+    v
+}
+
+/// Panics, naming the first difference, unless the reports in `a` and `b` are equal on every
+/// field but times, machine and provenance ([`report_without_times`]).
+pub fn assert_same_report(a: &Path, b: &Path) {
+    let (x, y) = (report_without_times(a), report_without_times(b));
+    if x == y {
+        return;
+    }
+    let (xr, yr) = (&x["rows"], &y["rows"]);
+    assert_eq!(
+        xr.as_array().map(Vec::len),
+        yr.as_array().map(Vec::len),
+        "{} and {}: not as many runs",
+        a.display(),
+        b.display()
+    );
+    for (k, (p, q)) in
+        xr.as_array().into_iter().flatten().zip(yr.as_array().into_iter().flatten()).enumerate()
+    {
+        assert_eq!(p, q, "run {k} differs between {} and {}", a.display(), b.display());
+    }
+    for key in ["suite", "scenes", "skipped", "grids"] {
+        assert_eq!(x[key], y[key], "`{key}` differs between {} and {}", a.display(), b.display());
+    }
+    panic!("{} and {} differ", a.display(), b.display());
+}

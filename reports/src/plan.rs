@@ -1,0 +1,326 @@
+//! A suite's work as a list of items, and its deterministic split into shards
+//! (`report --plan`, `report --shard K/N`).
+//!
+//! The items, in the order an unsharded report runs them: for each scene of the suite, one
+//! item per `[[run]]` (every combination of its parameters on that scene), then one per image
+//! grid of that scene; then one per paper's table. Each item names its scene, frame and
+//! reference, lists its runs and carries an estimate of its cost ([`WorkItem::cost`]), so that
+//! a user sees the size of a sweep before starting it, and shards can be balanced.
+//!
+//! The cost estimate, in arbitrary units, is what dominates a run at these sizes: per timed or
+//! warm-up run, the frame's pixels times the samples per pixel, plus the shadow map's texels,
+//! plus the scene's triangles; a grid counts one run per panel; a table its runs at the
+//! paper's frame. It orders items, it does not predict seconds.
+//!
+//! Shards take items by longest processing time first ([`assign`]): items sorted by falling
+//! cost (ties by their index), each given to the shard with the least cost so far (ties to the
+//! lowest shard). The same plan and shard count always give the same split. Within a shard,
+//! items run in plan order, so a scene's frame and reference are prepared once per shard.
+
+use crate::suite::{ReferenceChoice, Suite};
+use serde::{Deserialize, Serialize};
+
+/// What an item runs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Work {
+    /// Every combination of the suite's `[[run]]` number `spec` on the item's scene.
+    Runs {
+        /// Index into the suite's runs.
+        spec: usize,
+        /// The method.
+        method: String,
+        /// Its runs, as `map_res=512 rate=16 device=gpu` (empty for the defaults).
+        runs: Vec<String>,
+    },
+    /// The suite's image grid number `grid`.
+    Grid {
+        /// Index into the suite's grids.
+        grid: usize,
+        /// Its title.
+        title: String,
+    },
+    /// The suite's paper's table number `table`.
+    Table {
+        /// Index into the suite's tables.
+        table: usize,
+        /// The paper's table.
+        paper: String,
+    },
+}
+
+/// One item of a suite's work.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct WorkItem {
+    /// Its index in the plan.
+    pub item: usize,
+    /// The scene (`None` for a table, which has its own scenes).
+    pub scene: Option<String>,
+    /// Its index in the suite's scenes (a scene may be listed twice).
+    pub scene_index: Option<usize>,
+    /// Frame width (0 when the scene cannot be loaded).
+    pub width: u32,
+    /// Frame height.
+    pub height: u32,
+    /// The reference its runs are measured against (`exact`, `raytrace`; `None` for a table
+    /// or a scene that cannot be loaded).
+    pub reference: Option<String>,
+    /// The `raytrace` reference's rate.
+    pub ref_rate: Option<u32>,
+    /// What it runs.
+    #[serde(flatten)]
+    pub work: Work,
+    /// The estimated cost (see the module documentation).
+    pub cost: f64,
+}
+
+/// What the plan knows of a scene without running anything.
+struct SceneFacts {
+    width: u32,
+    height: u32,
+    triangles: f64,
+    transparency: bool,
+}
+
+fn facts(suite: &Suite, name: &str) -> Option<SceneFacts> {
+    let scene = scenes::load(name).ok()?;
+    let (width, height) =
+        if suite.width == 0 { (scene.width, scene.height) } else { (suite.width, suite.height) };
+    Some(SceneFacts {
+        width,
+        height,
+        triangles: scene.triangle_count() as f64,
+        transparency: scene.effects().transparency,
+    })
+}
+
+/// The cost of one method run with `rate` samples and a `map_res` map on `pixels` pixels.
+fn run_cost(pixels: f64, triangles: f64, rate: Option<u32>, map_res: Option<u32>) -> f64 {
+    let texels = map_res.map_or(1024.0 * 1024.0, |m| f64::from(m) * f64::from(m));
+    pixels * f64::from(rate.unwrap_or(1).max(1)) + texels + triangles
+}
+
+/// The suite's work, in the order an unsharded report runs it (see the module documentation).
+/// Scenes are loaded to learn their frame and effects; one that cannot be loaded still has
+/// its items, with a zero frame, and running them records why.
+pub fn plan(suite: &Suite) -> Vec<WorkItem> {
+    let runs_per = f64::from(suite.warmup + suite.repeats.max(1));
+    let mut items = Vec::new();
+    for (scene_index, name) in suite.scenes.iter().enumerate() {
+        let f = facts(suite, name);
+        let (width, height) = f.as_ref().map_or((0, 0), |f| (f.width, f.height));
+        let pixels = f64::from(width) * f64::from(height);
+        let triangles = f.as_ref().map_or(0.0, |f| f.triangles);
+        let (reference, ref_rate) = match &f {
+            None => (None, None),
+            Some(f) => {
+                let exact = match suite.reference {
+                    ReferenceChoice::Auto => !f.transparency,
+                    ReferenceChoice::Exact => true,
+                    ReferenceChoice::Raytrace => false,
+                };
+                if exact {
+                    (Some("exact".to_owned()), None)
+                } else {
+                    (Some("raytrace".to_owned()), Some(suite.ref_rate))
+                }
+            }
+        };
+        let item = |work: Work, cost: f64, items: &Vec<WorkItem>| WorkItem {
+            item: items.len(),
+            scene: Some(name.clone()),
+            scene_index: Some(scene_index),
+            width,
+            height,
+            reference: reference.clone(),
+            ref_rate,
+            work,
+            cost,
+        };
+        for (k, spec) in suite.runs.iter().enumerate() {
+            let combos = spec.expand();
+            let cost = combos
+                .iter()
+                .map(|o| runs_per * run_cost(pixels, triangles, o.rate, o.map_res))
+                .sum();
+            let runs = combos.iter().map(combo_label).collect();
+            let work = Work::Runs { spec: k, method: spec.method.clone(), runs };
+            let it = item(work, cost, &items);
+            items.push(it);
+        }
+        for (k, grid) in suite.grids.iter().enumerate().filter(|(_, g)| g.scene == *name) {
+            let cost =
+                grid.panels.iter().map(|p| run_cost(pixels, triangles, p.rate, p.map_res)).sum();
+            let it = item(Work::Grid { grid: k, title: grid.title.clone() }, cost, &items);
+            items.push(it);
+        }
+    }
+    for (k, spec) in suite.tables.iter().enumerate() {
+        let (pw, ph) = spec.paper.paper_frame();
+        let (w, h) = if spec.width == 0 { (pw, ph) } else { (spec.width, spec.height) };
+        let runs = crate::tables::table_run_count(spec) as f64;
+        let cost = runs * runs_per * run_cost(f64::from(w) * f64::from(h), 0.0, None, None);
+        items.push(WorkItem {
+            item: items.len(),
+            scene: None,
+            scene_index: None,
+            width: w,
+            height: h,
+            reference: None,
+            ref_rate: None,
+            work: Work::Table { table: k, paper: spec.paper.name().to_owned() },
+            cost,
+        });
+    }
+    items
+}
+
+/// A combination's parameters as `map_res=512 rate=16 device=gpu` (what it sets).
+fn combo_label(o: &methods::MethodOptions) -> String {
+    let mut parts = Vec::new();
+    for (k, v) in [("map_res", o.map_res), ("rate", o.rate), ("depth_bits", o.depth_bits)] {
+        if let Some(v) = v {
+            parts.push(format!("{k}={v}"));
+        }
+    }
+    if o.device == methods::registry::Device::Gpu {
+        parts.push("device=gpu".to_owned());
+    }
+    parts.join(" ")
+}
+
+/// The shard of each item (`0..shards`), by longest processing time first (see the module
+/// documentation). `shards` must be at least 1.
+pub fn assign(items: &[WorkItem], shards: u32) -> Vec<u32> {
+    let shards = shards.max(1);
+    let mut order: Vec<usize> = (0..items.len()).collect();
+    order.sort_by(|&a, &b| items[b].cost.total_cmp(&items[a].cost).then(a.cmp(&b)));
+    let mut load = vec![0.0f64; shards as usize];
+    let mut of = vec![0u32; items.len()];
+    for k in order {
+        let (least, _) = load
+            .iter()
+            .enumerate()
+            .min_by(|a, b| a.1.total_cmp(b.1).then(a.0.cmp(&b.0)))
+            .unwrap_or((0, &0.0));
+        load[least] += items[k].cost;
+        of[k] = least as u32;
+    }
+    of
+}
+
+/// A share of a plan: shard `index` of `count` (`report --shard K/N`, `K` from 0).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Shard {
+    /// This shard, from 0.
+    pub index: u32,
+    /// How many shards the plan is split into.
+    pub count: u32,
+}
+
+/// A `--shard` value that is not `K/N` with `0 <= K < N`.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "`{0}` is not a shard: give K/N with 0 <= K < N (e.g. 0/4, as Slurm's array task id and count)"
+)]
+pub struct ShardError(pub String);
+
+impl std::str::FromStr for Shard {
+    type Err = ShardError;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let bad = || ShardError(s.to_owned());
+        let (k, n) = s.split_once('/').ok_or_else(bad)?;
+        let index: u32 = k.trim().parse().map_err(|_| bad())?;
+        let count: u32 = n.trim().parse().map_err(|_| bad())?;
+        if index < count {
+            Ok(Self { index, count })
+        } else {
+            Err(bad())
+        }
+    }
+}
+
+impl std::fmt::Display for Shard {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}/{}", self.index, self.count)
+    }
+}
+
+impl Shard {
+    /// The items of `plan` in this shard, in plan order.
+    pub fn items(self, plan: &[WorkItem]) -> Vec<usize> {
+        let of = assign(plan, self.count);
+        (0..plan.len()).filter(|&k| of[k] == self.index).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn item(k: usize, cost: f64) -> WorkItem {
+        WorkItem {
+            item: k,
+            scene: None,
+            scene_index: None,
+            width: 0,
+            height: 0,
+            reference: None,
+            ref_rate: None,
+            work: Work::Table { table: k, paper: String::new() },
+            cost,
+        }
+    }
+
+    #[test]
+    fn shards_take_the_costliest_items_first_and_balance_the_rest() {
+        let items: Vec<WorkItem> =
+            [5.0, 1.0, 4.0, 3.0, 3.0, 2.0].iter().enumerate().map(|(k, &c)| item(k, c)).collect();
+        // By falling cost: 5 to shard 0, 4 to 1, 3 (item 3) to 1 (4 < 5), 3 (item 4) to 0
+        // (5 < 7), 2 to 1 (7 < 8), 1 to 0 (8 < 9).
+        assert_eq!(assign(&items, 2), [0, 0, 1, 1, 0, 1]);
+        let loads = |n: u32| {
+            let of = assign(&items, n);
+            let mut l = vec![0.0; n as usize];
+            for (k, s) in of.iter().enumerate() {
+                l[*s as usize] += items[k].cost;
+            }
+            l
+        };
+        assert_eq!(loads(2), [9.0, 9.0]);
+        assert_eq!(loads(1), [18.0]);
+        // Every item in exactly one shard, whatever the count, and more shards than items
+        // leave some empty.
+        for n in 1..9 {
+            let mut all: Vec<usize> =
+                (0..n).flat_map(|k| Shard { index: k, count: n }.items(&items)).collect();
+            all.sort_unstable();
+            assert_eq!(all, (0..items.len()).collect::<Vec<_>>());
+        }
+    }
+
+    #[test]
+    fn shard_values_are_k_of_n() {
+        assert_eq!("2/3".parse(), Ok(Shard { index: 2, count: 3 }));
+        for bad in ["3/3", "1", "a/2", "-1/2", "0/0", "1/2/3"] {
+            assert!(bad.parse::<Shard>().is_err(), "{bad}");
+        }
+        assert_eq!(Shard { index: 0, count: 4 }.to_string(), "0/4");
+    }
+
+    #[test]
+    fn the_plan_follows_the_unsharded_order() {
+        let suite = Suite::load("quick").expect("quick");
+        let p = plan(&suite);
+        let runs = suite.scenes.len() * suite.runs.len();
+        let grids = suite.grids.iter().filter(|g| suite.scenes.contains(&g.scene)).count();
+        assert_eq!(p.len(), runs + grids + suite.tables.len());
+        assert!(p.iter().enumerate().all(|(k, i)| i.item == k && i.cost > 0.0));
+        assert_eq!(p[0].scene.as_deref(), Some(suite.scenes[0].as_str()));
+        assert!(matches!(p[0].work, Work::Runs { spec: 0, .. }));
+        assert!(matches!(p.last().map(|i| &i.work), Some(Work::Table { .. })));
+        let line = serde_json::to_string(&p[0]).expect("json");
+        assert!(line.contains("\"kind\":\"runs\"") && line.contains("\"reference\":\"exact\""));
+    }
+}
