@@ -1,7 +1,8 @@
 //! `embree-side-by-side`: our ray tracer and shadow methods beside Intel Embree, in one
 //! process, on the same frames and sample points, at one thread count (see the library's
-//! documentation). Prints one Markdown table per measure, with ratios (ours / Embree: above 1,
-//! Embree is faster).
+//! documentation). Prints one Markdown table, with ratios (ours / Embree: above 1, Embree is
+//! faster); on `bunny-plane` also `spsm` against `sm` at 1920x1080 (there the ratio is
+//! `spsm / sm`, the "Embree" column holding `sm`'s time).
 //!
 //! Usage: `embree-side-by-side [--threads N] [--repeats R] [--scenes a,b,...]` (built with
 //! `--features embree`; `scripts/embree-bench` runs it at 1 and 2 threads), or
@@ -316,6 +317,30 @@ mod side_by_side {
                     e,
                     (f64::NAN, f64::NAN),
                 );
+                if name == "bunny-plane" {
+                    // Lecocq et al.'s Table 2: the sub-pixel shadow map's cost over a shadow map
+                    // of the same size, at 1920x1080.
+                    let mut rec = Recorder::default();
+                    let hd = Frame::new(&scene, 1920, 1080, &mut rec);
+                    for map in [1024, 4096] {
+                        let options = MethodOptions { map_res: Some(map), ..Default::default() };
+                        let spsm = ours_method(&hd, "spsm", &options, a.repeats)?;
+                        let sm = ours_method(&hd, "sm", &options, a.repeats)?;
+                        let what = format!("spsm vs sm, map {map} (Lecocq et al.: 1.27-1.81)");
+                        let triangles = hd.geometry.len();
+                        let gbuffer = rec.stages.total_ms();
+                        row(
+                            name,
+                            (1920, 1080),
+                            triangles,
+                            gbuffer,
+                            &what,
+                            spsm,
+                            sm,
+                            (f64::NAN, f64::NAN),
+                        );
+                    }
+                }
             }
         }
         Ok(())
