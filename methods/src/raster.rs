@@ -111,11 +111,6 @@ pub(crate) fn clip_near(corners: [DVec3; 3], depths: [f64; 3], near: f64) -> ([D
 /// moved outline are the samples at `i + 0.5 + shift` of the projector's image.
 fn setup(geometry: &Geometry, t: usize, proj: &Projector, shift: DVec2) -> Option<Setup> {
     let corners = geometry.corners(t);
-    let normal = (corners[1] - corners[0]).cross(corners[2] - corners[0]).normalize_or_zero();
-    if normal == DVec3::ZERO || !normal.is_finite() {
-        return None;
-    }
-    let offset = normal.dot(corners[0]);
     let (world, count) = if proj.is_perspective() {
         clip_near(corners, corners.map(|c| proj.depth_of(c)), proj.near)
     } else {
@@ -135,13 +130,8 @@ fn setup(geometry: &Geometry, t: usize, proj: &Projector, shift: DVec2) -> Optio
         depth_min = depth_min.min(d);
         depth_max = depth_max.max(d);
     }
-    // Orientation from the first non-collinear triple; an outline with none covers nothing.
-    let orientation = (1..count - 1)
-        .map(|i| orient2d(coord(outline[0]), coord(outline[i]), coord(outline[i + 1])))
-        .find(|&s| s != 0.0)?;
-    if orientation < 0.0 {
-        outline[..count].reverse();
-    }
+    // The sample rectangle first: most triangles of a dense mesh cover no sample, and are
+    // rejected before the normal and the exact orientation are computed.
     let (lo, hi) = outline[..count]
         .iter()
         .fold((DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)), |(lo, hi), &p| {
@@ -154,6 +144,18 @@ fn setup(geometry: &Geometry, t: usize, proj: &Projector, shift: DVec2) -> Optio
     let (y0, y1) = (first(lo.y), last(hi.y, proj.height));
     if x0 > x1 || y0 > y1 {
         return None;
+    }
+    let normal = (corners[1] - corners[0]).cross(corners[2] - corners[0]).normalize_or_zero();
+    if normal == DVec3::ZERO || !normal.is_finite() {
+        return None;
+    }
+    let offset = normal.dot(corners[0]);
+    // Orientation from the first non-collinear triple; an outline with none covers nothing.
+    let orientation = (1..count - 1)
+        .map(|i| orient2d(coord(outline[0]), coord(outline[i]), coord(outline[i + 1])))
+        .find(|&s| s != 0.0)?;
+    if orientation < 0.0 {
+        outline[..count].reverse();
     }
     Some(Setup {
         outline,
