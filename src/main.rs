@@ -97,7 +97,8 @@ struct ReportArgs {
     plan: bool,
     /// Run only share K of N of the work (K from 0, as Slurm's array task id: `--shard
     /// $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT`), into a shard folder for `report
-    /// merge`. Shards are balanced by the items' estimated cost; the same suite and N always
+    /// merge` (runs.json and the runs' images and records; the merge writes the pages and
+    /// charts). Shards are balanced by the items' estimated cost; the same suite and N always
     /// give the same shares.
     #[arg(long, value_name = "K/N")]
     shard: Option<reports::plan::Shard>,
@@ -585,7 +586,12 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
         (Some(b), Some(dir)) => Some(reports::baseline::compare(&report, b, dir, options)),
         _ => None,
     };
-    reports::write_report(&out, &report, &images, comparison.as_ref())?;
+    if a.shard.is_some() {
+        // The merge writes the report's pages and charts; a shard leaves what it measured.
+        reports::write::write_shard(&out, &report, &images)?;
+    } else {
+        reports::write_report(&out, &report, &images, comparison.as_ref())?;
+    }
     if let Some(c) = &comparison {
         println!("{}", reports::baseline::summary_line(c));
         for r in c.regressions() {

@@ -1,9 +1,9 @@
 //! A sharded report put back together (`report merge DIR... --out OUT`).
 //!
-//! A shard (`report --shard K/N`) writes a report of its own items into its folder: first
-//! `shard.json` ([`ShardStart`]), saying which shard started, then, when it has finished,
-//! everything a report holds, its `runs.json` naming the shard and its items
-//! ([`crate::model::ShardInfo`]). The merge:
+//! A shard (`report --shard K/N`) writes its own items into its folder: first `shard.json`
+//! ([`ShardStart`]), saying which shard started, then, when it has finished, its runs' images
+//! and records and its `runs.json`, naming the shard and its items
+//! ([`crate::model::ShardInfo`]); the pages and charts are left to the merge. The merge:
 //!
 //! - reads every folder's `runs.json`, and refuses when a shard of `0..N` is missing or did
 //!   not finish (naming each one and how to run only those again), when two folders hold the

@@ -401,6 +401,18 @@ pub fn write_report(
     write_summary(dir, report, baseline)
 }
 
+/// A shard's folder: what [`write_run_files`] writes, `runs.json`, and the manifest; the
+/// pages, charts and tables are the merge's (`crate::merge`).
+pub fn write_shard(dir: &Path, report: &Report, images: &Images) -> Result<(), OutputError> {
+    write_run_files(dir, report, images)?;
+    let path = dir.join("runs.json");
+    let json = serde_json::to_string_pretty(report)
+        .map_err(|e| OutputError::Write { path: path.clone(), message: e.to_string() })?;
+    std::fs::write(&path, json)
+        .map_err(|e| OutputError::Write { path: path.clone(), message: e.to_string() })?;
+    write_manifest(dir)
+}
+
 /// The files made from a sweep's images: `visibility/ID.exr`, `grids/*.png`, `scenes/*` and
 /// `runs/ID.{png,error.png,run.json,metrics.json}` (a merged report copies them from its
 /// shards).
