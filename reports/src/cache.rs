@@ -5,7 +5,9 @@
 //! computed it. Entries are content-addressed: the file name is the SHA-256 ([`key`]) of
 //! everything the reference depends on:
 //!
-//! - the workbench's version and the commit it was built from;
+//! - the workbench's version and its build ([`build_id`]: the commit of a clean checkout, or
+//!   the SHA-256 of the running executable when the checkout has uncommitted changes, so that
+//!   an edited, rebuilt workbench never reads a reference an earlier build computed);
 //! - the frame's size;
 //! - the reference's name and rate;
 //! - the scene's camera, light and effect switches (their `Debug` text, which prints every
@@ -101,15 +103,35 @@ fn hex(bytes: &[u8]) -> String {
     bytes.iter().map(|b| format!("{b:02x}")).collect()
 }
 
-/// The key of the reference `name` at `rate` on `frame` of `scene` (see the module
-/// documentation for what goes into it).
+/// What identifies the code that computes references: `commit` when the checkout it was built
+/// from is clean (`dirty` false and the commit known), else the SHA-256 of the running
+/// executable (or, when that cannot be read, this process's id and start time, which no other
+/// run shares).
+pub fn build_id(commit: &str, dirty: bool) -> String {
+    if !dirty && commit != "unknown" {
+        return format!("commit {commit}");
+    }
+    let exe = std::env::current_exe().and_then(std::fs::read);
+    match exe {
+        Ok(bytes) => format!("executable {}", hex(&Sha256::digest(&bytes))),
+        Err(_) => {
+            let nanos = std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0, |d| d.as_nanos());
+            format!("process {} {nanos}", std::process::id())
+        }
+    }
+}
+
+/// The key of the reference `name` at `rate` on `frame` of `scene`, computed by the code
+/// `build` ([`build_id`]; see the module documentation for what goes into it).
 pub fn key(
     scene: &scenes::Scene,
     width: u32,
     height: u32,
     name: &str,
     rate: Option<u32>,
-    commit: &str,
+    build: &str,
 ) -> String {
     let mut h = Sha256::new();
     // Each text with its length first, so that no two sequences of texts hash alike.
@@ -119,7 +141,7 @@ pub fn key(
     };
     text(&mut h, FORMAT);
     text(&mut h, env!("CARGO_PKG_VERSION"));
-    text(&mut h, commit);
+    text(&mut h, build);
     text(&mut h, &format!("{width}x{height} {name} {rate:?}"));
     text(&mut h, &format!("{:?}", scene.camera));
     text(&mut h, &format!("{:?}", scene.light));
@@ -223,19 +245,20 @@ impl ReferenceCache {
         result
     }
 
-    /// The reference `name` at `rate` on `frame` of `scene`, from the cache or from
-    /// `compute` (which returns it with its time in milliseconds), stored when computed.
+    /// The reference `name` at `rate` on `frame` of `scene` computed by the code `build`
+    /// ([`build_id`]), from the cache or from `compute` (which returns it with its time in
+    /// milliseconds), stored when computed.
     pub fn get_or_compute<E>(
         &mut self,
         scene: &scenes::Scene,
         frame: &Frame<'_>,
         name: &str,
         rate: Option<u32>,
-        commit: &str,
+        build: &str,
         compute: impl FnOnce() -> Result<(ReferenceImage, f64), E>,
     ) -> Result<(ReferenceImage, f64), E> {
         let (w, h) = (frame.width(), frame.height());
-        let key = key(scene, w, h, name, rate, commit);
+        let key = key(scene, w, h, name, rate, build);
         if let Some(hit) = self.read(&key, (name, rate, w, h)) {
             self.stats.hits += 1;
             return Ok(hit);
@@ -372,6 +395,11 @@ mod tests {
         assert_ne!(k, key(&scene, 64, 49, "exact", None, "abc"));
         assert_ne!(k, key(&scene, 64, 48, "raytrace", Some(64), "abc"));
         assert_ne!(k, key(&scene, 64, 48, "exact", None, "abd"));
+        // A clean checkout is named by its commit; an edited one by the executable itself.
+        assert_eq!(build_id("abc", false), "commit abc");
+        let edited = build_id("abc", true);
+        assert!(edited.starts_with("executable ") && edited.len() == 11 + 64, "{edited}");
+        assert_eq!(edited, build_id("unknown", false));
         let mut moved = scene.clone();
         let x = &mut moved.objects[0].mesh.positions[0].x;
         *x = x.next_up();

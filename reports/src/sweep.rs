@@ -41,7 +41,7 @@ fn reference_for(
     scene: &scenes::Scene,
     frame: &Frame<'_>,
     cache: Option<&mut ReferenceCache>,
-    commit: &str,
+    build: &str,
 ) -> Result<(String, Option<u32>, ReferenceImage, f64), String> {
     let use_exact = match suite.reference {
         ReferenceChoice::Auto => !frame.effects.transparency,
@@ -62,7 +62,7 @@ fn reference_for(
         Ok::<_, String>((image, t.elapsed().as_secs_f64() * 1e3))
     };
     let (image, ms) = match cache {
-        Some(c) => c.get_or_compute(scene, frame, name, rate, commit, compute)?,
+        Some(c) => c.get_or_compute(scene, frame, name, rate, build, compute)?,
         None => compute()?,
     };
     Ok((name.to_owned(), rate, image, ms))
@@ -286,6 +286,8 @@ pub fn run_items(
     let table_count = items.iter().filter(|&&k| matches!(plan[k].work, Work::Table { .. })).count();
     let mut tables_started = 0;
     let mut scenes_started = 0;
+    // What identifies this build in the cache's keys, worked out when a cache is first used.
+    let mut build: Option<String> = None;
     let mut at = 0;
     while at < items.len() {
         let first = &plan[items[at]];
@@ -334,8 +336,13 @@ pub fn run_items(
         };
         let mut rec = Recorder::default();
         let frame = Frame::new(&scene, w, h, &mut rec);
-        let commit = report.provenance.commit.clone();
-        let reference = reference_for(suite, &scene, &frame, cache.as_deref_mut(), &commit);
+        let build: &str = match cache {
+            Some(_) => build.get_or_insert_with(|| {
+                crate::cache::build_id(&report.provenance.commit, report.provenance.dirty)
+            }),
+            None => "",
+        };
+        let reference = reference_for(suite, &scene, &frame, cache.as_deref_mut(), build);
         let (ref_name, ref_rate, truth, reference_ms) = match reference {
             Ok(r) => r,
             Err(e) => {
