@@ -402,7 +402,7 @@ pub fn write_report(
 }
 
 /// A shard's folder: what [`write_run_files`] writes, `runs.json`, and the manifest; the
-/// pages, charts and tables are the merge's (`crate::merge`).
+/// pages, charts and tables are the merge's (`report merge`).
 pub fn write_shard(dir: &Path, report: &Report, images: &Images) -> Result<(), OutputError> {
     write_run_files(dir, report, images)?;
     let path = dir.join("runs.json");
