@@ -350,32 +350,22 @@ fn a_report_is_set_against_its_baseline_and_foreign_folders_are_refused() {
     let o = run(&second, None);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("notes.txt"), "{}", stderr(&o));
-    let o = shadowbench(&[
-        "report",
-        "--suite",
-        &suite,
-        "--out",
-        dir.path().join("fourth").to_str().expect("utf-8"),
-        "--baseline",
-        first.to_str().expect("utf-8"),
-        "--baseline-tolerance",
-        "-0.5",
-    ]);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(stderr(&o).contains("--baseline-tolerance"), "{}", stderr(&o));
-    let o = shadowbench(&[
-        "report",
-        "--suite",
-        &suite,
-        "--out",
-        dir.path().join("fourth").to_str().expect("utf-8"),
-        "--baseline",
-        first.to_str().expect("utf-8"),
-        "--baseline-min-ms",
-        "NaN",
-    ]);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(stderr(&o).contains("--baseline-min-ms"), "{}", stderr(&o));
+    // Thresholds that are not numbers of their kind are bad input, named.
+    for (flag, value) in [("--baseline-tolerance", "-0.5"), ("--baseline-min-ms", "NaN")] {
+        let o = shadowbench(&[
+            "report",
+            "--suite",
+            &suite,
+            "--out",
+            dir.path().join("fourth").to_str().expect("utf-8"),
+            "--baseline",
+            first.to_str().expect("utf-8"),
+            flag,
+            value,
+        ]);
+        assert_eq!(o.status.code(), Some(2), "{flag} {value}");
+        assert!(stderr(&o).contains(flag), "{}", stderr(&o));
+    }
     let o = run(&dir.path().join("third"), Some(&dir.path().join("nowhere")));
     assert_eq!(o.status.code(), Some(2));
     assert!(
