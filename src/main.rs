@@ -14,9 +14,11 @@ use analysis::{exact::ExactCoverage, metrics::Comparison, pixel_class::PixelClas
 use anyhow::Context;
 use clap::{Parser, Subcommand, ValueEnum};
 use instrumentation::{Recorder, RunRecord};
+#[cfg(feature = "gpu")]
+use methods::gpu::GpuError;
 use methods::{
-    gpu::GpuError, pan09::VisibilityMode, pattern::PatternKind, registry::Device, Frame,
-    MethodError, MethodOptions, ShadowMethod, Visibility,
+    pan09::VisibilityMode, pattern::PatternKind, registry::Device, Frame, MethodError,
+    MethodOptions, ShadowMethod, Visibility,
 };
 use reports::suite::{check_frame, MAX_FRAME_SIDE};
 use std::path::{Path, PathBuf};
@@ -327,6 +329,7 @@ fn input(e: impl Into<anyhow::Error>) -> Failure {
 /// A GPU error: the device failing is internal; no adapter, an adapter without what the
 /// kernels need, a bad `SHADOWBENCH_GPU_*` variable (the environment) or an input beyond the
 /// adapter's limits is bad input.
+#[cfg(feature = "gpu")]
 fn gpu_failure(e: GpuError) -> Failure {
     match e {
         GpuError::Device(_) => Failure::Internal(e.into()),
@@ -338,6 +341,7 @@ fn gpu_failure(e: GpuError) -> Failure {
 /// failures, which are internal.
 fn method_failure(e: MethodError) -> Failure {
     match e {
+        #[cfg(feature = "gpu")]
         MethodError::Gpu(g) => gpu_failure(g),
         _ => input(e),
     }
@@ -483,6 +487,7 @@ fn job(a: &RenderArgs) -> Result<Job, Failure> {
     let samples = methods::registry::stored_samples(&a.method, &options);
     let flags = if samples > 1 { "--width, --height and --rate" } else { "--width and --height" };
     check_frame(width, height, samples).map_err(|m| input(anyhow::anyhow!("{flags}: {m}")))?;
+    #[cfg(feature = "gpu")]
     if a.device == DeviceArg::Gpu {
         methods::gpu::GpuContext::shared().map_err(gpu_failure)?;
     }
@@ -739,7 +744,7 @@ fn record(
 /// The GPU adapter a job ran on (`--device gpu`), for its provenance.
 fn gpu_adapter(job: &Job) -> Option<String> {
     let on_gpu = job.technique.params().get("device").and_then(|d| d.as_str()) == Some("gpu");
-    on_gpu.then(|| methods::gpu::GpuContext::shared().ok().map(|c| c.adapter_name())).flatten()
+    on_gpu.then(methods::registry::gpu_adapter_name).flatten()
 }
 
 /// The spread of the total times of repeated runs (`--repeat`).
@@ -1028,7 +1033,7 @@ fn main() -> ExitCode {
     }
 }
 
-#[cfg(test)]
+#[cfg(all(test, feature = "gpu"))]
 mod tests {
     use super::*;
 

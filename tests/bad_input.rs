@@ -419,6 +419,7 @@ fn extreme_flag_values_are_named() {
     }
 }
 
+#[cfg(feature = "gpu")]
 /// Renders `cage` with `sm` on the GPU with the environment variable `key` set to `value`;
 /// returns (exit code, stderr).
 fn gpu_render_with(key: &str, value: &str) -> (Option<i32>, String) {
@@ -433,6 +434,7 @@ fn gpu_render_with(key: &str, value: &str) -> (Option<i32>, String) {
 }
 
 /// The GPU environment variables are bad input named as such, before any computation.
+#[cfg(feature = "gpu")]
 #[test]
 fn a_bad_gpu_backend_variable_is_named_with_the_allowed_values() {
     let (code, err) = gpu_render_with("SHADOWBENCH_GPU_BACKEND", "warp-drive");
@@ -444,6 +446,7 @@ fn a_bad_gpu_backend_variable_is_named_with_the_allowed_values() {
 /// `SHADOWBENCH_GPU_ADAPTER` that matches no adapter is named, with the adapters found (it was
 /// reported as "no adapter with 64-bit floats"). Without any adapter the message says so
 /// instead; both are bad input.
+#[cfg(feature = "gpu")]
 #[test]
 fn a_gpu_adapter_variable_matching_nothing_is_named_with_the_adapters_found() {
     let (code, err) = gpu_render_with("SHADOWBENCH_GPU_ADAPTER", "no-such-adapter-name");
@@ -461,6 +464,7 @@ fn a_gpu_adapter_variable_matching_nothing_is_named_with_the_adapters_found() {
 
 /// A map larger than the GPU adapter's binding limit (llvmpipe takes 128 MiB) is bad input
 /// naming `--map-res`, not a device failure; an adapter with larger limits renders it.
+#[cfg(feature = "gpu")]
 #[test]
 fn a_map_beyond_the_gpu_limits_is_bad_input_naming_the_flag() {
     let (code, err) = render("cage", &["--device", "gpu", "--map-res", "8192"]);

@@ -199,6 +199,7 @@ fn render_takes_a_mesh_file_as_scene() {
     assert_eq!(run["scene"], "tetra");
 }
 
+#[cfg(feature = "gpu")]
 #[test]
 fn render_on_the_gpu_names_the_adapter_and_the_timing_in_run_json() {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -234,6 +235,7 @@ fn render_on_the_gpu_names_the_adapter_and_the_timing_in_run_json() {
     assert!(stages.contains(&"G-buffer (GPU)") && stages.contains(&"rasterization of blockers"));
 }
 
+#[cfg(feature = "gpu")]
 #[test]
 fn gpu_device_names_the_methods_it_has_kernels_for() {
     let o = shadowbench(&[
@@ -409,6 +411,7 @@ fn identical_renders_write_identical_files() {
 
 /// A successful GPU run prints nothing about `XDG_RUNTIME_DIR` when the variable is unset
 /// (Mesa's Vulkan driver used to print `error: XDG_RUNTIME_DIR is invalid` twice).
+#[cfg(feature = "gpu")]
 #[test]
 fn gpu_render_without_a_runtime_dir_prints_no_error() {
     let dir = tempfile::tempdir().expect("tempdir");

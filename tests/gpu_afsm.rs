@@ -1,6 +1,8 @@
 //! `afsm` on the GPU (an irregular z-buffer) against the CPU `afsm`, pixel for pixel, with the
 //! CPU's own G-buffer uploaded; and one end-to-end run.
 
+#![cfg(feature = "gpu")]
+
 mod common;
 
 use common::{load_builtin, write};

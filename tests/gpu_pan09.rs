@@ -3,6 +3,8 @@
 //! values and the counters must equal the CPU's (`Pan09::run_masks`). Fails (does not skip)
 //! when there is no GPU adapter; scenes whose models are missing are skipped.
 
+#![cfg(feature = "gpu")]
+
 mod common;
 
 use common::load_builtin;

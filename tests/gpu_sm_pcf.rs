@@ -2,6 +2,8 @@
 //! twins: given the CPU's own G-buffer and depth maps, every pixel and every counter must
 //! agree; and each GPU method runs end to end through `ShadowMethod::run`.
 
+#![cfg(feature = "gpu")]
+
 mod common;
 
 use common::load_builtin;

@@ -528,6 +528,7 @@ fn scenes_beyond_the_supported_range_are_refused_naming_it() {
     assert!(failures.is_empty(), "{} failures:\n{}", failures.len(), failures.join("\n"));
 }
 
+#[cfg(feature = "gpu")]
 #[test]
 fn gpu_afsm_equals_the_cpu_on_every_scale_position_and_far_object() {
     use methods::{

@@ -15,6 +15,7 @@ pub mod depth_map;
 pub mod depth_test;
 pub mod frame;
 pub mod gbuffer;
+#[cfg(feature = "gpu")]
 pub mod gpu;
 pub mod method;
 pub mod pan09;

@@ -32,6 +32,7 @@ pub enum MethodError {
     NotApplicable(String),
     /// The GPU path could not run (no adapter, or a device failure).
     #[error(transparent)]
+    #[cfg(feature = "gpu")]
     Gpu(#[from] crate::gpu::GpuError),
 }
 

@@ -57,7 +57,8 @@ pub enum Device {
     /// The CPU methods (default).
     #[default]
     Cpu,
-    /// The GPU kernels ([`crate::gpu`]), for the methods in [`GPU_METHODS`].
+    /// The GPU kernels (the `gpu` module, with the `gpu` feature), for the methods in
+    /// [`GPU_METHODS`].
     Gpu,
 }
 
@@ -161,6 +162,7 @@ pub fn method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMetho
 }
 
 /// The GPU kernels of `name`, configured as [`cpu_method`] configures its twin.
+#[cfg(feature = "gpu")]
 fn gpu_method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMethod>, MethodError> {
     use crate::gpu::{pcf::GpuPcf, sm::GpuShadowMap};
     let map = || map_options(options, MapOptions::default());
@@ -239,6 +241,36 @@ fn bs_options(options: &MethodOptions) -> Result<BsOptions, MethodError> {
     let o = BsOptions { map: map_options(options, d.map)?, depth_bits };
     o.validate()?;
     Ok(o)
+}
+
+/// Name of the stage in which a GPU run renders its own camera G-buffer.
+pub const STAGE_GPU_GBUFFER: &str = "G-buffer (GPU)";
+
+/// Whether this build has the GPU kernels (the `gpu` feature).
+pub const HAS_GPU: bool = cfg!(feature = "gpu");
+
+/// The GPU adapter's name, when this build has GPU kernels and an adapter is found.
+pub fn gpu_adapter_name() -> Option<String> {
+    #[cfg(feature = "gpu")]
+    {
+        crate::gpu::GpuContext::shared().ok().map(|c| c.adapter_name())
+    }
+    #[cfg(not(feature = "gpu"))]
+    {
+        None
+    }
+}
+
+/// `--device gpu` in a build without the GPU kernels.
+#[cfg(not(feature = "gpu"))]
+fn gpu_method(name: &str, _options: &MethodOptions) -> Result<Box<dyn ShadowMethod>, MethodError> {
+    Err(MethodError::InvalidOption {
+        option: "--device",
+        message: format!(
+            "`{name}` on the GPU: this build has no GPU kernels (built without the `gpu` \
+             feature; rebuild with default features)"
+        ),
+    })
 }
 
 /// The methods that have GPU kernels (`--device gpu`).

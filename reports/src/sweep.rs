@@ -464,7 +464,7 @@ fn run_one(
     };
     let v = timed.visibility;
     if options.device == Device::Gpu && report.machine.gpu.is_none() {
-        report.machine.gpu = methods::gpu::GpuContext::shared().ok().map(|c| c.adapter_name());
+        report.machine.gpu = methods::registry::gpu_adapter_name();
     }
     let frame = &ctx.frame;
     let rt1 = if analysis::metrics::is_binary(&v, &ctx.compared) {

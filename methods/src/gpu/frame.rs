@@ -15,7 +15,7 @@ use crate::{depth_map::LightDepthMap, frame::Frame, gbuffer::GBuffer};
 use scenes::projection::{ProjectionKind, Projector};
 
 /// Name of the stage that renders the camera G-buffer on the GPU.
-pub const STAGE_GPU_GBUFFER: &str = "G-buffer (GPU)";
+pub use crate::registry::STAGE_GPU_GBUFFER;
 
 /// WGSL shared by the kernels: the projector in `f64`.
 pub const COMMON_WGSL: &str = include_str!("common.wgsl");

@@ -114,6 +114,7 @@ impl<M: Mask> LookupTable<M> {
     }
 
     /// Every entry, in [`index`] order (uploaded as is by the GPU path).
+    #[cfg(feature = "gpu")]
     pub(crate) fn masks(&self) -> &[M] {
         &self.masks
     }

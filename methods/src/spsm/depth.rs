@@ -85,6 +85,7 @@ pub struct ConsistentDepths {
 
 impl ConsistentDepths {
     /// The depths of the texels `index` (ascending, no repeats), one each.
+    #[cfg(feature = "gpu")]
     pub(crate) fn from_parts(index: Vec<u32>, depth: Vec<f32>) -> Self {
         debug_assert_eq!(index.len(), depth.len());
         Self { index, depth }
