@@ -514,28 +514,30 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
         ),
     };
     let mut options = reports::baseline::BaselineOptions::default();
-    if let Some(t) = a.baseline_tolerance {
-        if !(t.is_finite() && t >= 0.0) {
-            return Err(input(anyhow::anyhow!(
-                "--baseline-tolerance: {t} is not a relative tolerance (a finite number >= 0)"
-            )));
+    // A threshold of the baseline comparison: a finite number >= 0, given with --baseline.
+    let threshold = |value: Option<f64>, flag: &str, what: &str, into: &mut f64| {
+        let Some(v) = value else { return Ok(()) };
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(input(anyhow::anyhow!("{flag}: {v} is not {what} (a finite number >= 0)")));
         }
         if a.baseline.is_none() {
-            eprintln!("note: --baseline-tolerance applies only with --baseline; ignored");
+            eprintln!("note: {flag} applies only with --baseline; ignored");
         }
-        options.time_tolerance = t;
-    }
-    if let Some(ms) = a.baseline_min_ms {
-        if !(ms.is_finite() && ms >= 0.0) {
-            return Err(input(anyhow::anyhow!(
-                "--baseline-min-ms: {ms} is not a time in milliseconds (a finite number >= 0)"
-            )));
-        }
-        if a.baseline.is_none() {
-            eprintln!("note: --baseline-min-ms applies only with --baseline; ignored");
-        }
-        options.min_change_ms = ms;
-    }
+        *into = v;
+        Ok(())
+    };
+    threshold(
+        a.baseline_tolerance,
+        "--baseline-tolerance",
+        "a relative tolerance",
+        &mut options.time_tolerance,
+    )?;
+    threshold(
+        a.baseline_min_ms,
+        "--baseline-min-ms",
+        "a time in milliseconds",
+        &mut options.min_change_ms,
+    )?;
     let before = match &a.baseline {
         Some(dir) => Some(reports::baseline::load(dir).map_err(|e| input(anyhow::anyhow!("{e}")))?),
         None => None,

@@ -212,6 +212,20 @@ impl ParamSplit {
     }
 }
 
+/// A section of its own holding a bulleted list of texts (escaped): `<h2 id=ID>TITLE</h2>`;
+/// nothing when there is no item.
+pub fn list_section(id: &str, title: &str, items: &[String]) -> String {
+    if items.is_empty() {
+        return String::new();
+    }
+    let mut s = format!("<h2 id=\"{id}\">{}</h2>\n<ul>\n", escape(title));
+    for k in items {
+        let _ = writeln!(s, "<li>{}</li>", escape(k));
+    }
+    s.push_str("</ul>\n");
+    s
+}
+
 /// A sortable, filterable table: the filter box, the head and the body rows.
 pub fn sortable_table(class: &str, heads: &[(String, bool)], rows: &[String]) -> String {
     let mut s = String::from(

@@ -16,8 +16,8 @@
 use crate::baseline::Comparison;
 use crate::figures::PlotFile;
 use crate::html::{
-    adapter_html, anchor, escape, metric_cells, page_head, sortable_table, Cell, ParamSplit,
-    METRIC_COLUMNS,
+    adapter_html, anchor, escape, list_section, metric_cells, page_head, sortable_table, Cell,
+    ParamSplit, METRIC_COLUMNS,
 };
 use crate::model::{params_of, row_stem, Report, Row};
 use std::fmt::Write as _;
@@ -253,13 +253,7 @@ pub fn index_html(report: &Report, plots: &[PlotFile], baseline: Option<&Compari
         }
     }
     s.push_str(GLOSSARY);
-    if !report.skipped.is_empty() {
-        s.push_str("<h2 id=\"skipped\">Not run</h2>\n<ul>\n");
-        for k in &report.skipped {
-            let _ = writeln!(s, "<li>{}</li>", escape(k));
-        }
-        s.push_str("</ul>\n");
-    }
+    s.push_str(&list_section("skipped", "Not run", &report.skipped));
     s.push_str("</body></html>\n");
     s
 }

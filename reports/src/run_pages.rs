@@ -25,7 +25,7 @@
 //! map, 3 the class map). Opened as `ID.html#selftest`, the page flips, zooms, pans and swipes itself
 //! and writes what it found into `<pre id="selftest">`.
 
-use crate::html::{anchor, escape, metric_cells, page_head, Cell, METRIC_COLUMNS};
+use crate::html::{anchor, escape, list_section, metric_cells, page_head, Cell, METRIC_COLUMNS};
 use crate::model::{param_label, params_of, row_stem, scene_stem, Images, Report, Row};
 use crate::output::{write_run_json, write_visibility_exr, OutputError};
 use analysis::metrics::PerClass;
@@ -242,13 +242,7 @@ pub fn run_page(report: &Report, row: usize) -> String {
         s.push_str("<h2 id=\"counters\">Counters</h2>\n<p>Of the last timed run; those at zero are left out.</p>\n");
         s.push_str(&key_value_table(&counters));
     }
-    if !r.notes.is_empty() {
-        s.push_str("<h2 id=\"notes\">Notes</h2>\n<ul>\n");
-        for n in &r.notes {
-            let _ = writeln!(s, "<li>{}</li>", escape(n));
-        }
-        s.push_str("</ul>\n");
-    }
+    s.push_str(&list_section("notes", "Notes", &r.notes));
     s.push_str("</body></html>\n");
     s
 }
