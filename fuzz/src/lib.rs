@@ -2,7 +2,7 @@
 //! when the code under test breaks its contract.
 //!
 //! The same functions run under AFL++ (the binary of `src/main.rs`, built by `cargo afl build`)
-//! and in the workspace test `tests/fuzz_regressions.rs`, which includes this file by `#[path]`
+//! and in the workspace test `tests/cli/fuzz_regressions.rs`, which includes this file by `#[path]`
 //! and replays every input saved in `tests/data/fuzz/<target>/`. That is why this file uses
 //! only `std`, `glam`, `scenes` and `reports`, which both builds have.
 //!

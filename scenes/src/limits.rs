@@ -5,7 +5,7 @@
 //! the ray tracer's BVH stores `f32` boxes in a frame centred on the geometry and scaled to its
 //! typical triangle. Within these bounds every method and both references stay finite and
 //! scale-free (tested from scale 1e-6 to 1e6, translations to 1e7 and objects 1e12 away in
-//! `tests/hard_cases.rs`); a scene beyond them is refused with the range named.
+//! `tests/techniques/hard_cases.rs`); a scene beyond them is refused with the range named.
 
 /// Largest magnitude of any world-space coordinate of a scene's geometry, camera or light.
 pub const MAX_COORDINATE: f64 = 1e15;

@@ -49,7 +49,7 @@
 //! square under a vertical light seen by an axis-aligned orthographic camera, do not move, and
 //! that case comes out exact to the last bit.
 //!
-//! Measured on planar receivers (`analysis/tests/exact.rs`, against a union computed without
+//! Measured on planar receivers (`analysis/tests/references/exact.rs`, against a union computed without
 //! any grid by vertical slabs from the same shadow polygons): the worst per-pixel error of
 //! everything after the shadow polygons (union, triangulation, pixel clipping) is about three
 //! grid steps: 1.5e-14 at 64 x 48, 2.3e-13 on `bunny-plane` and 2.9e-13 on `cage` at

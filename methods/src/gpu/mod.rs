@@ -18,7 +18,7 @@
 //! A GPU run makes its own G-buffer and light depth map ([`raster`]: a hardware render pass of
 //! triangle ids, resolved in `f64`), so it may differ from the CPU run where the hardware's
 //! fixed-point coverage keeps another triangle than the CPU's exact rasterizer (at most 0.5 %
-//! of samples on the built-in scenes, `tests/gpu_raster.rs`). The parity tests give each
+//! of samples on the built-in scenes, `tests/gpu/raster.rs`). The parity tests give each
 //! kernel the CPU's own G-buffer and map ([`GpuFrame::upload`], [`GpuDepthMap::upload`]) and
 //! require the twin's answer exactly.
 //!

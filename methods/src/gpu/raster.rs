@@ -14,7 +14,7 @@
 //! rasterizer, depth, position and normal are bit-identical to the CPU's. Where it keeps
 //! another, the cause is coverage (the hardware snaps corners to its sub-pixel grid and decides
 //! edges in fixed point, the CPU decides them exactly in `f64`) or a nearest-surface decision
-//! within `f32` depth precision; `tests/gpu_raster.rs` measures how many samples that touches.
+//! within `f32` depth precision; `tests/gpu/raster.rs` measures how many samples that touches.
 
 use super::{frame::projector_data, GpuContext, GpuError};
 use crate::frame::Frame;

@@ -61,7 +61,7 @@
 //!   centre sample is always exact. Measured on 160 x 120 frames with the grid pattern, the
 //!   share of silhouette pixels' sub-samples the table flips (occlusion or validity) at 32 and
 //!   128 sub-samples: `plane-square` 1.2e-4 and 2.4e-4, `plant` 2.0e-3 and 2.2e-3, `cage`
-//!   3.5e-3 and 2.4e-3, `random-10k` 4.1e-3 and 4.1e-3 (`tests/pan09.rs`). Pixels off the
+//!   3.5e-3 and 2.4e-3, `random-10k` 4.1e-3 and 4.1e-3 (`tests/techniques/pan09.rs`). Pixels off the
 //!   silhouette are identical in both modes.
 //! - **Values** are finite and in `[0, 1]`: a silhouette pixel's value is
 //!   `1 - popcount(occlusion & valid) / popcount(valid)`, and the centre sample is always

@@ -3,9 +3,7 @@
 //! share references through the cache; a merge with a shard missing or unfinished refuses,
 //! naming it; a damaged cache entry is recomputed.
 
-mod common;
-
-use common::{assert_same_report, shadowbench, stderr, write};
+use crate::common::{assert_same_report, shadowbench, stderr, write};
 use std::path::Path;
 
 /// Two scenes, two methods, a grid: five items, so that three shards split scenes.

@@ -1,11 +1,7 @@
 //! `spsm` and `spsm-f32` on the GPU against the CPU twin, pixel for pixel and counter for
 //! counter, with the CPU's own G-buffer uploaded, at rate 1 and 16; and one end-to-end run.
 
-#![cfg(feature = "gpu")]
-
-mod common;
-
-use common::load_builtin;
+use crate::common::load_builtin;
 use instrumentation::Recorder;
 use methods::{
     gpu::{spsm as gpu_spsm, GpuContext, GpuFrame},

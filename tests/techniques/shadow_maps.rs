@@ -1,7 +1,7 @@
 //! Every shadow-map method (`sm` and the PCF variants) end to end: no acne on lit planes at the
 //! documented valid biases, finite results in [0, 1] on hard cases; `sm`'s binary output.
 
-mod common;
+use crate::common;
 
 use glam::DVec3;
 use instrumentation::Recorder;

@@ -3,11 +3,7 @@
 //! values and the counters must equal the CPU's (`Pan09::run_masks`). Fails (does not skip)
 //! when there is no GPU adapter; scenes whose models are missing are skipped.
 
-#![cfg(feature = "gpu")]
-
-mod common;
-
-use common::load_builtin;
+use crate::common::load_builtin;
 use instrumentation::Recorder;
 use methods::{
     gpu::{pan09::GpuPan09, GpuContext, GpuDepthMap, GpuFrame},

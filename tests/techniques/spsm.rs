@@ -3,7 +3,7 @@
 //! code's precision (section 3.4), what packing costs, antialiasing against the exact
 //! reference, stages, counters, the Fig. 14 class image, hard cases and bad options.
 
-mod common;
+use crate::common;
 
 use analysis::{exact::ExactCoverage, raytrace::RayTrace, Metrics, Reference};
 use glam::DVec3;

@@ -5,9 +5,7 @@
 //! provenance. Then one array task is cancelled: the merge refuses, naming the shard, and
 //! `submit --only` completes the report. The cluster is stopped whatever the outcome.
 
-mod common;
-
-use common::{assert_same_report, shadowbench, stderr, write};
+use crate::common::{assert_same_report, shadowbench, stderr, write};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 

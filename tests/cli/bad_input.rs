@@ -1,8 +1,7 @@
 //! Bad input: every malformed scene file, mesh file and flag gives exit code 2 and one message
 //! naming the file and line, the key, or the flag.
 
-mod common;
-use common::{shadowbench, stderr, write};
+use crate::common::{shadowbench, stderr, write};
 use std::process::Output;
 
 /// Renders `scene` with `method` at 32 x 24 and the `extra` flags into the folder `out`.
@@ -37,9 +36,9 @@ shape.plane = { size = 10.0 }
 // fixed-size arrays, directions of any magnitude, extents and the supported range.
 
 /// The unit cube of the loader tests, in each text format.
-const CUBE_OBJ: &str = include_str!("../scenes/tests/data/cube.obj");
-const CUBE_OFF: &str = include_str!("../scenes/tests/data/cube.off");
-const CUBE_PLY: &str = include_str!("../scenes/tests/data/cube.ply");
+const CUBE_OBJ: &str = include_str!("../../scenes/tests/data/cube.obj");
+const CUBE_OFF: &str = include_str!("../../scenes/tests/data/cube.off");
+const CUBE_PLY: &str = include_str!("../../scenes/tests/data/cube.ply");
 
 /// Renders `scene` with `sm` at 32 x 24 and returns the bytes of `visibility.exr`, or the exit
 /// code and stderr of a failed run.

@@ -1,7 +1,6 @@
 //! `compare` and references run through `render`: the CLI contract of DESIGN.md.
 
-mod common;
-use common::{shadowbench, stderr};
+use crate::common::{shadowbench, stderr};
 
 const METRIC_FIELDS: &[&str] = &[
     "reference",

@@ -5,7 +5,7 @@
 //! crate is a workspace of its own (it needs the fuzzing engine), and this way both run the
 //! same code.
 
-#[path = "../fuzz/src/lib.rs"]
+#[path = "../../fuzz/src/lib.rs"]
 mod targets;
 
 use anyhow::{ensure, Context};

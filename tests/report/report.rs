@@ -1,7 +1,6 @@
 //! `shadowbench report`: a suite file runs, and its CSV and JSON parse back with every run.
 
-mod common;
-use common::{shadowbench, stderr, write};
+use crate::common::{shadowbench, stderr, write};
 
 const SUITE: &str = r#"
 name = "tiny"

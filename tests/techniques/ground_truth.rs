@@ -1,6 +1,6 @@
 //! The two references agree: ray-traced supersampling converges to the exact coverage.
 
-mod common;
+use crate::common;
 
 use analysis::{
     exact::ExactCoverage, pixel_class::PixelClass, registry::reference, Metrics, Reference,

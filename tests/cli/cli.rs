@@ -1,7 +1,7 @@
 //! The CLI contract of DESIGN.md: `scenes` and `render`.
 
-mod common;
-use common::{shadowbench, stderr};
+use crate::common;
+use crate::common::{shadowbench, stderr};
 
 #[test]
 fn scenes_json_lists_at_least_twelve_scenes_with_counts_and_effects() {
@@ -84,7 +84,7 @@ fn render_writes_the_three_files_with_every_counter_and_named_stages() {
     for name in instrumentation::Counters::NAMES {
         assert!(counters.contains_key(*name), "counter {name} missing");
     }
-    // One lookup per pixel that sees a surface (tests/sm.rs checks the exact count).
+    // One lookup per pixel that sees a surface (tests/techniques/shadow_maps.rs checks the exact count).
     let lookups = counters["shadow_map_lookups"].as_u64().expect("count");
     assert!(lookups > 1000 && lookups <= 160 * 120, "{lookups} lookups");
     let stages: Vec<&str> = written["stages"]

@@ -1,11 +1,7 @@
 //! `afsm` on the GPU (an irregular z-buffer) against the CPU `afsm`, pixel for pixel, with the
 //! CPU's own G-buffer uploaded; and one end-to-end run.
 
-#![cfg(feature = "gpu")]
-
-mod common;
-
-use common::{load_builtin, write};
+use crate::common::{load_builtin, write};
 use glam::DVec3;
 use instrumentation::Recorder;
 use methods::{

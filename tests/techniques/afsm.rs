@@ -1,13 +1,11 @@
 //! Alias-free shadow maps (`afsm`, `afsm-ss`) against the ray-traced reference at the same
 //! sample points, semi-transparent casters, the two culling tests, determinism and options.
 
-mod common;
-
+use crate::common::load_builtin;
 use analysis::{
     raytrace::{RayTrace, SampleImage},
     Reference, ReferenceImage,
 };
-use common::load_builtin;
 use glam::{DVec2, DVec3};
 use instrumentation::Recorder;
 use methods::{

@@ -2,11 +2,7 @@
 //! twins: given the CPU's own G-buffer and depth maps, every pixel and every counter must
 //! agree; and each GPU method runs end to end through `ShadowMethod::run`.
 
-#![cfg(feature = "gpu")]
-
-mod common;
-
-use common::load_builtin;
+use crate::common::load_builtin;
 use instrumentation::{Counters, Recorder};
 use methods::{
     depth_test::{DepthTester, MapOptions},

@@ -2,11 +2,7 @@
 //! triangle, position and normal (and a map's depth) are bit-identical; where it keeps another (its
 //! fixed-point coverage near edges), the samples are few, and counted.
 
-#![cfg(feature = "gpu")]
-
-mod common;
-
-use common::load_builtin;
+use crate::common::load_builtin;
 use glam::DVec2;
 use instrumentation::Recorder;
 use methods::gpu::{GpuContext, GpuDepthMap, GpuFrame};

@@ -3,10 +3,10 @@
 //! non-silhouette pixels against `sm`, rate 1 against `afsm`, hard cases, stages, counters and
 //! options.
 
-mod common;
+use crate::common;
 
+use crate::common::load_builtin;
 use analysis::raytrace::{RayTrace, SampleImage};
-use common::load_builtin;
 use glam::DVec3;
 use instrumentation::Recorder;
 use methods::{

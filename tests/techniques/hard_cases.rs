@@ -24,7 +24,7 @@
 //! Where a GPU adapter exists (Mesa's lavapipe will do), `afsm`'s GPU kernels must equal the
 //! CPU's pixel for pixel on the base, scaled, translated and far-object scenes.
 
-mod common;
+use crate::common;
 
 use analysis::{registry::technique, ReferenceImage};
 use glam::DVec3;

@@ -1,0 +1,10 @@
+//! `shadowbench report`: a suite's tables and data, its pages in headless Chromium, a sweep in
+//! shards merged back, and the same on a real Slurm cluster.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod report;
+mod report_browser;
+mod shard;
+mod slurm;

@@ -1,0 +1,15 @@
+//! Each technique end to end against its paper and the references, the shared kernels on
+//! whole scenes, the two references against each other, and the hard cases (scale, grazing
+//! light, slivers, far objects) through every method. One test binary, one module per concern.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod afsm;
+mod frame;
+mod ground_truth;
+mod hard_cases;
+mod pan09;
+mod pcf;
+mod shadow_maps;
+mod spsm;
