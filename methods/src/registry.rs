@@ -181,6 +181,9 @@ fn gpu_method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMetho
         "pcf-gems16" => gems(GemsSamples::Sixteen),
         "pcf-gems4" => gems(GemsSamples::FourDithered),
         "afsm" => Ok(Box::new(crate::gpu::afsm::GpuAfsm { options: AfsmOptions::default() })),
+        "afsm-ss" => {
+            Ok(Box::new(crate::gpu::afsm_ss::GpuAfsmSs { options: afsm_ss_options(options) }))
+        }
         "pan09" => Ok(Box::new(crate::gpu::pan09::GpuPan09::new(pan09_options(options)?)?)),
         "spsm" | "spsm-f32" => {
             Ok(Box::new(crate::gpu::spsm::GpuSpsm { options: spsm_options(name, options)? }))
@@ -192,6 +195,16 @@ fn gpu_method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMetho
                 GPU_METHODS.join(", ")
             ),
         }),
+    }
+}
+
+/// `afsm-ss`'s options from the shared ones (validated by the method).
+fn afsm_ss_options(options: &MethodOptions) -> AfsmOptions {
+    let d = AfsmOptions::supersampled();
+    AfsmOptions {
+        rate: options.rate.unwrap_or(d.rate),
+        pattern: options.pattern.unwrap_or(d.pattern),
+        ..d
     }
 }
 
@@ -283,6 +296,7 @@ pub const GPU_METHODS: &[&str] = &[
     "pcf-gems16",
     "pcf-gems4",
     "afsm",
+    "afsm-ss",
     "pan09",
     "spsm",
     "spsm-f32",
@@ -312,13 +326,7 @@ fn cpu_method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMetho
             Ok(Box::new(m))
         }
         "afsm-ss" => {
-            let d = AfsmOptions::supersampled();
-            let o = AfsmOptions {
-                rate: options.rate.unwrap_or(d.rate),
-                pattern: options.pattern.unwrap_or(d.pattern),
-                ..d
-            };
-            let m = AliasFreeShadowMap::supersampled(o);
+            let m = AliasFreeShadowMap::supersampled(afsm_ss_options(options));
             m.validate()?;
             Ok(Box::new(m))
         }

@@ -622,11 +622,6 @@ mod tests {
                 &["1..=16384"],
             ),
             (
-                suite("[\"cage\"]", "method = \"afsm-ss\"\ndevice = [\"gpu\"]", ""),
-                "line 5: `run[0].device`",
-                &["no GPU kernels", "pan09"],
-            ),
-            (
                 suite("[\"cage\", \"no-such-scene\"]", "method = \"sm\"", ""),
                 "line 2: `scenes[1]`",
                 &["no-such-scene", "plane-square"],
@@ -647,16 +642,11 @@ mod tests {
                 &["1, 4, 8"],
             ),
         ];
-        // A method without GPU kernels asked for on the GPU is refused where this build has
-        // GPU kernels; a build without any checks the CPU twin, and the run is reported as
-        // not run.
-        let gpu = "[\"cage\"]";
-        let no_kernels = suite(gpu, "method = \"afsm-ss\"\ndevice = [\"gpu\"]", "");
-        assert_eq!(Suite::parse(&no_kernels, p).is_ok(), !methods::registry::HAS_GPU);
+        // Every technique has GPU kernels; a build without any checks the CPU twin, and the
+        // run is reported as not run.
+        let gpu = suite("[\"cage\"]", "method = \"afsm-ss\"\ndevice = [\"gpu\"]", "");
+        assert!(Suite::parse(&gpu, p).is_ok());
         for (text, at, needles) in cases {
-            if text.contains("afsm-ss") && !methods::registry::HAS_GPU {
-                continue;
-            }
             let e = Suite::parse(text, p).expect_err(at).to_string();
             assert!(e.starts_with("s.toml: ") && e.contains(at), "{at}: {e}");
             for n in *needles {

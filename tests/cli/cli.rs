@@ -235,25 +235,28 @@ fn render_on_the_gpu_names_the_adapter_and_the_timing_in_run_json() {
     assert!(stages.contains(&"G-buffer (GPU)") && stages.contains(&"rasterization of blockers"));
 }
 
+/// `render --device gpu` runs every technique; the references are refused, named.
 #[cfg(feature = "gpu")]
 #[test]
-fn gpu_device_names_the_methods_it_has_kernels_for() {
-    let o = shadowbench(&[
-        "render",
-        "--scene",
-        "plane-square",
-        "--method",
-        "afsm-ss",
-        "--device",
-        "gpu",
-        "--width",
-        "16",
-        "--height",
-        "12",
-    ]);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(stderr(&o).contains("--device"), "{}", stderr(&o));
-    assert!(stderr(&o).contains("no GPU kernels"), "{}", stderr(&o));
+fn gpu_device_runs_every_method_but_the_references() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let cpu_only = ["exact", "raytrace"];
+    for name in methods::registry::METHODS.iter().map(|(n, _)| *n).chain(cpu_only) {
+        let out = dir.path().join(name);
+        let mut args = vec!["render", "--scene", "plane-square", "--method", name];
+        args.extend(["--device", "gpu", "--width", "16", "--height", "12"]);
+        if name == "afsm-ss" || name == "pan09" {
+            args.extend(["--rate", "4"]);
+        }
+        args.extend(["--out", out.to_str().expect("utf-8")]);
+        let o = shadowbench(&args);
+        if cpu_only.contains(&name) {
+            assert_eq!(o.status.code(), Some(2), "{name}: {}", stderr(&o));
+            assert!(stderr(&o).contains("runs on the CPU only"), "{name}: {}", stderr(&o));
+        } else {
+            assert!(o.status.success(), "{name} on the GPU: {}", stderr(&o));
+        }
+    }
 }
 
 #[test]

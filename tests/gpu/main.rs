@@ -6,6 +6,7 @@
 mod common;
 
 mod afsm;
+mod afsm_ss;
 mod pan09;
 mod raster;
 mod sm_pcf;

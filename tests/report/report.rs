@@ -286,14 +286,6 @@ fn suites_with_unknown_names_or_bad_values_are_refused_before_running() {
             &["line 8", "run[0].map_res", "1..=16384"],
         ),
     ];
-    // A method without GPU kernels on the GPU (in a build without any, the GPU runs are
-    // checked as their CPU twins and reported as not run).
-    let gpu_case = (
-        "device",
-        format!("{base}[[run]]\nmethod = \"afsm-ss\"\ndevice = [\"gpu\"]\n"),
-        &["line 10", "run[1].device", "no GPU kernels"][..],
-    );
-    let cases = cases.into_iter().chain(methods::registry::HAS_GPU.then_some(gpu_case));
     for (name, text, needles) in cases {
         let file = write(dir.path(), &format!("{name}.toml"), &text);
         let out = dir.path().join(format!("out-{name}"));

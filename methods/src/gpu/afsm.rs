@@ -6,9 +6,9 @@
 //!
 //! Stages (each one GPU submission, timed by [`GpuContext::stage`]):
 //!
-//! - [`STAGE_TRANSFORMATION`] (`transform.wgsl`): every pixel centre's G-buffer surface point
-//!   moved to the light's image plane with its shadow threshold depth, as
-//!   [`afsm::samples::transform_samples`] does at rate 1, in `f64`.
+//! - [`STAGE_TRANSFORMATION`] (`transform.wgsl`): every pixel centre's surface point (on the
+//!   camera ray through it at the G-buffer's depth) moved to the light's image plane with its
+//!   shadow threshold depth, as [`afsm::samples::transform_samples`] does, in `f64`.
 //! - [`STAGE_IZB`] (`izb.wgsl`, `scan.wgsl`): the samples binned into a [`grid_size`] square
 //!   grid over the light image: per-cell counts by `atomicAdd` (which also gives each sample
 //!   its rank in its cell), an exclusive scan of the counts, and a scatter into one sample
@@ -30,6 +30,11 @@
 //!   care: its operands are computed bit for bit as on the CPU.
 //!
 //! The result is therefore the CPU `afsm`'s, pixel for pixel.
+//!
+//! [`Izb`] holds the pipelines and buffers of one frame and runs the stages for one
+//! sub-sample of every pixel ([`SampleSurface`]); `afsm` runs it once, at the pixel centres,
+//! and `afsm-ss` ([`super::afsm_ss`]) once per sub-sample. The casters' setup (the first part
+//! of the rasterization of blockers) depends on the light only and runs once per frame.
 //!
 //! # Choices
 //!
@@ -59,7 +64,9 @@ use crate::{
     frame::Frame,
     method::{MethodError, ShadowMethod, Visibility},
 };
+use glam::DVec2;
 use instrumentation::Recorder;
+use scenes::Projector;
 
 /// Name of the stage that bins the samples into the grid.
 pub const STAGE_IZB: &str = "IZB construction";
@@ -117,186 +124,351 @@ pub fn shade(
     frame: &Frame<'_>,
     rec: &mut Recorder,
 ) -> Result<AfsmGpuOutput, MethodError> {
-    let light = afsm::light_projector(frame);
-    let pixels = gpu.pixels();
-    let grid = grid_size(pixels);
-    let triangles = gpu.triangles as usize;
-    let cells = grid as usize * grid as usize;
-    let capacity = pixels.max(4096);
-    let wgsl = |src: &str, grid_fn: bool| {
-        let g = if grid_fn { include_str!("afsm/grid.wgsl") } else { "" };
-        format!("{COMMON_WGSL}{g}{src}")
-    };
-    let light_buf = ctx.upload("afsm light", &projector_data(&light));
-    let fparams = ctx.upload(
-        "afsm fparams",
-        &[
-            SHADOW_OFFSET,
-            f64::from(grid) / light.width,
-            f64::from(grid) / light.height,
-            ORIENT2D_FILTER_BOUND,
-        ],
-    );
-    let uparams = ctx.upload("afsm uparams", &[pixels as u32, grid, gpu.triangles, frame.width()]);
-    let camera_buf = ctx.upload("afsm camera", &projector_data(&frame.camera));
-    let scan = super::scan::Scan::new(ctx);
+    let izb = Izb::new(ctx, gpu, frame);
+    let surface =
+        SampleSurface { triangle: &gpu.triangle, depth: &gpu.depth, offset: DVec2::splat(0.5) };
+    let out = izb.shadowed(ctx, surface, rec)?;
+    rec.counters.sampling_points_tested += out.tested;
+    rec.notes.push(izb.note(out.undecided));
+    let lit = out.shadowed.iter().map(|&s| if s == 0 { 1.0 } else { 0.0 }).collect();
+    Ok(AfsmGpuOutput { lit, undecided: out.undecided, grid: izb.grid })
+}
 
-    // Transformation of samples.
-    let transform = ctx.pipeline(
-        "afsm transform",
-        &wgsl(include_str!("afsm/transform.wgsl"), false),
-        "transform",
-    );
-    let sample_f = ctx.zeroed::<f64>("afsm sample xyz", 3 * pixels);
-    let sample_tri = ctx.zeroed::<u32>("afsm sample triangle", pixels);
-    let bind = ctx.bind(
-        &transform,
-        &[
-            &light_buf,
-            &fparams,
-            &uparams,
-            &gpu.triangle,
-            &gpu.position,
-            &sample_f,
-            &sample_tri,
-            &camera_buf,
-        ],
-    );
-    ctx.stage(rec, STAGE_TRANSFORMATION, |e| {
-        GpuContext::dispatch(e, &transform, &bind, GpuContext::groups_1d(pixels, WG));
-    })?;
+/// The camera's nearest surface at one sub-sample position of every pixel, on the GPU: what
+/// the transformation of samples reads.
+#[derive(Debug, Clone, Copy)]
+pub struct SampleSurface<'a> {
+    /// Triangle id per pixel (`NO_TRIANGLE` where the sub-sample sees no surface).
+    pub triangle: &'a wgpu::Buffer,
+    /// Depth per pixel: the parameter of the camera ray through `(i, j) + offset` where it
+    /// meets the surface, `f64`.
+    pub depth: &'a wgpu::Buffer,
+    /// The sub-sample's position in its pixel (`(0.5, 0.5)` for the centre).
+    pub offset: DVec2,
+}
 
-    // IZB construction.
-    let izb_src = wgsl(include_str!("afsm/izb.wgsl"), true);
-    let count = ctx.pipeline("afsm count", &izb_src, "count");
-    let scatter = ctx.pipeline("afsm scatter", &izb_src, "scatter");
-    let slot = ctx.zeroed::<u32>("afsm slot", 2 * pixels);
-    let cell_start = ctx.zeroed::<u32>("afsm cells", cells + 1);
-    let samples = ctx.zeroed::<u32>("afsm samples", 1);
-    let izb_f = ctx.zeroed::<f64>("afsm izb xyz", 3 * pixels);
-    let izb_u = ctx.zeroed::<u32>("afsm izb ids", 2 * pixels);
-    let izb_bufs = [&fparams, &uparams, &sample_f, &sample_tri, &slot, &cell_start, &izb_f, &izb_u];
-    let bind_count = ctx.bind(&count, &izb_bufs);
-    let bind_scatter = ctx.bind(&scatter, &izb_bufs);
-    let cell_scan = scan.prepare(ctx, &cell_start, cells + 1, &samples);
-    ctx.stage(rec, STAGE_IZB, |e| {
-        let groups = GpuContext::groups_1d(pixels, WG);
-        GpuContext::dispatch(e, &count, &bind_count, groups);
-        cell_scan.record(e);
-        GpuContext::dispatch(e, &scatter, &bind_scatter, groups);
-    })?;
+/// What [`Izb::shadowed`] gives for one sub-sample of every pixel.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShadowedSamples {
+    /// Per pixel, 1 where the sub-sample is shadowed, else 0.
+    pub shadowed: Vec<u32>,
+    /// (Sample, triangle) pairs the GPU's filter could not decide, resolved on the CPU.
+    pub undecided: u64,
+    /// Samples tested against a triangle (`sampling_points_tested`).
+    pub tested: u64,
+}
 
-    // Rasterization of blockers.
-    let setup = ctx.pipeline("afsm setup", &wgsl(include_str!("afsm/setup.wgsl"), true), "setup");
-    let args_pipe = ctx.pipeline("afsm args", include_str!("afsm/args.wgsl"), "args_main");
-    let test = ctx.pipeline("afsm test", &wgsl(include_str!("afsm/test.wgsl"), false), "test");
-    let blk_outline = ctx.zeroed::<f64>("afsm blocker outlines", BLK_OUTLINE * triangles);
-    let blk_plane = ctx.zeroed::<f64>("afsm blocker planes", BLK_PLANE * triangles);
-    let blk_u = ctx.zeroed::<u32>("afsm blockers u32", BLK_U * triangles);
-    let items = ctx.zeroed::<u32>("afsm items", triangles + 1);
-    let items_total = ctx.zeroed::<u32>("afsm items total", 1);
-    let bind_setup = ctx.bind(
-        &setup,
-        &[
-            &light_buf,
-            &fparams,
-            &uparams,
-            &gpu.corners,
-            &gpu.casters,
-            &blk_outline,
-            &blk_plane,
-            &blk_u,
-            &items,
-        ],
-    );
-    let items_scan = scan.prepare(ctx, &items, triangles + 1, &items_total);
-    let args = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("afsm test dispatch"),
-        size: 12,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
-        mapped_at_creation: false,
-    });
-    let bind_args = ctx.bind(&args_pipe, &[&uparams, &items, &args]);
-    let shadow = ctx.zeroed::<u32>("afsm shadow", pixels);
-    let test_inputs = [
-        &fparams,
-        &uparams,
-        &items,
-        &blk_outline,
-        &blk_plane,
-        &blk_u,
-        &cell_start,
-        &izb_f,
-        &izb_u,
-        &shadow,
-    ];
-    let test_bufs = TestBuffers::new(ctx, capacity);
-    let bind_test = test_bufs.bind(ctx, &test, test_inputs);
-    let indirect = |e: &mut wgpu::CommandEncoder, bind: &wgpu::BindGroup| {
-        let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: None,
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(&test);
-        pass.set_bind_group(0, bind, &[]);
-        pass.dispatch_workgroups_indirect(&args, 0);
-    };
-    ctx.stage(rec, STAGE_RASTERIZATION, |e| {
-        GpuContext::dispatch(e, &setup, &bind_setup, GpuContext::groups_1d(triangles, WG));
-        items_scan.record(e);
-        GpuContext::dispatch(e, &args_pipe, &bind_args, (1, 1, 1));
-        indirect(e, &bind_test);
-    })?;
-    let (mut tested, mut undecided) = test_bufs.counts(ctx)?;
-    let mut pairs = test_bufs;
-    if undecided > capacity {
-        // The list overflowed: the sample tests again with room for every pair (marking a
-        // shadowed pixel twice changes nothing), timed as part of the same stage.
-        pairs = TestBuffers::new(ctx, undecided);
-        let bind = pairs.bind(ctx, &test, test_inputs);
-        ctx.stage(rec, STAGE_RASTERIZATION, |e| indirect(e, &bind))?;
-        if let Some(again) = rec.stages.stages.pop() {
-            if let Some(first) = rec.stages.stages.iter_mut().rev().find(|s| s.name == again.name) {
-                first.ms += again.ms;
-            }
-        }
-        (tested, undecided) = pairs.counts(ctx)?;
+/// The irregular z-buffer of one frame: its pipelines and buffers, made once and used for
+/// every sub-sample (`afsm` has one, `afsm-ss` `rate`). The casters' setup depends on the
+/// light only, so it runs once, in the first sub-sample's rasterization of blockers.
+pub struct Izb<'a> {
+    frame: &'a Frame<'a>,
+    light: Projector,
+    /// Cells per side of the grid.
+    pub grid: u32,
+    pixels: usize,
+    fparams: wgpu::Buffer,
+    /// The transformation's inputs but the surface: light, fparams, uparams, then after the
+    /// surface's two, the outputs and the camera (bindings 5, 6, 7).
+    transform_io: [wgpu::Buffer; 6],
+    transform: wgpu::ComputePipeline,
+    count: Kernel,
+    scatter: Kernel,
+    cell_start: wgpu::Buffer,
+    cell_scan: super::scan::PreparedScan,
+    setup: Kernel,
+    items_scan: super::scan::PreparedScan,
+    args: Kernel,
+    args_buf: wgpu::Buffer,
+    test: wgpu::ComputePipeline,
+    /// `test.wgsl`'s first ten bindings.
+    test_inputs: [wgpu::Buffer; 10],
+    /// The tests' counters and undecided list, cleared for every sub-sample, and their bind.
+    pairs: TestBuffers,
+    bind_test: wgpu::BindGroup,
+    set_up: std::cell::Cell<bool>,
+}
+
+/// A pipeline and its bind group.
+struct Kernel {
+    pipeline: wgpu::ComputePipeline,
+    bind: wgpu::BindGroup,
+}
+
+impl Kernel {
+    fn new(ctx: &GpuContext, pipeline: wgpu::ComputePipeline, buffers: &[&wgpu::Buffer]) -> Self {
+        let bind = ctx.bind(&pipeline, buffers);
+        Self { pipeline, bind }
     }
-    let mut shadowed: Vec<u32> = ctx.read(&shadow)?;
-    shadowed.truncate(pixels);
 
-    // Undecided tests (CPU).
-    let (pf, pu): (Vec<f64>, Vec<u32>) = if undecided > 0 {
-        (ctx.read(&pairs.und_f)?, ctx.read(&pairs.und_u)?)
-    } else {
-        (Vec::new(), Vec::new())
-    };
-    rec.stages.time(STAGE_UNDECIDED, || {
-        for k in 0..undecided {
-            let (pixel, t) = (pu[3 * k] as usize, pu[3 * k + 2] as usize);
-            let s = Sample {
-                x: pf[3 * k],
-                y: pf[3 * k + 1],
-                zt: pf[3 * k + 2],
-                id: pixel as u32,
-                tri: pu[3 * k + 1],
-            };
-            if Blocker::new(&frame.geometry, t, &light).is_some_and(|b| b.shadows(&s)) {
-                shadowed[pixel] = 1;
-            }
+    fn dispatch(&self, e: &mut wgpu::CommandEncoder, groups: (u32, u32, u32)) {
+        GpuContext::dispatch(e, &self.pipeline, &self.bind, groups);
+    }
+}
+
+impl<'a> Izb<'a> {
+    /// Compiles the kernels and allocates the buffers for `frame`, whose geometry is in `gpu`;
+    /// the light is [`afsm::light_projector`]'s.
+    pub fn new(ctx: &GpuContext, gpu: &GpuFrame, frame: &'a Frame<'a>) -> Self {
+        let light = afsm::light_projector(frame);
+        let pixels = gpu.pixels();
+        let grid = grid_size(pixels);
+        let triangles = gpu.triangles as usize;
+        let cells = grid as usize * grid as usize;
+        let wgsl = |src: &str, grid_fn: bool| {
+            let g = if grid_fn { include_str!("afsm/grid.wgsl") } else { "" };
+            format!("{COMMON_WGSL}{g}{src}")
+        };
+        let light_buf = ctx.upload("afsm light", &projector_data(&light));
+        // The last two are the sub-sample's offset in its pixel, written by `shadowed`.
+        let fparams = ctx.upload(
+            "afsm fparams",
+            &[
+                SHADOW_OFFSET,
+                f64::from(grid) / light.width,
+                f64::from(grid) / light.height,
+                ORIENT2D_FILTER_BOUND,
+                0.5,
+                0.5,
+            ],
+        );
+        let uparams =
+            ctx.upload("afsm uparams", &[pixels as u32, grid, gpu.triangles, frame.width()]);
+        let camera = ctx.upload("afsm camera", &projector_data(&frame.camera));
+        let scan = super::scan::Scan::new(ctx);
+        let transform = ctx.pipeline(
+            "afsm transform",
+            &wgsl(include_str!("afsm/transform.wgsl"), false),
+            "transform",
+        );
+        let sample_f = ctx.zeroed::<f64>("afsm sample xyz", 3 * pixels);
+        let sample_tri = ctx.zeroed::<u32>("afsm sample triangle", pixels);
+
+        let izb_src = wgsl(include_str!("afsm/izb.wgsl"), true);
+        let slot = ctx.zeroed::<u32>("afsm slot", 2 * pixels);
+        let cell_start = ctx.zeroed::<u32>("afsm cells", cells + 1);
+        let samples = ctx.zeroed::<u32>("afsm samples", 1);
+        let izb_f = ctx.zeroed::<f64>("afsm izb xyz", 3 * pixels);
+        let izb_u = ctx.zeroed::<u32>("afsm izb ids", 2 * pixels);
+        let izb_bufs =
+            [&fparams, &uparams, &sample_f, &sample_tri, &slot, &cell_start, &izb_f, &izb_u];
+        let count = Kernel::new(ctx, ctx.pipeline("afsm count", &izb_src, "count"), &izb_bufs);
+        let scatter =
+            Kernel::new(ctx, ctx.pipeline("afsm scatter", &izb_src, "scatter"), &izb_bufs);
+        let cell_scan = scan.prepare(ctx, &cell_start, cells + 1, &samples);
+
+        let blk_outline = ctx.zeroed::<f64>("afsm blocker outlines", BLK_OUTLINE * triangles);
+        let blk_plane = ctx.zeroed::<f64>("afsm blocker planes", BLK_PLANE * triangles);
+        let blk_u = ctx.zeroed::<u32>("afsm blockers u32", BLK_U * triangles);
+        let items = ctx.zeroed::<u32>("afsm items", triangles + 1);
+        let items_total = ctx.zeroed::<u32>("afsm items total", 1);
+        let setup = Kernel::new(
+            ctx,
+            ctx.pipeline("afsm setup", &wgsl(include_str!("afsm/setup.wgsl"), true), "setup"),
+            &[
+                &light_buf,
+                &fparams,
+                &uparams,
+                &gpu.corners,
+                &gpu.casters,
+                &blk_outline,
+                &blk_plane,
+                &blk_u,
+                &items,
+            ],
+        );
+        let items_scan = scan.prepare(ctx, &items, triangles + 1, &items_total);
+        let args_buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("afsm test dispatch"),
+            size: 12,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
+            mapped_at_creation: false,
+        });
+        let args = Kernel::new(
+            ctx,
+            ctx.pipeline("afsm args", include_str!("afsm/args.wgsl"), "args_main"),
+            &[&uparams, &items, &args_buf],
+        );
+        let test = ctx.pipeline("afsm test", &wgsl(include_str!("afsm/test.wgsl"), false), "test");
+        let shadow = ctx.zeroed::<u32>("afsm shadow", pixels);
+        let test_inputs = [
+            fparams.clone(),
+            uparams.clone(),
+            items,
+            blk_outline,
+            blk_plane,
+            blk_u,
+            cell_start.clone(),
+            izb_f,
+            izb_u,
+            shadow,
+        ];
+        let pairs = TestBuffers::new(ctx, pixels.max(4096));
+        let bind_test = pairs.bind(ctx, &test, &test_inputs);
+        Self {
+            frame,
+            light,
+            grid,
+            pixels,
+            transform_io: [light_buf, fparams.clone(), uparams, sample_f, sample_tri, camera],
+            transform,
+            count,
+            scatter,
+            cell_scan,
+            setup,
+            items_scan,
+            args,
+            args_buf,
+            test,
+            test_inputs,
+            pairs,
+            bind_test,
+            cell_start,
+            fparams,
+            set_up: std::cell::Cell::new(false),
         }
-    });
-    rec.counters.sampling_points_tested += tested;
-    rec.notes.push(format!(
-        "afsm (GPU): {grid} x {grid} grid cells over the light image; {undecided} undecided \
-         (sample, triangle) pairs resolved on the CPU"
-    ));
-    let lit = shadowed.iter().map(|&s| if s == 0 { 1.0 } else { 0.0 }).collect();
-    Ok(AfsmGpuOutput { lit, undecided: undecided as u64, grid })
+    }
+
+    /// Which pixels' sub-sample on `surface` are shadowed: the transformation of samples, the
+    /// IZB construction and the rasterization of blockers on the GPU (one stage each, timed
+    /// into `rec`), then the undecided pairs on the CPU ([`STAGE_UNDECIDED`]).
+    pub fn shadowed(
+        &self,
+        ctx: &GpuContext,
+        surface: SampleSurface<'_>,
+        rec: &mut Recorder,
+    ) -> Result<ShadowedSamples, MethodError> {
+        let pixels = self.pixels;
+        let groups = GpuContext::groups_1d(pixels, WG);
+        ctx.queue.write_buffer(
+            &self.fparams,
+            4 * 8,
+            bytemuck::cast_slice(&[surface.offset.x, surface.offset.y]),
+        );
+
+        // Transformation of samples.
+        let [light, fparams, uparams, sample_f, sample_tri, camera] = &self.transform_io;
+        let bind = ctx.bind(
+            &self.transform,
+            &[
+                light,
+                fparams,
+                uparams,
+                surface.triangle,
+                surface.depth,
+                sample_f,
+                sample_tri,
+                camera,
+            ],
+        );
+        ctx.stage(rec, STAGE_TRANSFORMATION, |e| {
+            GpuContext::dispatch(e, &self.transform, &bind, groups);
+        })?;
+
+        // IZB construction.
+        ctx.stage(rec, STAGE_IZB, |e| {
+            e.clear_buffer(&self.cell_start, 0, None);
+            self.count.dispatch(e, groups);
+            self.cell_scan.record(e);
+            self.scatter.dispatch(e, groups);
+        })?;
+
+        // Rasterization of blockers.
+        let set_up = self.set_up.replace(true);
+        let shadow = &self.test_inputs[9];
+        let triangles = self.frame.geometry.triangles.len();
+        let indirect = |e: &mut wgpu::CommandEncoder, bind: &wgpu::BindGroup| {
+            let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: None,
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.test);
+            pass.set_bind_group(0, bind, &[]);
+            pass.dispatch_workgroups_indirect(&self.args_buf, 0);
+        };
+        ctx.stage(rec, STAGE_RASTERIZATION, |e| {
+            if !set_up {
+                self.setup.dispatch(e, GpuContext::groups_1d(triangles, WG));
+                self.items_scan.record(e);
+                self.args.dispatch(e, (1, 1, 1));
+            }
+            e.clear_buffer(shadow, 0, None);
+            e.clear_buffer(&self.pairs.counters, 0, None);
+            indirect(e, &self.bind_test);
+        })?;
+        let (mut tested, mut undecided) = self.pairs.counts(ctx)?;
+        let larger;
+        let mut pairs = &self.pairs;
+        if undecided > pairs.capacity {
+            // The list overflowed: the samples are tested again with room for every pair
+            // (marking a shadowed pixel twice changes nothing), timed as part of the stage.
+            larger = TestBuffers::new(ctx, undecided);
+            pairs = &larger;
+            let bind = pairs.bind(ctx, &self.test, &self.test_inputs);
+            ctx.stage(rec, STAGE_RASTERIZATION, |e| indirect(e, &bind))?;
+            if let Some(again) = rec.stages.stages.pop() {
+                if let Some(first) =
+                    rec.stages.stages.iter_mut().rev().find(|s| s.name == again.name)
+                {
+                    first.ms += again.ms;
+                }
+            }
+            (tested, undecided) = pairs.counts(ctx)?;
+        }
+        let mut shadowed: Vec<u32> = ctx.read(shadow)?;
+        shadowed.truncate(pixels);
+
+        // Undecided tests (CPU).
+        let (pf, pu): (Vec<f64>, Vec<u32>) = if undecided > 0 {
+            (ctx.read(&pairs.und_f)?, ctx.read(&pairs.und_u)?)
+        } else {
+            (Vec::new(), Vec::new())
+        };
+        rec.stages.time(STAGE_UNDECIDED, || {
+            for k in 0..undecided {
+                let (pixel, t) = (pu[3 * k] as usize, pu[3 * k + 2] as usize);
+                let s = Sample {
+                    x: pf[3 * k],
+                    y: pf[3 * k + 1],
+                    zt: pf[3 * k + 2],
+                    id: pixel as u32,
+                    tri: pu[3 * k + 1],
+                };
+                if Blocker::new(&self.frame.geometry, t, &self.light).is_some_and(|b| b.shadows(&s))
+                {
+                    shadowed[pixel] = 1;
+                }
+            }
+        });
+        Ok(ShadowedSamples { shadowed, undecided: undecided as u64, tested })
+    }
+
+    /// The run record's note on the grid and the `undecided` pairs.
+    pub fn note(&self, undecided: u64) -> String {
+        let grid = self.grid;
+        format!(
+            "afsm (GPU): {grid} x {grid} grid cells over the light image; {undecided} undecided \
+             (sample, triangle) pairs resolved on the CPU"
+        )
+    }
+}
+
+/// Refuses a frame with semi-transparent casters, which `method`'s CPU twin attenuates in
+/// triangle order; the GPU kernels take opaque casters only.
+pub(super) fn opaque_casters_only(frame: &Frame<'_>, method: &str) -> Result<(), MethodError> {
+    if frame.effects.transparency {
+        return Err(MethodError::NotApplicable(format!(
+            "{method} on the GPU takes opaque casters only: semi-transparent casters attenuate \
+             in triangle order (run it with --device cpu)"
+        )));
+    }
+    Ok(())
 }
 
 /// The counters and the undecided list of the sample tests.
 struct TestBuffers {
+    /// Room for this many undecided pairs.
+    capacity: usize,
     /// Tests (low and high word) and undecided pairs.
     counters: wgpu::Buffer,
     /// Undecided pairs: light image x, y and threshold depth.
@@ -309,6 +481,7 @@ impl TestBuffers {
     /// Zeroed counters and a list with room for `capacity` pairs.
     fn new(ctx: &GpuContext, capacity: usize) -> Self {
         Self {
+            capacity,
             counters: ctx.zeroed::<u32>("afsm counters", 3),
             und_f: ctx.zeroed::<f64>("afsm undecided xyz", 3 * capacity),
             und_u: ctx.zeroed::<u32>("afsm undecided ids", 3 * capacity),
@@ -320,9 +493,9 @@ impl TestBuffers {
         &self,
         ctx: &GpuContext,
         test: &wgpu::ComputePipeline,
-        first: [&wgpu::Buffer; 10],
+        first: &[wgpu::Buffer; 10],
     ) -> wgpu::BindGroup {
-        let mut all = first.to_vec();
+        let mut all: Vec<&wgpu::Buffer> = first.iter().collect();
         all.extend([&self.counters, &self.und_f, &self.und_u]);
         ctx.bind(test, &all)
     }
@@ -347,20 +520,12 @@ impl ShadowMethod for GpuAfsm {
     }
 
     fn params(&self) -> serde_json::Map<String, serde_json::Value> {
-        let mut m = self.twin().params();
-        m.insert("device".into(), "gpu".into());
-        m
+        super::twin_params(&self.twin())
     }
 
     fn run(&self, frame: &Frame<'_>, rec: &mut Recorder) -> Result<Visibility, MethodError> {
         self.twin().validate()?;
-        if frame.effects.transparency {
-            return Err(MethodError::NotApplicable(
-                "afsm on the GPU takes opaque casters only: semi-transparent casters attenuate \
-                 in triangle order (run it with --device cpu)"
-                    .into(),
-            ));
-        }
+        opaque_casters_only(frame, self.name())?;
         let ctx = GpuContext::shared()?;
         ctx.describe(rec);
         let gpu = GpuFrame::for_run(ctx, frame, rec)?;

@@ -3,9 +3,9 @@
 //!
 //! Layouts (WGSL side in `common.wgsl`): a projector is 18 `f64` ([`projector_data`]);
 //! triangles are 9 `f64` each (three corners), casters one `u32` each (1 casts); the G-buffer
-//! holds per pixel the triangle id (`NO_TRIANGLE` for background), position and unit normal
-//! (3 `f64` each); the depth map per texel the depth (`f64`, infinity where no caster) and the
-//! triangle id.
+//! holds per pixel the triangle id (`NO_TRIANGLE` for background), the depth (the camera ray's
+//! parameter, `f64`), position and unit normal (3 `f64` each); the depth map per texel the
+//! depth (`f64`, infinity where no caster) and the triangle id.
 
 use super::{
     raster::{rasterize, RasterJob},
@@ -65,6 +65,9 @@ pub struct GpuFrame {
     pub camera: wgpu::Buffer,
     /// G-buffer: triangle id per pixel.
     pub triangle: wgpu::Buffer,
+    /// G-buffer: depth per pixel, the parameter of the camera ray through the pixel centre
+    /// (infinity where no surface), `f64`.
+    pub depth: wgpu::Buffer,
     /// G-buffer: world position per pixel, 3 `f64`.
     pub position: wgpu::Buffer,
     /// G-buffer: unit face normal per pixel, 3 `f64`.
@@ -98,6 +101,7 @@ impl GpuFrame {
             casters: ctx.upload("casters", &casters),
             camera: ctx.upload("camera", &projector_data(&frame.camera)),
             triangle: ctx.upload("gbuffer triangle", &gbuffer.triangle),
+            depth: ctx.upload("gbuffer depth", &gbuffer.depth),
             position: ctx.upload("gbuffer position", &flat(&gbuffer.position)),
             normal: ctx.upload("gbuffer normal", &flat(&gbuffer.normal)),
         }
@@ -128,32 +132,22 @@ impl GpuFrame {
             casters,
             camera: ctx.upload("camera", &projector_data(&frame.camera)),
             triangle: r.triangle,
+            depth: r.depth,
             position: r.position,
             normal: r.normal,
         })
     }
 
-    /// Reads the G-buffer back (depth is not kept on the GPU: infinity where no surface,
-    /// else the depth along the camera's axis of the position).
-    pub fn read_gbuffer(&self, ctx: &GpuContext, camera: &Projector) -> Result<GBuffer, GpuError> {
+    /// Reads the G-buffer back.
+    pub fn read_gbuffer(&self, ctx: &GpuContext) -> Result<GBuffer, GpuError> {
         let triangle: Vec<u32> = ctx.read(&self.triangle)?;
         let vec3 = |v: Vec<f64>| -> Vec<glam::DVec3> {
             v.chunks_exact(3).map(|c| glam::DVec3::new(c[0], c[1], c[2])).collect()
         };
+        let mut depth: Vec<f64> = ctx.read(&self.depth)?;
+        depth.truncate(triangle.len());
         let position = vec3(ctx.read(&self.position)?);
         let normal = vec3(ctx.read(&self.normal)?);
-        let depth =
-            triangle
-                .iter()
-                .zip(&position)
-                .map(|(&t, &p)| {
-                    if t == crate::raster::NO_TRIANGLE {
-                        f64::INFINITY
-                    } else {
-                        camera.depth_of(p)
-                    }
-                })
-                .collect();
         Ok(GBuffer { width: self.width, height: self.height, triangle, depth, position, normal })
     }
 

@@ -28,6 +28,7 @@
 //! [`GpuContext`] chooses; `--device cpu` (the default) its CPU twin.
 
 pub mod afsm;
+pub mod afsm_ss;
 mod context;
 pub mod frame;
 pub mod pan09;
@@ -38,6 +39,15 @@ pub mod sm;
 pub mod spsm;
 
 pub use context::{GpuContext, Timing, ADAPTER_ENV, BACKEND_ENV};
+
+use crate::method::ShadowMethod;
+
+/// A GPU method's parameters: its CPU twin's, and `device = "gpu"`.
+fn twin_params(twin: &dyn ShadowMethod) -> serde_json::Map<String, serde_json::Value> {
+    let mut m = twin.params();
+    m.insert("device".into(), "gpu".into());
+    m
+}
 pub use frame::{GpuDepthMap, GpuFrame, COMMON_WGSL};
 
 /// Why the GPU path could not run (no adapter, or an adapter that lacks what it needs).

@@ -402,9 +402,7 @@ impl ShadowMethod for GpuPcf {
     }
 
     fn params(&self) -> serde_json::Map<String, serde_json::Value> {
-        let mut m = self.twin().params();
-        m.insert("device".into(), "gpu".into());
-        m
+        super::twin_params(&*self.twin())
     }
 
     fn run(&self, frame: &Frame<'_>, rec: &mut Recorder) -> Result<Visibility, MethodError> {

@@ -7,8 +7,8 @@ use crate::gpu::GpuContext;
 /// Elements per block (the kernels' workgroup size).
 const BLOCK: u32 = 256;
 
-/// The three scan pipelines.
-#[derive(Debug)]
+/// The three scan pipelines (cheap to clone: wgpu's handles are shared).
+#[derive(Debug, Clone)]
 pub(crate) struct Scan {
     blocks: wgpu::ComputePipeline,
     sums: wgpu::ComputePipeline,
@@ -16,8 +16,8 @@ pub(crate) struct Scan {
 }
 
 /// A scan of one buffer, bound and ready to record.
-pub(crate) struct PreparedScan<'a> {
-    scan: &'a Scan,
+pub(crate) struct PreparedScan {
+    scan: Scan,
     groups: (u32, u32, u32),
     /// One bind group per kernel (auto layouts are not shared between pipelines).
     binds: [wgpu::BindGroup; 3],
@@ -36,23 +36,23 @@ impl Scan {
 
     /// Binds the scan of the first `n` elements of `data` in place; `total` (one `u32`)
     /// receives their sum.
-    pub(crate) fn prepare<'a>(
-        &'a self,
+    pub(crate) fn prepare(
+        &self,
         ctx: &GpuContext,
         data: &wgpu::Buffer,
         n: usize,
         total: &wgpu::Buffer,
-    ) -> PreparedScan<'a> {
+    ) -> PreparedScan {
         let groups = GpuContext::groups_1d(n, BLOCK);
         let params = ctx.upload("scan params", &[n as u32]);
         let sums = ctx.zeroed::<u32>("scan sums", groups.0 as usize * groups.1 as usize);
         let buffers = [&params, data, &sums, total];
         let binds = [&self.blocks, &self.sums, &self.add].map(|p| ctx.bind(p, &buffers));
-        PreparedScan { scan: self, groups, binds }
+        PreparedScan { scan: self.clone(), groups, binds }
     }
 }
 
-impl PreparedScan<'_> {
+impl PreparedScan {
     /// Records the three passes.
     pub(crate) fn record(&self, encoder: &mut wgpu::CommandEncoder) {
         let [blocks, sums, add] = &self.binds;

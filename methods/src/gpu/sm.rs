@@ -155,9 +155,7 @@ impl ShadowMethod for GpuShadowMap {
     }
 
     fn params(&self) -> serde_json::Map<String, serde_json::Value> {
-        let mut m = StandardShadowMap { options: self.options }.params();
-        m.insert("device".into(), "gpu".into());
-        m
+        super::twin_params(&StandardShadowMap { options: self.options })
     }
 
     fn run(&self, frame: &Frame<'_>, rec: &mut Recorder) -> Result<Visibility, MethodError> {

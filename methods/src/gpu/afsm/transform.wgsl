@@ -1,14 +1,15 @@
-// Stage "transformation of samples" (afsm::samples::transform_samples at rate 1): the
-// G-buffer's surface point of every pixel centre moved to the light's image plane, with its
-// shadow threshold depth. Appended to common.wgsl.
+// Stage "transformation of samples" (afsm::samples::transform_samples) for one sub-sample of
+// every pixel: the surface point of the sub-sample's G-buffer moved to the light's image
+// plane, with its shadow threshold depth. Appended to common.wgsl.
 
 @group(0) @binding(0) var<storage, read> light_data: array<f64, 18>;
-// [afsm::SHADOW_OFFSET, ...]
+// [afsm::SHADOW_OFFSET, cell scale x, y, orient2d bound, the sub-sample's offset x, y]
 @group(0) @binding(1) var<storage, read> fparams: array<f64>;
 // [pixels, grid, triangles, image width]
 @group(0) @binding(2) var<storage, read> uparams: array<u32>;
 @group(0) @binding(3) var<storage, read> g_triangle: array<u32>;
-@group(0) @binding(4) var<storage, read> g_position: array<f64>;
+// The sub-sample's depth: the parameter of the camera ray through it.
+@group(0) @binding(4) var<storage, read> g_depth: array<f64>;
 // Per pixel: light image x, y and threshold depth.
 @group(0) @binding(5) var<storage, read_write> sample_f: array<f64>;
 // Per pixel: the sample's triangle, NO_TRIANGLE where the pixel has no sample.
@@ -47,15 +48,17 @@ fn transform(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     var r = vec4<f64>(0.0lf, 0.0lf, 0.0lf, 0.0lf);
     if tri != NO_TRIANGLE {
         let p = proj_load(light_data);
-        let position = vec3<f64>(g_position[3u * k], g_position[3u * k + 1u], g_position[3u * k + 2u]);
+        // SamplePattern::point: the pixel's corner plus the sub-sample's offset; the surface
+        // point is Ray::at(depth) on the camera ray through it, as transform_samples takes it.
+        let w = uparams[3];
+        let point = vec2<f64>(f64(k % w) + fparams[4], f64(k / w) + fparams[5]);
+        let ray = proj_ray(proj_load(camera_data), point);
+        let position = ray.origin + g_depth[k] * ray.direction;
         r = proj_project(p, position);
         if r.w == 0.0lf {
             tri = NO_TRIANGLE;
         } else {
-            let w = uparams[3];
-            let centre = vec2<f64>(f64(k % w) + 0.5lf, f64(k / w) + 0.5lf);
-            let origin = proj_ray(proj_load(camera_data), centre).origin;
-            let zt = threshold_depth(p, r.x, r.y, r.z, shadow_offset(origin, position));
+            let zt = threshold_depth(p, r.x, r.y, r.z, shadow_offset(ray.origin, position));
             r.z = zt;
             if !is_finite64(zt) {
                 tri = NO_TRIANGLE;

@@ -104,9 +104,7 @@ impl ShadowMethod for GpuSpsm {
     }
 
     fn params(&self) -> serde_json::Map<String, serde_json::Value> {
-        let mut m = Spsm { options: self.options }.params();
-        m.insert("device".into(), "gpu".into());
-        m
+        super::twin_params(&Spsm { options: self.options })
     }
 
     fn run(&self, frame: &Frame<'_>, rec: &mut Recorder) -> Result<Visibility, MethodError> {
@@ -118,7 +116,7 @@ impl ShadowMethod for GpuSpsm {
         ctx.describe(rec);
         let gframe = GpuFrame::for_run(ctx, frame, rec)?;
         let mut frame = frame.clone();
-        frame.gbuffer = gframe.read_gbuffer(ctx, &frame.camera)?;
+        frame.gbuffer = gframe.read_gbuffer(ctx)?;
         shade(ctx, &gframe, &frame, &self.options, rec).map(|s| s.visibility)
     }
 }
