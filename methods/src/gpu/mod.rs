@@ -31,6 +31,7 @@ pub mod afsm;
 pub mod afsm_ss;
 mod context;
 pub mod frame;
+mod layout;
 pub mod pan09;
 pub mod pcf;
 pub mod raster;

@@ -28,21 +28,43 @@ const RASTER_WGSL: &str = include_str!("raster.wgsl");
 /// The render pass of `raster_draw.wgsl`.
 const DRAW_WGSL: &str = include_str!("raster_draw.wgsl");
 
-/// Uniforms of `raster.wgsl` (layout of its `Params`).
+/// Uniforms of `raster.wgsl`: its WGSL `Params`, field for field ([`super::layout`]).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
-struct Params {
+pub(super) struct Params {
     width: u32,
     height: u32,
     triangles: u32,
     casters_only: u32,
     row_words: u32,
     gbuffer: u32,
-    pad: [u32; 2],
-    shift: [f64; 2],
+    pad0: u32,
+    pad1: u32,
+    shift_x: f64,
+    shift_y: f64,
     znear: f64,
     zfar: f64,
 }
+
+super::layout::wgsl_mirror!(
+    Params,
+    "Params",
+    format!("{}{RASTER_WGSL}", crate::gpu::COMMON_WGSL),
+    [
+        width,
+        height,
+        triangles,
+        casters_only,
+        row_words,
+        gbuffer,
+        pad0,
+        pad1,
+        shift_x,
+        shift_y,
+        znear,
+        zfar
+    ]
+);
 
 /// What one rasterization gives: the kept triangle and the `f64` depth per sample, and for a
 /// G-buffer the position and normal.
@@ -106,8 +128,10 @@ pub fn rasterize(
         casters_only: u32::from(job.casters_only),
         row_words,
         gbuffer: u32::from(job.gbuffer),
-        pad: [0; 2],
-        shift: [job.shift.x, job.shift.y],
+        pad0: 0,
+        pad1: 0,
+        shift_x: job.shift.x,
+        shift_y: job.shift.y,
         znear,
         zfar,
     };

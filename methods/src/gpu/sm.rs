@@ -36,7 +36,8 @@ const SM_WGSL: &str = include_str!("sm.wgsl");
 /// Threads per workgroup of the per-pixel kernels (`counters.wgsl` sums over one workgroup).
 pub(super) const WORKGROUP: u32 = 64;
 
-/// The kernels' uniform parameters; the WGSL `Params` of `receiver.wgsl`, field for field.
+/// The kernels' uniform parameters; the WGSL `Params` of `receiver.wgsl`, field for field
+/// ([`super::layout`]).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, Pod, Zeroable)]
 pub(super) struct Params {
@@ -65,6 +66,38 @@ pub(super) struct Params {
     pub dithered: u32,
     pub pad1: u32,
 }
+
+super::layout::wgsl_mirror!(
+    Params,
+    "Params",
+    format!("{COMMON_WGSL}{RECEIVER_WGSL}"),
+    [
+        constant,
+        slope_bias,
+        max_slope,
+        reach,
+        code_near,
+        code_span,
+        code_max,
+        pad0,
+        width,
+        pixels,
+        res,
+        samples,
+        grid_x,
+        grid_y,
+        seed_lo,
+        seed_hi,
+        offset_x,
+        offset_y,
+        origin,
+        side,
+        half_offset,
+        levels,
+        dithered,
+        pad1
+    ]
+);
 
 impl Params {
     /// The parameters every per-pixel kernel shares: the tester's bias, the frame's size and

@@ -34,6 +34,30 @@ use instrumentation::{Counters, Recorder};
 
 const CLASSIFY_WGSL: &str = include_str!("classify.wgsl");
 
+crate::gpu::layout::wgsl_mirror!(
+    Params,
+    "Params",
+    format!("{COMMON_WGSL}{TEXEL_WGSL}{CLASSIFY_WGSL}"),
+    [
+        constant,
+        z_lo,
+        depth_step,
+        vertex_step,
+        half_res,
+        half_ulp,
+        size_x,
+        size_y,
+        pixels,
+        res,
+        perspective,
+        packed,
+        count,
+        pad1,
+        pad2,
+        pad3
+    ]
+);
+
 /// What classification hands to the next stages, as
 /// [`crate::spsm::classify::classify_pixels`] returns it.
 #[derive(Debug, Clone, PartialEq)]

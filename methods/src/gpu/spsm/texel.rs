@@ -16,7 +16,8 @@ use bytemuck::{Pod, Zeroable};
 /// WGSL of the texel decoding (needs `COMMON_WGSL` before it).
 pub(super) const TEXEL_WGSL: &str = include_str!("texel.wgsl");
 
-/// The kernels' uniform parameters; the WGSL `Params` of `texel.wgsl`, field for field.
+/// The kernels' uniform parameters; the WGSL `Params` of `texel.wgsl`, field for field
+/// (checked with the classification's shader, in `classify.rs`; see `gpu::layout`).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, Pod, Zeroable)]
 pub(super) struct Params {
@@ -33,7 +34,9 @@ pub(super) struct Params {
     pub perspective: u32,
     pub packed: u32,
     pub count: u32,
-    pub pad: [u32; 3],
+    pub pad1: u32,
+    pub pad2: u32,
+    pub pad3: u32,
 }
 
 /// The order-preserving map of the non-NaN `f64`s onto the integers.
