@@ -87,6 +87,11 @@ fn gpu_parity_bumpy() {
 }
 
 #[test]
+fn gpu_parity_spot_spheres() {
+    assert_parity("spot-spheres");
+}
+
+#[test]
 fn gpu_parity_grazing() {
     assert_parity("grazing");
 }

@@ -124,6 +124,11 @@ fn gpu_parity_bumpy_rate_32_with_validity() {
 }
 
 #[test]
+fn gpu_parity_spot_spheres_rate_32() {
+    parity("spot-spheres", 32, 512, VisibilityMode::Table).expect("built in");
+}
+
+#[test]
 fn gpu_parity_cage_rate_128() {
     parity("cage", 128, 512, VisibilityMode::Table);
 }

@@ -18,7 +18,7 @@ use methods::{
     Frame, ShadowMethod, Visibility,
 };
 
-const SCENES: [&str; 4] = ["plane-square", "cage", "random-10k", "bumpy"];
+const SCENES: [&str; 5] = ["plane-square", "cage", "random-10k", "bumpy", "spot-spheres"];
 const WIDTH: u32 = 160;
 const HEIGHT: u32 = 120;
 

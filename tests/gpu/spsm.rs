@@ -105,6 +105,11 @@ fn gpu_parity_bumpy() {
 }
 
 #[test]
+fn gpu_parity_spot_spheres() {
+    assert_parity("spot-spheres");
+}
+
+#[test]
 fn gpu_spsm_runs_end_to_end() {
     let scene = scenes::load("plane-square").expect("built-in");
     let frame = Frame::new(&scene, 160, 120, &mut Recorder::default());
