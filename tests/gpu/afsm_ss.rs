@@ -83,3 +83,58 @@ fn gpu_afsm_ss_runs_end_to_end() {
     assert!(v.lit.contains(&0.0) && v.lit.contains(&1.0));
     assert!(rec.notes.iter().any(|n| n.contains("over 4 sub-samples")), "{:?}", rec.notes);
 }
+
+/// The transformation of samples, sub-sample by sub-sample: the GPU's samples (light image
+/// point, threshold depth, triangle) equal the CPU's `transform_samples` bit for bit, on the
+/// same G-buffers, before any caster is tested.
+#[test]
+fn gpu_parity_afsm_ss_transformation_per_sub_sample() {
+    use glam::DVec2;
+    use methods::{
+        afsm::samples::{transform_samples, Surface},
+        gpu::afsm::{Izb, SampleSurface},
+        pattern::SamplePattern,
+        raster::rasterize_nearest_at,
+    };
+    let ctx = GpuContext::shared().expect("a GPU adapter (Mesa's lavapipe on CI)");
+    for name in ["plane-square", "spot-spheres", "cage"] {
+        let Some(scene) = load_builtin(name) else { continue };
+        let frame = Frame::new(&scene, 48, 36, &mut Recorder::default());
+        let pattern = SamplePattern::new(4, PatternKind::Rotated).expect("a pattern");
+        let extra: Vec<_> = (0..4)
+            .map(|s| {
+                let shift = pattern.offsets()[s] - DVec2::splat(0.5);
+                let geometry = &frame.geometry;
+                let mut counters = Default::default();
+                rasterize_nearest_at(geometry, |_| true, &frame.camera, shift, &mut counters)
+            })
+            .collect();
+        let centre = pattern.centre_index();
+        let surfaces: Vec<Surface<'_>> = (0..4)
+            .map(|s| match s == centre {
+                true => Surface { triangle: &frame.gbuffer.triangle, depth: &frame.gbuffer.depth },
+                false => Surface { triangle: &extra[s].triangle, depth: &extra[s].depth },
+            })
+            .collect();
+        let light = methods::afsm::light_projector(&frame);
+        let cpu = transform_samples(&frame.camera, &light, &surfaces, &pattern, frame.width());
+        let gpu_frame = GpuFrame::upload(ctx, &frame, &frame.gbuffer);
+        let izb = Izb::new(ctx, &gpu_frame, &frame);
+        let mut gpu = Vec::new();
+        for (s, surface) in surfaces.iter().enumerate() {
+            let triangle = ctx.upload("triangle", surface.triangle);
+            let depth = ctx.upload("depth", surface.depth);
+            let offset = pattern.offsets()[s];
+            let at = SampleSurface { triangle: &triangle, depth: &depth, offset };
+            izb.shadowed(ctx, at, &mut Recorder::default()).expect("GPU afsm-ss pass");
+            gpu.extend(izb.samples(ctx, s as u32, 4).expect("samples read back"));
+        }
+        gpu.sort_by_key(|s| s.id);
+        assert!(!cpu.is_empty(), "{name}: no sample");
+        let bits = |s: &methods::afsm::samples::Sample| {
+            (s.id, s.tri, s.x.to_bits(), s.y.to_bits(), s.zt.to_bits())
+        };
+        let differing = cpu.iter().zip(&gpu).filter(|(c, g)| bits(c) != bits(g)).count();
+        assert_eq!((gpu.len(), differing), (cpu.len(), 0), "{name}: transformed samples");
+    }
+}

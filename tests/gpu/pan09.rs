@@ -7,7 +7,7 @@ use crate::common::load_builtin;
 use instrumentation::Recorder;
 use methods::{
     gpu::{pan09::GpuPan09, GpuContext, GpuDepthMap, GpuFrame},
-    pan09::{Pan09, Pan09Options, SubsampleMasks, VisibilityMode},
+    pan09::{Pan09, Pan09Options, StageOutputs, SubsampleMasks, VisibilityMode},
     pattern::PatternKind,
     Frame, ShadowMethod, Visibility,
 };
@@ -56,6 +56,13 @@ fn parity(scene: &str, rate: u32, map_res: u32, visibility: VisibilityMode) -> O
     let map = frame.light_depth_map(map_res, &mut Recorder::default());
     let gframe = GpuFrame::upload(ctx, &frame, &frame.gbuffer);
     let gmap = GpuDepthMap::upload(ctx, &map);
+    // Stage by stage first, so that a drift shows where it starts.
+    let cpu_stages = Pan09::new(o).expect("valid").stage_outputs(&frame, &mut Recorder::default());
+    let gpu_stages = GpuPan09::new(o)
+        .expect("valid")
+        .stage_outputs(ctx, &frame, &gframe, &gmap, &mut Recorder::default())
+        .expect("gpu runs");
+    compare_stages(&cpu_stages, &gpu_stages);
     let mut gpu_rec = Recorder::default();
     let (gpu_v, gpu_m) = GpuPan09::new(o)
         .expect("valid")
@@ -78,6 +85,21 @@ fn parity(scene: &str, rate: u32, map_res: u32, visibility: VisibilityMode) -> O
         gpu_rec.stages.stages.iter().map(|s| (s.name.as_str(), s.ms)).collect::<Vec<_>>()
     );
     Some(cpu_rec.counters.silhouette_pixels)
+}
+
+/// The stages up to the triangle-texel pairs, in order: the first that differs fails.
+fn compare_stages(cpu: &StageOutputs, gpu: &StageOutputs) {
+    assert_eq!(gpu.silhouette_edges, cpu.silhouette_edges, "silhouette extraction: edges");
+    assert!(cpu.mask.contains(&true), "no texel marked: the mask map is not tested");
+    let texels = cpu.mask.iter().zip(&gpu.mask).filter(|(a, b)| a != b).count();
+    assert_eq!((gpu.mask.len(), texels), (cpu.mask.len(), 0), "silhouette mask map: texels");
+    assert!(gpu.sat == cpu.sat, "summed-area table differs");
+    let classes = cpu.class.iter().zip(&gpu.class).filter(|(a, b)| a != b).count();
+    assert_eq!((gpu.class.len(), classes), (cpu.class.len(), 0), "pixel facets: classes");
+    assert_eq!(gpu.facet_pixels, cpu.facet_pixels, "pixel facets: the facets' pixels");
+    let lit = cpu.depth_test_lit.iter().zip(&gpu.depth_test_lit).filter(|(a, b)| a != b).count();
+    assert_eq!(lit, 0, "depth test: pixels");
+    assert_eq!(gpu.pairs, cpu.pairs, "PT-pairs and TT-pairs");
 }
 
 fn compare(cv: &Visibility, cm: &SubsampleMasks, gv: &Visibility, gm: &SubsampleMasks) {

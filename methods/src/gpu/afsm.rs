@@ -63,6 +63,7 @@ use crate::{
     },
     frame::Frame,
     method::{MethodError, ShadowMethod, Visibility},
+    raster::NO_TRIANGLE,
 };
 use glam::DVec2;
 use instrumentation::Recorder;
@@ -441,6 +442,24 @@ impl<'a> Izb<'a> {
             }
         });
         Ok(ShadowedSamples { shadowed, undecided: undecided as u64, tested })
+    }
+
+    /// The samples the last transformation of samples wrote, read back as the CPU's
+    /// [`afsm::samples::transform_samples`] gives them for sub-sample `s` of `rate` (ids
+    /// `pixel * rate + s`, pixels without a sample left out): for stage-by-stage parity tests.
+    pub fn samples(&self, ctx: &GpuContext, s: u32, rate: u32) -> Result<Vec<Sample>, GpuError> {
+        let f: Vec<f64> = ctx.read(&self.transform_io[3])?;
+        let tri: Vec<u32> = ctx.read(&self.transform_io[4])?;
+        Ok((0..self.pixels)
+            .filter(|&k| tri[k] != NO_TRIANGLE)
+            .map(|k| Sample {
+                x: f[3 * k],
+                y: f[3 * k + 1],
+                zt: f[3 * k + 2],
+                id: k as u32 * rate + s,
+                tri: tri[k],
+            })
+            .collect())
     }
 
     /// The run record's note on the grid and the `undecided` pairs.

@@ -343,6 +343,37 @@ pub struct Pan09 {
 }
 
 /// Everything the mask-width-independent stages produce.
+/// What the stages up to the triangle-texel pairs give, for comparing the GPU kernels with
+/// the CPU stage by stage (`Pan09::stage_outputs`, and the GPU's twin of it).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct StageOutputs {
+    /// Silhouette edges found (silhouette extraction).
+    pub silhouette_edges: usize,
+    /// Silhouette mask map: per texel, row by row, whether it is marked.
+    pub mask: Vec<bool>,
+    /// Its summed-area table ([`sat::SummedAreaTable::sums`]).
+    pub sat: Vec<u32>,
+    /// Per pixel: 0 lit, 1 depth test, 2 silhouette (pixel facets).
+    pub class: Vec<u8>,
+    /// The silhouette facets' pixels, in facet order.
+    pub facet_pixels: Vec<u32>,
+    /// Per pixel, the depth test's light (1 outside its class).
+    pub depth_test_lit: Vec<f32>,
+    /// PT-pairs and TT-pairs kept.
+    pub pairs: (u64, u64),
+}
+
+impl StageOutputs {
+    /// The code of `class` in [`StageOutputs::class`].
+    pub fn class_code(class: PixelClass) -> u8 {
+        match class {
+            PixelClass::Lit => 0,
+            PixelClass::DepthTest => 1,
+            PixelClass::Silhouette(_) => 2,
+        }
+    }
+}
+
 struct Prepared {
     facets: Facets,
     pt: TexelLists,
@@ -389,7 +420,7 @@ impl Pan09 {
         if frame.effects.transparency {
             rec.notes.push("pan09 treats semi-transparent casters as opaque".into());
         }
-        let prepared = self.prepare(frame, rec);
+        let prepared = self.prepare(frame, rec, None);
         Ok(match (self.tables.as_deref(), self.options.rate) {
             (Some(Tables::W32(t)), _) => {
                 self.shade(frame, rec, prepared, &TableCoverage::new(t, &self.pattern), keep)
@@ -414,7 +445,25 @@ impl Pan09 {
 
     /// The stages that do not depend on the mask width: depth map, silhouettes, mask map,
     /// SAT, facets, depth test, PT- and TT-pairs.
-    fn prepare(&self, frame: &Frame<'_>, rec: &mut Recorder) -> Prepared {
+    /// The outputs of the stages up to the triangle-texel pairs on `frame`.
+    pub fn stage_outputs(&self, frame: &Frame<'_>, rec: &mut Recorder) -> StageOutputs {
+        let mut out = StageOutputs::default();
+        let p = self.prepare(frame, rec, Some(&mut out));
+        out.class = p.facets.class.iter().map(|&c| StageOutputs::class_code(c)).collect();
+        out.facet_pixels = p.facets.facets.iter().map(|f| f.pixel).collect();
+        out.depth_test_lit = p.lit;
+        out.pairs = (p.pt.len() as u64, p.tt.len() as u64);
+        out
+    }
+
+    /// The stages up to the triangle-texel pairs; `probe` receives the silhouette edges, the
+    /// mask map and its table, which are not kept otherwise.
+    fn prepare(
+        &self,
+        frame: &Frame<'_>,
+        rec: &mut Recorder,
+        probe: Option<&mut StageOutputs>,
+    ) -> Prepared {
         let res = self.options.map.map_res;
         let map = frame.light_depth_map(res, rec);
         let light = map.projector;
@@ -434,6 +483,11 @@ impl Pan09 {
         });
         let sat = rec.stages.time(STAGE_SAT, || sat::SummedAreaTable::new(&mask, res));
         rec.counters.silhouette_texels += u64::from(sat.total());
+        if let Some(probe) = probe {
+            probe.silhouette_edges = edges.len();
+            probe.sat = sat.sums().to_vec();
+            probe.mask = mask;
+        }
         let facets =
             rec.stages.time(STAGE_FACETS, || facets::classify_facets(frame, &light, res, &sat));
         rec.counters.silhouette_pixels += facets.facets.len() as u64;

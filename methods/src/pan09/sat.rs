@@ -51,6 +51,11 @@ impl SummedAreaTable {
         at(x1 + 1, y1 + 1) + at(x0, y0) - at(x0, y1 + 1) - at(x1 + 1, y0)
     }
 
+    /// The table itself: `sum(x, y)` at `y * (res + 1) + x`.
+    pub fn sums(&self) -> &[u32] {
+        &self.sums
+    }
+
     /// Marked texels in the whole map.
     pub fn total(&self) -> u32 {
         self.sums[self.sums.len() - 1]

@@ -64,7 +64,7 @@ use crate::{
     method::{MethodError, ShadowMethod, Visibility},
     pan09::{
         facets::PixelClass, lut::LookupTable, mask::Mask, silhouette::EdgeAdjacency, Pan09Options,
-        SubsampleMasks, VisibilityMode, STAGE_EDGE_ADJACENCY, STAGE_LIGHT_DEPTH_MAP,
+        StageOutputs, SubsampleMasks, VisibilityMode, STAGE_EDGE_ADJACENCY, STAGE_LIGHT_DEPTH_MAP,
         STAGE_VALIDITY,
     },
     pattern::SamplePattern,
@@ -256,6 +256,34 @@ impl GpuPan09 {
         map: &GpuDepthMap,
         rec: &mut Recorder,
     ) -> Result<(Visibility, SubsampleMasks), MethodError> {
+        self.run_probed(ctx, frame, gframe, map, rec, None)
+    }
+
+    /// What the stages up to the triangle-texel pairs wrote, read back: the twin of
+    /// [`crate::pan09::Pan09::stage_outputs`], on the same inputs as [`Self::run_kernels`].
+    pub fn stage_outputs(
+        &self,
+        ctx: &GpuContext,
+        frame: &Frame<'_>,
+        gframe: &GpuFrame,
+        map: &GpuDepthMap,
+        rec: &mut Recorder,
+    ) -> Result<StageOutputs, MethodError> {
+        let mut out = StageOutputs::default();
+        self.run_probed(ctx, frame, gframe, map, rec, Some(&mut out))?;
+        Ok(out)
+    }
+
+    /// [`Self::run_kernels`], reading the early stages' outputs back into `probe` when given.
+    fn run_probed(
+        &self,
+        ctx: &GpuContext,
+        frame: &Frame<'_>,
+        gframe: &GpuFrame,
+        map: &GpuDepthMap,
+        rec: &mut Recorder,
+        mut probe: Option<&mut StageOutputs>,
+    ) -> Result<(Visibility, SubsampleMasks), MethodError> {
         if map.res != self.options.map.map_res {
             return Err(MethodError::NotApplicable(format!(
                 "pan09 on the GPU: a {0} x {0} map given for --map-res {1}",
@@ -301,8 +329,25 @@ impl GpuPan09 {
             run.stage(rec, crate::pan09::STAGE_SAT, |e| sat::record(ctx, k, e, &marks, map.res))?;
         let facets = facets::run(&run, k, &sat, rec)?;
         let lit = depth_test::run(&run, k, &facets.class, rec)?;
+        if let Some(probe) = probe.as_deref_mut() {
+            let res = map.res as usize;
+            probe.silhouette_edges = edge_count as usize;
+            probe.mask = ctx.read::<u32>(&marks)?[..res * res].iter().map(|&m| m != 0).collect();
+            probe.sat = ctx.read::<u32>(&sat)?[..(res + 1) * (res + 1)].to_vec();
+            let pixels = gframe.pixels();
+            probe.class =
+                ctx.read::<u32>(&facets.class)?[..pixels].iter().map(|&c| c as u8).collect();
+            let fu: Vec<u32> = ctx.read(&facets.fu)?;
+            probe.facet_pixels =
+                (0..facets.count as usize).map(|f| fu[f * facets::FACET_U]).collect();
+            probe.depth_test_lit = ctx.read::<f32>(&lit)?[..pixels].to_vec();
+        }
         let pt = pairs::pixel_texel_pairs(&run, k, &facets, rec)?;
         let tt = pairs::triangle_texel_pairs(&run, k, &pt, rec)?;
+        if let Some(probe) = probe {
+            let c = read_counters(ctx, &run.counters)?;
+            probe.pairs = (u64::from(c[slot::PT_PAIRS]), u64::from(c[slot::TT_PAIRS]));
+        }
         let curved = frame.effects.curved_receivers;
         let capacity =
             if curved { read_counters(ctx, &run.counters)?[slot::EVALUATION_BOUND] } else { 0 };
