@@ -55,7 +55,11 @@
 //!   GPU path takes opaque casters only and reports scenes with `transparency` as not
 //!   applicable.
 
-use super::{frame::projector_data, GpuContext, GpuError, GpuFrame, COMMON_WGSL};
+use super::{
+    frame::{projector_data, COMMON},
+    shader::{compose, Part},
+    GpuContext, GpuError, GpuFrame,
+};
 use crate::{
     afsm::{
         self, blockers::Blocker, samples::Sample, AfsmOptions, AliasFreeShadowMap, SHADOW_OFFSET,
@@ -89,6 +93,25 @@ pub fn grid_size(pixels: usize) -> u32 {
 }
 
 const WG: u32 = 64;
+
+/// The kernels' WGSL: the grid's cell function is shared by the binning of samples and the
+/// casters' setup.
+const GRID: Part = Part::file("afsm/grid.wgsl", include_str!("afsm/grid.wgsl"));
+const TRANSFORM: Part = Part {
+    name: "afsm/transform.wgsl",
+    source: include_str!("afsm/transform.wgsl"),
+    needs: &[&COMMON],
+};
+const IZB: Part =
+    Part { name: "afsm/izb.wgsl", source: include_str!("afsm/izb.wgsl"), needs: &[&COMMON, &GRID] };
+const SETUP: Part = Part {
+    name: "afsm/setup.wgsl",
+    source: include_str!("afsm/setup.wgsl"),
+    needs: &[&COMMON, &GRID],
+};
+const ARGS: Part = Part::file("afsm/args.wgsl", include_str!("afsm/args.wgsl"));
+const TEST: Part =
+    Part { name: "afsm/test.wgsl", source: include_str!("afsm/test.wgsl"), needs: &[&COMMON] };
 /// `f64` per triangle of `setup.wgsl`'s outline records (4 corners and the bounding box).
 const BLK_OUTLINE: usize = 12;
 /// `f64` per triangle of `setup.wgsl`'s plane records (depth function and range); the
@@ -216,10 +239,6 @@ impl<'a> Izb<'a> {
         let grid = grid_size(pixels);
         let triangles = gpu.triangles as usize;
         let cells = grid as usize * grid as usize;
-        let wgsl = |src: &str, grid_fn: bool| {
-            let g = if grid_fn { include_str!("afsm/grid.wgsl") } else { "" };
-            format!("{COMMON_WGSL}{g}{src}")
-        };
         let light_buf = ctx.upload("afsm light", &projector_data(&light));
         // The last two are the sub-sample's offset in its pixel, written by `shadowed`.
         let fparams = ctx.upload(
@@ -237,15 +256,11 @@ impl<'a> Izb<'a> {
             ctx.upload("afsm uparams", &[pixels as u32, grid, gpu.triangles, frame.width()]);
         let camera = ctx.upload("afsm camera", &projector_data(&frame.camera));
         let scan = super::scan::Scan::new(ctx);
-        let transform = ctx.pipeline(
-            "afsm transform",
-            &wgsl(include_str!("afsm/transform.wgsl"), false),
-            "transform",
-        );
+        let transform = ctx.pipeline("afsm transform", &compose(&[&TRANSFORM]), "transform");
         let sample_f = ctx.zeroed::<f64>("afsm sample xyz", 3 * pixels);
         let sample_tri = ctx.zeroed::<u32>("afsm sample triangle", pixels);
 
-        let izb_src = wgsl(include_str!("afsm/izb.wgsl"), true);
+        let izb_src = compose(&[&IZB]);
         let slot = ctx.zeroed::<u32>("afsm slot", 2 * pixels);
         let cell_start = ctx.zeroed::<u32>("afsm cells", cells + 1);
         let samples = ctx.zeroed::<u32>("afsm samples", 1);
@@ -265,7 +280,7 @@ impl<'a> Izb<'a> {
         let items_total = ctx.zeroed::<u32>("afsm items total", 1);
         let setup = Kernel::new(
             ctx,
-            ctx.pipeline("afsm setup", &wgsl(include_str!("afsm/setup.wgsl"), true), "setup"),
+            ctx.pipeline("afsm setup", &compose(&[&SETUP]), "setup"),
             &[
                 &light_buf,
                 &fparams,
@@ -287,10 +302,10 @@ impl<'a> Izb<'a> {
         });
         let args = Kernel::new(
             ctx,
-            ctx.pipeline("afsm args", include_str!("afsm/args.wgsl"), "args_main"),
+            ctx.pipeline("afsm args", &compose(&[&ARGS]), "args_main"),
             &[&uparams, &items, &args_buf],
         );
-        let test = ctx.pipeline("afsm test", &wgsl(include_str!("afsm/test.wgsl"), false), "test");
+        let test = ctx.pipeline("afsm test", &compose(&[&TEST]), "test");
         let shadow = ctx.zeroed::<u32>("afsm shadow", pixels);
         let test_inputs = [
             fparams.clone(),

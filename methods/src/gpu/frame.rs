@@ -9,6 +9,7 @@
 
 use super::{
     raster::{rasterize, RasterJob},
+    shader::Part,
     GpuContext, GpuError,
 };
 use crate::{depth_map::LightDepthMap, frame::Frame, gbuffer::GBuffer};
@@ -17,8 +18,8 @@ use scenes::projection::{ProjectionKind, Projector};
 /// Name of the stage that renders the camera G-buffer on the GPU.
 pub use crate::registry::STAGE_GPU_GBUFFER;
 
-/// WGSL shared by the kernels: the projector in `f64`.
-pub const COMMON_WGSL: &str = include_str!("common.wgsl");
+/// WGSL shared by the kernels: the projector in `f64`, rays, near clipping, robust helpers.
+pub(crate) const COMMON: Part = Part::file("common.wgsl", include_str!("common.wgsl"));
 
 /// A projector as the 18 `f64` that `proj_load` in `common.wgsl` reads.
 pub fn projector_data(p: &Projector) -> [f64; 18] {

@@ -36,6 +36,7 @@ pub mod pan09;
 pub mod pcf;
 pub mod raster;
 mod scan;
+mod shader;
 pub mod sm;
 pub mod spsm;
 
@@ -49,7 +50,7 @@ fn twin_params(twin: &dyn ShadowMethod) -> serde_json::Map<String, serde_json::V
     m.insert("device".into(), "gpu".into());
     m
 }
-pub use frame::{GpuDepthMap, GpuFrame, COMMON_WGSL};
+pub use frame::{GpuDepthMap, GpuFrame};
 
 /// Why the GPU path could not run (no adapter, or an adapter that lacks what it needs).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -28,6 +28,7 @@
 //! count them (see [`super::sm`] for how).
 
 use super::{
+    shader::Part,
     sm::{counters_buffer, map_pipeline, pipeline, read_counters, Params, WORKGROUP},
     GpuContext, GpuDepthMap, GpuError, GpuFrame,
 };
@@ -43,13 +44,15 @@ use crate::{
 use glam::DVec2;
 use instrumentation::{Counters, Recorder};
 
-const JITTER_WGSL: &str = include_str!("pcf_jitter.wgsl");
-const REEVES_WGSL: &str = include_str!("pcf_reeves.wgsl");
-const GEMS_WGSL: &str = include_str!("pcf_gems.wgsl");
-const BS_ENCODE_WGSL: &str = include_str!("pcf_bs_encode.wgsl");
-const BS_PACK_WGSL: &str = include_str!("pcf_bs_pack.wgsl");
-const BS_PACK_FAST_WGSL: &str = include_str!("pcf_bs_pack_fast.wgsl");
-const BS_TEST_WGSL: &str = include_str!("pcf_bs_test.wgsl");
+const JITTER: Part = Part::file("pcf_jitter.wgsl", include_str!("pcf_jitter.wgsl"));
+const REEVES: Part =
+    Part { name: "pcf_reeves.wgsl", source: include_str!("pcf_reeves.wgsl"), needs: &[&JITTER] };
+const GEMS: Part = Part::file("pcf_gems.wgsl", include_str!("pcf_gems.wgsl"));
+const BS_ENCODE: Part = Part::file("pcf_bs_encode.wgsl", include_str!("pcf_bs_encode.wgsl"));
+const BS_PACK: Part = Part::file("pcf_bs_pack.wgsl", include_str!("pcf_bs_pack.wgsl"));
+const BS_PACK_FAST: Part =
+    Part::file("pcf_bs_pack_fast.wgsl", include_str!("pcf_bs_pack_fast.wgsl"));
+const BS_TEST: Part = Part::file("pcf_bs_test.wgsl", include_str!("pcf_bs_test.wgsl"));
 
 /// Runs a per-pixel kernel over `frame` with `buffers` bound after the uniform `params`, as
 /// the stage `stage`; returns the lit values and the counters. The kernel's last two
@@ -57,14 +60,14 @@ const BS_TEST_WGSL: &str = include_str!("pcf_bs_test.wgsl");
 fn per_pixel(
     ctx: &GpuContext,
     frame: &GpuFrame,
-    (label, source): (&str, &str),
+    (label, kernel): (&str, &Part),
     params: &Params,
     buffers: &[&wgpu::Buffer],
     stage: &str,
     rec: &mut Recorder,
 ) -> Result<(Vec<f32>, Counters), GpuError> {
     let n = frame.pixels();
-    let p = pipeline(ctx, label, source);
+    let p = pipeline(ctx, label, kernel);
     let uniform = ctx.uniform(label, params);
     let lit = ctx.zeroed::<f32>("lit", n);
     let counters = counters_buffer(ctx);
@@ -104,7 +107,7 @@ pub fn reeves(
     per_pixel(
         ctx,
         frame,
-        ("pcf-reeves", &format!("{JITTER_WGSL}{REEVES_WGSL}")),
+        ("pcf-reeves", &REEVES),
         &params,
         &buffers,
         crate::pcf_reeves::STAGE_FILTERING,
@@ -129,7 +132,7 @@ pub fn gems(
         ..Params::new(frame, map, tester)
     };
     let buffers = [&map.light, &frame.triangle, &frame.position, &frame.normal, &map.depth];
-    per_pixel(ctx, frame, ("pcf-gems", GEMS_WGSL), &params, &buffers, STAGE_FILTERING, rec)
+    per_pixel(ctx, frame, ("pcf-gems", &GEMS), &params, &buffers, STAGE_FILTERING, rec)
 }
 
 /// Brabec and Seidel's depth-as-colour ramp as the kernels read it: the
@@ -191,7 +194,7 @@ impl<'a> ShadowTest<'a> {
             ctx,
             frame,
             light,
-            pipeline: pipeline(ctx, variant.name(), BS_TEST_WGSL),
+            pipeline: pipeline(ctx, variant.name(), &BS_TEST),
             uniform: ctx.uniform("shadow test", &params),
             accumulator: ctx.zeroed::<u32>("accumulator", n),
             lit: ctx.zeroed::<f32>("lit", n),
@@ -248,13 +251,13 @@ fn bs_params(
 /// Runs a map kernel over `n` elements as the stage `stage`.
 fn map_kernel(
     ctx: &GpuContext,
-    (label, source): (&str, &str),
+    (label, kernel): (&str, &Part),
     buffers: &[&wgpu::Buffer],
     n: usize,
     stage: &str,
     rec: &mut Recorder,
 ) -> Result<(), GpuError> {
-    let p = map_pipeline(ctx, label, source);
+    let p = map_pipeline(ctx, label, kernel);
     let bind = ctx.bind(&p, buffers);
     ctx.stage(rec, stage, |e| {
         GpuContext::dispatch(e, &p, &bind, GpuContext::groups_1d(n, WORKGROUP))
@@ -279,7 +282,7 @@ pub fn bs_stratified(
     let packed = ctx.zeroed::<[u32; 4]>("packed", texels);
     let buffers =
         [&uniform, &maps[0].depth, &maps[1].depth, &maps[2].depth, &maps[3].depth, &packed];
-    map_kernel(ctx, ("texel packing", BS_PACK_WGSL), &buffers, texels, "texel packing", rec)?;
+    map_kernel(ctx, ("texel packing", &BS_PACK), &buffers, texels, "texel packing", rec)?;
     let test = ShadowTest::new(ctx, frame, &maps[0].light, Variant::Stratified2x2, &params);
     test.pass(&packed, "depth test", rec)?;
     test.finish()
@@ -315,7 +318,7 @@ pub fn bs_fast(
     let codes = ctx.zeroed::<u32>("codes", texels);
     map_kernel(
         ctx,
-        ("depth encoding", BS_ENCODE_WGSL),
+        ("depth encoding", &BS_ENCODE),
         &[&uniform, &map.depth, &codes],
         texels,
         "depth encoding",
@@ -338,7 +341,7 @@ pub fn bs_fast(
         let pack_uniform = ctx.uniform("texel packing", &pack_params);
         map_kernel(
             ctx,
-            ("texel packing", BS_PACK_FAST_WGSL),
+            ("texel packing", &BS_PACK_FAST),
             &[&pack_uniform, &codes, &packed],
             packed_texels,
             &packing,
@@ -489,7 +492,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             .iter()
             .flat_map(|&(seed, pixel, s, axis)| [seed as u32, (seed >> 32) as u32, pixel, s, axis])
             .collect();
-        let p = ctx.pipeline("jitter probe", &format!("{JITTER_WGSL}{probe}"), "main");
+        let p = ctx.pipeline(
+            "jitter probe",
+            &format!("{}{probe}", crate::gpu::shader::compose(&[&JITTER])),
+            "main",
+        );
         let input = ctx.upload("input", &input);
         let output = ctx.zeroed::<f64>("output", cases.len());
         let bind = ctx.bind(&p, &[&input, &output]);

@@ -16,7 +16,11 @@
 //! edges in fixed point, the CPU decides them exactly in `f64`) or a nearest-surface decision
 //! within `f32` depth precision; `tests/gpu/raster.rs` measures how many samples that touches.
 
-use super::{frame::projector_data, GpuContext, GpuError};
+use super::{
+    frame::{projector_data, COMMON},
+    shader::{compose, Part},
+    GpuContext, GpuError,
+};
 use crate::frame::Frame;
 use bytemuck::{Pod, Zeroable};
 use glam::DVec2;
@@ -24,7 +28,8 @@ use instrumentation::Recorder;
 use scenes::Projector;
 
 /// The kernels of `raster.wgsl`.
-const RASTER_WGSL: &str = include_str!("raster.wgsl");
+const RASTER: Part =
+    Part { name: "raster.wgsl", source: include_str!("raster.wgsl"), needs: &[&COMMON] };
 /// The render pass of `raster_draw.wgsl`.
 const DRAW_WGSL: &str = include_str!("raster_draw.wgsl");
 
@@ -49,7 +54,7 @@ pub(super) struct Params {
 super::layout::wgsl_mirror!(
     Params,
     "Params",
-    format!("{}{RASTER_WGSL}", crate::gpu::COMMON_WGSL),
+    compose(&[&RASTER]),
     [
         width,
         height,
@@ -148,7 +153,7 @@ pub fn rasterize(
         position: ctx.zeroed::<f64>("position", g(3 * samples)),
         normal: ctx.zeroed::<f64>("normal", g(3 * samples)),
     };
-    let source = format!("{}{RASTER_WGSL}", super::COMMON_WGSL);
+    let source = compose(&[&RASTER]);
     let kernels = ["setup", "project", "resolve"].map(|e| ctx.pipeline(e, &source, e));
     // Each entry point binds only what it uses; auto layouts drop the rest.
     let bind = |k: &wgpu::ComputePipeline, used: &[(u32, &wgpu::Buffer)]| {

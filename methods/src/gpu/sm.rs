@@ -13,9 +13,13 @@
 //! per workgroup and added into a 64-bit total (two `u32` words) on the GPU.
 //!
 //! The WGSL shared with the percentage-closer filtering kernels ([`super::pcf`]) is
-//! [`RECEIVER_WGSL`] (receiver, texel lookup, depth codes) and [`COUNTERS_WGSL`].
+//! [`RECEIVER`] (receiver, texel lookup, depth codes) and [`COUNTERS`].
 
-use super::{GpuContext, GpuDepthMap, GpuError, GpuFrame, COMMON_WGSL};
+use super::{
+    frame::COMMON,
+    shader::{compose, Part},
+    GpuContext, GpuDepthMap, GpuError, GpuFrame,
+};
 use crate::{
     depth_test::{DepthTester, MapOptions},
     frame::{Frame, STAGE_LIGHT_DEPTH_MAP},
@@ -25,13 +29,14 @@ use crate::{
 use bytemuck::{Pod, Zeroable};
 use instrumentation::{Counters, Recorder};
 
-/// WGSL of the receiver, the nearest-texel lookup and the depth codes (needs [`COMMON_WGSL`]).
-pub const RECEIVER_WGSL: &str = include_str!("receiver.wgsl");
+/// WGSL of the receiver, the nearest-texel lookup and the depth codes.
+pub(super) const RECEIVER: Part =
+    Part { name: "receiver.wgsl", source: include_str!("receiver.wgsl"), needs: &[&COMMON] };
 
 /// WGSL of the workgroup-summed 64-bit counters (`count(local, lookups, bilinear)`).
-pub const COUNTERS_WGSL: &str = include_str!("counters.wgsl");
+pub(super) const COUNTERS: Part = Part::file("counters.wgsl", include_str!("counters.wgsl"));
 
-const SM_WGSL: &str = include_str!("sm.wgsl");
+const SM: Part = Part::file("sm.wgsl", include_str!("sm.wgsl"));
 
 /// Threads per workgroup of the per-pixel kernels (`counters.wgsl` sums over one workgroup).
 pub(super) const WORKGROUP: u32 = 64;
@@ -70,7 +75,7 @@ pub(super) struct Params {
 super::layout::wgsl_mirror!(
     Params,
     "Params",
-    format!("{COMMON_WGSL}{RECEIVER_WGSL}"),
+    compose(&[&RECEIVER]),
     [
         constant,
         slope_bias,
@@ -115,14 +120,15 @@ impl Params {
     }
 }
 
-/// A compute pipeline of the per-pixel kernel `source` after the shared WGSL, counters included.
-pub(super) fn pipeline(ctx: &GpuContext, label: &str, source: &str) -> wgpu::ComputePipeline {
-    ctx.pipeline(label, &format!("{COMMON_WGSL}{RECEIVER_WGSL}{COUNTERS_WGSL}{source}"), "main")
+/// A compute pipeline of the per-pixel kernel `kernel` after the shared WGSL, counters
+/// included.
+pub(super) fn pipeline(ctx: &GpuContext, label: &str, kernel: &Part) -> wgpu::ComputePipeline {
+    ctx.pipeline(label, &compose(&[&RECEIVER, &COUNTERS, kernel]), "main")
 }
 
-/// A compute pipeline of the map kernel `source` (no counters) after the shared WGSL.
-pub(super) fn map_pipeline(ctx: &GpuContext, label: &str, source: &str) -> wgpu::ComputePipeline {
-    ctx.pipeline(label, &format!("{COMMON_WGSL}{RECEIVER_WGSL}{source}"), "main")
+/// A compute pipeline of the map kernel `kernel` (no counters) after the shared WGSL.
+pub(super) fn map_pipeline(ctx: &GpuContext, label: &str, kernel: &Part) -> wgpu::ComputePipeline {
+    ctx.pipeline(label, &compose(&[&RECEIVER, kernel]), "main")
 }
 
 /// The counters buffer the kernels add into: two 64-bit totals as `u32` words.
@@ -150,7 +156,7 @@ pub fn depth_test(
     debug_assert_eq!(NEAREST_REACH.x, NEAREST_REACH.y);
     let params = Params { reach: NEAREST_REACH.x, ..Params::new(frame, map, tester) };
     let n = frame.pixels();
-    let p = pipeline(ctx, "sm depth test", SM_WGSL);
+    let p = pipeline(ctx, "sm depth test", &SM);
     let uniform = ctx.uniform("sm params", &params);
     let lit = ctx.zeroed::<f32>("lit", n);
     let counters = counters_buffer(ctx);

@@ -58,7 +58,11 @@ mod silhouette;
 mod validity;
 mod visibility;
 
-use super::{GpuContext, GpuDepthMap, GpuError, GpuFrame, COMMON_WGSL};
+use super::{
+    frame::COMMON,
+    shader::{compose, Part},
+    GpuContext, GpuDepthMap, GpuError, GpuFrame,
+};
 use crate::{
     frame::Frame,
     method::{MethodError, ShadowMethod, Visibility},
@@ -73,10 +77,12 @@ use instrumentation::Recorder;
 use params::slot;
 use std::sync::{Arc, OnceLock};
 
-const LIB: &str = include_str!("pan09.wgsl");
-const PARAMS: &str = include_str!("params.wgsl");
-const COVERAGE: &str = include_str!("coverage.wgsl");
-const FACET_RECORD: &str = include_str!("facet_record.wgsl");
+/// The geometry shared by the stages, first in every stage's shader.
+const LIB: Part =
+    Part { name: "pan09/pan09.wgsl", source: include_str!("pan09.wgsl"), needs: &[&COMMON] };
+const PARAMS: Part = Part::file("pan09/params.wgsl", include_str!("params.wgsl"));
+const COVERAGE: Part = Part::file("pan09/coverage.wgsl", include_str!("coverage.wgsl"));
+const FACET_RECORD: Part = Part::file("pan09/facet_record.wgsl", include_str!("facet_record.wgsl"));
 
 /// The compiled kernels.
 #[derive(Debug)]
@@ -106,22 +112,25 @@ struct Kernels {
 
 impl Kernels {
     fn new(ctx: &GpuContext) -> Self {
-        let with = |parts: &[&str]| -> String {
-            std::iter::once(COMMON_WGSL)
-                .chain(std::iter::once(LIB))
-                .chain(parts.iter().copied())
-                .collect()
+        // A stage's shader: the shared geometry, the parts it needs, then its own file.
+        let with = |needs: &[&Part], name: &'static str, source: &'static str| -> String {
+            let own = Part::file(name, source);
+            let mut parts = vec![&LIB];
+            parts.extend_from_slice(needs);
+            parts.push(&own);
+            compose(&parts)
         };
-        let sat = with(&[include_str!("sat.wgsl")]);
-        let silhouette = with(&[PARAMS, include_str!("silhouette.wgsl")]);
-        let mask_map = with(&[PARAMS, include_str!("mask_map.wgsl")]);
-        let facets = with(&[PARAMS, include_str!("facets.wgsl")]);
-        let depth_test = with(&[PARAMS, include_str!("depth_test.wgsl")]);
-        let pt = with(&[FACET_RECORD, include_str!("pt_pairs.wgsl")]);
-        let tt = with(&[PARAMS, include_str!("tt_pairs.wgsl")]);
-        let visibility = with(&[PARAMS, COVERAGE, FACET_RECORD, include_str!("visibility.wgsl")]);
-        let validity = with(&[PARAMS, COVERAGE, FACET_RECORD, include_str!("validity.wgsl")]);
-        let ratio = with(&[PARAMS, COVERAGE, FACET_RECORD, include_str!("ratio.wgsl")]);
+        let evaluation: &[&Part] = &[&PARAMS, &COVERAGE, &FACET_RECORD];
+        let sat = with(&[], "pan09/sat.wgsl", include_str!("sat.wgsl"));
+        let silhouette = with(&[&PARAMS], "pan09/silhouette.wgsl", include_str!("silhouette.wgsl"));
+        let mask_map = with(&[&PARAMS], "pan09/mask_map.wgsl", include_str!("mask_map.wgsl"));
+        let facets = with(&[&PARAMS], "pan09/facets.wgsl", include_str!("facets.wgsl"));
+        let depth_test = with(&[&PARAMS], "pan09/depth_test.wgsl", include_str!("depth_test.wgsl"));
+        let pt = with(&[&FACET_RECORD], "pan09/pt_pairs.wgsl", include_str!("pt_pairs.wgsl"));
+        let tt = with(&[&PARAMS], "pan09/tt_pairs.wgsl", include_str!("tt_pairs.wgsl"));
+        let visibility = with(evaluation, "pan09/visibility.wgsl", include_str!("visibility.wgsl"));
+        let validity = with(evaluation, "pan09/validity.wgsl", include_str!("validity.wgsl"));
+        let ratio = with(evaluation, "pan09/ratio.wgsl", include_str!("ratio.wgsl"));
         let p = |label: &str, src: &str, entry: &str| ctx.pipeline(label, src, entry);
         Self {
             scan: crate::gpu::scan::Scan::new(ctx),

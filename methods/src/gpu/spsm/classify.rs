@@ -19,11 +19,15 @@
 //! `shadowed_by_neighbourhood`, `uncertain_pixels`, `shadow_map_lookups`; the handed-back
 //! pixels' counts are added by the CPU code that classifies them.
 
-use super::texel::{GpuTexels, Params, TEXEL_WGSL};
+use super::texel::{GpuTexels, Params, TEXEL};
 use crate::{
     depth_test::texel_at,
     frame::Frame,
-    gpu::{frame::projector_data, GpuContext, GpuError, GpuFrame, COMMON_WGSL},
+    gpu::{
+        frame::projector_data,
+        shader::{compose, Part},
+        GpuContext, GpuError, GpuFrame,
+    },
     spsm::{
         classify::{Lookup, PixelClass, UncertainPixel},
         texel::SpsmMap,
@@ -32,12 +36,13 @@ use crate::{
 };
 use instrumentation::{Counters, Recorder};
 
-const CLASSIFY_WGSL: &str = include_str!("classify.wgsl");
+const CLASSIFY: Part =
+    Part { name: "spsm/classify.wgsl", source: include_str!("classify.wgsl"), needs: &[&TEXEL] };
 
 crate::gpu::layout::wgsl_mirror!(
     Params,
     "Params",
-    format!("{COMMON_WGSL}{TEXEL_WGSL}{CLASSIFY_WGSL}"),
+    compose(&[&CLASSIFY]),
     [
         constant,
         z_lo,
@@ -88,11 +93,7 @@ pub fn classify(
     let map: &SpsmMap = lookup.map;
     let n = gframe.pixels();
     let params = Params { pixels: n as u32, ..texels.params };
-    let p = ctx.pipeline(
-        "spsm classification",
-        &format!("{COMMON_WGSL}{TEXEL_WGSL}{CLASSIFY_WGSL}"),
-        "main",
-    );
+    let p = ctx.pipeline("spsm classification", &compose(&[&CLASSIFY]), "main");
     let uniform = ctx.uniform("spsm params", &params);
     let light = ctx.upload("spsm light", &projector_data(&lookup.tester.projector));
     let result = ctx.zeroed::<u32>("spsm classes", 2 * n.max(1));

@@ -7,15 +7,23 @@
 //!
 //! [`consistent_min_depth`]: crate::spsm::depth::consistent_min_depth
 
-use super::texel::{GpuTexels, Params, TEXEL_WGSL};
+use super::texel::{GpuTexels, Params, TEXEL};
 use crate::{
-    gpu::{GpuContext, GpuError, COMMON_WGSL},
+    gpu::{
+        shader::{compose, Part},
+        GpuContext, GpuError,
+    },
     spsm::{classify::UncertainPixel, depth::ConsistentDepths, STAGE_CONSISTENT_DEPTH},
 };
 use instrumentation::Recorder;
 
-const MARK_WGSL: &str = include_str!("depth_mark.wgsl");
-const DEPTH_WGSL: &str = include_str!("depth.wgsl");
+const MARK: Part = Part {
+    name: "spsm/depth_mark.wgsl",
+    source: include_str!("depth_mark.wgsl"),
+    needs: &[&TEXEL],
+};
+const DEPTH: Part =
+    Part { name: "spsm/depth.wgsl", source: include_str!("depth.wgsl"), needs: &[&TEXEL] };
 
 /// The stage [`STAGE_CONSISTENT_DEPTH`] on the GPU: the consistent minimum depths of the
 /// texels around the `uncertain` pixels of the map in `texels`, and the number of texels the
@@ -30,16 +38,8 @@ pub fn consistent_depths(
     let n = res * res;
     let centres: Vec<u32> = uncertain.iter().map(|u| u.texel).collect();
     let params = Params { count: centres.len() as u32, ..texels.params };
-    let mark = ctx.pipeline(
-        "spsm consistent depth marks",
-        &format!("{COMMON_WGSL}{TEXEL_WGSL}{MARK_WGSL}"),
-        "main",
-    );
-    let depth = ctx.pipeline(
-        "spsm consistent depth",
-        &format!("{COMMON_WGSL}{TEXEL_WGSL}{DEPTH_WGSL}"),
-        "main",
-    );
+    let mark = ctx.pipeline("spsm consistent depth marks", &compose(&[&MARK]), "main");
+    let depth = ctx.pipeline("spsm consistent depth", &compose(&[&DEPTH]), "main");
     let uniform = ctx.uniform("spsm depth params", &params);
     let centre_buf = ctx.upload("spsm centres", &[centres.as_slice(), &[0]].concat());
     let marks = ctx.zeroed::<u32>("spsm texel marks", n);

@@ -4,7 +4,7 @@
 //! them with (`texel.wgsl`, the twin of [`SpsmMap::get`]).
 
 use crate::{
-    gpu::GpuContext,
+    gpu::{frame::COMMON, shader::Part, GpuContext},
     spsm::{
         classify::Lookup,
         quantize::DerivativeCode,
@@ -13,8 +13,9 @@ use crate::{
 };
 use bytemuck::{Pod, Zeroable};
 
-/// WGSL of the texel decoding (needs `COMMON_WGSL` before it).
-pub(super) const TEXEL_WGSL: &str = include_str!("texel.wgsl");
+/// WGSL of the texel decoding.
+pub(super) const TEXEL: Part =
+    Part { name: "spsm/texel.wgsl", source: include_str!("texel.wgsl"), needs: &[&COMMON] };
 
 /// The kernels' uniform parameters; the WGSL `Params` of `texel.wgsl`, field for field
 /// (checked with the classification's shader, in `classify.rs`; see `gpu::layout`).
