@@ -103,7 +103,7 @@ pub fn reeves(
         ..Params::new(frame, map, tester)
     };
     let buffers =
-        [&frame.camera, &map.light, &frame.triangle, &frame.position, &frame.normal, &map.depth];
+        [&map.light, &frame.triangle, &frame.position, &frame.normal, &frame.camera, &map.depth];
     per_pixel(
         ctx,
         frame,

@@ -1,12 +1,7 @@
 // pcf-gems16 / pcf-gems4: GPU Gems' 4x4-region percentage-closer filtering with bilinear
-// lookups (pcf_gems::bilinear_pcf, pcf_gems::filter), one thread a pixel. Needs common.wgsl,
-// receiver.wgsl and counters.wgsl before it.
+// lookups (pcf_gems::bilinear_pcf, pcf_gems::filter), one thread a pixel. After pixel.wgsl (its
+// bindings 0 to 4) and counters.wgsl.
 
-@group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var<storage, read> light: array<f64, 18>;
-@group(0) @binding(2) var<storage, read> g_triangle: array<u32>;
-@group(0) @binding(3) var<storage, read> g_position: array<f64>;
-@group(0) @binding(4) var<storage, read> g_normal: array<f64>;
 @group(0) @binding(5) var<storage, read> map_depth: array<f64>;
 @group(0) @binding(6) var<storage, read_write> lit: array<f32>;
 @group(0) @binding(7) var<storage, read_write> counters: array<atomic<u32>, 4>;
@@ -56,42 +51,38 @@ fn main(
     @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) local: u32,
 ) {
-    let k = gid.x + gid.y * (groups.x * 64u);
+    let k = pixel_index(gid, groups);
     var compares = 0u;
     var lookups = 0u;
     if k < params.pixels {
         var v = 1.0lf;
-        if g_triangle[k] != NO_TRIANGLE {
-            let p = vec3<f64>(g_position[3u * k], g_position[3u * k + 1u], g_position[3u * k + 2u]);
-            let n = vec3<f64>(g_normal[3u * k], g_normal[3u * k + 1u], g_normal[3u * k + 2u]);
-            let r = receiver(proj_load(light), p, n, params.max_slope);
-            if r.ok {
-                let tol = tolerance(params, r, vec2<f64>(params.reach, params.reach));
-                var sum = 0.0lf;
-                if params.dithered == 0u {
-                    // pcf_gems::OFFSETS_16, row by row.
-                    for (var s = 0u; s < 16u; s++) {
-                        let o = vec2<f64>(-1.5lf + f64(s % 4u), -1.5lf + f64(s / 4u));
-                        let f = bilinear_pcf(r.xy + o, r.depth, tol);
-                        sum += f.lit;
-                        compares += f.compares;
-                    }
-                    v = sum / 16.0lf;
-                    lookups = 16u;
-                } else {
-                    // pcf_gems::dither_offset of pixel (x, y).
-                    let x = k % params.width;
-                    let y = k / params.width;
-                    let ox = x % 2u;
-                    let d = vec2<f64>(f64(ox), f64((y % 2u) ^ ox));
-                    for (var s = 0u; s < 4u; s++) {
-                        let f = bilinear_pcf(r.xy + (OFFSETS_4[s] + d), r.depth, tol);
-                        sum += f.lit;
-                        compares += f.compares;
-                    }
-                    v = sum / 4.0lf;
-                    lookups = 4u;
+        let r = pixel_receiver(k);
+        if r.ok {
+            let tol = tolerance(params, r, vec2<f64>(params.reach, params.reach));
+            var sum = 0.0lf;
+            if params.dithered == 0u {
+                // pcf_gems::OFFSETS_16, row by row.
+                for (var s = 0u; s < 16u; s++) {
+                    let o = vec2<f64>(-1.5lf + f64(s % 4u), -1.5lf + f64(s / 4u));
+                    let f = bilinear_pcf(r.xy + o, r.depth, tol);
+                    sum += f.lit;
+                    compares += f.compares;
                 }
+                v = sum / 16.0lf;
+                lookups = 16u;
+            } else {
+                // pcf_gems::dither_offset of pixel (x, y).
+                let x = k % params.width;
+                let y = k / params.width;
+                let ox = x % 2u;
+                let d = vec2<f64>(f64(ox), f64((y % 2u) ^ ox));
+                for (var s = 0u; s < 4u; s++) {
+                    let f = bilinear_pcf(r.xy + (OFFSETS_4[s] + d), r.depth, tol);
+                    sum += f.lit;
+                    compares += f.compares;
+                }
+                v = sum / 4.0lf;
+                lookups = 4u;
             }
         }
         lit[k] = f32(v);

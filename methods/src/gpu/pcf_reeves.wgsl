@@ -1,13 +1,8 @@
 // pcf-reeves: Reeves et al.'s stochastic percentage-closer filtering (pcf_reeves::footprint,
-// pcf_reeves::filter), one thread a pixel. Needs common.wgsl, receiver.wgsl, counters.wgsl
-// and pcf_jitter.wgsl before it.
+// pcf_reeves::filter), one thread a pixel. After pixel.wgsl (its bindings 0 to 4),
+// counters.wgsl and pcf_jitter.wgsl.
 
-@group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var<storage, read> camera: array<f64, 18>;
-@group(0) @binding(2) var<storage, read> light: array<f64, 18>;
-@group(0) @binding(3) var<storage, read> g_triangle: array<u32>;
-@group(0) @binding(4) var<storage, read> g_position: array<f64>;
-@group(0) @binding(5) var<storage, read> g_normal: array<f64>;
+@group(0) @binding(5) var<storage, read> camera: array<f64, 18>;
 @group(0) @binding(6) var<storage, read> map_depth: array<f64>;
 @group(0) @binding(7) var<storage, read_write> lit: array<f32>;
 @group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>, 4>;
@@ -86,21 +81,20 @@ fn main(
     @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) local: u32,
 ) {
-    let k = gid.x + gid.y * (groups.x * 64u);
+    let k = pixel_index(gid, groups);
     var compares = 0u;
     if k < params.pixels {
         var v = 1.0lf;
-        if g_triangle[k] != NO_TRIANGLE {
-            let p = vec3<f64>(g_position[3u * k], g_position[3u * k + 1u], g_position[3u * k + 2u]);
-            let n = vec3<f64>(g_normal[3u * k], g_normal[3u * k + 1u], g_normal[3u * k + 2u]);
-            let lp = proj_load(light);
-            let r = receiver(lp, p, n, params.max_slope);
-            if r.ok {
-                let fp = footprint(proj_load(camera), lp, k % params.width, k / params.width, p, n, r.xy);
-                let f = reeves_filter(r, fp, k);
-                v = f.lit;
-                compares = f.compares;
-            }
+        let r = pixel_receiver(k);
+        if r.ok {
+            let x = k % params.width;
+            let y = k / params.width;
+            let p = pixel_position(k);
+            let n = pixel_normal(k);
+            let fp = footprint(proj_load(camera), proj_load(light), x, y, p, n, r.xy);
+            let f = reeves_filter(r, fp, k);
+            v = f.lit;
+            compares = f.compares;
         }
         lit[k] = f32(v);
     }

@@ -36,6 +36,11 @@ pub(super) const RECEIVER: Part =
 /// WGSL of the workgroup-summed 64-bit counters (`count(local, lookups, bilinear)`).
 pub(super) const COUNTERS: Part = Part::file("counters.wgsl", include_str!("counters.wgsl"));
 
+/// WGSL of the per-pixel kernels' first bindings (0 to 4: parameters, light, G-buffer) and
+/// their receiver, shared by `sm` and the PCF filters.
+pub(super) const PIXEL: Part =
+    Part { name: "pixel.wgsl", source: include_str!("pixel.wgsl"), needs: &[&RECEIVER] };
+
 const SM: Part = Part::file("sm.wgsl", include_str!("sm.wgsl"));
 
 /// Threads per workgroup of the per-pixel kernels (`counters.wgsl` sums over one workgroup).
@@ -120,10 +125,10 @@ impl Params {
     }
 }
 
-/// A compute pipeline of the per-pixel kernel `kernel` after the shared WGSL, counters
-/// included.
+/// A compute pipeline of the per-pixel kernel `kernel` after the shared prologue
+/// (`pixel.wgsl`) and the counters.
 pub(super) fn pipeline(ctx: &GpuContext, label: &str, kernel: &Part) -> wgpu::ComputePipeline {
-    ctx.pipeline(label, &compose(&[&RECEIVER, &COUNTERS, kernel]), "main")
+    ctx.pipeline(label, &compose(&[&PIXEL, &COUNTERS, kernel]), "main")
 }
 
 /// A compute pipeline of the map kernel `kernel` (no counters) after the shared WGSL.
