@@ -144,3 +144,65 @@ fn gpu_spsm_runs_end_to_end() {
         eprintln!("end to end {}: {differing} pixels differ from the CPU's run", texel.name());
     }
 }
+
+/// Stage 1 on the GPU, conservative rasterization, against the twin's: the same triangle and
+/// the same minimum conservative depth (bit for bit) in every texel, and the same counters,
+/// at maps 256 and 1024 on the parity scenes (spot-spheres: a spot light, clipped
+/// triangles).
+#[test]
+fn gpu_parity_conservative_rasterization_texel_for_texel() {
+    use methods::{gpu::spsm::raster as gpu_raster, spsm::raster, spsm::texel::LightSpace};
+    let ctx = GpuContext::shared().expect("a GPU adapter (Mesa's lavapipe on CI)");
+    for name in ["plane-square", "cage", "random-10k", "bumpy", "spot-spheres"] {
+        let Some(scene) = load_builtin(name) else { continue };
+        let frame = Frame::new(&scene, 64, 48, &mut Recorder::default());
+        for res in [256, 1024] {
+            let light = frame.light_projector(res);
+            let space = LightSpace::new(&light, frame.light_depth_bounds(&light));
+            let caster = |t| frame.is_caster(t);
+            let mut cpu_counters = Default::default();
+            let cpu = raster::rasterize_conservative(
+                &frame.geometry,
+                caster,
+                &light,
+                &space,
+                &mut cpu_counters,
+            );
+            let mut rec = Recorder::default();
+            let (gpu, counts) = gpu_raster::rasterize_conservative(
+                ctx,
+                &frame.geometry,
+                caster,
+                &light,
+                &space,
+                "conservative rasterization",
+                &mut rec,
+            )
+            .expect("GPU conservative rasterization");
+            let texels = cpu.texel.iter().zip(&gpu.texel).filter(|(a, b)| a != b).count();
+            let depths = cpu
+                .depth
+                .iter()
+                .zip(&gpu.depth)
+                .filter(|(a, b)| a.to_bits() != b.to_bits())
+                .count();
+            let covered = cpu.texel.iter().filter(|&&t| t != raster::NONE).count();
+            eprintln!(
+                "{name} map {res}: {covered} texels covered, {texels} triangles and {depths} \
+                 depths differ, {} undecided",
+                counts.undecided
+            );
+            assert!(covered > 0, "{name}: nothing rasterized");
+            assert_eq!((texels, depths), (0, 0), "{name} map {res}: texels differ");
+            assert_eq!(gpu.setups, cpu.setups);
+            let got = (rec.counters.triangles_rasterized, counts.tested, counts.fragments);
+            let want = (
+                cpu_counters.triangles_rasterized,
+                cpu_counters.raster_samples_tested,
+                cpu_counters.conservative_fragments,
+            );
+            assert_eq!(got, want, "{name} map {res}: triangles, texels tested, fragments");
+            assert_eq!(rec.stages.stages.len(), 1, "one stage: {:?}", rec.stages.stages);
+        }
+    }
+}

@@ -207,10 +207,7 @@ pub(crate) fn build_map(
     frame: &Frame<'_>,
     rec: &mut Recorder,
 ) -> (texel::SpsmMap, DepthTester, texel::LightSpace) {
-    let projector = frame.light_projector(o.map.map_res);
-    let space = texel::LightSpace::new(&projector, frame.light_depth_bounds(&projector));
-    let tester = DepthTester::new(&o.map, projector, frame.light_depth_range(&projector));
-
+    let (projector, space, tester) = map_frame(o, frame);
     let raster = rec.stages.time(STAGE_RASTER, || {
         raster::rasterize_conservative(
             &frame.geometry,
@@ -220,6 +217,27 @@ pub(crate) fn build_map(
             &mut rec.counters,
         )
     });
+    (pack(o, raster, space, rec), tester, space)
+}
+
+/// The map's light projector, its light space and the depth tester of `o` on `frame`.
+pub(crate) fn map_frame(
+    o: &SpsmOptions,
+    frame: &Frame<'_>,
+) -> (scenes::Projector, texel::LightSpace, DepthTester) {
+    let projector = frame.light_projector(o.map.map_res);
+    let space = texel::LightSpace::new(&projector, frame.light_depth_bounds(&projector));
+    let tester = DepthTester::new(&o.map, projector, frame.light_depth_range(&projector));
+    (projector, space, tester)
+}
+
+/// Stage 2, packing of the conservatively rasterized map `raster`.
+pub(crate) fn pack(
+    o: &SpsmOptions,
+    raster: raster::ConservativeMap,
+    space: texel::LightSpace,
+    rec: &mut Recorder,
+) -> texel::SpsmMap {
     let (map, packed, clamped) = rec
         .stages
         .time(STAGE_PACKING, || texel::pack_map(&raster, space, o.texel, o.derivative_power));
@@ -231,7 +249,7 @@ pub(crate) fn build_map(
              (clamped)"
         ));
     }
-    (map, tester, space)
+    map
 }
 
 /// Stages 4 to 6 after classification: consistent min depth, silhouette recovery and

@@ -185,6 +185,30 @@ pub fn setup(
     ([first, second], count - 2)
 }
 
+/// The prepared triangles of the scene triangles `include` selects, in scene order, and the
+/// texel rectangle each one's bounding box meets (`[x0, x1, y0, y1]`, `None` off the map);
+/// counts the triangles offered as `triangles_rasterized`. Shared with the GPU's twin.
+pub fn prepare(
+    geometry: &Geometry,
+    include: impl Fn(usize) -> bool + Sync,
+    proj: &Projector,
+    space: &LightSpace,
+    counters: &mut Counters,
+) -> (Vec<TriSetup>, Vec<Option<[usize; 4]>>) {
+    let res = proj.width as usize;
+    let offered: Vec<usize> = (0..geometry.len()).into_par_iter().filter(|&t| include(t)).collect();
+    counters.triangles_rasterized += offered.len() as u64;
+    let setups: Vec<TriSetup> = offered
+        .par_iter()
+        .flat_map_iter(|&t| {
+            let (pair, n) = setup(geometry, t, proj, space);
+            pair.into_iter().take(n).flatten()
+        })
+        .collect();
+    let bounds = setups.par_iter().map(|s| s.bounds(res)).collect();
+    (setups, bounds)
+}
+
 /// The conservatively rasterized map: per texel, the index of the kept triangle in
 /// [`setups`](Self::setups) and its minimum conservative depth.
 #[derive(Debug, Clone, PartialEq)]
@@ -219,16 +243,7 @@ pub fn rasterize_conservative(
     counters: &mut Counters,
 ) -> ConservativeMap {
     let res = proj.width as usize;
-    let offered: Vec<usize> = (0..geometry.len()).into_par_iter().filter(|&t| include(t)).collect();
-    counters.triangles_rasterized += offered.len() as u64;
-    let setups: Vec<TriSetup> = offered
-        .par_iter()
-        .flat_map_iter(|&t| {
-            let (pair, n) = setup(geometry, t, proj, space);
-            pair.into_iter().take(n).flatten()
-        })
-        .collect();
-    let bounds: Vec<Option<[usize; 4]>> = setups.par_iter().map(|s| s.bounds(res)).collect();
+    let (setups, bounds) = prepare(geometry, include, proj, space, counters);
 
     let bands = res.div_ceil(BAND_ROWS).max(1);
     let mut bins: Vec<Vec<u32>> = vec![Vec::new(); bands];

@@ -4,8 +4,11 @@
 //!
 //! Stages, named as the twin's:
 //!
-//! 1. **conservative rasterization** and 2. **packing** (sections 3.2 to 3.4): on the CPU,
-//!    by the twin's code, so the GPU reads the twin's texels bit for bit.
+//! 1. **conservative rasterization** (section 3.2): on the GPU ([`raster`]), texel for texel
+//!    the twin's map (triangle and minimum conservative depth), the triangles prepared by the
+//!    twin's code; overlaps the `f64` filter cannot decide are handed back to it.
+//! 2. **packing** (sections 3.3 and 3.4): on the CPU, by the twin's code, so the GPU reads
+//!    the twin's texels bit for bit.
 //! 3. **classification** (section 4.1, Algorithm 1): on the GPU ([`classify`]), one thread a
 //!    pixel, decoding the packed or `f32` texels in `f64` as the twin does; pixels whose exact
 //!    containment test the `f64` filter cannot decide are handed back to the twin's code.
@@ -22,6 +25,7 @@
 
 pub mod classify;
 pub mod depth;
+pub mod raster;
 pub mod texel;
 
 use crate::{
@@ -54,12 +58,31 @@ pub fn shade(
     rec: &mut Recorder,
 ) -> Result<Shaded, MethodError> {
     let sample_pattern = options.validate()?;
-    let (map, tester, space) = spsm::build_map(options, frame, rec);
+    let (projector, space, tester) = spsm::map_frame(options, frame);
+    let (raster, counts) = raster::rasterize_conservative(
+        ctx,
+        &frame.geometry,
+        |t| frame.is_caster(t),
+        &projector,
+        &space,
+        spsm::STAGE_RASTER,
+        rec,
+    )?;
+    rec.counters.raster_samples_tested += counts.tested;
+    rec.counters.conservative_fragments += counts.fragments;
+    if counts.undecided > 0 {
+        rec.notes.push(format!(
+            "{} texel-triangle pairs of the conservative rasterization decided by the CPU code \
+             (overlap undecided by the f64 filter)",
+            counts.undecided
+        ));
+    }
+    let map = spsm::pack(options, raster, space, rec);
     let lookup = spsm::classify::Lookup { map: &map, tester, space };
     let texels = texel::GpuTexels::upload(ctx, &lookup);
     rec.notes.push(
-        "spsm on the GPU: classification and consistent min depth run on the GPU; conservative \
-         rasterization, packing, silhouette recovery and antialiasing run the CPU twin's code"
+        "spsm on the GPU: conservative rasterization, classification and consistent min depth \
+         run on the GPU; packing, silhouette recovery and antialiasing run the CPU twin's code"
             .into(),
     );
     let mut c = classify::classify(ctx, gframe, frame, &lookup, &texels, rec)?;
@@ -91,7 +114,8 @@ pub fn shade(
     Ok(Shaded { visibility, classes: c.classes, handed_back: c.handed_back })
 }
 
-/// The sub-pixel shadow map with classification and consistent min depth on the GPU; the twin of [`Spsm`].
+/// The sub-pixel shadow map with conservative rasterization, classification and consistent
+/// min depth on the GPU; the twin of [`Spsm`].
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct GpuSpsm {
     /// Options, as the twin's.
