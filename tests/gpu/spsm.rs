@@ -206,3 +206,62 @@ fn gpu_parity_conservative_rasterization_texel_for_texel() {
         }
     }
 }
+
+/// Stage 2 on the GPU, packing, against the twin's: every texel's bits equal, in both
+/// formats, with the twin's conservative map as input, at maps 256 and 1024 (spot-spheres:
+/// derivative codes taken per texel at the decoded depth).
+#[test]
+fn gpu_parity_packing_texel_for_texel() {
+    use methods::{
+        gpu::spsm::pack as gpu_pack,
+        spsm::{quantize::DEFAULT_POWER, raster, texel},
+    };
+    let ctx = GpuContext::shared().expect("a GPU adapter (Mesa's lavapipe on CI)");
+    let bits = |m: &texel::SpsmMap| -> Vec<u32> {
+        match &m.texels {
+            texel::Texels::Packed(w, _) => w.iter().flatten().copied().collect(),
+            texel::Texels::F32(t) => t
+                .iter()
+                .flat_map(|x| {
+                    let [a, b, c] = x.v;
+                    [a[0], a[1], b[0], b[1], c[0], c[1], x.z, x.dz[0], x.dz[1]].map(f32::to_bits)
+                })
+                .collect(),
+        }
+    };
+    for name in ["plane-square", "cage", "random-10k", "bumpy", "spot-spheres"] {
+        let Some(scene) = load_builtin(name) else { continue };
+        let frame = Frame::new(&scene, 64, 48, &mut Recorder::default());
+        for res in [256, 1024] {
+            let light = frame.light_projector(res);
+            let space = texel::LightSpace::new(&light, frame.light_depth_bounds(&light));
+            let caster = |t| frame.is_caster(t);
+            let map = raster::rasterize_conservative(
+                &frame.geometry,
+                caster,
+                &light,
+                &space,
+                &mut Default::default(),
+            );
+            for format in [TexelFormat::Packed, TexelFormat::F32] {
+                let cpu = texel::pack_map(&map, space, format, DEFAULT_POWER);
+                let mut rec = Recorder::default();
+                let gpu = gpu_pack::pack_map(
+                    ctx,
+                    &map,
+                    space,
+                    format,
+                    DEFAULT_POWER,
+                    "packing",
+                    &mut rec,
+                )
+                .expect("GPU packing");
+                let (c, g) = (bits(&cpu.0), bits(&gpu.0));
+                let differing = c.iter().zip(&g).filter(|(a, b)| a != b).count();
+                eprintln!("{name} map {res} {format:?}: {differing} of {} words differ", c.len());
+                assert_eq!((g.len(), differing), (c.len(), 0), "{name} map {res} {format:?}");
+                assert_eq!((gpu.1, gpu.2), (cpu.1, cpu.2), "filled and clamped texels");
+            }
+        }
+    }
+}

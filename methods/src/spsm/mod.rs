@@ -242,6 +242,12 @@ pub(crate) fn pack(
         .stages
         .time(STAGE_PACKING, || texel::pack_map(&raster, space, o.texel, o.derivative_power));
     drop(raster);
+    record_packing(packed, clamped, rec);
+    map
+}
+
+/// The packing's counter (`packed` texels filled) and its note on the `clamped` ones.
+pub(crate) fn record_packing(packed: u64, clamped: u64, rec: &mut Recorder) {
     rec.counters.packed_texels += packed;
     if clamped > 0 {
         rec.notes.push(format!(
@@ -249,7 +255,6 @@ pub(crate) fn pack(
              (clamped)"
         ));
     }
-    map
 }
 
 /// Stages 4 to 6 after classification: consistent min depth, silhouette recovery and

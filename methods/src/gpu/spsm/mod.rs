@@ -7,8 +7,9 @@
 //! 1. **conservative rasterization** (section 3.2): on the GPU ([`raster`]), texel for texel
 //!    the twin's map (triangle and minimum conservative depth), the triangles prepared by the
 //!    twin's code; overlaps the `f64` filter cannot decide are handed back to it.
-//! 2. **packing** (sections 3.3 and 3.4): on the CPU, by the twin's code, so the GPU reads
-//!    the twin's texels bit for bit.
+//! 2. **packing** (sections 3.3 and 3.4): on the GPU ([`pack`]), texel for texel the twin's
+//!    bits in both formats; read back for the CPU stages, and uploaded again for the
+//!    classification (a copy a later change can spare).
 //! 3. **classification** (section 4.1, Algorithm 1): on the GPU ([`classify`]), one thread a
 //!    pixel, decoding the packed or `f32` texels in `f64` as the twin does; pixels whose exact
 //!    containment test the `f64` filter cannot decide are handed back to the twin's code.
@@ -25,6 +26,7 @@
 
 pub mod classify;
 pub mod depth;
+pub mod pack;
 pub mod raster;
 pub mod texel;
 
@@ -77,12 +79,22 @@ pub fn shade(
             counts.undecided
         ));
     }
-    let map = spsm::pack(options, raster, space, rec);
+    let (map, packed, clamped) = pack::pack_map(
+        ctx,
+        &raster,
+        space,
+        options.texel,
+        options.derivative_power,
+        spsm::STAGE_PACKING,
+        rec,
+    )?;
+    drop(raster);
+    spsm::record_packing(packed, clamped, rec);
     let lookup = spsm::classify::Lookup { map: &map, tester, space };
     let texels = texel::GpuTexels::upload(ctx, &lookup);
     rec.notes.push(
-        "spsm on the GPU: conservative rasterization, classification and consistent min depth \
-         run on the GPU; packing, silhouette recovery and antialiasing run the CPU twin's code"
+        "spsm on the GPU: conservative rasterization, packing, classification and consistent \
+         min depth run on the GPU; silhouette recovery and antialiasing run the CPU twin's code"
             .into(),
     );
     let mut c = classify::classify(ctx, gframe, frame, &lookup, &texels, rec)?;

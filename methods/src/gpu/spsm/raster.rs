@@ -29,6 +29,18 @@ const RASTER: Part = Part::file("spsm/raster.wgsl", include_str!("raster.wgsl"))
 /// `f64` per prepared triangle in `raster.wgsl`.
 const SETUP_F: usize = 13;
 
+/// The prepared triangles as the kernels read them (`SETUP_F` `f64` each: the vertices, their
+/// depths, the depth gradient, the least and largest vertex depth).
+pub(super) fn setup_data(setups: &[TriSetup]) -> Vec<f64> {
+    let mut out = Vec::with_capacity(SETUP_F * setups.len());
+    for s in setups {
+        out.extend(s.v.iter().flat_map(|v| [v.x, v.y]));
+        out.extend_from_slice(&s.z);
+        out.extend_from_slice(&[s.dz.x, s.dz.y, s.z_min, s.z_max]);
+    }
+    out
+}
+
 /// What [`rasterize_conservative`] gives beside the map.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct RasterCounts {
@@ -54,13 +66,10 @@ pub fn rasterize_conservative(
 ) -> Result<(ConservativeMap, RasterCounts), GpuError> {
     let res = proj.width as usize;
     let (setups, bounds) = prepare(geometry, include, proj, space, &mut rec.counters);
-    let mut setup_f = Vec::with_capacity(SETUP_F * setups.len());
+    let setup_f = setup_data(&setups);
     let mut cols = Vec::with_capacity(2 * setups.len());
     let mut items: Vec<u32> = Vec::new();
-    for (i, (s, b)) in setups.iter().zip(&bounds).enumerate() {
-        setup_f.extend(s.v.iter().flat_map(|v| [v.x, v.y]));
-        setup_f.extend_from_slice(&s.z);
-        setup_f.extend_from_slice(&[s.dz.x, s.dz.y, s.z_min, s.z_max]);
+    for (i, b) in bounds.iter().enumerate() {
         let [x0, x1, y0, y1] = b.map_or([1, 0, 1, 0], |b| b.map(|v| v as u32));
         cols.extend_from_slice(&[x0, x1]);
         for y in y0..=y1 {

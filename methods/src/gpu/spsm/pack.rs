@@ -1,0 +1,109 @@
+//! Stage "packing" of `spsm` on the GPU (`pack.wgsl`), equal to
+//! [`spsm::texel::pack_map`] texel for texel, in both texel formats.
+//!
+//! What depends on the triangle only (its three vertex words, whether a vertex was clamped,
+//! and, under an orthographic light, its derivative codes) is computed per prepared triangle
+//! by the twin's own [`Packer::pack_triangle`]; everything per texel runs on the GPU: the depth
+//! at the texel's centre and its 16-bit code (rounded half away from zero, as `f64::round`),
+//! the derivative codes at the decoded depth under a spot light (through the code's
+//! thresholds, [`encode_thresholds`]), or the `f32` texel. The texels are read back: the
+//! recovery and antialiasing stages on the CPU read the map too.
+
+use super::{raster::setup_data, texel::encode_thresholds};
+use crate::{
+    gpu::{
+        shader::{compose, Part},
+        GpuContext, GpuError,
+    },
+    spsm::{
+        quantize::DerivativeCode,
+        raster::{ConservativeMap, NONE},
+        texel::{F32Texel, LightSpace, Packer, SpsmMap, TexelFormat, Texels},
+    },
+};
+use instrumentation::Recorder;
+
+const PACK: Part = Part::file("spsm/pack.wgsl", include_str!("pack.wgsl"));
+
+/// The map of `raster` in `format` with derivative exponent `power`, as the twin's
+/// `pack_map` gives it: the map, the texels filled and those holding a clamped vertex. The
+/// GPU pass is recorded as the stage `stage`.
+pub fn pack_map(
+    ctx: &GpuContext,
+    raster: &ConservativeMap,
+    space: LightSpace,
+    format: TexelFormat,
+    power: u32,
+    stage: &str,
+    rec: &mut Recorder,
+) -> Result<(SpsmMap, u64, u64), GpuError> {
+    let texels = raster.texel.len();
+    let packer = Packer { space, code: DerivativeCode::new(power) };
+    let packed = format == TexelFormat::Packed;
+    // Per triangle: its words and codes (packed texels), and whether a vertex was clamped.
+    let (tri_words, clamped): (Vec<u32>, Vec<bool>) = if packed {
+        raster
+            .setups
+            .iter()
+            .map(|s| {
+                let t = packer.pack_triangle(&s.v, s.dz);
+                let codes = t.codes.map_or(u32::MAX, |(x, y)| u32::from(x) << 8 | u32::from(y));
+                let [a, b, c] = t.words;
+                ([a, b, c, codes], t.clamped)
+            })
+            .fold((Vec::new(), Vec::new()), |(mut w, mut c), (words, clamped)| {
+                w.extend_from_slice(&words);
+                c.push(clamped);
+                (w, c)
+            })
+    } else {
+        (vec![0], vec![false; raster.setups.len()])
+    };
+    let size = space.slope_scale(-1.0);
+    let thresholds = encode_thresholds(&packer.code);
+    let source = compose(&[&PACK]);
+    let entry = if packed { "pack_packed" } else { "pack_f32" };
+    let pipeline = ctx.pipeline("spsm pack", &source, entry);
+    let words_per = if packed { 4 } else { 6 };
+    let out_words = ctx.zeroed::<u32>("spsm packed words", words_per * texels);
+    let out_planes = ctx.zeroed::<u32>("spsm f32 planes", if packed { 1 } else { 3 * texels });
+    let bind = ctx.bind(
+        &pipeline,
+        &[
+            &ctx.upload("spsm pack dims", &[raster.res, u32::from(packed)]),
+            &ctx.upload("spsm pack params", &[space.z_lo, space.depth_step(), size.x, size.y]),
+            &ctx.upload("spsm setups", &setup_data(&raster.setups)),
+            &ctx.upload("spsm triangle words", &tri_words),
+            &ctx.upload("spsm texel triangles", &raster.texel),
+            &ctx.upload("spsm encode thresholds", &thresholds),
+            &out_words,
+            &out_planes,
+        ],
+    );
+    ctx.stage(rec, stage, |e| {
+        GpuContext::dispatch(e, &pipeline, &bind, GpuContext::groups_1d(texels, 64));
+    })?;
+    let words: Vec<u32> = ctx.read(&out_words)?;
+    let filled = raster.texel.iter().filter(|&&s| s != NONE).count() as u64;
+    let clamped = raster.texel.iter().filter(|&&s| s != NONE && clamped[s as usize]).count() as u64;
+    let texels = if packed {
+        let words = words[..4 * texels].chunks_exact(4).map(|w| [w[0], w[1], w[2], w[3]]).collect();
+        Texels::Packed(words, Box::new(packer))
+    } else {
+        let planes: Vec<u32> = ctx.read(&out_planes)?;
+        let f = f32::from_bits;
+        Texels::F32(
+            (0..texels)
+                .map(|k| {
+                    let (w, p) = (&words[6 * k..6 * k + 6], &planes[3 * k..3 * k + 3]);
+                    F32Texel {
+                        v: [[f(w[0]), f(w[1])], [f(w[2]), f(w[3])], [f(w[4]), f(w[5])]],
+                        z: f(p[0]),
+                        dz: [f(p[1]), f(p[2])],
+                    }
+                })
+                .collect(),
+        )
+    };
+    Ok((SpsmMap { res: raster.res, space, texels }, filled, clamped))
+}
