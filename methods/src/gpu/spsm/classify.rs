@@ -19,7 +19,7 @@
 //! `shadowed_by_neighbourhood`, `uncertain_pixels`, `shadow_map_lookups`; the handed-back
 //! pixels' counts are added by the CPU code that classifies them.
 
-use super::texel::{GpuTexels, Params, TEXEL};
+use super::texel::{GpuTexels, Params, ENCODE, TEXEL};
 use crate::{
     depth_test::texel_at,
     frame::Frame,
@@ -36,8 +36,11 @@ use crate::{
 };
 use instrumentation::{Counters, Recorder};
 
-const CLASSIFY: Part =
-    Part { name: "spsm/classify.wgsl", source: include_str!("classify.wgsl"), needs: &[&TEXEL] };
+const CLASSIFY: Part = Part {
+    name: "spsm/classify.wgsl",
+    source: include_str!("classify.wgsl"),
+    needs: &[&TEXEL, &ENCODE],
+};
 
 crate::gpu::layout::wgsl_mirror!(
     Params,

@@ -88,23 +88,6 @@ fn intersects(t: Tri, p: MapPoint) -> bool {
         && contains_within(t, p.xy, t.err_v * SQRT_2);
 }
 
-// DerivativeCode::encode by its thresholds (the smallest slope of each code, 1 to 254).
-fn encode(s: f64) -> u32 {
-    if s != s {
-        return 127u;
-    }
-    var lo = 0u;
-    var hi = 254u;
-    while lo < hi {
-        let mid = (lo + hi + 1u) / 2u;
-        if s >= tables[512u + mid] {
-            lo = mid;
-        } else {
-            hi = mid - 1u;
-        }
-    }
-    return lo;
-}
 
 fn is_finite(x: f64) -> bool {
     return abs(x) <= 1.7976931348623157e308lf;

@@ -6,10 +6,13 @@
 //! by the twin's own [`Packer::pack_triangle`]; everything per texel runs on the GPU: the depth
 //! at the texel's centre and its 16-bit code (rounded half away from zero, as `f64::round`),
 //! the derivative codes at the decoded depth under a spot light (through the code's
-//! thresholds, [`encode_thresholds`]), or the `f32` texel. The texels are read back: the
+//! thresholds, `encode.wgsl`), or the `f32` texel. The texels are read back: the
 //! recovery and antialiasing stages on the CPU read the map too.
 
-use super::{raster::setup_data, texel::encode_thresholds};
+use super::{
+    raster::setup_data,
+    texel::{code_tables, ENCODE},
+};
 use crate::{
     gpu::{
         shader::{compose, Part},
@@ -23,7 +26,8 @@ use crate::{
 };
 use instrumentation::Recorder;
 
-const PACK: Part = Part::file("spsm/pack.wgsl", include_str!("pack.wgsl"));
+const PACK: Part =
+    Part { name: "spsm/pack.wgsl", source: include_str!("pack.wgsl"), needs: &[&ENCODE] };
 
 /// The map of `raster` in `format` with derivative exponent `power`, as the twin's
 /// `pack_map` gives it: the map, the texels filled and those holding a clamped vertex. The
@@ -60,7 +64,7 @@ pub fn pack_map(
         (vec![0], vec![false; raster.setups.len()])
     };
     let size = space.slope_scale(-1.0);
-    let thresholds = encode_thresholds(&packer.code);
+    let tables = code_tables(&packer.code);
     let source = compose(&[&PACK]);
     let entry = if packed { "pack_packed" } else { "pack_f32" };
     let pipeline = ctx.pipeline("spsm pack", &source, entry);
@@ -75,7 +79,7 @@ pub fn pack_map(
             &ctx.upload("spsm setups", &setup_data(&raster.setups)),
             &ctx.upload("spsm triangle words", &tri_words),
             &ctx.upload("spsm texel triangles", &raster.texel),
-            &ctx.upload("spsm encode thresholds", &thresholds),
+            &ctx.upload("spsm code tables", &tables),
             &out_words,
             &out_planes,
         ],

@@ -2,7 +2,7 @@
 // triangle (from the conservative map) stored as the CPU stores it. `pack_packed`: the
 // triangle's three vertex words and, per texel, the 16-bit depth code of the plane at the
 // texel's centre and the two 8-bit derivative codes (the triangle's when the light is
-// orthographic, else taken at the decoded depth, through the code's thresholds);
+// orthographic, else taken at the decoded depth, through the code's thresholds, encode.wgsl);
 // `pack_f32`: vertices, centre depth and derivatives rounded to f32.
 
 // [res, packed (1) or f32 (0)]
@@ -16,8 +16,8 @@
 @group(0) @binding(3) var<storage, read> tri_words: array<u32>;
 // Per texel: the prepared triangle, NONE where none.
 @group(0) @binding(4) var<storage, read> texel: array<u32>;
-// The derivative code's thresholds: the smallest slope of each code 1 to 254.
-@group(0) @binding(5) var<storage, read> thresholds: array<f64>;
+// The derivative code's tables (texel::code_tables; encode.wgsl reads the thresholds).
+@group(0) @binding(5) var<storage, read> tables: array<f64>;
 // Packed: four words a texel. F32: the six vertex coordinates' f32 bits.
 @group(0) @binding(6) var<storage, read_write> out_words: array<u32>;
 // F32: the depth's and derivatives' f32 bits (three a texel).
@@ -35,7 +35,7 @@ fn bind_all() {
     _ = setups[0];
     _ = tri_words[0];
     _ = texel[0];
-    _ = thresholds[0];
+    _ = tables[0];
     _ = arrayLength(&out_words);
     _ = arrayLength(&out_planes);
 }
@@ -76,23 +76,6 @@ fn depth_code(z: f64) -> u32 {
     return u32(min(max(q, 0.0lf), 65535.0lf));
 }
 
-// DerivativeCode::encode by its thresholds.
-fn encode(s: f64) -> u32 {
-    if s != s {
-        return 127u;
-    }
-    var lo = 0u;
-    var hi = 254u;
-    while lo < hi {
-        let mid = (lo + hi + 1u) / 2u;
-        if s >= thresholds[mid] {
-            lo = mid;
-        } else {
-            hi = mid - 1u;
-        }
-    }
-    return lo;
-}
 
 @compute @workgroup_size(64)
 fn pack_packed(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {

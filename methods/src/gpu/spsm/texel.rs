@@ -13,6 +13,21 @@ use crate::{
 };
 use bytemuck::{Pod, Zeroable};
 
+/// WGSL of `DerivativeCode::encode` through the code's thresholds.
+pub(super) const ENCODE: Part = Part::file("spsm/encode.wgsl", include_str!("encode.wgsl"));
+
+/// A derivative code's tables as the kernels read them: decode `[0, 256)`, error
+/// `[256, 512)`, encode thresholds `[512, 768)`.
+pub(super) fn code_tables(code: &DerivativeCode) -> Vec<f64> {
+    let mut tables = vec![0.0f64; 768];
+    for q in 0..=255u8 {
+        tables[usize::from(q)] = code.decode(q);
+        tables[256 + usize::from(q)] = code.error(q);
+    }
+    tables[512..].copy_from_slice(&encode_thresholds(code));
+    tables
+}
+
 /// WGSL of the texel decoding.
 pub(super) const TEXEL: Part =
     Part { name: "spsm/texel.wgsl", source: include_str!("texel.wgsl"), needs: &[&COMMON] };
@@ -116,11 +131,7 @@ impl GpuTexels {
                 params.depth_step = p.space.depth_step();
                 params.vertex_step = p.space.vertex_step();
                 params.half_res = 0.5 * f64::from(p.space.res);
-                for q in 0..=255u8 {
-                    tables[usize::from(q)] = p.code.decode(q);
-                    tables[256 + usize::from(q)] = p.code.error(q);
-                }
-                tables[512..].copy_from_slice(&encode_thresholds(&p.code));
+                tables = code_tables(&p.code);
                 (t.iter().flatten().copied().collect(), vec![0])
             }
             Texels::F32(t) => (
