@@ -289,11 +289,7 @@ pub(crate) fn recover_and_antialias(
     lit: &mut [f32],
     rec: &mut Recorder,
 ) {
-    let (silhouettes, counters) = rec.stages.time(STAGE_RECOVERY, || {
-        recover::recover_pixels(frame, lookup, consistent, uncertain, lit)
-    });
-    rec.counters.merge(&counters);
-
+    let silhouettes = recover(frame, lookup, consistent, uncertain, lit, rec);
     if o.rate > 1 {
         let counters = rec.stages.time(STAGE_ANTIALIASING, || {
             antialias::antialias_pixels(frame, lookup, sample_pattern, uncertain, &silhouettes, lit)
@@ -302,6 +298,23 @@ pub(crate) fn recover_and_antialias(
     } else {
         rec.stages.skip(STAGE_ANTIALIASING);
     }
+}
+
+/// Stage 5: silhouette recovery of the `uncertain` pixels, deciding their binary values in
+/// `lit`; their silhouettes, for the antialiasing.
+pub(crate) fn recover(
+    frame: &Frame<'_>,
+    lookup: &classify::Lookup<'_>,
+    consistent: &depth::ConsistentDepths,
+    uncertain: &[classify::UncertainPixel],
+    lit: &mut [f32],
+    rec: &mut Recorder,
+) -> Vec<Option<recover::Silhouette>> {
+    let (silhouettes, counters) = rec.stages.time(STAGE_RECOVERY, || {
+        recover::recover_pixels(frame, lookup, consistent, uncertain, lit)
+    });
+    rec.counters.merge(&counters);
+    silhouettes
 }
 
 impl Spsm {

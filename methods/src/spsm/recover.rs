@@ -312,6 +312,12 @@ impl Resolved {
     pub fn occluders(&self) -> usize {
         self.n_tris
     }
+
+    /// The occluding triangles, the pattern and the origin of the tangent frames (the centre
+    /// texel's centre): what the GPU's antialiasing evaluates.
+    pub fn parts(&self) -> (&[Tri], Pattern, DVec2) {
+        (&self.tris[..self.n_tris], self.pattern, self.origin)
+    }
 }
 
 /// What the depth-test pattern needs to know of the point: the point, its receiver plane's

@@ -15,8 +15,10 @@
 //!    containment test the `f64` filter cannot decide are handed back to the twin's code.
 //! 4. **consistent min depth** (section 4, Fig. 9): on the GPU ([`depth`]), for the texels
 //!    around the uncertain pixels, as the twin.
-//! 5. **silhouette recovery**, 6. **antialiasing** (sections 4.2 and 5): on the CPU, by the
-//!    twin's code, for the uncertain pixels only.
+//! 5. **silhouette recovery** (section 4.2): on the CPU, by the twin's code, for the
+//!    uncertain pixels only.
+//! 6. **antialiasing** (section 5): on the GPU ([`antialias`]), the recovered silhouettes
+//!    uploaded per pixel and every sub-sample evaluated there.
 //!
 //! The texels reach the kernels as stored ([`texel`]).
 //!
@@ -24,6 +26,7 @@
 //! Counters as the twin's; those of classification and consistent min depth are counted on the
 //! GPU with atomics.
 
+pub mod antialias;
 pub mod classify;
 pub mod depth;
 pub mod pack;
@@ -93,8 +96,8 @@ pub fn shade(
     let lookup = spsm::classify::Lookup { map: &map, tester, space };
     let texels = texel::GpuTexels::upload(ctx, &lookup);
     rec.notes.push(
-        "spsm on the GPU: conservative rasterization, packing, classification and consistent \
-         min depth run on the GPU; silhouette recovery and antialiasing run the CPU twin's code"
+        "spsm on the GPU: conservative rasterization, packing, classification, consistent min \
+         depth and antialiasing run on the GPU; silhouette recovery runs the CPU twin's code"
             .into(),
     );
     let mut c = classify::classify(ctx, gframe, frame, &lookup, &texels, rec)?;
@@ -107,16 +110,23 @@ pub fn shade(
     }
     let (consistent, corrected) = depth::consistent_depths(ctx, &texels, &c.uncertain, rec)?;
     rec.counters.depth_corrected_texels += corrected;
-    spsm::recover_and_antialias(
-        options,
-        frame,
-        &lookup,
-        &sample_pattern,
-        &c.uncertain,
-        &consistent,
-        &mut c.lit,
-        rec,
-    );
+    let silhouettes = spsm::recover(frame, &lookup, &consistent, &c.uncertain, &mut c.lit, rec);
+    if options.rate > 1 {
+        let counters = antialias::antialias_pixels(
+            ctx,
+            frame,
+            &lookup,
+            &sample_pattern,
+            &c.uncertain,
+            &silhouettes,
+            &mut c.lit,
+            spsm::STAGE_ANTIALIASING,
+            rec,
+        )?;
+        rec.counters.merge(&counters);
+    } else {
+        rec.stages.skip(spsm::STAGE_ANTIALIASING);
+    }
     let visibility = Visibility {
         width: frame.width(),
         height: frame.height(),

@@ -1,0 +1,98 @@
+//! Stage "antialiasing" of `spsm` on the GPU (`antialias.wgsl`), equal to
+//! [`spsm::antialias::antialias_pixels`] pixel for pixel.
+//!
+//! The silhouettes are recovered on the CPU (stage 5, by the twin's code) and uploaded per
+//! pixel: the occluding triangles (decoded once, with their orientation's sign), the tangent
+//! normals and the origin, the pixel's surface point, normal and plane offset, and the light's
+//! projection of the point. The GPU evaluates every sub-sample: its camera ray meets the
+//! surface's plane, the point is projected into the light's map, and the recovered
+//! silhouette function says lit or shadowed. Only pixels whose pattern has tangents are
+//! evaluated, as on the CPU.
+
+use crate::{
+    frame::Frame,
+    gpu::{
+        frame::{projector_data, COMMON},
+        shader::{compose, Part},
+        GpuContext, GpuError,
+    },
+    pattern::SamplePattern,
+    spsm::{
+        classify::{Lookup, UncertainPixel},
+        recover::{Pattern, Resolved, Silhouette},
+    },
+};
+use instrumentation::{Counters, Recorder};
+
+const ANTIALIAS: Part =
+    Part { name: "spsm/antialias.wgsl", source: include_str!("antialias.wgsl"), needs: &[&COMMON] };
+
+/// `f64` per pixel record of `antialias.wgsl`.
+const REC_F: usize = 82;
+
+/// Antialiases the `uncertain` pixels with their recovered `silhouettes` (same order),
+/// writing their lit fraction into `lit`; the GPU pass is recorded as the stage `stage`.
+#[allow(clippy::too_many_arguments)]
+pub fn antialias_pixels(
+    ctx: &GpuContext,
+    frame: &Frame<'_>,
+    lookup: &Lookup<'_>,
+    pattern: &SamplePattern,
+    uncertain: &[UncertainPixel],
+    silhouettes: &[Option<Silhouette>],
+    lit: &mut [f32],
+    stage: &str,
+    rec: &mut Recorder,
+) -> Result<Counters, GpuError> {
+    let g = &frame.gbuffer;
+    let rate = pattern.offsets().len();
+    let mut rec_f: Vec<f64> = Vec::new();
+    let mut rec_u: Vec<u32> = Vec::new();
+    for (u, s) in uncertain.iter().zip(silhouettes) {
+        let Some(s) = s else { continue };
+        let Pattern::Tangents { count, normals } = s.pattern() else { continue };
+        let k = u.pixel as usize;
+        let (position, normal) = (g.position[k], g.normal[k]);
+        let Some((centre, _)) = lookup.tester.projector.project(position) else { continue };
+        let resolved = Resolved::new(lookup.map, s);
+        let (tris, _, origin) = resolved.parts();
+        let mut r = Vec::with_capacity(REC_F);
+        r.extend_from_slice(&[origin.x, origin.y]);
+        r.extend_from_slice(&position.to_array());
+        r.extend_from_slice(&normal.to_array());
+        r.push(normal.dot(position));
+        r.extend_from_slice(&[centre.x, centre.y]);
+        r.extend(normals.iter().flat_map(|n| [n.x, n.y]));
+        for t in tris {
+            r.extend(t.v.iter().flat_map(|v| [v.x, v.y]));
+            r.push(t.orientation().signum());
+        }
+        r.resize(REC_F, 0.0);
+        rec_f.extend_from_slice(&r);
+        rec_u.extend_from_slice(&[u.pixel, u32::from(count), tris.len() as u32]);
+    }
+    let n = rec_u.len() / 3;
+    let offsets: Vec<f64> = pattern.offsets().iter().flat_map(|o| [o.x, o.y]).collect();
+    let pipeline = ctx.pipeline("spsm antialiasing", &compose(&[&ANTIALIAS]), "main");
+    let out = ctx.zeroed::<f32>("spsm antialiased", n);
+    let bind = ctx.bind(
+        &pipeline,
+        &[
+            &ctx.upload("spsm aa dims", &[n as u32, frame.width(), rate as u32]),
+            &ctx.upload("spsm aa camera", &projector_data(&frame.camera)),
+            &ctx.upload("spsm aa light", &projector_data(&lookup.tester.projector)),
+            &ctx.upload("spsm aa offsets", &offsets),
+            &ctx.upload("spsm aa records", &rec_f),
+            &ctx.upload("spsm aa pixels", &rec_u),
+            &out,
+        ],
+    );
+    ctx.stage(rec, stage, |e| {
+        GpuContext::dispatch(e, &pipeline, &bind, GpuContext::groups_1d(n, 64));
+    })?;
+    let values: Vec<f32> = ctx.read(&out)?;
+    for (p, v) in rec_u.chunks_exact(3).zip(values) {
+        lit[p[0] as usize] = v;
+    }
+    Ok(Counters { antialiased_samples: (n * rate) as u64, ..Counters::default() })
+}
