@@ -110,11 +110,21 @@ fn texel_tri(x: i32, y: i32) -> Tri {
     return t;
 }
 
-fn depth_at(t: Tri, q: vec2<f64>) -> f64 {
-    return t.z + ((q.x - t.centre.x) * t.dz.x + (q.y - t.centre.y) * t.dz.y);
+// `v`, through a choice the compiler cannot see through (no map has 0 texels a side), so
+// that `a + kept(b) + kept(c)` is evaluated as the CPU writes it: Mesa's llvmpipe was seen
+// to reassociate `a + (b + c)` in f64 (see raster.wgsl).
+fn kept(v: f64) -> f64 {
+    return select(v, 0.0lf, params.res == 0u);
 }
 
+// Tri::depth_at.
+fn depth_at(t: Tri, q: vec2<f64>) -> f64 {
+    return t.z + kept(kept((q.x - t.centre.x) * t.dz.x) + kept((q.y - t.centre.y) * t.dz.y));
+}
+
+// Tri::error_at.
 fn error_at(t: Tri, q: vec2<f64>) -> f64 {
-    return t.err_z + (abs(q.x - t.centre.x) * t.err_dz.x + abs(q.y - t.centre.y) * t.err_dz.y);
+    let d = abs(q - t.centre);
+    return t.err_z + kept(kept(d.x * t.err_dz.x) + kept(d.y * t.err_dz.y));
 }
 
