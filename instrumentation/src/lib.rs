@@ -143,6 +143,16 @@ impl Stages {
         out
     }
 
+    /// Adds `ms` to the latest stage called `name`, or records a new stage when there is
+    /// none: one stage run in parts (a pass submitted twice, a sub-sample's pass, CPU work
+    /// beside a GPU pass) is one entry, its parts' time summed.
+    pub fn add(&mut self, name: &str, ms: f64) {
+        match self.stages.iter_mut().rev().find(|s| s.name == name) {
+            Some(stage) => stage.ms += ms,
+            None => self.stages.push(Stage { name: name.to_owned(), ms }),
+        }
+    }
+
     /// Records that the stage `name` was not run because the scene does not call for it.
     pub fn skip(&mut self, name: &str) {
         self.skipped.push(name.to_owned());
@@ -343,6 +353,17 @@ fn git_state(dir: &Path) -> Option<(String, bool)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_stage_run_in_parts_is_one_entry() {
+        let mut s = Stages::default();
+        s.add("map", 1.5);
+        s.add("test", 2.0);
+        s.add("map", 0.25);
+        let got: Vec<(&str, f64)> = s.stages.iter().map(|x| (x.name.as_str(), x.ms)).collect();
+        assert_eq!(got, [("map", 1.75), ("test", 2.0)]);
+        assert_eq!(s.total_ms(), 3.75);
+    }
 
     #[test]
     fn merge_adds_every_field() {

@@ -422,13 +422,6 @@ impl<'a> Izb<'a> {
             pairs = &larger;
             let bind = pairs.bind(ctx, &self.test, &self.test_inputs);
             ctx.stage(rec, STAGE_RASTERIZATION, |e| indirect(e, &bind))?;
-            if let Some(again) = rec.stages.stages.pop() {
-                if let Some(first) =
-                    rec.stages.stages.iter_mut().rev().find(|s| s.name == again.name)
-                {
-                    first.ms += again.ms;
-                }
-            }
             (tested, undecided) = pairs.counts(ctx)?;
         }
         let mut shadowed: Vec<u32> = ctx.read(shadow)?;

@@ -29,19 +29,19 @@
 //! - **Transparency** is not applicable, as for `afsm` on the GPU.
 
 use super::{
-    afsm::{Izb, SampleSurface, STAGE_UNDECIDED},
+    afsm::{Izb, SampleSurface},
     raster::{rasterize, RasterJob},
     GpuContext, GpuFrame,
 };
 use crate::{
-    afsm::{self, AfsmOptions, AliasFreeShadowMap, STAGE_RASTERIZATION, STAGE_TRANSFORMATION},
+    afsm::{self, AfsmOptions, AliasFreeShadowMap},
     frame::Frame,
     method::{MethodError, ShadowMethod, Visibility},
     pattern::SamplePattern,
     raster::rasterize_nearest_at,
 };
 use glam::DVec2;
-use instrumentation::{Recorder, Stage};
+use instrumentation::Recorder;
 
 /// Where the sub-samples' camera G-buffers come from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -105,10 +105,8 @@ pub fn shade(
         undecided += out.undecided;
         rec.counters.sampling_points_tested += out.tested;
     }
-    for name in [STAGE_TRANSFORMATION, super::afsm::STAGE_IZB, STAGE_RASTERIZATION, STAGE_UNDECIDED]
-    {
-        let ms = passes.stages.stages.iter().filter(|s| s.name == name).map(|s| s.ms).sum();
-        rec.stages.stages.push(Stage { name: name.to_owned(), ms });
+    for stage in &passes.stages.stages {
+        rec.stages.add(&stage.name, stage.ms);
     }
     rec.notes.push(format!("{}, over {rate} sub-samples", izb.note(undecided)));
     let lit = lit_count

@@ -12,7 +12,8 @@
 //! the difference of two timestamps written around its passes on the GPU; otherwise, and on
 //! software adapters (whose timestamps do not wait for the compute work between them), it is
 //! the wall-clock time from submission to completion. [`GpuContext::timing`] names which one
-//! the run record gets.
+//! the run record gets. A stage submitted in parts is one entry, its parts' times summed
+//! ([`instrumentation::Stages::add`]).
 //!
 //! Errors: what the device reports outside any call's result (validation errors, running out
 //! of memory, a lost device) would make wgpu panic by default; here it is kept and returned as
@@ -418,7 +419,7 @@ impl GpuContext {
             }
             None => wall_ms,
         };
-        rec.stages.stages.push(instrumentation::Stage { name: name.to_owned(), ms });
+        rec.stages.add(name, ms);
         Ok(out)
     }
 

@@ -58,7 +58,7 @@ pub(super) fn run(
         ],
     );
     let groups = GpuContext::groups_1d(pixels, 64);
-    run.stage(rec, STAGE_FACETS, |e| {
+    run.ctx.stage(rec, STAGE_FACETS, |e| {
         GpuContext::dispatch(e, &k.facets_classify, &bind, groups);
         super::scan::record(ctx, k, e, &index, pixels as u32 + 1);
     })?;
@@ -84,6 +84,7 @@ pub(super) fn run(
             &run.counters,
         ],
     );
-    run.stage(rec, STAGE_FACETS, |e| GpuContext::dispatch(e, &k.facets_build, &bind, groups))?;
+    run.ctx
+        .stage(rec, STAGE_FACETS, |e| GpuContext::dispatch(e, &k.facets_build, &bind, groups))?;
     Ok(Facets { class, ff, fu, valid, count })
 }

@@ -175,27 +175,6 @@ struct Run<'a> {
     words: u32,
 }
 
-impl Run<'_> {
-    /// [`GpuContext::stage`], adding the time to the previous entry when the stage was
-    /// submitted in parts.
-    fn stage<T>(
-        &self,
-        rec: &mut Recorder,
-        name: &str,
-        record: impl FnOnce(&mut wgpu::CommandEncoder) -> T,
-    ) -> Result<T, GpuError> {
-        let out = self.ctx.stage(rec, name, record)?;
-        let stages = &mut rec.stages.stages;
-        if stages.len() >= 2 && stages[stages.len() - 2].name == name {
-            let last = stages.pop().expect("two stages recorded");
-            if let Some(prev) = stages.last_mut() {
-                prev.ms += last.ms;
-            }
-        }
-        Ok(out)
-    }
-}
-
 /// The counters buffer read back.
 fn read_counters(ctx: &GpuContext, counters: &wgpu::Buffer) -> Result<Vec<u32>, GpuError> {
     ctx.read(counters)
@@ -334,8 +313,9 @@ impl GpuPan09 {
         let edges = silhouette::run(&run, k, &positions, &adjacency_buf, adjacency.len(), rec)?;
         let edge_count = read_counters(ctx, &run.counters)?[slot::EDGES];
         let marks = mask_map::run(&run, k, &edges, edge_count, rec)?;
-        let sat =
-            run.stage(rec, crate::pan09::STAGE_SAT, |e| sat::record(ctx, k, e, &marks, map.res))?;
+        let sat = run
+            .ctx
+            .stage(rec, crate::pan09::STAGE_SAT, |e| sat::record(ctx, k, e, &marks, map.res))?;
         let facets = facets::run(&run, k, &sat, rec)?;
         let lit = depth_test::run(&run, k, &facets.class, rec)?;
         if let Some(probe) = probe.as_deref_mut() {

@@ -34,7 +34,7 @@ pub(super) fn pixel_texel_pairs(
         &k.pt_count,
         &[&dims, &facets.ff, &facets.fu, &counts, &ph[0], &ph[1], &ph[2], &ph[3], &ph[4], &ph[5]],
     );
-    let total = run.stage(rec, STAGE_PT_PAIRS, |e| {
+    let total = run.ctx.stage(rec, STAGE_PT_PAIRS, |e| {
         GpuContext::dispatch(e, &k.pt_count, &bind, GpuContext::groups_1d(n as usize, 64));
         scan::record(ctx, k, e, &counts, n + 1)
     })?;
@@ -63,7 +63,7 @@ pub(super) fn pixel_texel_pairs(
     let emit = ctx.bind(&k.pt_emit, &bufs(&by_facet));
     let test = ctx.bind(&k.pt_test, &bufs(&by_key));
     let scatter = ctx.bind(&k.pt_scatter, &bufs(&by_key));
-    run.stage(rec, STAGE_PT_PAIRS, |e| {
+    run.ctx.stage(rec, STAGE_PT_PAIRS, |e| {
         GpuContext::dispatch(e, &k.pt_emit, &emit, GpuContext::groups_1d(n as usize, 64));
         let g = GpuContext::groups_1d(emitted as usize, 64);
         GpuContext::dispatch(e, &k.pt_test, &test, g);
@@ -116,7 +116,7 @@ pub(super) fn triangle_texel_pairs(
         )
     };
     let mark = part1(&by_texel, &ph[3], &k.tt_busy);
-    let (keys_total, rows_total, bsat) = run.stage(rec, STAGE_TT_PAIRS, |e| {
+    let (keys_total, rows_total, bsat) = run.ctx.stage(rec, STAGE_TT_PAIRS, |e| {
         GpuContext::dispatch(e, &k.tt_busy, &mark, GpuContext::groups_1d(texels, 64));
         let bsat = super::sat::record(ctx, k, e, &busy, res);
         let count = part1(&by_triangle, &bsat, &k.tt_count);
@@ -159,7 +159,7 @@ pub(super) fn triangle_texel_pairs(
     let emit = part2(&by_item, &k.tt_emit);
     let test = part2(&by_key, &k.tt_test);
     let compact = part2(&by_key, &k.tt_compact);
-    run.stage(rec, STAGE_TT_PAIRS, |e| {
+    run.ctx.stage(rec, STAGE_TT_PAIRS, |e| {
         let per_item = GpuContext::groups_1d(items as usize, 64);
         GpuContext::dispatch(e, &k.tt_count_rows, &count_rows, per_item);
         scan::record(ctx, k, e, &row_keys, items + 1);

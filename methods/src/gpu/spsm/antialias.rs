@@ -46,6 +46,8 @@ pub fn antialias_pixels(
 ) -> Result<Counters, GpuError> {
     let g = &frame.gbuffer;
     let rate = pattern.offsets().len();
+    // The CPU's part of the stage (the records) is timed into it beside the GPU pass.
+    let start = std::time::Instant::now();
     let mut rec_f: Vec<f64> = Vec::new();
     let mut rec_u: Vec<u32> = Vec::new();
     for (u, s) in uncertain.iter().zip(silhouettes) {
@@ -72,6 +74,7 @@ pub fn antialias_pixels(
         rec_u.extend_from_slice(&[u.pixel, u32::from(count), tris.len() as u32]);
     }
     let n = rec_u.len() / 3;
+    let cpu_ms = start.elapsed().as_secs_f64() * 1e3;
     let offsets: Vec<f64> = pattern.offsets().iter().flat_map(|o| [o.x, o.y]).collect();
     let pipeline = ctx.pipeline("spsm antialiasing", &compose(&[&ANTIALIAS]), "main");
     let out = ctx.zeroed::<f32>("spsm antialiased", n);
@@ -90,6 +93,7 @@ pub fn antialias_pixels(
     ctx.stage(rec, stage, |e| {
         GpuContext::dispatch(e, &pipeline, &bind, GpuContext::groups_1d(n, 64));
     })?;
+    rec.stages.add(stage, cpu_ms);
     let values: Vec<f32> = ctx.read(&out)?;
     for (p, v) in rec_u.chunks_exact(3).zip(values) {
         lit[p[0] as usize] = v;

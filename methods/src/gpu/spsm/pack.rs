@@ -44,6 +44,8 @@ pub fn pack_map(
     let texels = raster.texel.len();
     let packer = Packer { space, code: DerivativeCode::new(power) };
     let packed = format == TexelFormat::Packed;
+    // The CPU's part of the stage (per triangle) is timed into it beside the GPU pass.
+    let start = std::time::Instant::now();
     // Per triangle: its words and codes (packed texels), and whether a vertex was clamped.
     let (tri_words, clamped): (Vec<u32>, Vec<bool>) = if packed {
         raster
@@ -63,6 +65,7 @@ pub fn pack_map(
     } else {
         (vec![0], vec![false; raster.setups.len()])
     };
+    let cpu_ms = start.elapsed().as_secs_f64() * 1e3;
     let size = space.slope_scale(-1.0);
     let tables = code_tables(&packer.code);
     let source = compose(&[&PACK]);
@@ -87,6 +90,7 @@ pub fn pack_map(
     ctx.stage(rec, stage, |e| {
         GpuContext::dispatch(e, &pipeline, &bind, GpuContext::groups_1d(texels, 64));
     })?;
+    rec.stages.add(stage, cpu_ms);
     let words: Vec<u32> = ctx.read(&out_words)?;
     let filled = raster.texel.iter().filter(|&&s| s != NONE).count() as u64;
     let clamped = raster.texel.iter().filter(|&&s| s != NONE && clamped[s as usize]).count() as u64;

@@ -65,6 +65,9 @@ pub fn rasterize_conservative(
     rec: &mut Recorder,
 ) -> Result<(ConservativeMap, RasterCounts), GpuError> {
     let res = proj.width as usize;
+    // The CPU's part of the stage (preparing the triangles and cutting the items, then
+    // deciding the undecided pairs) is timed into it beside the GPU passes.
+    let start = std::time::Instant::now();
     let (setups, bounds) = prepare(geometry, include, proj, space, &mut rec.counters);
     let setup_f = setup_data(&setups);
     let mut cols = Vec::with_capacity(2 * setups.len());
@@ -77,6 +80,7 @@ pub fn rasterize_conservative(
         }
     }
     let n_items = items.len() / 2;
+    let mut cpu_ms = start.elapsed().as_secs_f64() * 1e3;
     let texels = res * res;
     let source = compose(&[&RASTER]);
     let count = ctx.pipeline("spsm raster count", &source, "count");
@@ -109,15 +113,14 @@ pub fn rasterize_conservative(
             out_depth.clone(),
         ]
     };
-    let mut part = Recorder::default();
     // Counting, with room for `capacity` undecided pairs; again with room for all of them
     // when they overflow (rare: the filter fails only within rounding of an edge).
-    let count_pass = |capacity: usize, part: &mut Recorder| -> Result<_, GpuError> {
+    let count_pass = |capacity: usize, rec: &mut Recorder| -> Result<_, GpuError> {
         let dims = ctx.upload("spsm raster dims", &[res as u32, n_items as u32, capacity as u32]);
         let undecided = ctx.zeroed::<u32>("spsm undecided", 3 * capacity);
         let no_list = ctx.zeroed::<u32>("spsm texel lists (not yet)", 1);
         let bind = ctx.bind(&count, &buffers(&dims, &no_list, &undecided).each_ref());
-        ctx.stage(part, stage, |e| {
+        ctx.stage(rec, stage, |e| {
             e.clear_buffer(&texel_count, 0, None);
             e.clear_buffer(&counters, 0, None);
             GpuContext::dispatch(e, &count, &bind, GpuContext::groups_1d(n_items, 64));
@@ -125,9 +128,9 @@ pub fn rasterize_conservative(
         })?;
         Ok((ctx.read::<u32>(&counters)?, undecided))
     };
-    let (mut c, mut undecided) = count_pass(4096, &mut part)?;
+    let (mut c, mut undecided) = count_pass(4096, rec)?;
     if c[4] as usize > 4096 {
-        (c, undecided) = count_pass(c[4] as usize, &mut part)?;
+        (c, undecided) = count_pass(c[4] as usize, rec)?;
     }
     let word = |lo: usize| u64::from(c[lo]) | u64::from(c[lo + 1]) << 32;
     let total = ctx.read::<u32>(&fragments_total)?[0] as usize;
@@ -136,7 +139,7 @@ pub fn rasterize_conservative(
     let buffers = buffers(&dims, &list, &undecided);
     let bind_scatter = ctx.bind(&scatter, &buffers.each_ref());
     let bind_resolve = ctx.bind(&resolve, &buffers.each_ref());
-    ctx.stage(&mut part, stage, |e| {
+    ctx.stage(rec, stage, |e| {
         GpuContext::dispatch(e, &scatter, &bind_scatter, GpuContext::groups_1d(n_items, 64));
         GpuContext::dispatch(e, &resolve, &bind_resolve, GpuContext::groups_1d(texels, 64));
     })?;
@@ -164,7 +167,7 @@ pub fn rasterize_conservative(
             texel[k] = i;
         }
     }
-    let ms = part.stages.total_ms() + start.elapsed().as_secs_f64() * 1e3;
-    rec.stages.stages.push(instrumentation::Stage { name: stage.to_owned(), ms });
+    cpu_ms += start.elapsed().as_secs_f64() * 1e3;
+    rec.stages.add(stage, cpu_ms);
     Ok((ConservativeMap { res: res as u32, setups, texel, depth }, counts))
 }
