@@ -391,7 +391,8 @@ impl<'a> Izb<'a> {
 
         // Rasterization of blockers.
         let set_up = self.set_up.replace(true);
-        let shadow = &self.test_inputs[9];
+        // `test.wgsl`'s binding 9: per pixel, whether its sample is shadowed.
+        let [.., shadow] = &self.test_inputs;
         let triangles = self.frame.geometry.triangles.len();
         let indirect = |e: &mut wgpu::CommandEncoder, bind: &wgpu::BindGroup| {
             let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -456,8 +457,9 @@ impl<'a> Izb<'a> {
     /// [`afsm::samples::transform_samples`] gives them for sub-sample `s` of `rate` (ids
     /// `pixel * rate + s`, pixels without a sample left out): for stage-by-stage parity tests.
     pub fn samples(&self, ctx: &GpuContext, s: u32, rate: u32) -> Result<Vec<Sample>, GpuError> {
-        let f: Vec<f64> = ctx.read(&self.transform_io[3])?;
-        let tri: Vec<u32> = ctx.read(&self.transform_io[4])?;
+        let [_, _, _, sample_f, sample_tri, _] = &self.transform_io;
+        let f: Vec<f64> = ctx.read(sample_f)?;
+        let tri: Vec<u32> = ctx.read(sample_tri)?;
         Ok((0..self.pixels)
             .filter(|&k| tri[k] != NO_TRIANGLE)
             .map(|k| Sample {

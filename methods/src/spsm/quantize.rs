@@ -80,6 +80,11 @@ impl DerivativeCode {
         (127.0 + u.signum() * m) as u8
     }
 
+    /// The exponent `n`, in `1..=MAX_POWER`.
+    pub fn power(&self) -> u32 {
+        self.power
+    }
+
     /// The slope a code stands for (equation 4, through the 256-entry table).
     #[inline]
     pub fn decode(&self, q: u8) -> f64 {

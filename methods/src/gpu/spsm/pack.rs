@@ -77,12 +77,12 @@ pub fn pack_map(
     let bind = ctx.bind(
         &pipeline,
         &[
-            &ctx.upload("spsm pack dims", &[raster.res, u32::from(packed)]),
+            &ctx.upload("spsm pack dims", &[raster.res]),
             &ctx.upload("spsm pack params", &[space.z_lo, space.depth_step(), size.x, size.y]),
             &ctx.upload("spsm setups", &setup_data(&raster.setups)),
             &ctx.upload("spsm triangle words", &tri_words),
             &ctx.upload("spsm texel triangles", &raster.texel),
-            &ctx.upload("spsm code tables", &tables),
+            &ctx.upload("spsm code tables", tables),
             &out_words,
             &out_planes,
         ],

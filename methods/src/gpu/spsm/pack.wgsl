@@ -5,7 +5,7 @@
 // orthographic, else taken at the decoded depth, through the code's thresholds, encode.wgsl);
 // `pack_f32`: vertices, centre depth and derivatives rounded to f32.
 
-// [res, packed (1) or f32 (0)]
+// [res]
 @group(0) @binding(0) var<storage, read> dims: array<u32>;
 // [z_lo, depth step, texel size x, y]
 @group(0) @binding(1) var<storage, read> fparams: array<f64>;
@@ -75,7 +75,6 @@ fn depth_code(z: f64) -> u32 {
     }
     return u32(min(max(q, 0.0lf), 65535.0lf));
 }
-
 
 @compute @workgroup_size(64)
 fn pack_packed(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {

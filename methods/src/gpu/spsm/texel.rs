@@ -7,25 +7,32 @@ use crate::{
     gpu::{frame::COMMON, shader::Part, GpuContext},
     spsm::{
         classify::Lookup,
-        quantize::DerivativeCode,
+        quantize::{DerivativeCode, MAX_POWER},
         texel::{SpsmMap, Texels},
     },
 };
 use bytemuck::{Pod, Zeroable};
+use std::sync::OnceLock;
 
 /// WGSL of `DerivativeCode::encode` through the code's thresholds.
 pub(super) const ENCODE: Part = Part::file("spsm/encode.wgsl", include_str!("encode.wgsl"));
 
 /// A derivative code's tables as the kernels read them: decode `[0, 256)`, error
-/// `[256, 512)`, encode thresholds `[512, 768)`.
-pub(super) fn code_tables(code: &DerivativeCode) -> Vec<f64> {
-    let mut tables = vec![0.0f64; 768];
-    for q in 0..=255u8 {
-        tables[usize::from(q)] = code.decode(q);
-        tables[256 + usize::from(q)] = code.error(q);
-    }
-    tables[512..].copy_from_slice(&encode_thresholds(code));
-    tables
+/// `[256, 512)`, encode thresholds `[512, 768)`. Made once per exponent and kept: finding
+/// the thresholds takes some 16 000 encodings, and both the packing and the classification
+/// of every GPU run read them.
+pub(super) fn code_tables(code: &DerivativeCode) -> &'static [f64] {
+    static TABLES: [OnceLock<Vec<f64>>; MAX_POWER as usize] =
+        [const { OnceLock::new() }; MAX_POWER as usize];
+    TABLES[code.power() as usize - 1].get_or_init(|| {
+        let mut tables = vec![0.0f64; 768];
+        for q in 0..=255u8 {
+            tables[usize::from(q)] = code.decode(q);
+            tables[256 + usize::from(q)] = code.error(q);
+        }
+        tables[512..].copy_from_slice(&encode_thresholds(code));
+        tables
+    })
 }
 
 /// WGSL of the texel decoding.
@@ -123,7 +130,7 @@ impl GpuTexels {
             perspective: u32::from(space.perspective),
             ..Default::default()
         };
-        let mut tables = vec![0.0f64; 768];
+        let mut tables: &[f64] = &[0.0; 768];
         let (words, planes): (Vec<u32>, Vec<u32>) = match &map.texels {
             Texels::Packed(t, p) => {
                 params.packed = 1;
@@ -148,7 +155,7 @@ impl GpuTexels {
             params,
             texels: ctx.upload("spsm texels", &words),
             planes: ctx.upload("spsm texel planes", &planes),
-            tables: ctx.upload("spsm tables", &tables),
+            tables: ctx.upload("spsm tables", tables),
         }
     }
 }
