@@ -265,3 +265,65 @@ fn gpu_parity_packing_texel_for_texel() {
         }
     }
 }
+
+/// Stage 5 on the GPU, silhouette recovery, against the twin's: the same silhouette (centre
+/// texel, kept pattern, facing away) and the same value for every uncertain pixel, and the
+/// same counters, with the twin's map, classes and consistent depths as input, in both
+/// formats at maps 512 and 1024 (spot-spheres: a spot light).
+#[test]
+fn gpu_parity_silhouette_recovery_pixel_for_pixel() {
+    use methods::{
+        gpu::spsm::{recover as gpu_recover, texel::GpuTexels},
+        spsm::{self, classify, depth, recover},
+    };
+    let ctx = GpuContext::shared().expect("a GPU adapter (Mesa's lavapipe on CI)");
+    let mut tangents = 0;
+    for name in ["plane-square", "cage", "random-10k", "bumpy", "spot-spheres"] {
+        let Some(scene) = load_builtin(name) else { continue };
+        let frame = Frame::new(&scene, 160, 120, &mut Recorder::default());
+        let gpu_frame = GpuFrame::upload(ctx, &frame, &frame.gbuffer);
+        for res in [512, 1024] {
+            for texel in [TexelFormat::Packed, TexelFormat::F32] {
+                let mut o = options(texel, 1);
+                o.map.map_res = res;
+                let (map, tester, space) = spsm::build_map(&o, &frame, &mut Recorder::default());
+                let lookup = classify::Lookup { map: &map, tester, space };
+                let (_, lit, uncertain, _) = classify::classify_pixels(&frame, &lookup);
+                let centres: Vec<u32> = uncertain.iter().map(|u| u.texel).collect();
+                let (consistent, _) = depth::consistent_depths(&map, &centres);
+                let mut cpu_lit = lit.clone();
+                let (cpu, cpu_counters) =
+                    recover::recover_pixels(&frame, &lookup, &consistent, &uncertain, &mut cpu_lit);
+                let texels = GpuTexels::upload(ctx, &lookup);
+                let mut gpu_lit = lit;
+                let mut rec = Recorder::default();
+                let gpu = gpu_recover::recover_pixels(
+                    ctx,
+                    &gpu_frame,
+                    &frame,
+                    &lookup,
+                    &texels,
+                    &consistent,
+                    &uncertain,
+                    &mut gpu_lit,
+                    &mut rec,
+                )
+                .expect("GPU silhouette recovery");
+                let silhouettes = cpu.iter().zip(&gpu.silhouettes).filter(|(a, b)| a != b).count();
+                let values = cpu_lit.iter().zip(&gpu_lit).filter(|(a, b)| a != b).count();
+                eprintln!(
+                    "{name} map {res} {texel:?}: {} uncertain, {} recovered by tangents, \
+                     {silhouettes} silhouettes and {values} values differ, {} handed back",
+                    uncertain.len(),
+                    cpu_counters.recovered_pixels,
+                    gpu.handed_back
+                );
+                assert_eq!(gpu.silhouettes.len(), cpu.len());
+                assert_eq!((silhouettes, values), (0, 0), "{name} map {res} {texel:?}");
+                assert_eq!(rec.counters, cpu_counters, "{name} map {res} {texel:?}");
+                tangents += cpu_counters.recovered_pixels;
+            }
+        }
+    }
+    assert!(tangents > 0, "no pixel was decided by a silhouette function");
+}

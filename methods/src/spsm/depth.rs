@@ -91,6 +91,12 @@ impl ConsistentDepths {
         Self { index, depth }
     }
 
+    /// The texels, ascending, and their depths.
+    #[cfg(feature = "gpu")]
+    pub(crate) fn parts(&self) -> (&[u32], &[f32]) {
+        (&self.index, &self.depth)
+    }
+
     /// The stored consistent minimum depth of texel `k`, if it was computed.
     #[inline]
     pub fn get(&self, k: u32) -> Option<f64> {

@@ -202,7 +202,7 @@ pub fn class_image(classes: &[PixelClass], lit: &[f32]) -> Vec<[u8; 3]> {
 }
 
 /// Stages 1 and 2: the map of `frame` under options `o`, the bias rule and the map's space.
-pub(crate) fn build_map(
+pub fn build_map(
     o: &SpsmOptions,
     frame: &Frame<'_>,
     rec: &mut Recorder,

@@ -381,10 +381,31 @@ pub fn silhouette(
     Some(Silhouette { texel: (x as u32, y as u32), kept, facing_away })
 }
 
+/// The silhouette of one uncertain pixel and its lit value at the pixel's own map point;
+/// `(None, true)` where the point falls outside the map.
+pub fn recover_pixel(
+    frame: &Frame<'_>,
+    lookup: &Lookup<'_>,
+    consistent: &ConsistentDepths,
+    u: &UncertainPixel,
+) -> (Option<Silhouette>, bool) {
+    let g = &frame.gbuffer;
+    let k = u.pixel as usize;
+    let Some(p) = lookup.point(g.position[k], g.normal[k]) else {
+        return (None, true);
+    };
+    match silhouette(lookup, consistent, &p) {
+        Some(s) => {
+            let lit = Resolved::new(lookup.map, &s).lit(p.xy);
+            (Some(s), lit)
+        }
+        None => (None, true),
+    }
+}
+
 /// Runs silhouette recovery for the uncertain pixels (indices into the frame), writing their
 /// lit value (1 or 0) into `lit`. Returns each pixel's silhouette, in the order of
-/// `uncertain`, and the counters: `recovered_pixels` (pixels decided by a silhouette
-/// function rather than a full or empty pattern) and `shadow_map_lookups` (9 per pixel).
+/// `uncertain`, and the counters ([`record`]).
 pub fn recover_pixels(
     frame: &Frame<'_>,
     lookup: &Lookup<'_>,
@@ -392,23 +413,19 @@ pub fn recover_pixels(
     uncertain: &[UncertainPixel],
     lit: &mut [f32],
 ) -> (Vec<Option<Silhouette>>, Counters) {
-    let g = &frame.gbuffer;
-    let out: Vec<(Option<Silhouette>, bool)> = uncertain
-        .par_iter()
-        .map(|u| {
-            let k = u.pixel as usize;
-            let Some(p) = lookup.point(g.position[k], g.normal[k]) else {
-                return (None, true);
-            };
-            match silhouette(lookup, consistent, &p) {
-                Some(s) => {
-                    let lit = Resolved::new(lookup.map, &s).lit(p.xy);
-                    (Some(s), lit)
-                }
-                None => (None, true),
-            }
-        })
-        .collect();
+    let out: Vec<(Option<Silhouette>, bool)> =
+        uncertain.par_iter().map(|u| recover_pixel(frame, lookup, consistent, u)).collect();
+    record(uncertain, out, lit)
+}
+
+/// Writes the recovered values `out` of the `uncertain` pixels (same order) into `lit`, and
+/// counts `recovered_pixels` (pixels decided by a silhouette function rather than a full or
+/// empty pattern) and `shadow_map_lookups` (9 per pixel with a silhouette).
+pub fn record(
+    uncertain: &[UncertainPixel],
+    out: Vec<(Option<Silhouette>, bool)>,
+    lit: &mut [f32],
+) -> (Vec<Option<Silhouette>>, Counters) {
     let mut c = Counters::default();
     let mut silhouettes = Vec::with_capacity(out.len());
     for (u, (s, value)) in uncertain.iter().zip(out) {

@@ -24,8 +24,14 @@ use crate::{
 };
 use instrumentation::{Counters, Recorder};
 
-const ANTIALIAS: Part =
-    Part { name: "spsm/antialias.wgsl", source: include_str!("antialias.wgsl"), needs: &[&COMMON] };
+/// WGSL of a resolved silhouette's occluders and its function along a tangent.
+pub(super) const SILHOUETTE: Part =
+    Part::file("spsm/silhouette.wgsl", include_str!("silhouette.wgsl"));
+const ANTIALIAS: Part = Part {
+    name: "spsm/antialias.wgsl",
+    source: include_str!("antialias.wgsl"),
+    needs: &[&COMMON, &SILHOUETTE],
+};
 
 /// `f64` per pixel record of `antialias.wgsl`.
 const REC_F: usize = 82;

@@ -35,79 +35,12 @@ fn kept(v: f64) -> f64 {
     return select(v, 0.0lf, dims[2] == 0u);
 }
 
-fn dot2(a: vec2<f64>, b: vec2<f64>) -> f64 {
-    return kept(a.x * b.x) + kept(a.y * b.y);
-}
-
 fn vec2_at(o: u32) -> vec2<f64> {
     return vec2<f64>(rec_f[o], rec_f[o + 1u]);
 }
 
 fn vec3_at(o: u32) -> vec3<f64> {
     return vec3<f64>(rec_f[o], rec_f[o + 1u], rec_f[o + 2u]);
-}
-
-// Resolved::shadowed_along: whether q lies beyond the boundary along the tangent of normal n.
-fn shadowed_along(base: u32, tris: u32, n: vec2<f64>, q: vec2<f64>) -> bool {
-    let origin = vec2_at(base + AT_ORIGIN);
-    let tangent = vec2<f64>(-n.y, n.x);
-    let tq = dot2(q - origin, tangent);
-    let dq = dot2(q - origin, n);
-    var covered = 0.0lf;
-    var has_covered = false;
-    var left = vec2<f64>(0.0lf);
-    var has_left = false;
-    var right = vec2<f64>(0.0lf);
-    var has_right = false;
-    for (var k = 0u; k < tris; k++) {
-        let o = base + AT_TRIS + k * TRI_F;
-        let sign = rec_f[o + 6u];
-        for (var e = 0u; e < 3u; e++) {
-            let a = vec2_at(o + 2u * e);
-            let b = vec2_at(o + 2u * ((e + 1u) % 3u));
-            let d = b - a;
-            let outward = vec2<f64>(d.y, -d.x) * sign;
-            if dot2(outward, n) >= 0.0lf {
-                continue;
-            }
-            let pa = vec2<f64>(dot2(a - origin, tangent), dot2(a - origin, n));
-            let pb = vec2<f64>(dot2(b - origin, tangent), dot2(b - origin, n));
-            var p0 = pb;
-            var p1 = pa;
-            if pa.x <= pb.x {
-                p0 = pa;
-                p1 = pb;
-            }
-            if tq >= p0.x && tq <= p1.x {
-                var at = min(p0.y, p1.y);
-                if p1.x > p0.x {
-                    at = p0.y + (p1.y - p0.y) * (tq - p0.x) / (p1.x - p0.x);
-                }
-                if !has_covered || at < covered {
-                    covered = at;
-                    has_covered = true;
-                }
-            }
-            for (var m = 0u; m < 2u; m++) {
-                let p = select(p1, p0, m == 0u);
-                if p.x <= tq && (!has_left || p.x > left.x || (p.x == left.x && p.y < left.y)) {
-                    left = p;
-                    has_left = true;
-                }
-                if p.x >= tq && (!has_right || p.x < right.x || (p.x == right.x && p.y < right.y)) {
-                    right = p;
-                    has_right = true;
-                }
-            }
-        }
-    }
-    if has_covered {
-        return dq > covered;
-    }
-    if has_left && has_right && right.x > left.x {
-        return dq > left.y + (right.y - left.y) * (tq - left.x) / (right.x - left.x);
-    }
-    return false;
 }
 
 @compute @workgroup_size(64)
@@ -124,6 +57,15 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     let normal = vec3_at(base + AT_NORMAL);
     let offset = rec_f[base + AT_OFFSET];
     let centre = vec2_at(base + AT_CENTRE);
+    occ_origin = vec2_at(base + AT_ORIGIN);
+    occ_n = tris;
+    for (var k = 0u; k < tris; k++) {
+        let o = base + AT_TRIS + k * TRI_F;
+        for (var e = 0u; e < 3u; e++) {
+            occ_v[3u * k + e] = vec2_at(o + 2u * e);
+        }
+        occ_sign[k] = rec_f[o + 6u];
+    }
     let camera = proj_load(camera_data);
     let light = proj_load(light_data);
     var lit = 0u;
@@ -142,7 +84,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         }
         var shadowed = true;
         for (var k = 0u; k < tangents; k++) {
-            if !shadowed_along(base, tris, vec2_at(base + AT_NORMALS + 2u * k), q) {
+            if !shadowed_along(vec2_at(base + AT_NORMALS + 2u * k), q) {
                 shadowed = false;
             }
         }

@@ -36,11 +36,15 @@ use crate::{
 };
 use instrumentation::{Counters, Recorder};
 
-const CLASSIFY: Part = Part {
-    name: "spsm/classify.wgsl",
-    source: include_str!("classify.wgsl"),
+/// WGSL of [`Lookup`]: map points, containment, gradient, plane error, `lies_on`.
+pub(super) const LOOKUP: Part = Part {
+    name: "spsm/lookup.wgsl",
+    source: include_str!("lookup.wgsl"),
     needs: &[&TEXEL, &ENCODE],
 };
+
+const CLASSIFY: Part =
+    Part { name: "spsm/classify.wgsl", source: include_str!("classify.wgsl"), needs: &[&LOOKUP] };
 
 crate::gpu::layout::wgsl_mirror!(
     Params,

@@ -22,8 +22,11 @@ const MARK: Part = Part {
     source: include_str!("depth_mark.wgsl"),
     needs: &[&TEXEL],
 };
+/// WGSL of a triangle clipped to a texel and its consistent and conservative depths.
+pub(super) const CLIP: Part =
+    Part { name: "spsm/clip.wgsl", source: include_str!("clip.wgsl"), needs: &[&TEXEL] };
 const DEPTH: Part =
-    Part { name: "spsm/depth.wgsl", source: include_str!("depth.wgsl"), needs: &[&TEXEL] };
+    Part { name: "spsm/depth.wgsl", source: include_str!("depth.wgsl"), needs: &[&CLIP] };
 
 /// The stage [`STAGE_CONSISTENT_DEPTH`] on the GPU: the consistent minimum depths of the
 /// texels around the `uncertain` pixels of the map in `texels`, and the number of texels the

@@ -15,10 +15,11 @@
 //!    containment test the `f64` filter cannot decide are handed back to the twin's code.
 //! 4. **consistent min depth** (section 4, Fig. 9): on the GPU ([`depth`]), for the texels
 //!    around the uncertain pixels, as the twin.
-//! 5. **silhouette recovery** (section 4.2): on the CPU, by the twin's code, for the
-//!    uncertain pixels only.
-//! 6. **antialiasing** (section 5): on the GPU ([`antialias`]), the recovered silhouettes
-//!    uploaded per pixel and every sub-sample evaluated there.
+//! 5. **silhouette recovery** (section 4.2): on the GPU ([`recover`]), one thread an
+//!    uncertain pixel, the look-up tables uploaded; pixels whose exact tests the `f64` filter
+//!    cannot decide are handed back to the twin's code.
+//! 6. **antialiasing** (section 5): on the GPU ([`antialias`]), the recovered silhouettes'
+//!    occluders uploaded per pixel and every sub-sample evaluated there.
 //!
 //! The texels reach the kernels as stored ([`texel`]).
 //!
@@ -31,6 +32,7 @@ pub mod classify;
 pub mod depth;
 pub mod pack;
 pub mod raster;
+pub mod recover;
 pub mod texel;
 
 use crate::{
@@ -95,11 +97,6 @@ pub fn shade(
     spsm::record_packing(packed, clamped, rec);
     let lookup = spsm::classify::Lookup { map: &map, tester, space };
     let texels = texel::GpuTexels::upload(ctx, &lookup);
-    rec.notes.push(
-        "spsm on the GPU: conservative rasterization, packing, classification, consistent min \
-         depth and antialiasing run on the GPU; silhouette recovery runs the CPU twin's code"
-            .into(),
-    );
     let mut c = classify::classify(ctx, gframe, frame, &lookup, &texels, rec)?;
     rec.counters.merge(&c.counters);
     if c.handed_back > 0 {
@@ -110,7 +107,25 @@ pub fn shade(
     }
     let (consistent, corrected) = depth::consistent_depths(ctx, &texels, &c.uncertain, rec)?;
     rec.counters.depth_corrected_texels += corrected;
-    let silhouettes = spsm::recover(frame, &lookup, &consistent, &c.uncertain, &mut c.lit, rec);
+    let recovered = recover::recover_pixels(
+        ctx,
+        gframe,
+        frame,
+        &lookup,
+        &texels,
+        &consistent,
+        &c.uncertain,
+        &mut c.lit,
+        rec,
+    )?;
+    if recovered.handed_back > 0 {
+        rec.notes.push(format!(
+            "{} pixels recovered by the CPU code (containment or orientation undecided by the \
+             f64 filter)",
+            recovered.handed_back
+        ));
+    }
+    let silhouettes = recovered.silhouettes;
     if options.rate > 1 {
         let counters = antialias::antialias_pixels(
             ctx,
