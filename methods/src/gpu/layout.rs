@@ -8,8 +8,10 @@
 //! member's name, offset and size to be the Rust struct's. A field added, removed, renamed,
 //! resized or moved on one side only fails that test (`tests` below shows it failing).
 //!
-//! The layouts checked: `raster::Params` (`raster.wgsl`), `sm::Params` (`receiver.wgsl`, shared
-//! by `sm` and the PCF kernels) and `spsm::texel::Params` (`texel.wgsl`).
+//! The layouts checked: `frame::ProjectorData` and `frame::Xyz` (`common.wgsl`, every
+//! projector the kernels read), `raster::Params` (`raster.wgsl`), `sm::Params`
+//! (`receiver.wgsl`, shared by `sm` and the PCF kernels) and `spsm::texel::Params`
+//! (`texel.wgsl`).
 
 /// Declares that the `#[repr(C)]` struct `$ty` is mirrored by the WGSL struct `$name` of the
 /// shader source `$source` (an expression giving a `String`), fields `[$field, ...]` in

@@ -9,7 +9,7 @@ use crate::{
     afsm::SHADOW_OFFSET,
     depth_test::DepthTester,
     frame::Frame,
-    gpu::frame::projector_data,
+    gpu::frame::ProjectorData,
     pan09::{
         facets::LightPlanes,
         mask::Mask,
@@ -67,6 +67,15 @@ fn light_model(l: LightModel) -> (u32, DVec3) {
     }
 }
 
+/// The projector of `p` as `load_proj` in `params.wgsl` reads it: 18 `f64`, the kind as 0 or 1.
+fn projector(out: &mut Vec<f64>, p: &Projector) {
+    let d = ProjectorData::new(p);
+    for v in [d.origin, d.right, d.up, d.forward] {
+        out.extend_from_slice(&[v.x, v.y, v.z]);
+    }
+    out.extend_from_slice(&[f64::from(d.kind), d.a, d.b, d.near, d.width, d.height]);
+}
+
 fn plane(out: &mut Vec<f64>, p: Option<&WorldPlane>) {
     let p = p.copied().unwrap_or_default();
     out.extend_from_slice(&[p.n.x, p.n.y, p.n.z, p.c, p.n_ox, p.n_oy, p.n_dx, p.n_dy]);
@@ -85,8 +94,8 @@ pub(super) fn params(
     let (light_kind, light_v) = light_model(LightModel::of(light));
     let (eye_kind, eye_v) = light_model(LightModel::of(&frame.camera));
     let mut p = Vec::with_capacity(97 + 2 * pattern.rate() as usize);
-    p.extend_from_slice(&projector_data(light));
-    p.extend_from_slice(&projector_data(&frame.camera));
+    projector(&mut p, light);
+    projector(&mut p, &frame.camera);
     p.extend_from_slice(&[
         tester.constant,
         tester.slope_bias,

@@ -31,11 +31,16 @@ struct Setup {
 }
 
 fn load_proj(o: u32) -> Proj {
-    var a: array<f64, 18>;
-    for (var i = 0u; i < 18u; i++) {
-        a[i] = P[o + i];
-    }
-    return proj_load(a);
+    let x = array<Xyz, 4>(
+        Xyz(P[o], P[o + 1u], P[o + 2u]),
+        Xyz(P[o + 3u], P[o + 4u], P[o + 5u]),
+        Xyz(P[o + 6u], P[o + 7u], P[o + 8u]),
+        Xyz(P[o + 9u], P[o + 10u], P[o + 11u]),
+    );
+    return proj_load(ProjectorData(
+        x[0], x[1], x[2], x[3], u32(P[o + 12u]), 0u,
+        P[o + 13u], P[o + 14u], P[o + 15u], P[o + 16u], P[o + 17u],
+    ));
 }
 
 fn load_v3(o: u32) -> vec3<f64> {
