@@ -10,8 +10,9 @@
 //!
 //! The layouts checked: `frame::ProjectorData` and `frame::Xyz` (`common.wgsl`, every
 //! projector the kernels read), `raster::Params` (`raster.wgsl`), `sm::Params`
-//! (`receiver.wgsl`, shared by `sm` and the PCF kernels) and `spsm::texel::Params`
-//! (`texel.wgsl`).
+//! (`receiver.wgsl`, shared by `sm` and the PCF kernels), `spsm::texel::Params`
+//! (`texel.wgsl`) and `pan09::params::Params` and `PlaneData` (`pan09/params.wgsl`, pan09's
+//! per-frame constants).
 
 /// Declares that the `#[repr(C)]` struct `$ty` is mirrored by the WGSL struct `$name` of the
 /// shader source `$source` (an expression giving a `String`), fields `[$field, ...]` in
