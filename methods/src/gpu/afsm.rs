@@ -56,7 +56,7 @@
 //!   applicable.
 
 use super::{
-    frame::{projector_data, COMMON},
+    frame::{ProjectorData, COMMON},
     shader::{compose, Part},
     GpuContext, GpuError, GpuFrame,
 };
@@ -239,7 +239,7 @@ impl<'a> Izb<'a> {
         let grid = grid_size(pixels);
         let triangles = gpu.triangles as usize;
         let cells = grid as usize * grid as usize;
-        let light_buf = ctx.upload("afsm light", &projector_data(&light));
+        let light_buf = ctx.upload("afsm light", &[ProjectorData::new(&light)]);
         // The last two are the sub-sample's offset in its pixel, written by `shadowed`.
         let fparams = ctx.upload(
             "afsm fparams",
@@ -254,7 +254,7 @@ impl<'a> Izb<'a> {
         );
         let uparams =
             ctx.upload("afsm uparams", &[pixels as u32, grid, gpu.triangles, frame.width()]);
-        let camera = ctx.upload("afsm camera", &projector_data(&frame.camera));
+        let camera = ctx.upload("afsm camera", &[ProjectorData::new(&frame.camera)]);
         let scan = super::scan::Scan::new(ctx);
         let transform = ctx.pipeline("afsm transform", &compose(&[&TRANSFORM]), "transform");
         let sample_f = ctx.zeroed::<f64>("afsm sample xyz", 3 * pixels);

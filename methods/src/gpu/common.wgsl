@@ -18,14 +18,37 @@ struct Proj {
     height: f64,
 }
 
-fn proj_load(v: array<f64, 18>) -> Proj {
+// Three f64 as a buffer holds them (frame::Xyz): vec3<f64> is aligned to 32 bytes.
+struct Xyz {
+    x: f64,
+    y: f64,
+    z: f64,
+}
+
+fn xyz(v: Xyz) -> vec3<f64> {
+    return vec3<f64>(v.x, v.y, v.z);
+}
+
+// A projector as a buffer holds it (frame::ProjectorData, field for field); kind, a and b
+// as in Proj, pad zero.
+struct ProjectorData {
+    origin: Xyz,
+    right: Xyz,
+    up: Xyz,
+    forward: Xyz,
+    kind: u32,
+    pad: u32,
+    a: f64,
+    b: f64,
+    near: f64,
+    width: f64,
+    height: f64,
+}
+
+fn proj_load(d: ProjectorData) -> Proj {
     return Proj(
-        vec3<f64>(v[0], v[1], v[2]),
-        vec3<f64>(v[3], v[4], v[5]),
-        vec3<f64>(v[6], v[7], v[8]),
-        vec3<f64>(v[9], v[10], v[11]),
-        u32(v[12]),
-        v[13], v[14], v[15], v[16], v[17],
+        xyz(d.origin), xyz(d.right), xyz(d.up), xyz(d.forward),
+        d.kind, d.a, d.b, d.near, d.width, d.height,
     );
 }
 

@@ -8,14 +8,19 @@
 //! member's name, offset and size to be the Rust struct's. A field added, removed, renamed,
 //! resized or moved on one side only fails that test (`tests` below shows it failing).
 //!
-//! The layouts checked: `raster::Params` (`raster.wgsl`), `sm::Params` (`receiver.wgsl`, shared
-//! by `sm` and the PCF kernels) and `spsm::texel::Params` (`texel.wgsl`).
+//! The layouts checked: `frame::ProjectorData` and `frame::Xyz` (`common.wgsl`, every
+//! projector the kernels read), `raster::Params` (`raster.wgsl`), `sm::Params`
+//! (`receiver.wgsl`, shared by `sm` and the PCF kernels), `spsm::texel::Params`
+//! (`texel.wgsl`) and `pan09::params::Params` and `PlaneData` (`pan09/params.wgsl`, pan09's
+//! per-frame constants).
 
 /// Declares that the `#[repr(C)]` struct `$ty` is mirrored by the WGSL struct `$name` of the
 /// shader source `$source` (an expression giving a `String`), fields `[$field, ...]` in
-/// order, and adds the test `wgsl_layout::matches_the_shader` to the calling module.
+/// order, and adds the test `wgsl_layout::matches_the_shader` to the calling module. A module
+/// with several such structs lists them in one call, separated by `;`; the one test checks
+/// each and names every mismatch.
 macro_rules! wgsl_mirror {
-    ($ty:ty, $name:literal, $source:expr, [$($field:ident),+ $(,)?]) => {
+    ($($ty:ty, $name:literal, $source:expr, [$($field:ident),+ $(,)?]);+ $(;)?) => {
         #[cfg(test)]
         mod wgsl_layout {
             #[allow(unused_imports)]
@@ -26,27 +31,32 @@ macro_rules! wgsl_mirror {
                 fn size<S, T>(_: fn(&S) -> &T) -> usize {
                     std::mem::size_of::<T>()
                 }
-                let fields = [$(
-                    $crate::gpu::layout::Field {
-                        name: stringify!($field),
-                        offset: std::mem::offset_of!($ty, $field),
-                        size: size::<$ty, _>(|s| &s.$field),
-                    },
-                )+];
-                let source: String = $source;
-                let mismatches = $crate::gpu::layout::mismatches(
-                    &fields,
-                    std::mem::size_of::<$ty>(),
-                    &source,
-                    $name,
-                );
-                assert!(
-                    mismatches.is_empty(),
-                    "{} and the WGSL struct {}: {}",
-                    stringify!($ty),
-                    $name,
-                    mismatches.join("; ")
-                );
+                let mut failures: Vec<String> = Vec::new();
+                $(
+                    let fields = [$(
+                        $crate::gpu::layout::Field {
+                            name: stringify!($field),
+                            offset: std::mem::offset_of!($ty, $field),
+                            size: size::<$ty, _>(|s| &s.$field),
+                        },
+                    )+];
+                    let source: String = $source;
+                    let mismatches = $crate::gpu::layout::mismatches(
+                        &fields,
+                        std::mem::size_of::<$ty>(),
+                        &source,
+                        $name,
+                    );
+                    if !mismatches.is_empty() {
+                        failures.push(format!(
+                            "{} and the WGSL struct {}: {}",
+                            stringify!($ty),
+                            $name,
+                            mismatches.join("; ")
+                        ));
+                    }
+                )+
+                assert!(failures.is_empty(), "{}", failures.join("\n"));
             }
         }
     };

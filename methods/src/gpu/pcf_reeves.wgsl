@@ -2,7 +2,7 @@
 // pcf_reeves::filter), one thread a pixel. After pixel.wgsl (its bindings 0 to 4),
 // counters.wgsl and pcf_jitter.wgsl.
 
-@group(0) @binding(5) var<storage, read> camera: array<f64, 18>;
+@group(0) @binding(5) var<storage, read> camera: ProjectorData;
 @group(0) @binding(6) var<storage, read> map_depth: array<f64>;
 @group(0) @binding(7) var<storage, read_write> lit: array<f32>;
 @group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>, 4>;

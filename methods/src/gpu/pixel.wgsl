@@ -3,7 +3,7 @@
 // bindings follow from 5.
 
 @group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var<storage, read> light: array<f64, 18>;
+@group(0) @binding(1) var<storage, read> light: ProjectorData;
 @group(0) @binding(2) var<storage, read> g_triangle: array<u32>;
 @group(0) @binding(3) var<storage, read> g_position: array<f64>;
 @group(0) @binding(4) var<storage, read> g_normal: array<f64>;

@@ -17,7 +17,7 @@
 //! within `f32` depth precision; `tests/gpu/raster.rs` measures how many samples that touches.
 
 use super::{
-    frame::{projector_data, COMMON},
+    frame::{ProjectorData, COMMON},
     shader::{compose, Part},
     GpuContext, GpuError,
 };
@@ -143,7 +143,7 @@ pub fn rasterize(
     let samples = width as usize * height as usize;
     let g = |n: usize| if job.gbuffer { n } else { 1 };
     let uniform = ctx.uniform("raster params", &params);
-    let proj = ctx.upload("raster projector", &projector_data(p));
+    let proj = ctx.upload("raster projector", &[ProjectorData::new(p)]);
     let planes = ctx.zeroed::<f64>("planes", 6 * triangles as usize);
     let clip = ctx.zeroed::<[f32; 4]>("clip", 3 * triangles as usize);
     let ids = ctx.zeroed::<u32>("ids", row_words as usize * height as usize);

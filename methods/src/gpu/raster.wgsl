@@ -26,7 +26,7 @@ struct Params {
 }
 
 @group(0) @binding(0) var<uniform> prm: Params;
-@group(0) @binding(1) var<storage, read> proj_data: array<f64, 18>;
+@group(0) @binding(1) var<storage, read> proj_data: ProjectorData;
 @group(0) @binding(2) var<storage, read> corners: array<f64>;
 @group(0) @binding(3) var<storage, read> casters: array<u32>;
 @group(0) @binding(4) var<storage, read_write> planes: array<f64>;

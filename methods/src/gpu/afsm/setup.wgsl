@@ -4,7 +4,7 @@
 // range and plane depth function, and the grid cells its bounding box covers. Appended to
 // common.wgsl and grid.wgsl.
 
-@group(0) @binding(0) var<storage, read> light_data: array<f64, 18>;
+@group(0) @binding(0) var<storage, read> light_data: ProjectorData;
 // [offset, cell scale x, cell scale y, orient2d filter bound]
 @group(0) @binding(1) var<storage, read> fparams: array<f64>;
 // [pixels, grid, triangles]

@@ -2,7 +2,7 @@
 // every pixel: the surface point of the sub-sample's G-buffer moved to the light's image
 // plane, with its shadow threshold depth. Appended to common.wgsl.
 
-@group(0) @binding(0) var<storage, read> light_data: array<f64, 18>;
+@group(0) @binding(0) var<storage, read> light_data: ProjectorData;
 // [afsm::SHADOW_OFFSET, cell scale x, y, orient2d bound, the sub-sample's offset x, y]
 @group(0) @binding(1) var<storage, read> fparams: array<f64>;
 // [pixels, grid, triangles, image width]
@@ -14,7 +14,7 @@
 @group(0) @binding(5) var<storage, read_write> sample_f: array<f64>;
 // Per pixel: the sample's triangle, NO_TRIANGLE where the pixel has no sample.
 @group(0) @binding(6) var<storage, read_write> sample_tri: array<u32>;
-@group(0) @binding(7) var<storage, read> camera_data: array<f64, 18>;
+@group(0) @binding(7) var<storage, read> camera_data: ProjectorData;
 
 fn max_element(v: vec3<f64>) -> f64 {
     return max(max(v.x, v.y), v.z);

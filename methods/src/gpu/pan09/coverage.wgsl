@@ -1,8 +1,6 @@
 // coverage::{TableCoverage, ExactCoverage}: the sub-samples of a half-plane, from the lookup
-// table `lut` (mode 0) or tested one by one (mode 1, the pattern's offsets in `P` from
-// PATTERN_AT). Reads the bindings P and lut of the stage.
-
-const PATTERN_AT: u32 = 97u;
+// table `lut` (mode 0) or tested one by one (mode 1, the pattern's offsets in `params`).
+// Reads the bindings params and lut of the stage.
 
 fn cov_split(s: Setup, h: vec3<f64>, strict: bool) -> vec4<u32> {
     var m = vec4<u32>(0u);
@@ -14,8 +12,8 @@ fn cov_split(s: Setup, h: vec3<f64>, strict: bool) -> vec4<u32> {
         return m;
     }
     for (var i = 0u; i < s.rate; i++) {
-        let x = P[PATTERN_AT + i];
-        let y = P[PATTERN_AT + s.rate + i];
+        let x = params.pattern_x[i];
+        let y = params.pattern_y[i];
         let g = h.x + h.y * x + h.z * y;
         if g > 0.0lf || (!strict && g == 0.0lf) {
             m[i / 32u] |= 1u << (i % 32u);

@@ -17,7 +17,7 @@ pub(super) fn run(
     let lit = ctx.zeroed::<f32>("lit", f.pixels());
     let bind = ctx.bind(
         &k.depth_test,
-        &[&run.p, &run.u, &f.position, &f.normal, class, &run.map.depth, &lit, &run.counters],
+        &[&run.params, &f.position, &f.normal, class, &run.map.depth, &lit, &run.counters],
     );
     ctx.stage(rec, STAGE_DEPTH_TEST, |e| {
         GpuContext::dispatch(e, &k.depth_test, &bind, GpuContext::groups_1d(f.pixels(), 64))

@@ -2,14 +2,13 @@
 // point falls in against its depth less the tolerance (reach half a texel). Writes every
 // pixel's lit value (1 for lit and silhouette pixels; the occlusion ratio overwrites those).
 
-@group(0) @binding(0) var<storage, read> P: array<f64>;
-@group(0) @binding(1) var<storage, read> U: array<u32>;
-@group(0) @binding(2) var<storage, read> g_position: array<f64>;
-@group(0) @binding(3) var<storage, read> g_normal: array<f64>;
-@group(0) @binding(4) var<storage, read> pixel_class: array<u32>;
-@group(0) @binding(5) var<storage, read> depth: array<f64>;
-@group(0) @binding(6) var<storage, read_write> lit: array<f32>;
-@group(0) @binding(7) var<storage, read_write> counters: array<atomic<u32>>;
+@group(0) @binding(0) var<storage, read> params: Params;
+@group(0) @binding(1) var<storage, read> g_position: array<f64>;
+@group(0) @binding(2) var<storage, read> g_normal: array<f64>;
+@group(0) @binding(3) var<storage, read> pixel_class: array<u32>;
+@group(0) @binding(4) var<storage, read> depth: array<f64>;
+@group(0) @binding(5) var<storage, read_write> lit: array<f32>;
+@group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {

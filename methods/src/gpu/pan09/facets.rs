@@ -43,8 +43,7 @@ pub(super) fn run(
     let bind = ctx.bind(
         &k.facets_classify,
         &[
-            &run.p,
-            &run.u,
+            &run.params,
             &f.triangle,
             &f.position,
             &f.normal,
@@ -70,8 +69,7 @@ pub(super) fn run(
     let bind = ctx.bind(
         &k.facets_build,
         &[
-            &run.p,
-            &run.u,
+            &run.params,
             &f.triangle,
             &f.position,
             &f.normal,

@@ -4,18 +4,17 @@
 // into facet numbers in pixel order afterwards); `build` builds the silhouette facets again
 // and writes their records (facet_record.wgsl) and their initial validity masks (all).
 
-@group(0) @binding(0) var<storage, read> P: array<f64>;
-@group(0) @binding(1) var<storage, read> U: array<u32>;
-@group(0) @binding(2) var<storage, read> g_triangle: array<u32>;
-@group(0) @binding(3) var<storage, read> g_position: array<f64>;
-@group(0) @binding(4) var<storage, read> g_normal: array<f64>;
-@group(0) @binding(5) var<storage, read> sat: array<u32>;
-@group(0) @binding(6) var<storage, read_write> pixel_class: array<u32>;
-@group(0) @binding(7) var<storage, read_write> index: array<u32>;
-@group(0) @binding(8) var<storage, read_write> FF: array<f64>;
-@group(0) @binding(9) var<storage, read_write> FU: array<u32>;
-@group(0) @binding(10) var<storage, read_write> valid: array<u32>;
-@group(0) @binding(11) var<storage, read_write> counters: array<atomic<u32>>;
+@group(0) @binding(0) var<storage, read> params: Params;
+@group(0) @binding(1) var<storage, read> g_triangle: array<u32>;
+@group(0) @binding(2) var<storage, read> g_position: array<f64>;
+@group(0) @binding(3) var<storage, read> g_normal: array<f64>;
+@group(0) @binding(4) var<storage, read> sat: array<u32>;
+@group(0) @binding(5) var<storage, read_write> pixel_class: array<u32>;
+@group(0) @binding(6) var<storage, read_write> index: array<u32>;
+@group(0) @binding(7) var<storage, read_write> FF: array<f64>;
+@group(0) @binding(8) var<storage, read_write> FU: array<u32>;
+@group(0) @binding(9) var<storage, read_write> valid: array<u32>;
+@group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>>;
 
 const FACET_F: u32 = 48u;
 const FACET_U: u32 = 8u;

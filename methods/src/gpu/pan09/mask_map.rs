@@ -22,8 +22,7 @@ pub(super) fn run(
     let bind = ctx.bind(
         &k.mask_map,
         &[
-            &run.p,
-            &run.u,
+            &run.params,
             edges,
             &n,
             &map.depth,

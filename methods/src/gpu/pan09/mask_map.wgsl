@@ -3,15 +3,14 @@
 // hidden there behind all nine depth-map surfaces around the texel. The hidden depths are
 // computed where needed instead of remembered (same values).
 
-@group(0) @binding(0) var<storage, read> P: array<f64>;
-@group(0) @binding(1) var<storage, read> U: array<u32>;
-@group(0) @binding(2) var<storage, read> edges: array<f64>;
-@group(0) @binding(3) var<storage, read> count: array<u32>;
-@group(0) @binding(4) var<storage, read> depth: array<f64>;
-@group(0) @binding(5) var<storage, read> map_triangle: array<u32>;
-@group(0) @binding(6) var<storage, read> corners: array<f64>;
-@group(0) @binding(7) var<storage, read_write> marks: array<atomic<u32>>;
-@group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>>;
+@group(0) @binding(0) var<storage, read> params: Params;
+@group(0) @binding(1) var<storage, read> edges: array<f64>;
+@group(0) @binding(2) var<storage, read> count: array<u32>;
+@group(0) @binding(3) var<storage, read> depth: array<f64>;
+@group(0) @binding(4) var<storage, read> map_triangle: array<u32>;
+@group(0) @binding(5) var<storage, read> corners: array<f64>;
+@group(0) @binding(6) var<storage, read_write> marks: array<atomic<u32>>;
+@group(0) @binding(7) var<storage, read_write> counters: array<atomic<u32>>;
 
 const EDGE_MARGIN: f64 = 1e-7lf;
 

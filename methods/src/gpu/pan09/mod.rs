@@ -163,10 +163,8 @@ struct Run<'a> {
     ctx: &'a GpuContext,
     frame: &'a GpuFrame,
     map: &'a GpuDepthMap,
-    /// `f64` constants (`params.wgsl`).
-    p: wgpu::Buffer,
-    /// `u32` constants.
-    u: wgpu::Buffer,
+    /// The run's constants, one [`params::Params`] (`params.wgsl`).
+    params: wgpu::Buffer,
     /// Counter slots ([`params::slot`]).
     counters: wgpu::Buffer,
     /// Lookup table, `words` per entry (one placeholder word in exact mode).
@@ -283,7 +281,7 @@ impl GpuPan09 {
         }
         let k = self.kernels.get_or_init(|| Kernels::new(ctx));
         let words = params::words(self.options.rate);
-        let (p, u) = params::params(frame, &map.projector, &self.options, &self.pattern);
+        let params = params::Params::new(frame, &map.projector, &self.options, &self.pattern);
         let tester = crate::depth_test::DepthTester::new(
             &self.options.map,
             map.projector,
@@ -294,8 +292,7 @@ impl GpuPan09 {
             ctx,
             frame: gframe,
             map,
-            p: ctx.upload("pan09 f64 params", &p),
-            u: ctx.upload("pan09 u32 params", &u),
+            params: ctx.upload("pan09 params", &[params]),
             counters: ctx.zeroed::<u32>("pan09 counters", slot::COUNT),
             lut: match &self.table {
                 Some(t) => ctx.upload("lookup table", t),

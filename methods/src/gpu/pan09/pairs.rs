@@ -96,8 +96,7 @@ pub(super) fn triangle_texel_pairs(
         ctx.bind(
             pipeline,
             &[
-                &run.p,
-                &run.u,
+                &run.params,
                 d,
                 &f.corners,
                 &f.casters,
@@ -136,8 +135,7 @@ pub(super) fn triangle_texel_pairs(
         ctx.bind(
             pipeline,
             &[
-                &run.p,
-                &run.u,
+                &run.params,
                 d,
                 &f.corners,
                 &f.casters,

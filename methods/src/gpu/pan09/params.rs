@@ -1,15 +1,20 @@
-//! The run's constants as the kernels read them (`params.wgsl`): `P` (`f64`) holds the light
-//! and camera projectors, the depth tolerance, the shadow offset ratio (`afsm::SHADOW_OFFSET`,
-//! scaled per triangle by the kernels), the light and eye models,
-//! the camera's screen basis and the light's planes seen by it (computed on the CPU by the
-//! CPU's own code, per frame, as the projectors are), then the pattern's offsets; `U` (`u32`)
-//! the sizes, kinds and masks.
+//! The run's constants as the kernels read them: one [`Params`], the WGSL struct `Params` of
+//! `params.wgsl` field for field, bound as `params` (binding 0) by every stage that includes
+//! that file. It holds the light and camera projectors ([`ProjectorData`]), the depth
+//! tolerance, the shadow offset ratio (`afsm::SHADOW_OFFSET`, scaled per triangle by the
+//! kernels), the light and eye models, the camera's screen basis and the light's planes seen by
+//! it ([`PlaneData`]; computed on the CPU by the CPU's own code, per frame, as the projectors
+//! are), the sizes, kinds and masks, and the sample pattern's offsets. The rate is at most
+//! [`MAX_METHOD_RATE`], so the offsets are two fixed arrays of that many `f64` (x, y, relative
+//! to the pixel's centre; zero past the rate) inside the block rather than a binding of their
+//! own. Vectors are [`Xyz`] (`vec3<f64>` would be aligned to 32 bytes); masks four `u32`
+//! words, lowest first.
 
 use crate::{
     afsm::SHADOW_OFFSET,
     depth_test::DepthTester,
     frame::Frame,
-    gpu::frame::projector_data,
+    gpu::frame::{ProjectorData, Xyz},
     pan09::{
         facets::LightPlanes,
         mask::Mask,
@@ -17,8 +22,9 @@ use crate::{
         silhouette::LightModel,
         Pan09Options, VisibilityMode,
     },
-    pattern::SamplePattern,
+    pattern::{SamplePattern, MAX_METHOD_RATE},
 };
+use bytemuck::{Pod, Zeroable};
 use glam::DVec3;
 use scenes::Projector;
 
@@ -67,63 +73,211 @@ fn light_model(l: LightModel) -> (u32, DVec3) {
     }
 }
 
-fn plane(out: &mut Vec<f64>, p: Option<&WorldPlane>) {
-    let p = p.copied().unwrap_or_default();
-    out.extend_from_slice(&[p.n.x, p.n.y, p.n.z, p.c, p.n_ox, p.n_oy, p.n_dx, p.n_dy]);
+/// A plane seen by the camera ([`WorldPlane`]), the WGSL struct `PlaneData` of `params.wgsl`
+/// field for field.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub(super) struct PlaneData {
+    n: Xyz,
+    c: f64,
+    n_ox: f64,
+    n_oy: f64,
+    n_dx: f64,
+    n_dy: f64,
 }
 
-/// `P` and `U` for a run of `options` on `frame` with the light `light`.
-pub(super) fn params(
-    frame: &Frame<'_>,
-    light: &Projector,
-    options: &Pan09Options,
-    pattern: &SamplePattern,
-) -> (Vec<f64>, Vec<u32>) {
-    let tester = DepthTester::new(&options.map, *light, frame.light_depth_range(light));
-    let camera = CameraBasis::new(&frame.camera);
-    let planes = LightPlanes::new(light, &camera);
-    let (light_kind, light_v) = light_model(LightModel::of(light));
-    let (eye_kind, eye_v) = light_model(LightModel::of(&frame.camera));
-    let mut p = Vec::with_capacity(97 + 2 * pattern.rate() as usize);
-    p.extend_from_slice(&projector_data(light));
-    p.extend_from_slice(&projector_data(&frame.camera));
-    p.extend_from_slice(&[
-        tester.constant,
-        tester.slope_bias,
-        tester.max_slope,
-        SHADOW_OFFSET,
-        f64::INFINITY,
-    ]);
-    p.extend_from_slice(&light_v.to_array());
-    p.extend_from_slice(&eye_v.to_array());
-    for v in [camera.o0, camera.ox, camera.oy, camera.d0, camera.dx, camera.dy] {
-        p.extend_from_slice(&v.to_array());
+impl PlaneData {
+    /// `p`, or the default plane (zero) where there is none.
+    fn new(p: Option<&WorldPlane>) -> Self {
+        let p = p.copied().unwrap_or_default();
+        Self { n: p.n.into(), c: p.c, n_ox: p.n_ox, n_oy: p.n_oy, n_dx: p.n_dx, n_dy: p.n_dy }
     }
-    plane(&mut p, Some(&planes.x));
-    plane(&mut p, Some(&planes.y));
-    plane(&mut p, planes.w.as_ref());
-    plane(&mut p, planes.near.as_ref());
-    debug_assert_eq!(p.len(), 97);
-    p.extend(pattern.offsets().iter().map(|o| o.x - 0.5));
-    p.extend(pattern.offsets().iter().map(|o| o.y - 0.5));
+}
 
-    let all = to_words(<u128 as Mask>::first(pattern.rate()));
-    let centre = to_words(<u128 as Mask>::bit(pattern.centre_index()));
-    let mut u = vec![
-        options.map.map_res,
-        frame.width(),
-        frame.height(),
-        words(pattern.rate()),
-        pattern.rate(),
-        u32::from(options.visibility == VisibilityMode::Exact),
-        u32::from(frame.effects.curved_receivers),
+/// The sample pattern's offsets the block has room for (the largest rate of the methods).
+const PATTERN: usize = MAX_METHOD_RATE as usize;
+
+/// The run's constants, the WGSL struct `Params` of `params.wgsl` field for field (see the
+/// module doc).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub(super) struct Params {
+    /// The light's projector (the depth map's).
+    light: ProjectorData,
+    /// The camera's projector.
+    camera: ProjectorData,
+    /// The depth tester's constant bias.
+    constant: f64,
+    /// The depth tester's slope bias.
+    slope_bias: f64,
+    /// The depth tester's largest slope.
+    max_slope: f64,
+    /// `afsm::SHADOW_OFFSET`; `visibility::occluder_offset` scales it per triangle.
+    offset: f64,
+    /// Infinity (WGSL has no literal for it).
+    inf: f64,
+    /// The light model's vector: the direction towards the light (`light_kind` 0) or its
+    /// position (1).
+    light_v: Xyz,
+    /// The eye's, likewise (`eye_kind`).
+    eye_v: Xyz,
+    /// The camera's screen basis ([`CameraBasis`]).
+    o0: Xyz,
+    ox: Xyz,
+    oy: Xyz,
+    d0: Xyz,
+    dx: Xyz,
+    dy: Xyz,
+    /// The light's planes seen by the camera ([`LightPlanes`]); `pw` and `pnear` zero where
+    /// absent (`has_w`, `has_near`).
+    px: PlaneData,
+    py: PlaneData,
+    pw: PlaneData,
+    pnear: PlaneData,
+    /// Depth map resolution.
+    res: u32,
+    /// Image width.
+    width: u32,
+    /// Image height.
+    height: u32,
+    /// Mask words per pixel ([`words`]).
+    words: u32,
+    /// Sub-samples per pixel.
+    rate: u32,
+    /// Visibility mode: 0 the lookup table, 1 exact.
+    mode: u32,
+    /// 1 with curved receivers.
+    curved: u32,
+    /// The light model's kind: 0 towards `light_v`, 1 at `light_v`.
+    light_kind: u32,
+    /// The eye's, likewise.
+    eye_kind: u32,
+    /// 1 where the camera is perspective.
+    perspective: u32,
+    /// 1 where `pw` is a plane.
+    has_w: u32,
+    /// 1 where `pnear` is a plane.
+    has_near: u32,
+    /// The mask of every sub-sample.
+    all: [u32; 4],
+    /// The mask of the centre sub-sample.
+    centre: [u32; 4],
+    /// The pattern's x offsets from the pixel's centre, `rate` of them, zero after.
+    pattern_x: [f64; PATTERN],
+    /// Their y offsets.
+    pattern_y: [f64; PATTERN],
+}
+
+super::super::layout::wgsl_mirror!(
+    PlaneData,
+    "PlaneData",
+    stage_source(),
+    [n, c, n_ox, n_oy, n_dx, n_dy];
+    Params,
+    "Params",
+    stage_source(),
+    [
+        light,
+        camera,
+        constant,
+        slope_bias,
+        max_slope,
+        offset,
+        inf,
+        light_v,
+        eye_v,
+        o0,
+        ox,
+        oy,
+        d0,
+        dx,
+        dy,
+        px,
+        py,
+        pw,
+        pnear,
+        res,
+        width,
+        height,
+        words,
+        rate,
+        mode,
+        curved,
         light_kind,
         eye_kind,
-        u32::from(camera.perspective),
-        u32::from(planes.w.is_some()),
-        u32::from(planes.near.is_some()),
+        perspective,
+        has_w,
+        has_near,
+        all,
+        centre,
+        pattern_x,
+        pattern_y
     ];
-    u.extend_from_slice(&all);
-    u.extend_from_slice(&centre);
-    (p, u)
+);
+
+/// A stage that reads the block, as its pipeline composes it: the depth test's.
+#[cfg(test)]
+fn stage_source() -> String {
+    use crate::gpu::shader::{compose, Part};
+    let own = Part::file("pan09/depth_test.wgsl", include_str!("depth_test.wgsl"));
+    compose(&[&super::LIB, &super::PARAMS, &own])
+}
+
+impl Params {
+    /// The constants of a run of `options` on `frame` with the light `light`.
+    pub(super) fn new(
+        frame: &Frame<'_>,
+        light: &Projector,
+        options: &Pan09Options,
+        pattern: &SamplePattern,
+    ) -> Self {
+        let tester = DepthTester::new(&options.map, *light, frame.light_depth_range(light));
+        let camera = CameraBasis::new(&frame.camera);
+        let planes = LightPlanes::new(light, &camera);
+        let (light_kind, light_v) = light_model(LightModel::of(light));
+        let (eye_kind, eye_v) = light_model(LightModel::of(&frame.camera));
+        let mut pattern_x = [0.0; PATTERN];
+        let mut pattern_y = [0.0; PATTERN];
+        for (i, o) in pattern.offsets().iter().enumerate() {
+            pattern_x[i] = o.x - 0.5;
+            pattern_y[i] = o.y - 0.5;
+        }
+        Self {
+            light: ProjectorData::new(light),
+            camera: ProjectorData::new(&frame.camera),
+            constant: tester.constant,
+            slope_bias: tester.slope_bias,
+            max_slope: tester.max_slope,
+            offset: SHADOW_OFFSET,
+            inf: f64::INFINITY,
+            light_v: light_v.into(),
+            eye_v: eye_v.into(),
+            o0: camera.o0.into(),
+            ox: camera.ox.into(),
+            oy: camera.oy.into(),
+            d0: camera.d0.into(),
+            dx: camera.dx.into(),
+            dy: camera.dy.into(),
+            px: PlaneData::new(Some(&planes.x)),
+            py: PlaneData::new(Some(&planes.y)),
+            pw: PlaneData::new(planes.w.as_ref()),
+            pnear: PlaneData::new(planes.near.as_ref()),
+            res: options.map.map_res,
+            width: frame.width(),
+            height: frame.height(),
+            words: words(pattern.rate()),
+            rate: pattern.rate(),
+            mode: u32::from(options.visibility == VisibilityMode::Exact),
+            curved: u32::from(frame.effects.curved_receivers),
+            light_kind,
+            eye_kind,
+            perspective: u32::from(camera.perspective),
+            has_w: u32::from(planes.w.is_some()),
+            has_near: u32::from(planes.near.is_some()),
+            all: to_words(<u128 as Mask>::first(pattern.rate())),
+            centre: to_words(<u128 as Mask>::bit(pattern.centre_index())),
+            pattern_x,
+            pattern_y,
+        }
+    }
 }

@@ -1,5 +1,60 @@
-// The run's constants (per frame), read from the bindings `P` (f64) and `U` (u32) that every
-// stage including this file declares; layouts in params.rs.
+// The run's constants (per frame): the struct Params (params.rs's Params, field for field),
+// read from the binding `params` (binding 0) that every stage including this file declares,
+// and the Setup that setup() makes of it.
+
+// screen::WorldPlane as a buffer holds it (params.rs's PlaneData).
+struct PlaneData {
+    n: Xyz,
+    c: f64,
+    n_ox: f64,
+    n_oy: f64,
+    n_dx: f64,
+    n_dy: f64,
+}
+
+struct Params {
+    light: ProjectorData,
+    camera: ProjectorData,
+    constant: f64,
+    slope_bias: f64,
+    max_slope: f64,
+    offset: f64,
+    inf: f64,
+    // The light and eye models' vectors (kinds in light_kind, eye_kind).
+    light_v: Xyz,
+    eye_v: Xyz,
+    // screen::CameraBasis.
+    o0: Xyz,
+    ox: Xyz,
+    oy: Xyz,
+    d0: Xyz,
+    dx: Xyz,
+    dy: Xyz,
+    // facets::LightPlanes; pw and pnear zero where absent (has_w, has_near).
+    px: PlaneData,
+    py: PlaneData,
+    pw: PlaneData,
+    pnear: PlaneData,
+    res: u32,
+    width: u32,
+    height: u32,
+    words: u32,
+    rate: u32,
+    // 0: the lookup table; 1: exact.
+    mode: u32,
+    curved: u32,
+    light_kind: u32,
+    eye_kind: u32,
+    perspective: u32,
+    has_w: u32,
+    has_near: u32,
+    // Masks, four words, lowest first.
+    all: array<u32, 4>,
+    centre: array<u32, 4>,
+    // The pattern's offsets from the pixel's centre, `rate` of them (at most 128).
+    pattern_x: array<f64, 128>,
+    pattern_y: array<f64, 128>,
+}
 
 struct Setup {
     light: Proj,
@@ -30,49 +85,45 @@ struct Setup {
     centre: vec4<u32>,
 }
 
-fn load_proj(o: u32) -> Proj {
-    var a: array<f64, 18>;
-    for (var i = 0u; i < 18u; i++) {
-        a[i] = P[o + i];
-    }
-    return proj_load(a);
+fn plane_load(p: PlaneData) -> WorldPlane {
+    return WorldPlane(xyz(p.n), p.c, p.n_ox, p.n_oy, p.n_dx, p.n_dy);
 }
 
-fn load_v3(o: u32) -> vec3<f64> {
-    return vec3<f64>(P[o], P[o + 1u], P[o + 2u]);
-}
-
-fn load_plane(o: u32) -> WorldPlane {
-    return WorldPlane(load_v3(o), P[o + 3u], P[o + 4u], P[o + 5u], P[o + 6u], P[o + 7u]);
+fn mask_load(m: array<u32, 4>) -> vec4<u32> {
+    return vec4<u32>(m[0], m[1], m[2], m[3]);
 }
 
 fn setup() -> Setup {
     var s: Setup;
-    s.light = load_proj(0u);
-    s.camera = load_proj(18u);
-    s.constant = P[36];
-    s.slope_bias = P[37];
-    s.max_slope = P[38];
-    s.offset = P[39];
-    s.inf = P[40];
-    s.lm = LightModel(U[7], load_v3(41u));
-    s.eye = LightModel(U[8], load_v3(44u));
-    s.cam = Basis(load_v3(47u), load_v3(50u), load_v3(53u), load_v3(56u), load_v3(59u), load_v3(62u), U[9] == 1u);
-    s.px = load_plane(65u);
-    s.py = load_plane(73u);
-    s.pw = load_plane(81u);
-    s.pnear = load_plane(89u);
-    s.res = U[0];
-    s.width = U[1];
-    s.height = U[2];
-    s.words = U[3];
-    s.rate = U[4];
-    s.mode = U[5];
-    s.curved = U[6];
-    s.has_w = U[10] == 1u;
-    s.has_near = U[11] == 1u;
-    s.all = vec4<u32>(U[12], U[13], U[14], U[15]);
-    s.centre = vec4<u32>(U[16], U[17], U[18], U[19]);
+    s.light = proj_load(params.light);
+    s.camera = proj_load(params.camera);
+    s.constant = params.constant;
+    s.slope_bias = params.slope_bias;
+    s.max_slope = params.max_slope;
+    s.offset = params.offset;
+    s.inf = params.inf;
+    s.lm = LightModel(params.light_kind, xyz(params.light_v));
+    s.eye = LightModel(params.eye_kind, xyz(params.eye_v));
+    s.cam = Basis(
+        xyz(params.o0), xyz(params.ox), xyz(params.oy),
+        xyz(params.d0), xyz(params.dx), xyz(params.dy),
+        params.perspective == 1u,
+    );
+    s.px = plane_load(params.px);
+    s.py = plane_load(params.py);
+    s.pw = plane_load(params.pw);
+    s.pnear = plane_load(params.pnear);
+    s.res = params.res;
+    s.width = params.width;
+    s.height = params.height;
+    s.words = params.words;
+    s.rate = params.rate;
+    s.mode = params.mode;
+    s.curved = params.curved;
+    s.has_w = params.has_w == 1u;
+    s.has_near = params.has_near == 1u;
+    s.all = mask_load(params.all);
+    s.centre = mask_load(params.centre);
     return s;
 }
 

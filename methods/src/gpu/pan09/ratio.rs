@@ -20,8 +20,7 @@ pub(super) fn run(
     let bind = ctx.bind(
         &k.ratio,
         &[
-            &run.p,
-            &run.u,
+            &run.params,
             &dims,
             &facets.ff,
             &facets.fu,

@@ -3,16 +3,15 @@
 // written to its pixel; counts the boundary pixels and, with curved receivers, their valid
 // sub-samples. dims: facets.
 
-@group(0) @binding(0) var<storage, read> P: array<f64>;
-@group(0) @binding(1) var<storage, read> U: array<u32>;
-@group(0) @binding(2) var<storage, read> dims: array<u32>;
-@group(0) @binding(3) var<storage, read> FF: array<f64>;
-@group(0) @binding(4) var<storage, read> FU: array<u32>;
-@group(0) @binding(5) var<storage, read> lut: array<u32>;
-@group(0) @binding(6) var<storage, read> masks: array<u32>;
-@group(0) @binding(7) var<storage, read_write> valid: array<u32>;
-@group(0) @binding(8) var<storage, read_write> lit: array<f32>;
-@group(0) @binding(9) var<storage, read_write> counters: array<atomic<u32>>;
+@group(0) @binding(0) var<storage, read> params: Params;
+@group(0) @binding(1) var<storage, read> dims: array<u32>;
+@group(0) @binding(2) var<storage, read> FF: array<f64>;
+@group(0) @binding(3) var<storage, read> FU: array<u32>;
+@group(0) @binding(4) var<storage, read> lut: array<u32>;
+@group(0) @binding(5) var<storage, read> masks: array<u32>;
+@group(0) @binding(6) var<storage, read_write> valid: array<u32>;
+@group(0) @binding(7) var<storage, read_write> lit: array<f32>;
+@group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>>;
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {

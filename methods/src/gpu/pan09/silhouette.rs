@@ -28,8 +28,7 @@ pub(super) fn run(
 ) -> Result<wgpu::Buffer, GpuError> {
     let ctx = run.ctx;
     let out = ctx.zeroed::<f64>("silhouette edges", 6 * edges);
-    let bind =
-        ctx.bind(&k.silhouette, &[&run.p, &run.u, positions, adjacency, &out, &run.counters]);
+    let bind = ctx.bind(&k.silhouette, &[&run.params, positions, adjacency, &out, &run.counters]);
     ctx.stage(rec, STAGE_SILHOUETTE_EDGES, |e| {
         crate::gpu::GpuContext::dispatch(
             e,

@@ -2,12 +2,11 @@
 // adjacency; silhouette edges are appended to `edges` (6 f64 each) in any order (the mask
 // map marks with OR, so the order does not matter).
 
-@group(0) @binding(0) var<storage, read> P: array<f64>;
-@group(0) @binding(1) var<storage, read> U: array<u32>;
-@group(0) @binding(2) var<storage, read> positions: array<f64>;
-@group(0) @binding(3) var<storage, read> adjacency: array<u32>;
-@group(0) @binding(4) var<storage, read_write> edges: array<f64>;
-@group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>>;
+@group(0) @binding(0) var<storage, read> params: Params;
+@group(0) @binding(1) var<storage, read> positions: array<f64>;
+@group(0) @binding(2) var<storage, read> adjacency: array<u32>;
+@group(0) @binding(3) var<storage, read_write> edges: array<f64>;
+@group(0) @binding(4) var<storage, read_write> counters: array<atomic<u32>>;
 
 fn vertex(v: u32) -> vec3<f64> {
     return vec3<f64>(positions[3u * v], positions[3u * v + 1u], positions[3u * v + 2u]);

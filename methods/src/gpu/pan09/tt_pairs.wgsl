@@ -8,29 +8,27 @@
 // ORs into masks (and notes validity candidates that are ANDed), so the order changes no
 // result and the GPU keeps the emission order. dims: n (texels, triangles or keys), res.
 
-@group(0) @binding(0) var<storage, read> P: array<f64>;
-@group(0) @binding(1) var<storage, read> U: array<u32>;
-@group(0) @binding(2) var<storage, read> dims: array<u32>;
-@group(0) @binding(3) var<storage, read> corners: array<f64>;
-@group(0) @binding(4) var<storage, read> casters: array<u32>;
-@group(0) @binding(5) var<storage, read> toff: array<u32>;
-@group(0) @binding(6) var<storage, read_write> busy: array<u32>;
-@group(0) @binding(7) var<storage, read_write> bsat: array<u32>;
-@group(0) @binding(8) var<storage, read_write> counts: array<u32>;
-@group(0) @binding(9) var<storage, read_write> keys: array<u32>;
-@group(0) @binding(10) var<storage, read_write> flags: array<u32>;
-@group(0) @binding(11) var<storage, read_write> tt: array<u32>;
-@group(0) @binding(12) var<storage, read_write> counters: array<atomic<u32>>;
+@group(0) @binding(0) var<storage, read> params: Params;
+@group(0) @binding(1) var<storage, read> dims: array<u32>;
+@group(0) @binding(2) var<storage, read> corners: array<f64>;
+@group(0) @binding(3) var<storage, read> casters: array<u32>;
+@group(0) @binding(4) var<storage, read> toff: array<u32>;
+@group(0) @binding(5) var<storage, read_write> busy: array<u32>;
+@group(0) @binding(6) var<storage, read_write> bsat: array<u32>;
+@group(0) @binding(7) var<storage, read_write> counts: array<u32>;
+@group(0) @binding(8) var<storage, read_write> keys: array<u32>;
+@group(0) @binding(9) var<storage, read_write> flags: array<u32>;
+@group(0) @binding(10) var<storage, read_write> tt: array<u32>;
+@group(0) @binding(11) var<storage, read_write> counters: array<atomic<u32>>;
 // First row of each triangle's rectangle.
-@group(0) @binding(13) var<storage, read_write> rows: array<u32>;
+@group(0) @binding(12) var<storage, read_write> rows: array<u32>;
 // Rows of each triangle's rectangle that hold keys (0 for none), scanned into each triangle's
 // first row item; then the keys of each row item, scanned into its first key's slot.
-@group(0) @binding(14) var<storage, read_write> row_off: array<u32>;
-@group(0) @binding(15) var<storage, read_write> row_keys: array<u32>;
+@group(0) @binding(13) var<storage, read_write> row_off: array<u32>;
+@group(0) @binding(14) var<storage, read_write> row_keys: array<u32>;
 
 fn bind_all() {
-    _ = P[0];
-    _ = U[0];
+    _ = params.res;
     _ = arrayLength(&corners);
     _ = arrayLength(&casters);
     _ = arrayLength(&toff);

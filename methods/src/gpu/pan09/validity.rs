@@ -20,8 +20,7 @@ pub(super) fn run(
     let bind = ctx.bind(
         &k.validity,
         &[
-            &run.p,
-            &run.u,
+            &run.params,
             &dims,
             candidates,
             &run.frame.corners,

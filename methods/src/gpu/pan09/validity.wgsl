@@ -3,15 +3,14 @@
 // plane meets the pixel hides from the camera the sub-samples it covers as seen from the
 // eye; they are ANDed out of the facet's validity mask (the centre always stays). dims: n.
 
-@group(0) @binding(0) var<storage, read> P: array<f64>;
-@group(0) @binding(1) var<storage, read> U: array<u32>;
-@group(0) @binding(2) var<storage, read> dims: array<u32>;
-@group(0) @binding(3) var<storage, read> candidates: array<u32>;
-@group(0) @binding(4) var<storage, read> corners: array<f64>;
-@group(0) @binding(5) var<storage, read> FF: array<f64>;
-@group(0) @binding(6) var<storage, read> FU: array<u32>;
-@group(0) @binding(7) var<storage, read> lut: array<u32>;
-@group(0) @binding(8) var<storage, read_write> valid: array<atomic<u32>>;
+@group(0) @binding(0) var<storage, read> params: Params;
+@group(0) @binding(1) var<storage, read> dims: array<u32>;
+@group(0) @binding(2) var<storage, read> candidates: array<u32>;
+@group(0) @binding(3) var<storage, read> corners: array<f64>;
+@group(0) @binding(4) var<storage, read> FF: array<f64>;
+@group(0) @binding(5) var<storage, read> FU: array<u32>;
+@group(0) @binding(6) var<storage, read> lut: array<u32>;
+@group(0) @binding(7) var<storage, read_write> valid: array<atomic<u32>>;
 
 fn corner(t: u32, i: u32) -> vec3<f64> {
     let o = 9u * t + 3u * i;

@@ -23,8 +23,7 @@ pub(super) fn run(
     let bind = ctx.bind(
         &k.visibility,
         &[
-            &run.p,
-            &run.u,
+            &run.params,
             &dims,
             tt,
             &run.frame.corners,

@@ -1,23 +1,22 @@
 // Stage "visibility evaluation" (visibility::occlusion_masks), one invocation per TT-pair:
 // its triangle as an Occluder against every facet of its texel's PT list (less the pixel's
 // own triangle), the occluded sub-samples ORed into the facet's mask word by word. With
-// curved receivers (U[6]) it also appends the validity candidates (facet, triangle) to
+// curved receivers (`curved`) it also appends the validity candidates (facet, triangle) to
 // `candidates`, up to dims[1] of them (the TT stage's bound on the evaluations). dims: pairs,
 // candidate capacity.
 
-@group(0) @binding(0) var<storage, read> P: array<f64>;
-@group(0) @binding(1) var<storage, read> U: array<u32>;
-@group(0) @binding(2) var<storage, read> dims: array<u32>;
-@group(0) @binding(3) var<storage, read> tt: array<u32>;
-@group(0) @binding(4) var<storage, read> corners: array<f64>;
-@group(0) @binding(5) var<storage, read> toff: array<u32>;
-@group(0) @binding(6) var<storage, read> items: array<u32>;
-@group(0) @binding(7) var<storage, read> FF: array<f64>;
-@group(0) @binding(8) var<storage, read> FU: array<u32>;
-@group(0) @binding(9) var<storage, read> lut: array<u32>;
-@group(0) @binding(10) var<storage, read_write> masks: array<atomic<u32>>;
-@group(0) @binding(11) var<storage, read_write> candidates: array<u32>;
-@group(0) @binding(12) var<storage, read_write> counters: array<atomic<u32>>;
+@group(0) @binding(0) var<storage, read> params: Params;
+@group(0) @binding(1) var<storage, read> dims: array<u32>;
+@group(0) @binding(2) var<storage, read> tt: array<u32>;
+@group(0) @binding(3) var<storage, read> corners: array<f64>;
+@group(0) @binding(4) var<storage, read> toff: array<u32>;
+@group(0) @binding(5) var<storage, read> items: array<u32>;
+@group(0) @binding(6) var<storage, read> FF: array<f64>;
+@group(0) @binding(7) var<storage, read> FU: array<u32>;
+@group(0) @binding(8) var<storage, read> lut: array<u32>;
+@group(0) @binding(9) var<storage, read_write> masks: array<atomic<u32>>;
+@group(0) @binding(10) var<storage, read_write> candidates: array<u32>;
+@group(0) @binding(11) var<storage, read_write> counters: array<atomic<u32>>;
 
 fn max_element(v: vec3<f64>) -> f64 {
     return max(max(v.x, v.y), v.z);

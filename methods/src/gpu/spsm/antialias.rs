@@ -12,7 +12,7 @@
 use crate::{
     frame::Frame,
     gpu::{
-        frame::{projector_data, COMMON},
+        frame::{ProjectorData, COMMON},
         shader::{compose, Part},
         GpuContext, GpuError,
     },
@@ -88,8 +88,8 @@ pub fn antialias_pixels(
         &pipeline,
         &[
             &ctx.upload("spsm aa dims", &[n as u32, frame.width(), rate as u32]),
-            &ctx.upload("spsm aa camera", &projector_data(&frame.camera)),
-            &ctx.upload("spsm aa light", &projector_data(&lookup.tester.projector)),
+            &ctx.upload("spsm aa camera", &[ProjectorData::new(&frame.camera)]),
+            &ctx.upload("spsm aa light", &[ProjectorData::new(&lookup.tester.projector)]),
             &ctx.upload("spsm aa offsets", &offsets),
             &ctx.upload("spsm aa records", &rec_f),
             &ctx.upload("spsm aa pixels", &rec_u),

@@ -7,8 +7,8 @@
 
 // [pixels to shade, image width, rate]
 @group(0) @binding(0) var<storage, read> dims: array<u32>;
-@group(0) @binding(1) var<storage, read> camera_data: array<f64, 18>;
-@group(0) @binding(2) var<storage, read> light_data: array<f64, 18>;
+@group(0) @binding(1) var<storage, read> camera_data: ProjectorData;
+@group(0) @binding(2) var<storage, read> light_data: ProjectorData;
 // The pattern's offsets, x then y per sub-sample.
 @group(0) @binding(3) var<storage, read> offsets: array<f64>;
 // Per pixel, REC_F f64: see the offsets below.

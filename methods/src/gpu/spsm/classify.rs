@@ -24,7 +24,7 @@ use crate::{
     depth_test::texel_at,
     frame::Frame,
     gpu::{
-        frame::projector_data,
+        frame::ProjectorData,
         shader::{compose, Part},
         GpuContext, GpuError, GpuFrame,
     },
@@ -102,7 +102,7 @@ pub fn classify(
     let params = Params { pixels: n as u32, ..texels.params };
     let p = ctx.pipeline("spsm classification", &compose(&[&CLASSIFY]), "main");
     let uniform = ctx.uniform("spsm params", &params);
-    let light = ctx.upload("spsm light", &projector_data(&lookup.tester.projector));
+    let light = ctx.upload("spsm light", &[ProjectorData::new(&lookup.tester.projector)]);
     let result = ctx.zeroed::<u32>("spsm classes", 2 * n.max(1));
     let counters = ctx.zeroed::<u32>("spsm counters", 8);
     let bind = ctx.bind(
