@@ -256,24 +256,26 @@ fn gpu_parity_packing_texel_for_texel() {
                     &mut rec,
                 )
                 .expect("GPU packing");
-                let (c, g) = (bits(&cpu.0), bits(&gpu.0));
+                let (c, g) = (bits(&cpu.0), bits(&gpu.map));
                 let differing = c.iter().zip(&g).filter(|(a, b)| a != b).count();
                 eprintln!("{name} map {res} {format:?}: {differing} of {} words differ", c.len());
                 assert_eq!((g.len(), differing), (c.len(), 0), "{name} map {res} {format:?}");
-                assert_eq!((gpu.1, gpu.2), (cpu.1, cpu.2), "filled and clamped texels");
+                assert_eq!((gpu.filled, gpu.clamped), (cpu.1, cpu.2), "filled and clamped texels");
             }
         }
     }
 }
 
-/// Stage 5 on the GPU, silhouette recovery, against the twin's: the same silhouette (centre
-/// texel, kept pattern, facing away) and the same value for every uncertain pixel, and the
-/// same counters, with the twin's map, classes and consistent depths as input, in both
-/// formats at maps 512 and 1024 (spot-spheres: a spot light).
+/// Stages 4 and 5 on the GPU, consistent min depth and silhouette recovery, against the
+/// twin's: the same depth for every texel recovery reads and the same count of corrected
+/// texels; the same silhouette (centre texel, kept pattern, facing away) and the same value
+/// for every uncertain pixel, and the same counters. Each stage takes the twin's outputs as
+/// its input (map, classes, consistent depths), in both formats at maps 512 and 1024
+/// (spot-spheres: a spot light).
 #[test]
-fn gpu_parity_silhouette_recovery_pixel_for_pixel() {
+fn gpu_parity_consistent_depth_and_silhouette_recovery() {
     use methods::{
-        gpu::spsm::{recover as gpu_recover, texel::GpuTexels},
+        gpu::spsm::{depth as gpu_depth, recover as gpu_recover, texel::GpuTexels},
         spsm::{self, classify, depth, recover},
     };
     let ctx = GpuContext::shared().expect("a GPU adapter (Mesa's lavapipe on CI)");
@@ -290,11 +292,22 @@ fn gpu_parity_silhouette_recovery_pixel_for_pixel() {
                 let lookup = classify::Lookup { map: &map, tester, space };
                 let (_, lit, uncertain, _) = classify::classify_pixels(&frame, &lookup);
                 let centres: Vec<u32> = uncertain.iter().map(|u| u.texel).collect();
-                let (consistent, _) = depth::consistent_depths(&map, &centres);
+                let (consistent, corrected) = depth::consistent_depths(&map, &centres);
+                let texels = GpuTexels::upload(ctx, &lookup);
+                let gpu_consistent = gpu_depth::consistent_depths(
+                    ctx,
+                    &texels,
+                    &uncertain,
+                    &mut Recorder::default(),
+                )
+                .expect("GPU consistent min depth");
+                assert!(
+                    gpu_consistent == (consistent.clone(), corrected),
+                    "{name} map {res} {texel:?}: consistent depths differ"
+                );
                 let mut cpu_lit = lit.clone();
                 let (cpu, cpu_counters) =
                     recover::recover_pixels(&frame, &lookup, &consistent, &uncertain, &mut cpu_lit);
-                let texels = GpuTexels::upload(ctx, &lookup);
                 let mut gpu_lit = lit;
                 let mut rec = Recorder::default();
                 let gpu = gpu_recover::recover_pixels(

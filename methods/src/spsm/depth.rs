@@ -73,7 +73,12 @@ pub fn conservative_depth(tri: &Tri, x: usize, y: usize) -> f64 {
     let cy = if tri.dz.y > 0.0 { y as f64 } else { y as f64 + 1.0 };
     let zv = tri.v.map(|p| tri.depth_at(p));
     let (lo, hi) = (zv[0].min(zv[1]).min(zv[2]), zv[0].max(zv[1]).max(zv[2]));
-    tri.depth_at(DVec2::new(cx, cy)).clamp(lo, hi)
+    let d = tri.depth_at(DVec2::new(cx, cy));
+    // Every vertex depth NaN (an f32 texel whose derivatives overflowed): nothing to clamp to.
+    if lo.is_nan() {
+        return d;
+    }
+    d.clamp(lo, hi)
 }
 
 /// Consistent minimum depths of a set of texels, by texel index (row by row).
@@ -153,6 +158,18 @@ mod tests {
             err_dz: DVec2::ZERO,
             err_v: 0.0,
         }
+    }
+
+    #[test]
+    fn infinite_derivatives_give_no_panic() {
+        // An f32 texel whose derivatives overflowed: every vertex depth is inf - inf = NaN,
+        // which once made the clamp to the vertex depths' range panic.
+        let v = [DVec2::new(1.0, 0.0), DVec2::new(2.0, 0.2), DVec2::new(1.5, -1.0)];
+        let t = tri(v, DVec2::splat(f64::INFINITY));
+        assert!(v.iter().all(|&p| t.depth_at(p).is_nan()));
+        assert_eq!(conservative_depth(&t, 0, 0), f64::NEG_INFINITY, "the corner's own depth");
+        let (m, _) = consistent_min_depth(&t, 0, 0);
+        assert!(!m.is_nan(), "the smallest depth of none is infinite, not NaN");
     }
 
     /// The minimum over the candidate vertices of triangle ∩ square, found independently:

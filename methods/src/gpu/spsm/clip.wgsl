@@ -2,6 +2,33 @@
 // f64, clip_to_texel), the consistent minimum depth over the texel (consistent_min_depth) and
 // Hasselgren's conservative corner depth (conservative_depth). Needs texel.wgsl before it.
 
+// f64's min and max, which return the other operand where one is NaN.
+fn min_num(a: f64, b: f64) -> f64 {
+    if a != a {
+        return b;
+    }
+    if b != b {
+        return a;
+    }
+    return min(a, b);
+}
+
+fn max_num(a: f64, b: f64) -> f64 {
+    if a != a {
+        return b;
+    }
+    if b != b {
+        return a;
+    }
+    return max(a, b);
+}
+
+// f64 infinity, made at run time: WGSL has no infinite literal, and a constant that
+// overflows is an error.
+fn infinity() -> f64 {
+    return f64(bitcast<f32>(0x7f800000u + u32(params.res == 0u)));
+}
+
 // At most 7 corners, `n` of them.
 struct Polygon {
     p: array<vec2<f64>, 7>,
@@ -66,10 +93,13 @@ fn conservative_depth(t: Tri, x: f64, y: f64) -> f64 {
     let z0 = depth_at(t, t.v[0]);
     let z1 = depth_at(t, t.v[1]);
     let z2 = depth_at(t, t.v[2]);
-    let lo = min(min(z0, z1), z2);
-    let hi = max(max(z0, z1), z2);
+    let lo = min_num(min_num(z0, z1), z2);
+    let hi = max_num(max_num(z0, z1), z2);
     let d = depth_at(t, vec2<f64>(cx, cy));
-    // f64::clamp: the bounds are ordered, and a NaN stays NaN.
+    // f64::clamp (a NaN stays NaN); unclamped where every vertex depth is NaN.
+    if lo != lo {
+        return d;
+    }
     if d < lo {
         return lo;
     }
@@ -79,16 +109,20 @@ fn conservative_depth(t: Tri, x: f64, y: f64) -> f64 {
     return d;
 }
 
-// consistent_min_depth: the smallest plane value at the clipped polygon's corners; the
-// conservative corner depth where the polygon is empty.
+// consistent_min_depth: the smallest plane value at the clipped polygon's corners (NaN
+// values passed over, infinity where all are NaN, as the twin's fold of f64::min from
+// infinity); the conservative corner depth where the polygon is empty.
 fn consistent_min_depth(t: Tri, x0: f64, y0: f64) -> f64 {
     let poly = clip_to_texel(t.v, x0, y0);
     if poly.n == 0u {
         return conservative_depth(t, x0, y0);
     }
-    var z = depth_at(t, poly.p[0]);
-    for (var i = 1u; i < poly.n; i++) {
-        z = min(z, depth_at(t, poly.p[i]));
+    var z = infinity();
+    for (var i = 0u; i < poly.n; i++) {
+        let v = depth_at(t, poly.p[i]);
+        if v < z {
+            z = v;
+        }
     }
     return z;
 }

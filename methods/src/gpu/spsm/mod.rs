@@ -8,8 +8,8 @@
 //!    the twin's map (triangle and minimum conservative depth), the triangles prepared by the
 //!    twin's code; overlaps the `f64` filter cannot decide are handed back to it.
 //! 2. **packing** (sections 3.3 and 3.4): on the GPU ([`pack`]), texel for texel the twin's
-//!    bits in both formats; read back for the CPU stages, and uploaded again for the
-//!    classification (a copy a later change can spare).
+//!    bits in both formats; kept on the GPU for the later stages, and read back for the
+//!    twin's code (the pixels handed back, the antialiasing's records).
 //! 3. **classification** (section 4.1, Algorithm 1): on the GPU ([`classify`]), one thread a
 //!    pixel, decoding the packed or `f32` texels in `f64` as the twin does; pixels whose exact
 //!    containment test the `f64` filter cannot decide are handed back to the twin's code.
@@ -84,7 +84,7 @@ pub fn shade(
             counts.undecided
         ));
     }
-    let (map, packed, clamped) = pack::pack_map(
+    let packed = pack::pack_map(
         ctx,
         &raster,
         space,
@@ -94,9 +94,9 @@ pub fn shade(
         rec,
     )?;
     drop(raster);
-    spsm::record_packing(packed, clamped, rec);
-    let lookup = spsm::classify::Lookup { map: &map, tester, space };
-    let texels = texel::GpuTexels::upload(ctx, &lookup);
+    spsm::record_packing(packed.filled, packed.clamped, rec);
+    let lookup = spsm::classify::Lookup { map: &packed.map, tester, space };
+    let texels = texel::GpuTexels::keep(ctx, &lookup, packed.words, packed.planes);
     let mut c = classify::classify(ctx, gframe, frame, &lookup, &texels, rec)?;
     rec.counters.merge(&c.counters);
     if c.handed_back > 0 {

@@ -29,9 +29,25 @@ use instrumentation::Recorder;
 const PACK: Part =
     Part { name: "spsm/pack.wgsl", source: include_str!("pack.wgsl"), needs: &[&ENCODE] };
 
+/// What [`pack_map`] gives: the twin's map, read back, and its texels as they stay on the
+/// GPU for the later stages.
+#[derive(Debug)]
+pub struct Packed {
+    /// The map, as the twin's `pack_map` gives it.
+    pub map: SpsmMap,
+    /// Texels filled.
+    pub filled: u64,
+    /// Filled texels holding a clamped vertex.
+    pub clamped: u64,
+    /// The texels' words on the GPU (the layout of [`super::texel::GpuTexels::texels`]).
+    pub words: wgpu::Buffer,
+    /// The `f32` texels' planes on the GPU ([`super::texel::GpuTexels::planes`]).
+    pub planes: wgpu::Buffer,
+}
+
 /// The map of `raster` in `format` with derivative exponent `power`, as the twin's
-/// `pack_map` gives it: the map, the texels filled and those holding a clamped vertex. The
-/// GPU pass is recorded as the stage `stage`.
+/// `pack_map` gives it, with the texels filled and those holding a clamped vertex. The GPU
+/// pass is recorded as the stage `stage`.
 pub fn pack_map(
     ctx: &GpuContext,
     raster: &ConservativeMap,
@@ -40,7 +56,7 @@ pub fn pack_map(
     power: u32,
     stage: &str,
     rec: &mut Recorder,
-) -> Result<(SpsmMap, u64, u64), GpuError> {
+) -> Result<Packed, GpuError> {
     let texels = raster.texel.len();
     let packer = Packer { space, code: DerivativeCode::new(power) };
     let packed = format == TexelFormat::Packed;
@@ -113,5 +129,6 @@ pub fn pack_map(
                 .collect(),
         )
     };
-    Ok((SpsmMap { res: raster.res, space, texels }, filled, clamped))
+    let map = SpsmMap { res: raster.res, space, texels };
+    Ok(Packed { map, filled, clamped, words: out_words, planes: out_planes })
 }

@@ -22,7 +22,7 @@ use super::{
 use crate::{
     frame::Frame,
     gpu::{
-        frame::projector_data,
+        frame::ProjectorData,
         shader::{compose, Part},
         GpuContext, GpuError, GpuFrame,
     },
@@ -103,7 +103,7 @@ pub fn recover_pixels(
         &pipeline,
         &[
             &ctx.uniform("spsm recovery params", &params),
-            &ctx.upload("spsm light", &projector_data(&lookup.tester.projector)),
+            &ctx.upload("spsm light", &[ProjectorData::new(&lookup.tester.projector)]),
             &gframe.position,
             &gframe.normal,
             &texels.texels,

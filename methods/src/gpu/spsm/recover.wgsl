@@ -9,7 +9,7 @@
 // handed back (status 2) and recovered by the CPU code.
 
 @group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var<storage, read> light: array<f64, 18>;
+@group(0) @binding(1) var<storage, read> light: ProjectorData;
 @group(0) @binding(2) var<storage, read> g_position: array<f64>;
 @group(0) @binding(3) var<storage, read> g_normal: array<f64>;
 // The texels (texel.wgsl).

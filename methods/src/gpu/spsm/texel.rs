@@ -112,8 +112,9 @@ pub struct GpuTexels {
 }
 
 impl GpuTexels {
-    /// Uploads `lookup`'s map.
-    pub fn upload(ctx: &GpuContext, lookup: &Lookup<'_>) -> Self {
+    /// The kernels' parameters for `lookup`'s map, and the derivative code's tables.
+    fn params(lookup: &Lookup<'_>) -> (Params, &'static [f64]) {
+        static NO_TABLES: [f64; 768] = [0.0; 768];
         let map: &SpsmMap = lookup.map;
         let space = map.space;
         let size = space.texel_world_size(1.0);
@@ -130,17 +131,22 @@ impl GpuTexels {
             perspective: u32::from(space.perspective),
             ..Default::default()
         };
-        let mut tables: &[f64] = &[0.0; 768];
-        let (words, planes): (Vec<u32>, Vec<u32>) = match &map.texels {
-            Texels::Packed(t, p) => {
-                params.packed = 1;
-                params.z_lo = p.space.z_lo;
-                params.depth_step = p.space.depth_step();
-                params.vertex_step = p.space.vertex_step();
-                params.half_res = 0.5 * f64::from(p.space.res);
-                tables = code_tables(&p.code);
-                (t.iter().flatten().copied().collect(), vec![0])
-            }
+        let mut tables: &'static [f64] = &NO_TABLES;
+        if let Texels::Packed(_, p) = &map.texels {
+            params.packed = 1;
+            params.z_lo = p.space.z_lo;
+            params.depth_step = p.space.depth_step();
+            params.vertex_step = p.space.vertex_step();
+            params.half_res = 0.5 * f64::from(p.space.res);
+            tables = code_tables(&p.code);
+        }
+        (params, tables)
+    }
+
+    /// Uploads `lookup`'s map.
+    pub fn upload(ctx: &GpuContext, lookup: &Lookup<'_>) -> Self {
+        let (words, planes): (Vec<u32>, Vec<u32>) = match &lookup.map.texels {
+            Texels::Packed(t, _) => (t.iter().flatten().copied().collect(), vec![0]),
             Texels::F32(t) => (
                 t.iter()
                     .flat_map(|x| {
@@ -151,11 +157,23 @@ impl GpuTexels {
                 t.iter().flat_map(|x| [x.z, x.dz[0], x.dz[1]].map(f32::to_bits)).collect(),
             ),
         };
-        Self {
-            params,
-            texels: ctx.upload("spsm texels", &words),
-            planes: ctx.upload("spsm texel planes", &planes),
-            tables: ctx.upload("spsm tables", tables),
-        }
+        Self::keep(
+            ctx,
+            lookup,
+            ctx.upload("spsm texels", &words),
+            ctx.upload("spsm texel planes", &planes),
+        )
+    }
+
+    /// `lookup`'s map from buffers already on the GPU, laid out as [`Self::texels`] and
+    /// [`Self::planes`] (the packing kernel's output).
+    pub fn keep(
+        ctx: &GpuContext,
+        lookup: &Lookup<'_>,
+        texels: wgpu::Buffer,
+        planes: wgpu::Buffer,
+    ) -> Self {
+        let (params, tables) = Self::params(lookup);
+        Self { params, texels, planes, tables: ctx.upload("spsm tables", tables) }
     }
 }

@@ -88,10 +88,12 @@ fn texel_tri(x: i32, y: i32) -> Tri {
         t.err_dz = vec2<f64>(tables[256u + qx] * s.x, tables[256u + qy] * s.y);
         t.err_v = 0.5lf * params.vertex_step;
     } else {
-        let z = f32_plane(3u * k);
-        if z != z {
+        // F32Texel::EMPTY: a NaN depth, told by its bits (a NaN through bitcast and the
+        // widening to f64 is not kept as NaN everywhere; llvmpipe's was not).
+        if (planes[3u * k] & 0x7fffffffu) > 0x7f800000u {
             return t;
         }
+        let z = f32_plane(3u * k);
         let b = 6u * k;
         t.v[0] = vec2<f64>(f32_word(b), f32_word(b + 1u));
         t.v[1] = vec2<f64>(f32_word(b + 2u), f32_word(b + 3u));
