@@ -134,13 +134,24 @@ impl Lookup<'_> {
     /// diagonal of a quad; a steep triangle's plane, uncertain far from its centre, does not
     /// light `p`).
     pub fn lies_on(&self, tri: &Tri, p: &MapPoint) -> bool {
+        Self::lies_on_plane(tri, p, || self.gradient(p).map(|g| self.map.plane_error(p.z, g)))
+    }
+
+    /// [`Self::lies_on`] with the quantization bound of the receiver's plane in this map
+    /// ([`SpsmMap::plane_error`] at its gradient; `None` where the plane has none) given by
+    /// `receiver_error`, called only when needed: silhouette recovery tests nine texels
+    /// against one receiver.
+    pub fn lies_on_plane(
+        tri: &Tri,
+        p: &MapPoint,
+        receiver_error: impl FnOnce() -> Option<(f64, DVec2)>,
+    ) -> bool {
         let err = tri.error_at(p.xy);
         if (tri.depth_at(p.xy) - p.z).abs() > p.tol + err {
             return false;
         }
         tri.may_contain(p.xy)
-            || self.gradient(p).is_some_and(|g| {
-                let (at_centre, per_texel) = self.map.plane_error(p.z, g);
+            || receiver_error().is_some_and(|(at_centre, per_texel)| {
                 err <= p.tol + at_centre + (p.xy - tri.centre).abs().dot(per_texel)
             })
     }

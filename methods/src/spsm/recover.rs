@@ -331,7 +331,7 @@ struct Receiver {
 
 /// Whether `tri`, stored in texel `(x, y)` with consistent minimum depth `cmin`, occludes the
 /// neighbourhood of the point (see the module documentation).
-fn occludes(lookup: &Lookup<'_>, tri: &Tri, (x, y): (i64, i64), cmin: f64, r: &Receiver) -> bool {
+fn occludes(tri: &Tri, (x, y): (i64, i64), cmin: f64, r: &Receiver) -> bool {
     let p = &r.p;
     // Quantization margin: the triangle's own error bound, but no more than the receiver's
     // own plane would suffer in this texel.
@@ -340,7 +340,7 @@ fn occludes(lookup: &Lookup<'_>, tri: &Tri, (x, y): (i64, i64), cmin: f64, r: &R
     if cmin >= p.z - p.tol - margin(tri.centre + DVec2::splat(0.5)) - stored {
         return false;
     }
-    if lookup.lies_on(tri, p) {
+    if Lookup::lies_on_plane(tri, p, || r.grad.map(|_| r.error)) {
         return false;
     }
     let Some(g) = r.grad else { return true };
@@ -371,7 +371,7 @@ pub fn silhouette(
         let cmin = consistent
             .get((ny * r + nx) as u32)
             .unwrap_or_else(|| consistent_min_depth(&tri, nx as usize, ny as usize).0);
-        if occludes(lookup, &tri, (nx, ny), cmin, &receiver) {
+        if occludes(&tri, (nx, ny), cmin, &receiver) {
             mask |= 1 << k;
         }
     }

@@ -8,7 +8,7 @@
 //! The receiver's gradient in the coplanar test needs [`crate::spsm::quantize::DerivativeCode::encode`] (an `atan`
 //! and a power): the GPU encodes by the uploaded thresholds, the smallest `f64` slope of each
 //! code found on the CPU by bisection over the ordered `f64`s, so it returns the CPU's code
-//! for every slope ([`super::texel::encode_thresholds`]).
+//! for every slope ([`DerivativeCode::thresholds`](crate::spsm::quantize::DerivativeCode::thresholds)).
 //!
 //! The CPU's containment tests use the exact `orient2d` of the `robust` crate. The kernel
 //! runs its `f64` filter: where the filter decides, both return the same `f64` determinant;

@@ -30,7 +30,7 @@ pub(super) fn code_tables(code: &DerivativeCode) -> &'static [f64] {
             tables[usize::from(q)] = code.decode(q);
             tables[256 + usize::from(q)] = code.error(q);
         }
-        tables[512..].copy_from_slice(&encode_thresholds(code));
+        tables[512..].copy_from_slice(code.thresholds());
         tables
     })
 }
@@ -60,39 +60,6 @@ pub(super) struct Params {
     pub pad1: u32,
     pub pad2: u32,
     pub pad3: u32,
-}
-
-/// The order-preserving map of the non-NaN `f64`s onto the integers.
-fn key(s: f64) -> i128 {
-    let b = s.to_bits() as i64;
-    i128::from(if b < 0 { b ^ i64::MAX } else { b })
-}
-
-/// The inverse of [`key`].
-fn from_key(k: i128) -> f64 {
-    let k = k as i64;
-    f64::from_bits((if k < 0 { k ^ i64::MAX } else { k }) as u64)
-}
-
-/// For each code `c` in 1 to 254, the smallest `f64` slope `code` encodes to `c` or above
-/// (index 0 and 255 are unused): [`DerivativeCode::encode`] is non-decreasing, so a slope's
-/// code is the number of thresholds at or below it.
-pub fn encode_thresholds(code: &DerivativeCode) -> [f64; 256] {
-    let mut t = [f64::NEG_INFINITY; 256];
-    t[255] = f64::INFINITY;
-    for (c, slot) in t.iter_mut().enumerate().take(255).skip(1) {
-        let (mut lo, mut hi) = (key(f64::NEG_INFINITY), key(f64::INFINITY));
-        while hi - lo > 1 {
-            let mid = lo + (hi - lo) / 2;
-            if usize::from(code.encode(from_key(mid))) >= c {
-                hi = mid;
-            } else {
-                lo = mid;
-            }
-        }
-        *slot = from_key(hi);
-    }
-    t
 }
 
 /// The map's texels and tables on the GPU.
