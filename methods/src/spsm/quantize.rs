@@ -131,7 +131,7 @@ impl DerivativeCode {
         // The number of thresholds at or below `s`, codes 1 to 254.
         let (mut lo, mut hi) = (0usize, 254usize);
         while lo < hi {
-            let mid = (lo + hi + 1) / 2;
+            let mid = (lo + hi).div_ceil(2);
             if s >= self.threshold[mid] {
                 lo = mid;
             } else {
