@@ -2,9 +2,10 @@
 //! the pixel centre's ray meets it, and its face normal.
 //!
 //! Positions are computed as `ray(centre).at(depth)` with the depth from the ray-plane
-//! intersection, so they reproject to their pixel centres up to `f64` rounding.
+//! intersection, so they reproject to their pixel centres up to `f64` rounding. Normals are
+//! the rasterizer's own (the plane it intersects), written where a triangle wins a pixel.
 
-use crate::raster::{rasterize_nearest, NO_TRIANGLE};
+use crate::raster::{rasterize_nearest_with_normals, NO_TRIANGLE};
 use glam::{DVec2, DVec3};
 use instrumentation::Counters;
 use rayon::prelude::*;
@@ -37,28 +38,22 @@ impl GBuffer {
 
 /// Renders the G-buffer of all triangles of `geometry` through the camera projector.
 pub fn render_gbuffer(geometry: &Geometry, camera: &Projector, counters: &mut Counters) -> GBuffer {
-    let nearest = rasterize_nearest(geometry, |_| true, camera, counters);
-    let w = nearest.width as usize;
-    let normals: Vec<DVec3> = (0..geometry.len())
-        .into_par_iter()
-        .map(|t| {
-            let [a, b, c] = geometry.corners(t);
-            (b - a).cross(c - a).normalize_or_zero()
-        })
-        .collect();
-    let (position, normal) = nearest
+    let (w, h) = (camera.width as usize, camera.height as usize);
+    let mut normal = vec![DVec3::ZERO; w * h];
+    let nearest = rasterize_nearest_with_normals(geometry, camera, &mut normal, counters);
+    let position = nearest
         .triangle
         .par_iter()
         .zip(&nearest.depth)
         .enumerate()
         .map(|(k, (&t, &d))| {
             if t == NO_TRIANGLE {
-                return (DVec3::ZERO, DVec3::ZERO);
+                return DVec3::ZERO;
             }
             let centre = DVec2::new((k % w) as f64 + 0.5, (k / w) as f64 + 0.5);
-            (camera.ray(centre).at(d), normals[t as usize])
+            camera.ray(centre).at(d)
         })
-        .unzip();
+        .collect();
     GBuffer {
         width: nearest.width,
         height: nearest.height,

@@ -33,6 +33,11 @@ pub const NO_TRIANGLE: u32 = u32::MAX;
 /// Rows per band of parallel work.
 const BAND_ROWS: usize = 8;
 
+/// Triangles per chunk of parallel setup work: each chunk keeps its own setups, so that no
+/// vector of every setup is assembled (for a million triangles it would be some 40 MB moved
+/// and faulted in).
+const SETUP_CHUNK: usize = 1 << 14;
+
 /// The nearest triangle and its depth at every sample point of a grid.
 #[derive(Debug, Clone, PartialEq)]
 pub struct NearestSurface {
@@ -52,10 +57,10 @@ pub struct NearestSurface {
 struct Setup {
     outline: [DVec2; 4],
     corners: usize,
-    x0: usize,
-    x1: usize,
-    y0: usize,
-    y1: usize,
+    x0: u32,
+    x1: u32,
+    y0: u32,
+    y1: u32,
     normal: DVec3,
     offset: f64,
     depth_min: f64,
@@ -160,10 +165,10 @@ fn setup(geometry: &Geometry, t: usize, proj: &Projector, shift: DVec2) -> Optio
     Some(Setup {
         outline,
         corners: count,
-        x0: x0 as usize,
-        x1: x1 as usize,
-        y0: y0 as usize,
-        y1: y1 as usize,
+        x0: x0 as u32,
+        x1: x1 as u32,
+        y0: y0 as u32,
+        y1: y1 as u32,
         normal,
         offset,
         depth_min,
@@ -226,41 +231,79 @@ pub fn rasterize_nearest_at(
     shift: DVec2,
     counters: &mut Counters,
 ) -> NearestSurface {
+    rasterize(geometry, include, proj, shift, None, counters)
+}
+
+/// Like [`rasterize_nearest`], also writing the face normal (as the triangle is wound) of
+/// the nearest triangle at every covered sample into `normal` (one per sample; untouched
+/// where no triangle covers the sample).
+pub(crate) fn rasterize_nearest_with_normals(
+    geometry: &Geometry,
+    proj: &Projector,
+    normal: &mut [DVec3],
+    counters: &mut Counters,
+) -> NearestSurface {
+    rasterize(geometry, |_| true, proj, DVec2::ZERO, Some(normal), counters)
+}
+
+fn rasterize(
+    geometry: &Geometry,
+    include: impl Fn(usize) -> bool + Sync,
+    proj: &Projector,
+    shift: DVec2,
+    normal: Option<&mut [DVec3]>,
+    counters: &mut Counters,
+) -> NearestSurface {
     let (width, height) = (proj.width as usize, proj.height as usize);
-    let setups: Vec<Setup> = (0..geometry.len())
+    let n = geometry.len();
+    let chunks: Vec<(Vec<Setup>, u64)> = (0..n.div_ceil(SETUP_CHUNK))
         .into_par_iter()
-        .filter(|&t| include(t))
-        .filter_map(|t| setup(geometry, t, proj, shift))
+        .map(|c| {
+            let mut included = 0u64;
+            let setups = (c * SETUP_CHUNK..((c + 1) * SETUP_CHUNK).min(n))
+                .filter(|&t| include(t))
+                .filter_map(|t| {
+                    included += 1;
+                    setup(geometry, t, proj, shift)
+                })
+                .collect();
+            (setups, included)
+        })
         .collect();
-    counters.triangles_rasterized +=
-        (0..geometry.len()).into_par_iter().filter(|&t| include(t)).count() as u64;
+    counters.triangles_rasterized += chunks.iter().map(|c| c.1).sum::<u64>();
 
     let bands = height.div_ceil(BAND_ROWS).max(1);
-    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); bands];
-    for (i, s) in setups.iter().enumerate() {
-        for bin in &mut bins[s.y0 / BAND_ROWS..=s.y1 / BAND_ROWS] {
-            bin.push(i as u32);
+    let mut bins: Vec<Vec<&Setup>> = vec![Vec::new(); bands];
+    for s in chunks.iter().flat_map(|c| &c.0) {
+        for bin in &mut bins[s.y0 as usize / BAND_ROWS..=s.y1 as usize / BAND_ROWS] {
+            bin.push(s);
         }
     }
 
     let mut depth = vec![f64::INFINITY; width * height];
     let mut triangle = vec![NO_TRIANGLE; width * height];
-    let chunk = width * BAND_ROWS;
+    let chunk = (width * BAND_ROWS).max(1);
+    let mut normals: Vec<Option<&mut [DVec3]>> = match normal {
+        Some(normal) => normal.chunks_mut(chunk).map(Some).collect(),
+        None => (0..bands).map(|_| None).collect(),
+    };
     let tested: u64 = depth
-        .par_chunks_mut(chunk.max(1))
-        .zip(triangle.par_chunks_mut(chunk.max(1)))
+        .par_chunks_mut(chunk)
+        .zip(triangle.par_chunks_mut(chunk))
+        .zip(normals.par_iter_mut())
         .zip(bins.par_iter())
         .enumerate()
-        .map(|(band, ((depth, triangle), bin))| {
+        .map(|(band, (((depth, triangle), normal), bin))| {
             let row0 = band * BAND_ROWS;
             let rows = depth.len() / width.max(1);
             let mut tested = 0u64;
-            for &i in bin {
-                let s = &setups[i as usize];
+            for s in bin {
                 let outline = &s.outline[..s.corners];
-                for y in s.y0.max(row0)..=s.y1.min(row0 + rows - 1) {
+                for y in (s.y0 as usize).max(row0)..=(s.y1 as usize).min(row0 + rows - 1) {
                     let py = y as f64 + 0.5;
-                    let Some((x0, x1)) = row_span(outline, py, s.x0, s.x1) else { continue };
+                    let Some((x0, x1)) = row_span(outline, py, s.x0 as usize, s.x1 as usize) else {
+                        continue;
+                    };
                     for x in x0..=x1 {
                         tested += 1;
                         let p = DVec2::new(x as f64 + 0.5, py);
@@ -278,6 +321,9 @@ pub fn rasterize_nearest_at(
                         if d < depth[k] {
                             depth[k] = d;
                             triangle[k] = s.id;
+                            if let Some(normal) = normal {
+                                normal[k] = s.normal;
+                            }
                         }
                     }
                 }
