@@ -47,7 +47,7 @@ const BIN_CHUNK: usize = 1024;
 
 /// Binning tasks per batch: triangles are binned and rasterized in batches of
 /// `BIN_CHUNK * BATCH_CHUNKS`, so that the bins stay small and their memory is reused.
-const BATCH_CHUNKS: usize = 8;
+const BATCH_CHUNKS: usize = 64;
 
 /// Which culling tests run (both on by default; off only to measure them).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
