@@ -1,10 +1,11 @@
 //! Stage "antialiasing" of `spsm` on the GPU (`antialias.wgsl`), equal to
 //! [`spsm::antialias::antialias_pixels`] pixel for pixel.
 //!
-//! The silhouettes are recovered on the CPU (stage 5, by the twin's code) and uploaded per
-//! pixel: the occluding triangles (decoded once, with their orientation's sign), the tangent
-//! normals and the origin, the pixel's surface point, normal and plane offset, and the light's
-//! projection of the point. The GPU evaluates every sub-sample: its camera ray meets the
+//! The silhouettes recovered in stage 5 (centre texel, kept pattern) are resolved on the CPU
+//! by the twin's code and uploaded per pixel as a [`Record`]: the occluding triangles
+//! (decoded once, with their orientation's sign, which the CPU decides exactly), the tangent
+//! normals and the origin, the surface's normal and plane offset, and the light's projection
+//! of the point. The GPU evaluates every sub-sample: its camera ray meets the
 //! surface's plane, the point is projected into the light's map, and the recovered
 //! silhouette function says lit or shadowed. Only pixels whose pattern has tangents are
 //! evaluated, as on the CPU.
@@ -12,7 +13,7 @@
 use crate::{
     frame::Frame,
     gpu::{
-        frame::{ProjectorData, COMMON},
+        frame::{ProjectorData, Xyz, COMMON},
         shader::{compose, Part},
         GpuContext, GpuError,
     },
@@ -22,6 +23,7 @@ use crate::{
         recover::{Pattern, Resolved, Silhouette},
     },
 };
+use bytemuck::{Pod, Zeroable};
 use instrumentation::{Counters, Recorder};
 
 /// WGSL of a resolved silhouette's occluders and its function along a tangent.
@@ -33,8 +35,28 @@ const ANTIALIAS: Part = Part {
     needs: &[&COMMON, &SILHOUETTE],
 };
 
-/// `f64` per pixel record of `antialias.wgsl`.
-const REC_F: usize = 82;
+/// One uncertain pixel's silhouette as the kernel reads it (the WGSL `Record` of
+/// `antialias.wgsl`): the origin of its tangent frames, the normal and plane offset of the
+/// surface seen at the pixel, the light's projection of the point, the tangents' normals (`x, y`,
+/// up to four) and the occluding triangles (per triangle its vertices' `x, y` and its
+/// orientation's sign, up to nine). Entries past the pixel's counts are zero.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct Record {
+    origin: [f64; 2],
+    normal: Xyz,
+    offset: f64,
+    centre: [f64; 2],
+    normals: [f64; 8],
+    tris: [f64; 63],
+}
+
+crate::gpu::layout::wgsl_mirror!(
+    Record,
+    "Record",
+    compose(&[&ANTIALIAS]),
+    [origin, normal, offset, centre, normals, tris]
+);
 
 /// Antialiases the `uncertain` pixels with their recovered `silhouettes` (same order),
 /// writing their lit fraction into `lit`; the GPU pass is recorded as the stage `stage`.
@@ -54,7 +76,7 @@ pub fn antialias_pixels(
     let rate = pattern.offsets().len();
     // The CPU's part of the stage (the records) is timed into it beside the GPU pass.
     let start = std::time::Instant::now();
-    let mut rec_f: Vec<f64> = Vec::new();
+    let mut records: Vec<Record> = Vec::new();
     let mut rec_u: Vec<u32> = Vec::new();
     for (u, s) in uncertain.iter().zip(silhouettes) {
         let Some(s) = s else { continue };
@@ -64,19 +86,21 @@ pub fn antialias_pixels(
         let Some((centre, _)) = lookup.tester.projector.project(position) else { continue };
         let resolved = Resolved::new(lookup.map, s);
         let (tris, _, origin) = resolved.parts();
-        let mut r = Vec::with_capacity(REC_F);
-        r.extend_from_slice(&[origin.x, origin.y]);
-        r.extend_from_slice(&position.to_array());
-        r.extend_from_slice(&normal.to_array());
-        r.push(normal.dot(position));
-        r.extend_from_slice(&[centre.x, centre.y]);
-        r.extend(normals.iter().flat_map(|n| [n.x, n.y]));
-        for t in tris {
-            r.extend(t.v.iter().flat_map(|v| [v.x, v.y]));
-            r.push(t.orientation().signum());
+        let mut r = Record::zeroed();
+        r.origin = origin.to_array();
+        r.normal = normal.into();
+        r.offset = normal.dot(position);
+        r.centre = centre.to_array();
+        for (slot, n) in r.normals.chunks_exact_mut(2).zip(&normals) {
+            slot.copy_from_slice(&n.to_array());
         }
-        r.resize(REC_F, 0.0);
-        rec_f.extend_from_slice(&r);
+        for (slot, t) in r.tris.chunks_exact_mut(7).zip(tris) {
+            for (k, v) in t.v.iter().enumerate() {
+                slot[2 * k..2 * k + 2].copy_from_slice(&v.to_array());
+            }
+            slot[6] = t.orientation().signum();
+        }
+        records.push(r);
         rec_u.extend_from_slice(&[u.pixel, u32::from(count), tris.len() as u32]);
     }
     let n = rec_u.len() / 3;
@@ -91,7 +115,7 @@ pub fn antialias_pixels(
             &ctx.upload("spsm aa camera", &[ProjectorData::new(&frame.camera)]),
             &ctx.upload("spsm aa light", &[ProjectorData::new(&lookup.tester.projector)]),
             &ctx.upload("spsm aa offsets", &offsets),
-            &ctx.upload("spsm aa records", &rec_f),
+            &ctx.upload("spsm aa records", &records),
             &ctx.upload("spsm aa pixels", &rec_u),
             &out,
         ],

@@ -11,23 +11,22 @@
 @group(0) @binding(2) var<storage, read> light_data: ProjectorData;
 // The pattern's offsets, x then y per sub-sample.
 @group(0) @binding(3) var<storage, read> offsets: array<f64>;
-// Per pixel, REC_F f64: see the offsets below.
-@group(0) @binding(4) var<storage, read> rec_f: array<f64>;
-// Per pixel: its index, tangents, occluding triangles.
+// Per pixel: its silhouette.
+@group(0) @binding(4) var<storage, read> records: array<Record>;
 @group(0) @binding(5) var<storage, read> rec_u: array<u32>;
 @group(0) @binding(6) var<storage, read_write> out_lit: array<f32>;
 
-const REC_F: u32 = 82u;
-// origin (2), position (3), normal (3), plane offset (1), centre (2), tangent normals (8),
-// then per triangle its vertices (6) and its orientation's sign (1), up to nine.
-const AT_ORIGIN: u32 = 0u;
-const AT_POSITION: u32 = 2u;
-const AT_NORMAL: u32 = 5u;
-const AT_OFFSET: u32 = 8u;
-const AT_CENTRE: u32 = 9u;
-const AT_NORMALS: u32 = 11u;
-const AT_TRIS: u32 = 19u;
-const TRI_F: u32 = 7u;
+// antialias::Record: the origin of the tangent frames, the surface's normal and plane
+// offset, the light's projection of the point, the tangents' normals (x, y; up to four),
+// then per triangle its vertices (x, y) and its orientation's sign (up to nine).
+struct Record {
+    origin: array<f64, 2>,
+    normal: Xyz,
+    offset: f64,
+    centre: array<f64, 2>,
+    normals: array<f64, 8>,
+    tris: array<f64, 63>,
+}
 
 // `v`, through a choice the compiler cannot see through (see raster.wgsl's `kept`): keeps
 // the products of a dot product apart from its sum.
@@ -35,36 +34,26 @@ fn kept(v: f64) -> f64 {
     return select(v, 0.0lf, dims[2] == 0u);
 }
 
-fn vec2_at(o: u32) -> vec2<f64> {
-    return vec2<f64>(rec_f[o], rec_f[o + 1u]);
-}
-
-fn vec3_at(o: u32) -> vec3<f64> {
-    return vec3<f64>(rec_f[o], rec_f[o + 1u], rec_f[o + 2u]);
-}
-
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let j = gid.x + gid.y * (groups.x * 64u);
     if j >= dims[0] { return; }
-    let base = j * REC_F;
+    let r = records[j];
     let pixel = rec_u[3u * j];
     let tangents = rec_u[3u * j + 1u];
     let tris = rec_u[3u * j + 2u];
     let w = dims[1];
     let rate = dims[2];
-    let position = vec3_at(base + AT_POSITION);
-    let normal = vec3_at(base + AT_NORMAL);
-    let offset = rec_f[base + AT_OFFSET];
-    let centre = vec2_at(base + AT_CENTRE);
-    occ_origin = vec2_at(base + AT_ORIGIN);
+    let normal = xyz(r.normal);
+    let offset = r.offset;
+    let centre = vec2<f64>(r.centre[0], r.centre[1]);
+    occ_origin = vec2<f64>(r.origin[0], r.origin[1]);
     occ_n = tris;
     for (var k = 0u; k < tris; k++) {
-        let o = base + AT_TRIS + k * TRI_F;
         for (var e = 0u; e < 3u; e++) {
-            occ_v[3u * k + e] = vec2_at(o + 2u * e);
+            occ_v[3u * k + e] = vec2<f64>(r.tris[7u * k + 2u * e], r.tris[7u * k + 2u * e + 1u]);
         }
-        occ_sign[k] = rec_f[o + 6u];
+        occ_sign[k] = r.tris[7u * k + 6u];
     }
     let camera = proj_load(camera_data);
     let light = proj_load(light_data);
@@ -84,7 +73,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         }
         var shadowed = true;
         for (var k = 0u; k < tangents; k++) {
-            if !shadowed_along(vec2_at(base + AT_NORMALS + 2u * k), q) {
+            if !shadowed_along(vec2<f64>(r.normals[2u * k], r.normals[2u * k + 1u]), q) {
                 shadowed = false;
             }
         }
