@@ -11,8 +11,10 @@
 //! The layouts checked: `frame::ProjectorData` and `frame::Xyz` (`common.wgsl`, every
 //! projector the kernels read), `raster::Params` (`raster.wgsl`), `sm::Params`
 //! (`receiver.wgsl`, shared by `sm` and the PCF kernels), `spsm::texel::Params`
-//! (`texel.wgsl`) and `pan09::params::Params` and `PlaneData` (`pan09/params.wgsl`, pan09's
-//! per-frame constants).
+//! (`texel.wgsl`), `spsm::antialias::Record` (`spsm/antialias.wgsl`, a silhouette per
+//! uncertain pixel), `pan09::params::Params` and `PlaneData` (`pan09/params.wgsl`, pan09's
+//! per-frame constants) and `pan09::facets::FacetF` and `FacetU` (`pan09/facet_layout.wgsl`,
+//! a silhouette facet's record).
 
 /// Declares that the `#[repr(C)]` struct `$ty` is mirrored by the WGSL struct `$name` of the
 /// shader source `$source` (an expression giving a `String`), fields `[$field, ...]` in

@@ -3,14 +3,54 @@
 //! facets' records.
 
 use super::{params::slot, read_counters, Kernels, Run};
-use crate::gpu::{GpuContext, GpuError};
+use crate::gpu::{frame::Xyz, GpuContext, GpuError};
 use crate::pan09::STAGE_FACETS;
+use bytemuck::{Pod, Zeroable};
 use instrumentation::Recorder;
 
-/// `f64` per facet record (`facet_record.wgsl`).
-pub(super) const FACET_F: usize = 48;
-/// `u32` per facet record.
-pub(super) const FACET_U: usize = 8;
+/// A silhouette facet's record, `f64` part: the WGSL `FacetF` of `facet_layout.wgsl` (the
+/// facet's plane, its map, its region's planes, its footprint's corners, box and
+/// orientation). Written and read on the GPU only.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub(super) struct FacetF {
+    normal: Xyz,
+    offset: f64,
+    origin: Xyz,
+    dir: Xyz,
+    a: Xyz,
+    b: [f64; 2],
+    k: f64,
+    region: [Xyz; 3],
+    footprint: [f64; 16],
+    lo: [f64; 2],
+    hi: [f64; 2],
+    orientation: f64,
+}
+
+/// A silhouette facet's record, `u32` part: the WGSL `FacetU` (pixel, triangle, region plane
+/// count, footprint corner count, texel rectangle `x0, y0, x1, y1`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub(super) struct FacetU {
+    /// The facet's pixel.
+    pub pixel: u32,
+    triangle: u32,
+    regions: u32,
+    corners: u32,
+    rect: [u32; 4],
+}
+
+crate::gpu::layout::wgsl_mirror!(
+    FacetF,
+    "FacetF",
+    crate::gpu::shader::compose(&[&crate::gpu::pan09::FACET_LAYOUT]),
+    [normal, offset, origin, dir, a, b, k, region, footprint, lo, hi, orientation];
+    FacetU,
+    "FacetU",
+    crate::gpu::shader::compose(&[&crate::gpu::pan09::FACET_LAYOUT]),
+    [pixel, triangle, regions, corners, rect];
+);
 
 /// The facets: class per pixel, records, initial validity masks.
 pub(super) struct Facets {
@@ -39,7 +79,7 @@ pub(super) fn run(
     let class = ctx.zeroed::<u32>("pixel class", pixels);
     let index = ctx.zeroed::<u32>("facet index", pixels + 1);
     let placeholders =
-        [ctx.zeroed::<f64>("-", 1), ctx.zeroed::<u32>("-", 1), ctx.zeroed::<u32>("-", 1)];
+        [ctx.zeroed::<FacetF>("-", 1), ctx.zeroed::<FacetU>("-", 1), ctx.zeroed::<u32>("-", 1)];
     let bind = ctx.bind(
         &k.facets_classify,
         &[
@@ -63,8 +103,9 @@ pub(super) fn run(
     })?;
     let count = read_counters(ctx, &run.counters)?[slot::SILHOUETTE_PIXELS];
     let n = count as usize;
-    let ff = ctx.zeroed::<f64>("facets f64", n * FACET_F);
-    let fu = ctx.zeroed::<u32>("facets u32", n * FACET_U);
+    // At least one record: a binding holds at least one element of its array.
+    let ff = ctx.zeroed::<FacetF>("facets f64", n.max(1));
+    let fu = ctx.zeroed::<FacetU>("facets u32", n.max(1));
     let valid = ctx.zeroed::<u32>("validity masks", n * run.words as usize);
     let bind = ctx.bind(
         &k.facets_build,

@@ -11,13 +11,11 @@
 @group(0) @binding(4) var<storage, read> sat: array<u32>;
 @group(0) @binding(5) var<storage, read_write> pixel_class: array<u32>;
 @group(0) @binding(6) var<storage, read_write> index: array<u32>;
-@group(0) @binding(7) var<storage, read_write> FF: array<f64>;
-@group(0) @binding(8) var<storage, read_write> FU: array<u32>;
+@group(0) @binding(7) var<storage, read_write> FF: array<FacetF>;
+@group(0) @binding(8) var<storage, read_write> FU: array<FacetU>;
 @group(0) @binding(9) var<storage, read_write> valid: array<u32>;
 @group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>>;
 
-const FACET_F: u32 = 48u;
-const FACET_U: u32 = 8u;
 
 struct Projected {
     map: FacetMap,
@@ -175,50 +173,26 @@ fn build(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     let f = index[k];
     let p = project_facet(s, k % s.width, k / s.width, g3(0u, k), g3(1u, k));
     let rect = silhouette_rect(s, p);
-    let o = f * FACET_F;
-    var v = array<f64, 46>();
-    v[0] = p.normal.x;
-    v[1] = p.normal.y;
-    v[2] = p.normal.z;
-    v[3] = p.offset;
-    v[4] = p.map.origin.x;
-    v[5] = p.map.origin.y;
-    v[6] = p.map.origin.z;
-    v[7] = p.map.dir.x;
-    v[8] = p.map.dir.y;
-    v[9] = p.map.dir.z;
-    v[10] = p.map.a.x;
-    v[11] = p.map.a.y;
-    v[12] = p.map.a.z;
-    v[13] = p.map.b.x;
-    v[14] = p.map.b.y;
-    v[15] = p.map.k;
+    var r: FacetF;
+    r.normal = Xyz(p.normal.x, p.normal.y, p.normal.z);
+    r.offset = p.offset;
+    r.origin = Xyz(p.map.origin.x, p.map.origin.y, p.map.origin.z);
+    r.dir = Xyz(p.map.dir.x, p.map.dir.y, p.map.dir.z);
+    r.a = Xyz(p.map.a.x, p.map.a.y, p.map.a.z);
+    r.b = array<f64, 2>(p.map.b.x, p.map.b.y);
+    r.k = p.map.k;
     for (var i = 0u; i < 3u; i++) {
-        v[16u + 3u * i] = p.region[i].x;
-        v[17u + 3u * i] = p.region[i].y;
-        v[18u + 3u * i] = p.region[i].z;
+        r.region[i] = Xyz(p.region[i].x, p.region[i].y, p.region[i].z);
     }
     for (var i = 0u; i < 8u; i++) {
-        v[25u + 2u * i] = p.fp.c[i].x;
-        v[26u + 2u * i] = p.fp.c[i].y;
+        r.footprint[2u * i] = p.fp.c[i].x;
+        r.footprint[2u * i + 1u] = p.fp.c[i].y;
     }
-    v[41] = p.fp.lo.x;
-    v[42] = p.fp.lo.y;
-    v[43] = p.fp.hi.x;
-    v[44] = p.fp.hi.y;
-    v[45] = p.fp.orientation;
-    for (var i = 0u; i < 46u; i++) {
-        FF[o + i] = v[i];
-    }
-    let u = f * FACET_U;
-    FU[u] = k;
-    FU[u + 1u] = g_triangle[k];
-    FU[u + 2u] = p.count;
-    FU[u + 3u] = p.fp.n;
-    FU[u + 4u] = rect.r.x;
-    FU[u + 5u] = rect.r.y;
-    FU[u + 6u] = rect.r.z;
-    FU[u + 7u] = rect.r.w;
+    r.lo = array<f64, 2>(p.fp.lo.x, p.fp.lo.y);
+    r.hi = array<f64, 2>(p.fp.hi.x, p.fp.hi.y);
+    r.orientation = p.fp.orientation;
+    FF[f] = r;
+    FU[f] = FacetU(k, g_triangle[k], p.count, p.fp.n, array<u32, 4>(rect.r.x, rect.r.y, rect.r.z, rect.r.w));
     for (var w = 0u; w < s.words; w++) {
         valid[f * s.words + w] = s.all[w];
     }

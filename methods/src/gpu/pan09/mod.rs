@@ -82,7 +82,16 @@ const LIB: Part =
     Part { name: "pan09/pan09.wgsl", source: include_str!("pan09.wgsl"), needs: &[&COMMON] };
 const PARAMS: Part = Part::file("pan09/params.wgsl", include_str!("params.wgsl"));
 const COVERAGE: Part = Part::file("pan09/coverage.wgsl", include_str!("coverage.wgsl"));
-const FACET_RECORD: Part = Part::file("pan09/facet_record.wgsl", include_str!("facet_record.wgsl"));
+const FACET_LAYOUT: Part = Part {
+    name: "pan09/facet_layout.wgsl",
+    source: include_str!("facet_layout.wgsl"),
+    needs: &[&COMMON],
+};
+const FACET_RECORD: Part = Part {
+    name: "pan09/facet_record.wgsl",
+    source: include_str!("facet_record.wgsl"),
+    needs: &[&FACET_LAYOUT],
+};
 
 /// The compiled kernels.
 #[derive(Debug)]
@@ -124,7 +133,8 @@ impl Kernels {
         let sat = with(&[], "pan09/sat.wgsl", include_str!("sat.wgsl"));
         let silhouette = with(&[&PARAMS], "pan09/silhouette.wgsl", include_str!("silhouette.wgsl"));
         let mask_map = with(&[&PARAMS], "pan09/mask_map.wgsl", include_str!("mask_map.wgsl"));
-        let facets = with(&[&PARAMS], "pan09/facets.wgsl", include_str!("facets.wgsl"));
+        let facets =
+            with(&[&PARAMS, &FACET_LAYOUT], "pan09/facets.wgsl", include_str!("facets.wgsl"));
         let depth_test = with(&[&PARAMS], "pan09/depth_test.wgsl", include_str!("depth_test.wgsl"));
         let pt = with(&[&FACET_RECORD], "pan09/pt_pairs.wgsl", include_str!("pt_pairs.wgsl"));
         let tt = with(&[&PARAMS], "pan09/tt_pairs.wgsl", include_str!("tt_pairs.wgsl"));
@@ -323,9 +333,8 @@ impl GpuPan09 {
             let pixels = gframe.pixels();
             probe.class =
                 ctx.read::<u32>(&facets.class)?[..pixels].iter().map(|&c| c as u8).collect();
-            let fu: Vec<u32> = ctx.read(&facets.fu)?;
-            probe.facet_pixels =
-                (0..facets.count as usize).map(|f| fu[f * facets::FACET_U]).collect();
+            let fu: Vec<facets::FacetU> = ctx.read(&facets.fu)?;
+            probe.facet_pixels = fu[..facets.count as usize].iter().map(|r| r.pixel).collect();
             probe.depth_test_lit = ctx.read::<f32>(&lit)?[..pixels].to_vec();
         }
         let pt = pairs::pixel_texel_pairs(&run, k, &facets, rec)?;
@@ -362,7 +371,7 @@ impl GpuPan09 {
 
         let lit: Vec<f32> = ctx.read(&lit)?;
         let class: Vec<u32> = ctx.read(&facets.class)?;
-        let fu: Vec<u32> = ctx.read(&facets.fu)?;
+        let fu: Vec<facets::FacetU> = ctx.read(&facets.fu)?;
         let occ: Vec<u32> = ctx.read(&masks)?;
         let val: Vec<u32> = ctx.read(&facets.valid)?;
         let all = <u128 as Mask>::first(self.pattern.rate());
@@ -380,8 +389,8 @@ impl GpuPan09 {
                 .map(|&c| if c == 1 { PixelClass::DepthTest } else { PixelClass::Lit })
                 .collect(),
         };
-        for f in 0..facets.count as usize {
-            let pixel = fu[f * facets::FACET_U] as usize;
+        for (f, record) in fu[..facets.count as usize].iter().enumerate() {
+            let pixel = record.pixel as usize;
             out.class[pixel] = PixelClass::Silhouette(f as u32);
             out.occlusion[pixel] = mask_of(&occ, f);
             out.valid[pixel] = mask_of(&val, f);

@@ -7,8 +7,8 @@
 // into masks, so the order changes nothing. dims: n (facets or keys), res.
 
 @group(0) @binding(0) var<storage, read> dims: array<u32>;
-@group(0) @binding(1) var<storage, read> FF: array<f64>;
-@group(0) @binding(2) var<storage, read> FU: array<u32>;
+@group(0) @binding(1) var<storage, read> FF: array<FacetF>;
+@group(0) @binding(2) var<storage, read> FU: array<FacetU>;
 @group(0) @binding(3) var<storage, read_write> counts: array<u32>;
 @group(0) @binding(4) var<storage, read_write> keys: array<u32>;
 @group(0) @binding(5) var<storage, read_write> flags: array<u32>;
@@ -31,8 +31,8 @@ fn bind_all() {
 }
 
 fn rect_of(f: u32) -> vec4<u32> {
-    let u = f * FACET_U;
-    return vec4<u32>(FU[u + 4u], FU[u + 5u], FU[u + 6u], FU[u + 7u]);
+    let r = FU[f].rect;
+    return vec4<u32>(r[0], r[1], r[2], r[3]);
 }
 
 @compute @workgroup_size(64)

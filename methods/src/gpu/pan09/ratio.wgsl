@@ -5,8 +5,8 @@
 
 @group(0) @binding(0) var<storage, read> params: Params;
 @group(0) @binding(1) var<storage, read> dims: array<u32>;
-@group(0) @binding(2) var<storage, read> FF: array<f64>;
-@group(0) @binding(3) var<storage, read> FU: array<u32>;
+@group(0) @binding(2) var<storage, read> FF: array<FacetF>;
+@group(0) @binding(3) var<storage, read> FU: array<FacetU>;
 @group(0) @binding(4) var<storage, read> lut: array<u32>;
 @group(0) @binding(5) var<storage, read> masks: array<u32>;
 @group(0) @binding(6) var<storage, read_write> valid: array<u32>;
@@ -19,7 +19,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     if f >= dims[0] { return; }
     let s = setup();
     var region = s.all;
-    for (var i = 0u; i < FU[f * FACET_U + 2u]; i++) {
+    for (var i = 0u; i < FU[f].regions; i++) {
         region &= coverage(s, facet_region(f, i), false);
     }
     var v = vec4<u32>(0u);
@@ -31,7 +31,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     v = (region & v) | s.centre;
     let dark = f64(popcount4(o & v)) / f64(popcount4(v));
     let l = f32(clamp(1.0lf - dark, 0.0lf, 1.0lf));
-    lit[FU[f * FACET_U]] = l;
+    lit[FU[f].pixel] = l;
     for (var w = 0u; w < s.words; w++) {
         valid[f * s.words + w] = v[w];
     }

@@ -7,8 +7,8 @@
 @group(0) @binding(1) var<storage, read> dims: array<u32>;
 @group(0) @binding(2) var<storage, read> candidates: array<u32>;
 @group(0) @binding(3) var<storage, read> corners: array<f64>;
-@group(0) @binding(4) var<storage, read> FF: array<f64>;
-@group(0) @binding(5) var<storage, read> FU: array<u32>;
+@group(0) @binding(4) var<storage, read> FF: array<FacetF>;
+@group(0) @binding(5) var<storage, read> FU: array<FacetU>;
 @group(0) @binding(6) var<storage, read> lut: array<u32>;
 @group(0) @binding(7) var<storage, read_write> valid: array<atomic<u32>>;
 
@@ -40,7 +40,7 @@ fn meets_pixel(s: Setup, c: array<vec3<f64>, 3>, f: u32) -> bool {
     let pa = proj_project(s.camera, pts[0]);
     let pb = proj_project(s.camera, b);
     if pa.w == 0.0lf || pb.w == 0.0lf { return false; }
-    let pixel = FU[f * FACET_U];
+    let pixel = FU[f].pixel;
     let lo = vec2<f64>(f64(pixel % s.width), f64(pixel / s.width));
     return clip_segment(pa.xy, pb.xy, lo, lo + vec2<f64>(1.0lf, 1.0lf), 0.0lf).z != 0.0lf;
 }

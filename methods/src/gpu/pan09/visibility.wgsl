@@ -11,8 +11,8 @@
 @group(0) @binding(3) var<storage, read> corners: array<f64>;
 @group(0) @binding(4) var<storage, read> toff: array<u32>;
 @group(0) @binding(5) var<storage, read> items: array<u32>;
-@group(0) @binding(6) var<storage, read> FF: array<f64>;
-@group(0) @binding(7) var<storage, read> FU: array<u32>;
+@group(0) @binding(6) var<storage, read> FF: array<FacetF>;
+@group(0) @binding(7) var<storage, read> FU: array<FacetU>;
 @group(0) @binding(8) var<storage, read> lut: array<u32>;
 @group(0) @binding(9) var<storage, read_write> masks: array<atomic<u32>>;
 @group(0) @binding(10) var<storage, read_write> candidates: array<u32>;
@@ -53,7 +53,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     var evaluations = 0u;
     for (var j = toff[texel]; j < toff[texel + 1u]; j++) {
         let f = items[j];
-        if FU[f * FACET_U + 1u] == t { continue; }
+        if FU[f].triangle == t { continue; }
         evaluations += 1u;
         let map = facet_map_of(f);
         let m = occlusion(s, o, map);
