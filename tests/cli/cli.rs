@@ -259,6 +259,37 @@ fn gpu_device_runs_every_method_but_the_references() {
     }
 }
 
+/// A scene whose objects cast no shadow leaves the GPU kernels empty inputs (no caster, no
+/// silhouette edge, no uncertain pixel): every method still runs (once, pan09 and spsm failed
+/// to bind their empty buffers), and the image is lit everywhere.
+#[test]
+fn gpu_device_runs_every_method_on_a_scene_without_casters() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let o = shadowbench(&["scenes", "--toml", "plane-square"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let toml =
+        String::from_utf8_lossy(&o.stdout).replace("casts_shadows = true", "casts_shadows = false");
+    assert!(!toml.contains("casts_shadows = true"));
+    let scene = dir.path().join("no-casters.toml");
+    std::fs::write(&scene, toml).expect("scene file written");
+    for name in methods::registry::METHODS.iter().map(|(n, _)| *n) {
+        let out = dir.path().join(name);
+        let mut args = vec!["render", "--scene", scene.to_str().expect("utf-8"), "--method", name];
+        args.extend(["--device", "gpu", "--width", "16", "--height", "12"]);
+        if ["afsm-ss", "pan09", "spsm", "spsm-f32"].contains(&name) {
+            args.extend(["--rate", "4"]);
+        }
+        args.extend(["--out", out.to_str().expect("utf-8"), "--json"]);
+        let o = shadowbench(&args);
+        assert!(o.status.success(), "{name} on the GPU without casters: {}", stderr(&o));
+        let exr = exr::prelude::read_first_flat_layer_from_file(out.join("visibility.exr"))
+            .expect("EXR reads");
+        for c in &exr.layer_data.channel_data.list {
+            assert!(c.sample_data.values_as_f32().all(|v| v == 1.0), "{name}: not lit everywhere");
+        }
+    }
+}
+
 #[test]
 fn help_explains_every_render_flag() {
     let o = shadowbench(&["render", "--help"]);

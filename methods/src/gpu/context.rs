@@ -273,12 +273,13 @@ impl GpuContext {
         })
     }
 
-    /// A storage buffer holding `data` (at least 4 bytes, so empty inputs bind).
+    /// A storage buffer holding `data`; an empty `data` gives one zeroed element (at least 4
+    /// bytes), so that empty inputs bind (a binding holds at least one element of its array).
     pub fn upload<T: Pod>(&self, label: &str, data: &[T]) -> wgpu::Buffer {
         let bytes: &[u8] = bytemuck::cast_slice(data);
         let padded;
         let contents = if bytes.len() < 4 {
-            padded = [0u8; 4];
+            padded = vec![0u8; std::mem::size_of::<T>().max(4)];
             &padded[..]
         } else {
             bytes
@@ -319,9 +320,10 @@ impl GpuContext {
         buffer
     }
 
-    /// A zeroed storage buffer of `len` elements of `T` (at least 4 bytes).
+    /// A zeroed storage buffer of `len` elements of `T`, at least one (and 4 bytes), so that
+    /// it binds when `len` is 0.
     pub fn zeroed<T: Pod>(&self, label: &str, len: usize) -> wgpu::Buffer {
-        let size = (std::mem::size_of::<T>() * len).max(4) as u64;
+        let size = (std::mem::size_of::<T>() * len.max(1)).max(4) as u64;
         self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(label),
             size: size.next_multiple_of(4),

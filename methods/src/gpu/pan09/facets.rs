@@ -103,9 +103,8 @@ pub(super) fn run(
     })?;
     let count = read_counters(ctx, &run.counters)?[slot::SILHOUETTE_PIXELS];
     let n = count as usize;
-    // At least one record: a binding holds at least one element of its array.
-    let ff = ctx.zeroed::<FacetF>("facets f64", n.max(1));
-    let fu = ctx.zeroed::<FacetU>("facets u32", n.max(1));
+    let ff = ctx.zeroed::<FacetF>("facets f64", n);
+    let fu = ctx.zeroed::<FacetU>("facets u32", n);
     let valid = ctx.zeroed::<u32>("validity masks", n * run.words as usize);
     let bind = ctx.bind(
         &k.facets_build,
