@@ -6,11 +6,11 @@
 //! by the twin's own [`Packer::pack_triangle`]; everything per texel runs on the GPU: the depth
 //! at the texel's centre and its 16-bit code (rounded half away from zero, as `f64::round`),
 //! the derivative codes at the decoded depth under a spot light (through the code's
-//! thresholds, `encode.wgsl`), or the `f32` texel. The texels are read back: the
-//! recovery and antialiasing stages on the CPU read the map too.
+//! thresholds, `encode.wgsl`), or the `f32` texel. The texels stay on the GPU for the later
+//! stages and are read back for the twin's code (handed-back pixels, antialiasing records).
 
 use super::{
-    raster::setup_data,
+    raster::{setup_data, SETUP},
     texel::{code_tables, ENCODE},
 };
 use crate::{
@@ -24,10 +24,29 @@ use crate::{
         texel::{F32Texel, LightSpace, Packer, SpsmMap, TexelFormat, Texels},
     },
 };
+use bytemuck::{Pod, Zeroable};
 use instrumentation::Recorder;
 
 const PACK: Part =
-    Part { name: "spsm/pack.wgsl", source: include_str!("pack.wgsl"), needs: &[&ENCODE] };
+    Part { name: "spsm/pack.wgsl", source: include_str!("pack.wgsl"), needs: &[&ENCODE, &SETUP] };
+
+/// The packing's parameters, the WGSL `PackParams` of `pack.wgsl`: the light space's depth
+/// origin and step, and its texel's world size at unit depth (`LightSpace::slope_scale`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct PackParams {
+    z_lo: f64,
+    depth_step: f64,
+    size_x: f64,
+    size_y: f64,
+}
+
+crate::gpu::layout::wgsl_mirror!(
+    PackParams,
+    "PackParams",
+    compose(&[&PACK]),
+    [z_lo, depth_step, size_x, size_y]
+);
 
 /// What [`pack_map`] gives: the twin's map, read back, and its texels as they stay on the
 /// GPU for the later stages.
@@ -94,7 +113,15 @@ pub fn pack_map(
         &pipeline,
         &[
             &ctx.upload("spsm pack dims", &[raster.res]),
-            &ctx.upload("spsm pack params", &[space.z_lo, space.depth_step(), size.x, size.y]),
+            &ctx.upload(
+                "spsm pack params",
+                &[PackParams {
+                    z_lo: space.z_lo,
+                    depth_step: space.depth_step(),
+                    size_x: size.x,
+                    size_y: size.y,
+                }],
+            ),
             &ctx.upload("spsm setups", &setup_data(&raster.setups)),
             &ctx.upload("spsm triangle words", &tri_words),
             &ctx.upload("spsm texel triangles", &raster.texel),

@@ -7,10 +7,9 @@
 
 // [res]
 @group(0) @binding(0) var<storage, read> dims: array<u32>;
-// [z_lo, depth step, texel size x, y]
-@group(0) @binding(1) var<storage, read> fparams: array<f64>;
-// Per prepared triangle (SETUP_F f64), as raster.wgsl reads them.
-@group(0) @binding(2) var<storage, read> setups: array<f64>;
+@group(0) @binding(1) var<storage, read> fparams: PackParams;
+// Per prepared triangle (setup.wgsl), as raster.wgsl reads them.
+@group(0) @binding(2) var<storage, read> setups: array<SetupData>;
 // Per prepared triangle: vertex words R, G, B and its derivative codes (qx << 8 | qy), or
 // NO_CODES when they depend on the texel's depth.
 @group(0) @binding(3) var<storage, read> tri_words: array<u32>;
@@ -23,7 +22,15 @@
 // F32: the depth's and derivatives' f32 bits (three a texel).
 @group(0) @binding(7) var<storage, read_write> out_planes: array<u32>;
 
-const SETUP_F: u32 = 13u;
+// pack::PackParams: the light space's depth origin and step, and its texel's world size at
+// unit depth (LightSpace::slope_scale).
+struct PackParams {
+    z_lo: f64,
+    depth_step: f64,
+    size_x: f64,
+    size_y: f64,
+}
+
 const NONE: u32 = 0xffffffffu;
 const NO_CODES: u32 = 0xffffffffu;
 const F32_NAN: u32 = 0x7fc00000u;
@@ -31,7 +38,7 @@ const MIN_POSITIVE: f64 = 2.2250738585072014e-308lf;
 
 fn bind_all() {
     _ = dims[0];
-    _ = fparams[0];
+    _ = fparams.z_lo;
     _ = setups[0];
     _ = tri_words[0];
     _ = texel[0];
@@ -56,20 +63,20 @@ fn round_away(x: f64) -> f64 {
 
 // TriSetup::plane at the centre of texel k.
 fn centre_depth(s: u32, k: u32) -> f64 {
-    let o = s * SETUP_F;
+    let t = setups[s];
     let res = dims[0];
     let cx = f64(k % res) + 0.5lf;
     let cy = f64(k / res) + 0.5lf;
-    return setups[o + 6u] + kept((cx - setups[o]) * setups[o + 9u] + (cy - setups[o + 1u]) * setups[o + 10u]);
+    return t.z[0] + kept((cx - t.v[0]) * t.dz[0] + (cy - t.v[1]) * t.dz[1]);
 }
 
 // Packer::depth_code.
 fn depth_code(z: f64) -> u32 {
-    let s = fparams[1];
+    let s = fparams.depth_step;
     if s <= 0.0lf {
         return 0u;
     }
-    let q = round_away((z - fparams[0]) / s);
+    let q = round_away((z - fparams.z_lo) / s);
     if q != q {
         return 0u;
     }
@@ -93,12 +100,11 @@ fn pack_packed(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
     var codes = tri_words[4u * s + 3u];
     if codes == NO_CODES {
         // Packer::derivative_codes at the decoded depth, through LightSpace::slope_scale.
-        let z = fparams[0] + kept(f64(zq) * fparams[1]);
+        let z = fparams.z_lo + kept(f64(zq) * fparams.depth_step);
         let m = max(-z, MIN_POSITIVE);
-        let kx = fparams[2] * m;
-        let ky = fparams[3] * m;
-        let o = s * SETUP_F;
-        codes = (encode(setups[o + 9u] / kx) << 8u) | encode(setups[o + 10u] / ky);
+        let kx = fparams.size_x * m;
+        let ky = fparams.size_y * m;
+        codes = (encode(setups[s].dz[0] / kx) << 8u) | encode(setups[s].dz[1] / ky);
     }
     for (var w = 0u; w < 3u; w++) {
         out_words[4u * k + w] = tri_words[4u * s + w];
@@ -122,11 +128,11 @@ fn pack_f32(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
         out_planes[3u * k + 2u] = 0u;
         return;
     }
-    let o = s * SETUP_F;
+    let t = setups[s];
     for (var w = 0u; w < 6u; w++) {
-        out_words[6u * k + w] = bitcast<u32>(f32(setups[o + w]));
+        out_words[6u * k + w] = bitcast<u32>(f32(setups[s].v[w]));
     }
     out_planes[3u * k] = bitcast<u32>(f32(centre_depth(s, k)));
-    out_planes[3u * k + 1u] = bitcast<u32>(f32(setups[o + 9u]));
-    out_planes[3u * k + 2u] = bitcast<u32>(f32(setups[o + 10u]));
+    out_planes[3u * k + 1u] = bitcast<u32>(f32(t.dz[0]));
+    out_planes[3u * k + 2u] = bitcast<u32>(f32(t.dz[1]));
 }

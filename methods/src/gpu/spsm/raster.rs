@@ -21,24 +21,47 @@ use crate::{
     spsm::raster::{prepare, ConservativeMap, TriSetup},
     spsm::texel::LightSpace,
 };
+use bytemuck::{Pod, Zeroable};
 use instrumentation::Recorder;
 use scenes::{Geometry, Projector};
 
-const RASTER: Part = Part::file("spsm/raster.wgsl", include_str!("raster.wgsl"));
+/// WGSL of a prepared triangle as the kernels read it.
+pub(super) const SETUP: Part = Part::file("spsm/setup.wgsl", include_str!("setup.wgsl"));
+const RASTER: Part =
+    Part { name: "spsm/raster.wgsl", source: include_str!("raster.wgsl"), needs: &[&SETUP] };
 
-/// `f64` per prepared triangle in `raster.wgsl`.
-const SETUP_F: usize = 13;
+/// A prepared triangle ([`TriSetup`]) as the kernels read it, the WGSL `SetupData` of
+/// `setup.wgsl`: the vertices (`x, y`), their depths, the depth gradient, the least and
+/// largest vertex depth.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub(super) struct SetupData {
+    v: [f64; 6],
+    z: [f64; 3],
+    dz: [f64; 2],
+    z_min: f64,
+    z_max: f64,
+}
 
-/// The prepared triangles as the kernels read them (`SETUP_F` `f64` each: the vertices, their
-/// depths, the depth gradient, the least and largest vertex depth).
-pub(super) fn setup_data(setups: &[TriSetup]) -> Vec<f64> {
-    let mut out = Vec::with_capacity(SETUP_F * setups.len());
-    for s in setups {
-        out.extend(s.v.iter().flat_map(|v| [v.x, v.y]));
-        out.extend_from_slice(&s.z);
-        out.extend_from_slice(&[s.dz.x, s.dz.y, s.z_min, s.z_max]);
-    }
-    out
+crate::gpu::layout::wgsl_mirror!(
+    SetupData,
+    "SetupData",
+    compose(&[&SETUP]),
+    [v, z, dz, z_min, z_max]
+);
+
+/// The prepared triangles as the kernels read them.
+pub(super) fn setup_data(setups: &[TriSetup]) -> Vec<SetupData> {
+    setups
+        .iter()
+        .map(|s| SetupData {
+            v: [s.v[0].x, s.v[0].y, s.v[1].x, s.v[1].y, s.v[2].x, s.v[2].y],
+            z: s.z,
+            dz: s.dz.to_array(),
+            z_min: s.z_min,
+            z_max: s.z_max,
+        })
+        .collect()
 }
 
 /// What [`rasterize_conservative`] gives beside the map.

@@ -9,8 +9,8 @@
 
 // [res, items, undecided capacity]
 @group(0) @binding(0) var<storage, read> dims: array<u32>;
-// Per prepared triangle (SETUP_F f64): v0.xy v1.xy v2.xy, z0 z1 z2, dz.xy, z_min, z_max.
-@group(0) @binding(1) var<storage, read> setups: array<f64>;
+// Per prepared triangle (setup.wgsl).
+@group(0) @binding(1) var<storage, read> setups: array<SetupData>;
 // Per prepared triangle: its rectangle's columns x0, x1 (rows come with the items).
 @group(0) @binding(2) var<storage, read> cols: array<u32>;
 // Per item: prepared triangle, row.
@@ -26,7 +26,6 @@
 @group(0) @binding(9) var<storage, read_write> out_texel: array<u32>;
 @group(0) @binding(10) var<storage, read_write> out_depth: array<f64>;
 
-const SETUP_F: u32 = 13u;
 // robust's orient2d filter bound (CCWERRBOUNDA).
 const THETA: f64 = 3.3306690621773722e-16lf;
 const NONE: u32 = 0xffffffffu;
@@ -46,7 +45,7 @@ fn bind_all() {
 }
 
 fn vertex(s: u32, i: u32) -> vec2<f64> {
-    return vec2<f64>(setups[s * SETUP_F + 2u * i], setups[s * SETUP_F + 2u * i + 1u]);
+    return vec2<f64>(setups[s].v[2u * i], setups[s].v[2u * i + 1u]);
 }
 
 // TriSetup::strip_columns for the strip y0 <= y <= y1 within columns c0..=c1; x > y when
@@ -116,13 +115,13 @@ fn kept(v: f64) -> f64 {
 
 // TriSetup::conservative_depth over texel (i, j).
 fn conservative_depth(s: u32, i: u32, j: u32) -> f64 {
-    let o = s * SETUP_F;
-    let dz = vec2<f64>(setups[o + 9u], setups[o + 10u]);
+    let t = setups[s];
+    let dz = vec2<f64>(t.dz[0], t.dz[1]);
     let x = select(f64(i) + 1.0lf, f64(i), dz.x > 0.0lf);
     let y = select(f64(j) + 1.0lf, f64(j), dz.y > 0.0lf);
     let v0 = vertex(s, 0u);
-    let plane = setups[o + 6u] + kept((x - v0.x) * dz.x + (y - v0.y) * dz.y);
-    return min(max(plane, setups[o + 11u]), setups[o + 12u]);
+    let plane = t.z[0] + kept((x - v0.x) * dz.x + (y - v0.y) * dz.y);
+    return min(max(plane, t.z_min), t.z_max);
 }
 
 // Adds n to the 64-bit counter at words c, c + 1.
