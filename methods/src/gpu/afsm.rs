@@ -69,6 +69,7 @@ use crate::{
     method::{MethodError, ShadowMethod, Visibility},
     raster::NO_TRIANGLE,
 };
+use bytemuck::{Pod, Zeroable};
 use glam::DVec2;
 use instrumentation::Recorder;
 use scenes::Projector;
@@ -97,28 +98,113 @@ const WG: u32 = 64;
 /// The kernels' WGSL: the grid's cell function is shared by the binning of samples and the
 /// casters' setup.
 const GRID: Part = Part::file("afsm/grid.wgsl", include_str!("afsm/grid.wgsl"));
+/// The per-frame constants and the blocker records, as the kernels read them.
+const LAYOUT: Part = Part::file("afsm/layout.wgsl", include_str!("afsm/layout.wgsl"));
+
+/// The kernels' `f64` constants, the WGSL `FParams` of `layout.wgsl`: the shadow offset
+/// ratio ([`SHADOW_OFFSET`]), the grid's cells per light-image unit along x and y,
+/// `orient2d`'s filter bound, and the offset in its pixel of the sub-sample shaded
+/// (written per pass by [`Izb::shadowed`]).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct FParams {
+    offset: f64,
+    cell_x: f64,
+    cell_y: f64,
+    filter_bound: f64,
+    sub_x: f64,
+    sub_y: f64,
+}
+
+/// The kernels' `u32` constants, the WGSL `UParams`: pixels, grid cells a side, triangles,
+/// image width.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct UParams {
+    pixels: u32,
+    grid: u32,
+    triangles: u32,
+    width: u32,
+}
+
+/// A blocker's outline (up to four corners, `x` then `y`) and bounding box, the WGSL
+/// `BlockerOutline` (outline and plane are apart so that each buffer stays within the
+/// adapter's binding size limit).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct BlockerOutline {
+    outline: [f64; 8],
+    lo: [f64; 2],
+    hi: [f64; 2],
+}
+
+/// A blocker's plane depth function (numerator and denominator coefficients) and depth
+/// range, the WGSL `BlockerPlane`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct BlockerPlane {
+    num: [f64; 3],
+    den: [f64; 3],
+    dmin: f64,
+    dmax: f64,
+}
+
+/// A blocker's corner count (with a flag when its orientation was left undecided) and its
+/// grid cell range, the WGSL `BlockerU`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct BlockerU {
+    flags: u32,
+    x0: u32,
+    y0: u32,
+    x1: u32,
+    y1: u32,
+}
+
+super::layout::wgsl_mirror!(
+    FParams,
+    "FParams",
+    compose(&[&LAYOUT]),
+    [offset, cell_x, cell_y, filter_bound, sub_x, sub_y];
+    UParams,
+    "UParams",
+    compose(&[&LAYOUT]),
+    [pixels, grid, triangles, width];
+    BlockerOutline,
+    "BlockerOutline",
+    compose(&[&LAYOUT]),
+    [outline, lo, hi];
+    BlockerPlane,
+    "BlockerPlane",
+    compose(&[&LAYOUT]),
+    [num, den, dmin, dmax];
+    BlockerU,
+    "BlockerU",
+    compose(&[&LAYOUT]),
+    [flags, x0, y0, x1, y1];
+);
 const TRANSFORM: Part = Part {
     name: "afsm/transform.wgsl",
     source: include_str!("afsm/transform.wgsl"),
-    needs: &[&COMMON],
+    needs: &[&COMMON, &LAYOUT],
 };
-const IZB: Part =
-    Part { name: "afsm/izb.wgsl", source: include_str!("afsm/izb.wgsl"), needs: &[&COMMON, &GRID] };
+const IZB: Part = Part {
+    name: "afsm/izb.wgsl",
+    source: include_str!("afsm/izb.wgsl"),
+    needs: &[&COMMON, &GRID, &LAYOUT],
+};
 const SETUP: Part = Part {
     name: "afsm/setup.wgsl",
     source: include_str!("afsm/setup.wgsl"),
-    needs: &[&COMMON, &GRID],
+    needs: &[&COMMON, &GRID, &LAYOUT],
 };
-const ARGS: Part = Part::file("afsm/args.wgsl", include_str!("afsm/args.wgsl"));
-const TEST: Part =
-    Part { name: "afsm/test.wgsl", source: include_str!("afsm/test.wgsl"), needs: &[&COMMON] };
-/// `f64` per triangle of `setup.wgsl`'s outline records (4 corners and the bounding box).
-const BLK_OUTLINE: usize = 12;
-/// `f64` per triangle of `setup.wgsl`'s plane records (depth function and range); the
-/// records are split so that each buffer stays within the adapter's binding size limit.
-const BLK_PLANE: usize = 8;
-/// `u32` per triangle record of `setup.wgsl`.
-const BLK_U: usize = 5;
+const ARGS: Part =
+    Part { name: "afsm/args.wgsl", source: include_str!("afsm/args.wgsl"), needs: &[&LAYOUT] };
+const TEST: Part = Part {
+    name: "afsm/test.wgsl",
+    source: include_str!("afsm/test.wgsl"),
+    needs: &[&COMMON, &LAYOUT],
+};
 
 /// The alias-free shadow map on the GPU (`afsm` with `--device gpu`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -243,17 +329,24 @@ impl<'a> Izb<'a> {
         // The last two are the sub-sample's offset in its pixel, written by `shadowed`.
         let fparams = ctx.upload(
             "afsm fparams",
-            &[
-                SHADOW_OFFSET,
-                f64::from(grid) / light.width,
-                f64::from(grid) / light.height,
-                ORIENT2D_FILTER_BOUND,
-                0.5,
-                0.5,
-            ],
+            &[FParams {
+                offset: SHADOW_OFFSET,
+                cell_x: f64::from(grid) / light.width,
+                cell_y: f64::from(grid) / light.height,
+                filter_bound: ORIENT2D_FILTER_BOUND,
+                sub_x: 0.5,
+                sub_y: 0.5,
+            }],
         );
-        let uparams =
-            ctx.upload("afsm uparams", &[pixels as u32, grid, gpu.triangles, frame.width()]);
+        let uparams = ctx.upload(
+            "afsm uparams",
+            &[UParams {
+                pixels: pixels as u32,
+                grid,
+                triangles: gpu.triangles,
+                width: frame.width(),
+            }],
+        );
         let camera = ctx.upload("afsm camera", &[ProjectorData::new(&frame.camera)]);
         let scan = super::scan::Scan::new(ctx);
         let transform = ctx.pipeline("afsm transform", &compose(&[&TRANSFORM]), "transform");
@@ -273,9 +366,9 @@ impl<'a> Izb<'a> {
             Kernel::new(ctx, ctx.pipeline("afsm scatter", &izb_src, "scatter"), &izb_bufs);
         let cell_scan = scan.prepare(ctx, &cell_start, cells + 1, &samples);
 
-        let blk_outline = ctx.zeroed::<f64>("afsm blocker outlines", BLK_OUTLINE * triangles);
-        let blk_plane = ctx.zeroed::<f64>("afsm blocker planes", BLK_PLANE * triangles);
-        let blk_u = ctx.zeroed::<u32>("afsm blockers u32", BLK_U * triangles);
+        let blk_outline = ctx.zeroed::<BlockerOutline>("afsm blocker outlines", triangles);
+        let blk_plane = ctx.zeroed::<BlockerPlane>("afsm blocker planes", triangles);
+        let blk_u = ctx.zeroed::<BlockerU>("afsm blockers u32", triangles);
         let items = ctx.zeroed::<u32>("afsm items", triangles + 1);
         let items_total = ctx.zeroed::<u32>("afsm items total", 1);
         let setup = Kernel::new(
@@ -358,7 +451,7 @@ impl<'a> Izb<'a> {
         let groups = GpuContext::groups_1d(pixels, WG);
         ctx.queue.write_buffer(
             &self.fparams,
-            4 * 8,
+            std::mem::offset_of!(FParams, sub_x) as u64,
             bytemuck::cast_slice(&[surface.offset.x, surface.offset.y]),
         );
 

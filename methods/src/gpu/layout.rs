@@ -12,9 +12,11 @@
 //! projector the kernels read), `raster::Params` (`raster.wgsl`), `sm::Params`
 //! (`receiver.wgsl`, shared by `sm` and the PCF kernels), `spsm::texel::Params`
 //! (`texel.wgsl`), `spsm::antialias::Record` (`spsm/antialias.wgsl`, a silhouette per
-//! uncertain pixel), `pan09::params::Params` and `PlaneData` (`pan09/params.wgsl`, pan09's
-//! per-frame constants) and `pan09::facets::FacetF` and `FacetU` (`pan09/facet_layout.wgsl`,
-//! a silhouette facet's record).
+//! uncertain pixel), `spsm::raster::SetupData` (`spsm/setup.wgsl`, a prepared triangle),
+//! `spsm::pack::PackParams` (`spsm/pack.wgsl`), `pan09::params::Params` and `PlaneData`
+//! (`pan09/params.wgsl`, pan09's per-frame constants), `pan09::facets::FacetF` and `FacetU`
+//! (`pan09/facet_layout.wgsl`, a silhouette facet's record) and afsm's `FParams`, `UParams`,
+//! `BlockerOutline`, `BlockerPlane` and `BlockerU` (`afsm/layout.wgsl`).
 
 /// Declares that the `#[repr(C)]` struct `$ty` is mirrored by the WGSL struct `$name` of the
 /// shader source `$source` (an expression giving a `String`), fields `[$field, ...]` in

@@ -3,8 +3,8 @@
 // scan of the counts, `scatter` writes each sample to its cell's run of the sample array.
 // Appended to common.wgsl and grid.wgsl.
 
-@group(0) @binding(0) var<storage, read> fparams: array<f64>;
-@group(0) @binding(1) var<storage, read> uparams: array<u32>;
+@group(0) @binding(0) var<storage, read> fparams: FParams;
+@group(0) @binding(1) var<storage, read> uparams: UParams;
 @group(0) @binding(2) var<storage, read> sample_f: array<f64>;
 @group(0) @binding(3) var<storage, read> sample_tri: array<u32>;
 // Per pixel: (cell, rank in the cell).
@@ -20,12 +20,12 @@ fn count(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     _ = arrayLength(&izb_f);
     _ = arrayLength(&izb_u);
     let k = gid.x + gid.y * (nwg.x * 64u);
-    if k >= uparams[0] || sample_tri[k] == NO_TRIANGLE {
+    if k >= uparams.pixels || sample_tri[k] == NO_TRIANGLE {
         return;
     }
-    let g = uparams[1];
-    let cx = cell_axis(sample_f[3u * k], fparams[1], g);
-    let cy = cell_axis(sample_f[3u * k + 1u], fparams[2], g);
+    let g = uparams.grid;
+    let cx = cell_axis(sample_f[3u * k], fparams.cell_x, g);
+    let cy = cell_axis(sample_f[3u * k + 1u], fparams.cell_y, g);
     let cell = cy * g + cx;
     slot[2u * k] = cell;
     slot[2u * k + 1u] = atomicAdd(&cells[cell], 1u);
@@ -33,9 +33,9 @@ fn count(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
 
 @compute @workgroup_size(64)
 fn scatter(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    _ = arrayLength(&fparams);
+    _ = fparams.offset;
     let k = gid.x + gid.y * (nwg.x * 64u);
-    if k >= uparams[0] || sample_tri[k] == NO_TRIANGLE {
+    if k >= uparams.pixels || sample_tri[k] == NO_TRIANGLE {
         return;
     }
     let at = atomicLoad(&cells[slot[2u * k]]) + slot[2u * k + 1u];

@@ -5,24 +5,17 @@
 // common.wgsl and grid.wgsl.
 
 @group(0) @binding(0) var<storage, read> light_data: ProjectorData;
-// [offset, cell scale x, cell scale y, orient2d filter bound]
-@group(0) @binding(1) var<storage, read> fparams: array<f64>;
-// [pixels, grid, triangles]
-@group(0) @binding(2) var<storage, read> uparams: array<u32>;
+@group(0) @binding(1) var<storage, read> fparams: FParams;
+@group(0) @binding(2) var<storage, read> uparams: UParams;
 @group(0) @binding(3) var<storage, read> corners: array<f64>;
 @group(0) @binding(4) var<storage, read> casters: array<u32>;
-// Per triangle, BLK_OUTLINE f64: outline (4 corners), lo, hi.
-@group(0) @binding(5) var<storage, read_write> blk_outline: array<f64>;
-// Per triangle, BLK_PLANE f64: num (3), den (3), dmin, dmax.
-@group(0) @binding(6) var<storage, read_write> blk_plane: array<f64>;
-// Per triangle, BLK_U u32: corners | ORIENTATION_UNDECIDED, cell range x0, y0, x1, y1.
-@group(0) @binding(7) var<storage, read_write> blk_u: array<u32>;
+// Per triangle (layout.wgsl): outline and box, plane, corner count and cells.
+@group(0) @binding(5) var<storage, read_write> blk_outline: array<BlockerOutline>;
+@group(0) @binding(6) var<storage, read_write> blk_plane: array<BlockerPlane>;
+@group(0) @binding(7) var<storage, read_write> blk_u: array<BlockerU>;
 // Per triangle, the number of grid cells it visits (0: it casts nothing).
 @group(0) @binding(8) var<storage, read_write> items: array<u32>;
 
-const BLK_OUTLINE: u32 = 12u;
-const BLK_PLANE: u32 = 8u;
-const BLK_U: u32 = 5u;
 const ORIENTATION_UNDECIDED: u32 = 256u;
 
 fn corner(t: u32, i: u32) -> vec3<f64> {
@@ -37,7 +30,7 @@ fn orient_filter(a: vec2<f64>, b: vec2<f64>, c: vec2<f64>) -> i32 {
     let detleft = (a.x - c.x) * (b.y - c.y);
     let detright = (a.y - c.y) * (b.x - c.x);
     let det = detleft - detright;
-    let errbound = fparams[3] * abs(detleft + detright);
+    let errbound = fparams.filter_bound * abs(detleft + detright);
     if det >= errbound || -det >= errbound {
         if det > 0.0lf {
             return 1;
@@ -53,7 +46,7 @@ fn orient_filter(a: vec2<f64>, b: vec2<f64>, c: vec2<f64>) -> i32 {
 @compute @workgroup_size(64)
 fn setup(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let t = gid.x + gid.y * (nwg.x * 64u);
-    if t >= uparams[2] {
+    if t >= uparams.triangles {
         return;
     }
     items[t] = 0u;
@@ -145,36 +138,24 @@ fn setup(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
             -2.0lf * nu * p.b / p.height,
         );
     }
-    let o = BLK_OUTLINE * t;
+    var b: BlockerOutline;
     for (var i = 0u; i < 4u; i = i + 1u) {
-        blk_outline[o + 2u * i] = outline[i].x;
-        blk_outline[o + 2u * i + 1u] = outline[i].y;
+        b.outline[2u * i] = outline[i].x;
+        b.outline[2u * i + 1u] = outline[i].y;
     }
-    blk_outline[o + 8u] = lo.x;
-    blk_outline[o + 9u] = lo.y;
-    blk_outline[o + 10u] = hi.x;
-    blk_outline[o + 11u] = hi.y;
-    let f = BLK_PLANE * t;
-    for (var i = 0u; i < 3u; i = i + 1u) {
-        blk_plane[f + i] = num[i];
-        blk_plane[f + 3u + i] = den[i];
-    }
-    blk_plane[f + 6u] = dmin;
-    blk_plane[f + 7u] = dmax;
-    let g = uparams[1];
-    let x0 = cell_axis(lo.x, fparams[1], g);
-    let y0 = cell_axis(lo.y, fparams[2], g);
-    let x1 = cell_axis(hi.x, fparams[1], g);
-    let y1 = cell_axis(hi.y, fparams[2], g);
+    b.lo = array<f64, 2>(lo.x, lo.y);
+    b.hi = array<f64, 2>(hi.x, hi.y);
+    blk_outline[t] = b;
+    blk_plane[t] = BlockerPlane(num, den, dmin, dmax);
+    let g = uparams.grid;
+    let x0 = cell_axis(lo.x, fparams.cell_x, g);
+    let y0 = cell_axis(lo.y, fparams.cell_y, g);
+    let x1 = cell_axis(hi.x, fparams.cell_x, g);
+    let y1 = cell_axis(hi.y, fparams.cell_y, g);
     var flags = count;
     if orientation == 2 {
         flags = flags | ORIENTATION_UNDECIDED;
     }
-    let u = BLK_U * t;
-    blk_u[u] = flags;
-    blk_u[u + 1u] = x0;
-    blk_u[u + 2u] = y0;
-    blk_u[u + 3u] = x1;
-    blk_u[u + 4u] = y1;
+    blk_u[t] = BlockerU(flags, x0, y0, x1, y1);
     items[t] = (x1 - x0 + 1u) * (y1 - y0 + 1u);
 }

@@ -5,15 +5,13 @@
 // outline by orient2d with the top-left rule. Pairs the orient2d filter cannot decide go to
 // the undecided list for the CPU. Appended to common.wgsl.
 
-// [offset, cell scale x, cell scale y, orient2d filter bound]
-@group(0) @binding(0) var<storage, read> fparams: array<f64>;
-// [pixels, grid, triangles]
-@group(0) @binding(1) var<storage, read> uparams: array<u32>;
+@group(0) @binding(0) var<storage, read> fparams: FParams;
+@group(0) @binding(1) var<storage, read> uparams: UParams;
 @group(0) @binding(2) var<storage, read> item_start: array<u32>;
 // The triangle records of setup.wgsl.
-@group(0) @binding(3) var<storage, read> blk_outline: array<f64>;
-@group(0) @binding(4) var<storage, read> blk_plane: array<f64>;
-@group(0) @binding(5) var<storage, read> blk_u: array<u32>;
+@group(0) @binding(3) var<storage, read> blk_outline: array<BlockerOutline>;
+@group(0) @binding(4) var<storage, read> blk_plane: array<BlockerPlane>;
+@group(0) @binding(5) var<storage, read> blk_u: array<BlockerU>;
 @group(0) @binding(6) var<storage, read> cell_start: array<u32>;
 @group(0) @binding(7) var<storage, read> izb_f: array<f64>;
 @group(0) @binding(8) var<storage, read> izb_u: array<u32>;
@@ -26,9 +24,6 @@
 @group(0) @binding(11) var<storage, read_write> und_f: array<f64>;
 @group(0) @binding(12) var<storage, read_write> und_u: array<u32>;
 
-const BLK_OUTLINE: u32 = 12u;
-const BLK_PLANE: u32 = 8u;
-const BLK_U: u32 = 5u;
 const ORIENTATION_UNDECIDED: u32 = 256u;
 
 // raster::inside_edge with orient2d's filter: 0 outside, 1 inside, 2 undecided.
@@ -36,7 +31,7 @@ fn inside_edge(a: vec2<f64>, b: vec2<f64>, p: vec2<f64>) -> u32 {
     let detleft = (a.x - p.x) * (b.y - p.y);
     let detright = (a.y - p.y) * (b.x - p.x);
     let det = detleft - detright;
-    let errbound = fparams[3] * abs(detleft + detright);
+    let errbound = fparams.filter_bound * abs(detleft + detright);
     if !(det >= errbound || -det >= errbound) {
         return 2u;
     }
@@ -50,7 +45,7 @@ fn inside_edge(a: vec2<f64>, b: vec2<f64>, p: vec2<f64>) -> u32 {
 @compute @workgroup_size(64)
 fn test(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let i = gid.x + gid.y * (nwg.x * 64u);
-    let triangles = uparams[2];
+    let triangles = uparams.triangles;
     if i >= item_start[triangles] {
         return;
     }
@@ -67,30 +62,30 @@ fn test(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     }
     let t = lo_t;
     let local = i - item_start[t];
-    let u = BLK_U * t;
-    let flags = blk_u[u];
+    let bu = blk_u[t];
+    let flags = bu.flags;
     let count = flags & 255u;
     let undecided_triangle = (flags & ORIENTATION_UNDECIDED) != 0u;
-    let x0 = blk_u[u + 1u];
-    let width = blk_u[u + 3u] - x0 + 1u;
-    let cell = (blk_u[u + 2u] + local / width) * uparams[1] + x0 + local % width;
-    let o = BLK_OUTLINE * t;
+    let x0 = bu.x0;
+    let width = bu.x1 - x0 + 1u;
+    let cell = (bu.y0 + local / width) * uparams.grid + x0 + local % width;
+    let b = blk_outline[t];
     var outline: array<vec2<f64>, 5>;
     for (var e = 0u; e < count; e = e + 1u) {
-        outline[e] = vec2<f64>(blk_outline[o + 2u * e], blk_outline[o + 2u * e + 1u]);
+        outline[e] = vec2<f64>(b.outline[2u * e], b.outline[2u * e + 1u]);
     }
     outline[count] = outline[0];
-    let lo = vec2<f64>(blk_outline[o + 8u], blk_outline[o + 9u]);
-    let hi = vec2<f64>(blk_outline[o + 10u], blk_outline[o + 11u]);
-    let f = BLK_PLANE * t;
-    let n0 = blk_plane[f];
-    let n1 = blk_plane[f + 1u];
-    let n2 = blk_plane[f + 2u];
-    let d0 = blk_plane[f + 3u];
-    let d1 = blk_plane[f + 4u];
-    let d2 = blk_plane[f + 5u];
-    let dmin = blk_plane[f + 6u];
-    let dmax = blk_plane[f + 7u];
+    let lo = vec2<f64>(b.lo[0], b.lo[1]);
+    let hi = vec2<f64>(b.hi[0], b.hi[1]);
+    let pl = blk_plane[t];
+    let n0 = pl.num[0];
+    let n1 = pl.num[1];
+    let n2 = pl.num[2];
+    let d0 = pl.den[0];
+    let d1 = pl.den[1];
+    let d2 = pl.den[2];
+    let dmin = pl.dmin;
+    let dmax = pl.dmax;
     var tested = 0u;
     let end = cell_start[cell + 1u];
     for (var k = cell_start[cell]; k < end; k = k + 1u) {

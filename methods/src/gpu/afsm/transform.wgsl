@@ -3,10 +3,8 @@
 // plane, with its shadow threshold depth. Appended to common.wgsl.
 
 @group(0) @binding(0) var<storage, read> light_data: ProjectorData;
-// [afsm::SHADOW_OFFSET, cell scale x, y, orient2d bound, the sub-sample's offset x, y]
-@group(0) @binding(1) var<storage, read> fparams: array<f64>;
-// [pixels, grid, triangles, image width]
-@group(0) @binding(2) var<storage, read> uparams: array<u32>;
+@group(0) @binding(1) var<storage, read> fparams: FParams;
+@group(0) @binding(2) var<storage, read> uparams: UParams;
 @group(0) @binding(3) var<storage, read> g_triangle: array<u32>;
 // The sub-sample's depth: the parameter of the camera ray through it.
 @group(0) @binding(4) var<storage, read> g_depth: array<f64>;
@@ -23,7 +21,7 @@ fn max_element(v: vec3<f64>) -> f64 {
 // afsm::shadow_offset: the offset of the surface point `p` hit by a camera ray from `origin`.
 fn shadow_offset(origin: vec3<f64>, p: vec3<f64>) -> f64 {
     let magnitude = max_element(max(abs(origin), abs(p))) + max_element(abs(p - origin));
-    return fparams[0] * magnitude;
+    return fparams.offset * magnitude;
 }
 
 // samples::threshold_depth.
@@ -41,7 +39,7 @@ fn threshold_depth(p: Proj, x: f64, y: f64, z: f64, offset: f64) -> f64 {
 @compute @workgroup_size(64)
 fn transform(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let k = gid.x + gid.y * (nwg.x * 64u);
-    if k >= uparams[0] {
+    if k >= uparams.pixels {
         return;
     }
     var tri = g_triangle[k];
@@ -50,8 +48,8 @@ fn transform(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
         let p = proj_load(light_data);
         // SamplePattern::point: the pixel's corner plus the sub-sample's offset; the surface
         // point is Ray::at(depth) on the camera ray through it, as transform_samples takes it.
-        let w = uparams[3];
-        let point = vec2<f64>(f64(k % w) + fparams[4], f64(k / w) + fparams[5]);
+        let w = uparams.width;
+        let point = vec2<f64>(f64(k % w) + fparams.sub_x, f64(k / w) + fparams.sub_y);
         let ray = proj_ray(proj_load(camera_data), point);
         let position = ray.origin + g_depth[k] * ray.direction;
         r = proj_project(p, position);
