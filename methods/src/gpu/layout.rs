@@ -12,8 +12,8 @@
 //! projector the kernels read), `raster::Params` (`raster.wgsl`), `sm::Params`
 //! (`receiver.wgsl`, shared by `sm` and the PCF kernels), `spsm::texel::Params`
 //! (`texel.wgsl`), `spsm::antialias::Record` (`spsm/antialias.wgsl`, a silhouette per
-//! uncertain pixel), `spsm::raster::SetupData` (`spsm/setup.wgsl`, a prepared triangle),
-//! `spsm::pack::PackParams` (`spsm/pack.wgsl`), `pan09::params::Params` and `PlaneData`
+//! uncertain pixel), `spsm::raster::SetupData` (`spsm/setup.wgsl`, a prepared triangle)
+//! and `Dims`, `spsm::antialias::Dims`, `spsm::pack::PackParams` (`spsm/pack.wgsl`), `pan09::params::Params` and `PlaneData`
 //! (`pan09/params.wgsl`, pan09's per-frame constants), `pan09::facets::FacetF` and `FacetU`
 //! (`pan09/facet_layout.wgsl`, a silhouette facet's record) and afsm's `FParams`, `UParams`,
 //! `BlockerOutline`, `BlockerPlane` and `BlockerU` (`afsm/layout.wgsl`).

@@ -51,11 +51,25 @@ struct Record {
     tris: [f64; 63],
 }
 
+/// The kernel's sizes, the WGSL `Dims` of `antialias.wgsl`: the pixels to shade, the image
+/// width, the rate.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct Dims {
+    pixels: u32,
+    width: u32,
+    rate: u32,
+}
+
 crate::gpu::layout::wgsl_mirror!(
     Record,
     "Record",
     compose(&[&ANTIALIAS]),
-    [origin, normal, offset, centre, normals, tris]
+    [origin, normal, offset, centre, normals, tris];
+    Dims,
+    "Dims",
+    compose(&[&ANTIALIAS]),
+    [pixels, width, rate];
 );
 
 /// Antialiases the `uncertain` pixels with their recovered `silhouettes` (same order),
@@ -111,7 +125,10 @@ pub fn antialias_pixels(
     let bind = ctx.bind(
         &pipeline,
         &[
-            &ctx.upload("spsm aa dims", &[n as u32, frame.width(), rate as u32]),
+            &ctx.upload(
+                "spsm aa dims",
+                &[Dims { pixels: n as u32, width: frame.width(), rate: rate as u32 }],
+            ),
             &ctx.upload("spsm aa camera", &[ProjectorData::new(&frame.camera)]),
             &ctx.upload("spsm aa light", &[ProjectorData::new(&lookup.tester.projector)]),
             &ctx.upload("spsm aa offsets", &offsets),

@@ -5,8 +5,14 @@
 // recovered silhouette function (recover::Resolved::lit). The pixel's value is its lit
 // fraction. The silhouettes are recovered on the CPU and uploaded as records.
 
-// [pixels to shade, image width, rate]
-@group(0) @binding(0) var<storage, read> dims: array<u32>;
+// antialias::Dims: the pixels to shade, the image width, the rate.
+struct Dims {
+    pixels: u32,
+    width: u32,
+    rate: u32,
+}
+
+@group(0) @binding(0) var<storage, read> dims: Dims;
 @group(0) @binding(1) var<storage, read> camera_data: ProjectorData;
 @group(0) @binding(2) var<storage, read> light_data: ProjectorData;
 // The pattern's offsets, x then y per sub-sample.
@@ -31,19 +37,19 @@ struct Record {
 // `v`, through a choice the compiler cannot see through (see raster.wgsl's `kept`): keeps
 // the products of a dot product apart from its sum.
 fn kept(v: f64) -> f64 {
-    return select(v, 0.0lf, dims[2] == 0u);
+    return select(v, 0.0lf, dims.rate == 0u);
 }
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let j = gid.x + gid.y * (groups.x * 64u);
-    if j >= dims[0] { return; }
+    if j >= dims.pixels { return; }
     let r = records[j];
     let pixel = rec_u[3u * j];
     let tangents = rec_u[3u * j + 1u];
     let tris = rec_u[3u * j + 2u];
-    let w = dims[1];
-    let rate = dims[2];
+    let w = dims.width;
+    let rate = dims.rate;
     let normal = xyz(r.normal);
     let offset = r.offset;
     let centre = vec2<f64>(r.centre[0], r.centre[1]);

@@ -5,8 +5,8 @@
 // orthographic, else taken at the decoded depth, through the code's thresholds, encode.wgsl);
 // `pack_f32`: vertices, centre depth and derivatives rounded to f32.
 
-// [res]
-@group(0) @binding(0) var<storage, read> dims: array<u32>;
+// The map's resolution.
+@group(0) @binding(0) var<storage, read> res: u32;
 @group(0) @binding(1) var<storage, read> fparams: PackParams;
 // Per prepared triangle (setup.wgsl), as raster.wgsl reads them.
 @group(0) @binding(2) var<storage, read> setups: array<SetupData>;
@@ -37,7 +37,7 @@ const F32_NAN: u32 = 0x7fc00000u;
 const MIN_POSITIVE: f64 = 2.2250738585072014e-308lf;
 
 fn bind_all() {
-    _ = dims[0];
+    _ = res;
     _ = fparams.z_lo;
     _ = setups[0];
     _ = tri_words[0];
@@ -49,7 +49,7 @@ fn bind_all() {
 
 // `v`, through a choice the compiler cannot see through (see raster.wgsl's `kept`).
 fn kept(v: f64) -> f64 {
-    return select(v, 0.0lf, dims[0] == 0u);
+    return select(v, 0.0lf, res == 0u);
 }
 
 // f64::round: halves away from zero (WGSL's round takes them to even).
@@ -64,7 +64,6 @@ fn round_away(x: f64) -> f64 {
 // TriSetup::plane at the centre of texel k.
 fn centre_depth(s: u32, k: u32) -> f64 {
     let t = setups[s];
-    let res = dims[0];
     let cx = f64(k % res) + 0.5lf;
     let cy = f64(k / res) + 0.5lf;
     return t.z[0] + kept((cx - t.v[0]) * t.dz[0] + (cy - t.v[1]) * t.dz[1]);
@@ -87,7 +86,6 @@ fn depth_code(z: f64) -> u32 {
 fn pack_packed(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     bind_all();
     let k = gid.x + gid.y * (groups.x * 64u);
-    let res = dims[0];
     if k >= res * res { return; }
     let s = texel[k];
     if s == NONE {
@@ -116,7 +114,6 @@ fn pack_packed(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
 fn pack_f32(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     bind_all();
     let k = gid.x + gid.y * (groups.x * 64u);
-    let res = dims[0];
     if k >= res * res { return; }
     let s = texel[k];
     if s == NONE {

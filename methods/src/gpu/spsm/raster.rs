@@ -43,11 +43,25 @@ pub(super) struct SetupData {
     z_max: f64,
 }
 
+/// The kernels' sizes, the WGSL `Dims` of `raster.wgsl`: the map's resolution, the items,
+/// and the capacity of the list of undecided pairs.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct Dims {
+    res: u32,
+    items: u32,
+    capacity: u32,
+}
+
 crate::gpu::layout::wgsl_mirror!(
     SetupData,
     "SetupData",
     compose(&[&SETUP]),
-    [v, z, dz, z_min, z_max]
+    [v, z, dz, z_min, z_max];
+    Dims,
+    "Dims",
+    compose(&[&RASTER]),
+    [res, items, capacity];
 );
 
 /// The prepared triangles as the kernels read them.
@@ -139,7 +153,10 @@ pub fn rasterize_conservative(
     // Counting, with room for `capacity` undecided pairs; again with room for all of them
     // when they overflow (rare: the filter fails only within rounding of an edge).
     let count_pass = |capacity: usize, rec: &mut Recorder| -> Result<_, GpuError> {
-        let dims = ctx.upload("spsm raster dims", &[res as u32, n_items as u32, capacity as u32]);
+        let dims = ctx.upload(
+            "spsm raster dims",
+            &[Dims { res: res as u32, items: n_items as u32, capacity: capacity as u32 }],
+        );
         let undecided = ctx.zeroed::<u32>("spsm undecided", 3 * capacity);
         let no_list = ctx.zeroed::<u32>("spsm texel lists (not yet)", 1);
         let bind = ctx.bind(&count, &buffers(&dims, &no_list, &undecided).each_ref());
@@ -158,7 +175,10 @@ pub fn rasterize_conservative(
     let word = |lo: usize| u64::from(c[lo]) | u64::from(c[lo + 1]) << 32;
     let total = ctx.read::<u32>(&fragments_total)?[0] as usize;
     let list = ctx.zeroed::<u32>("spsm texel lists", total.max(1));
-    let dims = ctx.upload("spsm raster dims", &[res as u32, n_items as u32, 0]);
+    let dims = ctx.upload(
+        "spsm raster dims",
+        &[Dims { res: res as u32, items: n_items as u32, capacity: 0 }],
+    );
     let buffers = buffers(&dims, &list, &undecided);
     let bind_scatter = ctx.bind(&scatter, &buffers.each_ref());
     let bind_resolve = ctx.bind(&resolve, &buffers.each_ref());

@@ -7,8 +7,14 @@
 // texel, keeps the triangle of least minimum conservative depth, ties to the lower index,
 // as the CPU's in-order `<` does.
 
-// [res, items, undecided capacity]
-@group(0) @binding(0) var<storage, read> dims: array<u32>;
+// raster::Dims: the map's resolution, the items, the undecided list's capacity.
+struct Dims {
+    res: u32,
+    items: u32,
+    capacity: u32,
+}
+
+@group(0) @binding(0) var<storage, read> dims: Dims;
 // Per prepared triangle (setup.wgsl).
 @group(0) @binding(1) var<storage, read> setups: array<SetupData>;
 // Per prepared triangle: its rectangle's columns x0, x1 (rows come with the items).
@@ -31,7 +37,7 @@ const THETA: f64 = 3.3306690621773722e-16lf;
 const NONE: u32 = 0xffffffffu;
 
 fn bind_all() {
-    _ = dims[0];
+    _ = dims.res;
     _ = setups[0];
     _ = cols[0];
     _ = items[0];
@@ -110,7 +116,7 @@ fn touches(s: u32, i: u32, j: u32) -> u32 {
 // that `a + kept(b + c)` is evaluated as written: Mesa's llvmpipe was seen to reassociate
 // `a + (b + c)` in f64, one ulp off the CPU's `TriSetup::plane`.
 fn kept(v: f64) -> f64 {
-    return select(v, 0.0lf, dims[0] == 0u);
+    return select(v, 0.0lf, dims.res == 0u);
 }
 
 // TriSetup::conservative_depth over texel (i, j).
@@ -142,7 +148,7 @@ struct Item {
 }
 
 fn item_of(it: u32) -> Item {
-    if it >= dims[1] {
+    if it >= dims.items {
         return Item(0u, 0u, 1u, 0u);
     }
     let s = items[2u * it];
@@ -158,7 +164,7 @@ fn count(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     if item.x0 > item.x1 { return; }
     let s = item.s;
     let y = item.y;
-    let res = dims[0];
+    let res = dims.res;
     var tested = 0u;
     var fragments = 0u;
     for (var x = item.x0; x <= item.x1; x++) {
@@ -169,7 +175,7 @@ fn count(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
             atomicAdd(&texel_count[y * res + x], 1u);
         } else if t == 2u {
             let at = atomicAdd(&counters[4], 1u);
-            if at < dims[2] {
+            if at < dims.capacity {
                 undecided[3u * at] = s;
                 undecided[3u * at + 1u] = x;
                 undecided[3u * at + 2u] = y;
@@ -187,7 +193,7 @@ fn scatter(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroup
     if item.x0 > item.x1 { return; }
     let s = item.s;
     let y = item.y;
-    let res = dims[0];
+    let res = dims.res;
     for (var x = item.x0; x <= item.x1; x++) {
         if touches(s, x, y) == 1u {
             let k = y * res + x;
@@ -200,7 +206,7 @@ fn scatter(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroup
 fn resolve(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     bind_all();
     let k = gid.x + gid.y * (groups.x * 64u);
-    let res = dims[0];
+    let res = dims.res;
     if k >= res * res { return; }
     let first = atomicLoad(&texel_count[k]);
     let last = atomicLoad(&texel_count[k + 1u]);
