@@ -125,7 +125,7 @@ pub fn pack_map(
             &ctx.upload("spsm setups", &setup_data(&raster.setups)),
             &ctx.upload("spsm triangle words", &tri_words),
             &ctx.upload("spsm texel triangles", &raster.texel),
-            &ctx.upload("spsm code tables", tables),
+            &ctx.upload("spsm code tables", &tables),
             &out_words,
             &out_planes,
         ],

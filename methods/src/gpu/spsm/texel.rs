@@ -7,32 +7,26 @@ use crate::{
     gpu::{frame::COMMON, shader::Part, GpuContext},
     spsm::{
         classify::Lookup,
-        quantize::{DerivativeCode, MAX_POWER},
+        quantize::DerivativeCode,
         texel::{SpsmMap, Texels},
     },
 };
 use bytemuck::{Pod, Zeroable};
-use std::sync::OnceLock;
 
 /// WGSL of `DerivativeCode::encode` through the code's thresholds.
 pub(super) const ENCODE: Part = Part::file("spsm/encode.wgsl", include_str!("encode.wgsl"));
 
 /// A derivative code's tables as the kernels read them: decode `[0, 256)`, error
-/// `[256, 512)`, encode thresholds `[512, 768)`. Made once per exponent and kept: finding
-/// the thresholds takes some 16 000 encodings, and both the packing and the classification
-/// of every GPU run read them.
-pub(super) fn code_tables(code: &DerivativeCode) -> &'static [f64] {
-    static TABLES: [OnceLock<Vec<f64>>; MAX_POWER as usize] =
-        [const { OnceLock::new() }; MAX_POWER as usize];
-    TABLES[code.power() as usize - 1].get_or_init(|| {
-        let mut tables = vec![0.0f64; 768];
-        for q in 0..=255u8 {
-            tables[usize::from(q)] = code.decode(q);
-            tables[256 + usize::from(q)] = code.error(q);
-        }
-        tables[512..].copy_from_slice(code.thresholds());
-        tables
-    })
+/// `[256, 512)`, encode thresholds `[512, 768)` (the code keeps its thresholds; this only
+/// lays the three out side by side).
+pub(super) fn code_tables(code: &DerivativeCode) -> Vec<f64> {
+    let mut tables = vec![0.0f64; 768];
+    for q in 0..=255u8 {
+        tables[usize::from(q)] = code.decode(q);
+        tables[256 + usize::from(q)] = code.error(q);
+    }
+    tables[512..].copy_from_slice(code.thresholds());
+    tables
 }
 
 /// WGSL of the texel decoding.
@@ -80,8 +74,7 @@ pub struct GpuTexels {
 
 impl GpuTexels {
     /// The kernels' parameters for `lookup`'s map, and the derivative code's tables.
-    fn params(lookup: &Lookup<'_>) -> (Params, &'static [f64]) {
-        static NO_TABLES: [f64; 768] = [0.0; 768];
+    fn params(lookup: &Lookup<'_>) -> (Params, Vec<f64>) {
         let map: &SpsmMap = lookup.map;
         let space = map.space;
         let size = space.texel_world_size(1.0);
@@ -98,7 +91,7 @@ impl GpuTexels {
             perspective: u32::from(space.perspective),
             ..Default::default()
         };
-        let mut tables: &'static [f64] = &NO_TABLES;
+        let mut tables = vec![0.0; 768];
         if let Texels::Packed(_, p) = &map.texels {
             params.packed = 1;
             params.z_lo = p.space.z_lo;
@@ -141,6 +134,6 @@ impl GpuTexels {
         planes: wgpu::Buffer,
     ) -> Self {
         let (params, tables) = Self::params(lookup);
-        Self { params, texels, planes, tables: ctx.upload("spsm tables", tables) }
+        Self { params, texels, planes, tables: ctx.upload("spsm tables", &tables) }
     }
 }
