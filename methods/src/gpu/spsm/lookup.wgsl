@@ -10,13 +10,12 @@
 
 var<private> undecided: bool;
 
-// classify::MapPoint.
+// classify::MapPoint, but `facing` (faces_light: recovery alone reads it).
 struct MapPoint {
     xy: vec2<f64>,
     depth: f64,
     z: f64,
     tol: f64,
-    facing: bool,
     position: vec3<f64>,
     normal: vec3<f64>,
 }
@@ -48,14 +47,19 @@ fn map_point(position: vec3<f64>, normal: vec3<f64>) -> Mapped {
     if params.perspective == 1u {
         tol = params.constant / (r.z * r.z);
     }
-    // Projector::direction_to.
-    var towards = -proj.forward;
-    if proj.kind == 1u {
-        towards = normalize_or(proj.origin - position, -proj.forward);
-    }
-    m.p = MapPoint(r.xy, r.z, space_z(r.z), tol, dot3(normal, towards) > 0.0lf, position, normal);
+    m.p = MapPoint(r.xy, r.z, space_z(r.z), tol, position, normal);
     m.ok = true;
     return m;
+}
+
+// MapPoint::facing: whether the surface at `p` faces the light (Projector::direction_to).
+fn faces_light(p: MapPoint) -> bool {
+    let proj = proj_load(light);
+    var towards = -proj.forward;
+    if proj.kind == 1u {
+        towards = normalize_or(proj.origin - p.position, -proj.forward);
+    }
+    return dot3(p.normal, towards) > 0.0lf;
 }
 
 // robust::orient2d where its filter decides; else flags the pixel undecided.

@@ -158,7 +158,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
             }
         }
         let kept_mask = patterns[mask];
-        let facing_away = !p.facing && kept_mask != 0u;
+        let facing_away = kept_mask != 0u && !faces_light(p);
         let ring = kept_mask & 0xffu;
         // Silhouette::pattern, then Resolved::lit at the pixel's own map point.
         var lit = true;
