@@ -19,7 +19,6 @@
 
 #[cfg(feature = "embree")]
 pub mod embree_tracer;
-pub mod scaling;
 
 use glam::{DVec2, DVec3};
 use methods::pattern::SamplePattern;

@@ -6,7 +6,8 @@
 //!
 //! Usage: `embree-side-by-side [--threads N] [--repeats R] [--scenes a,b,...]` (built with
 //! `--features embree`; `scripts/embree-bench` runs it at 1 and 2 threads), or
-//! `embree-side-by-side scaling [...]`: cost against work, without Embree.
+//! `embree-side-by-side scaling [...]`: cost against work (the `papers` report's two
+//! cost-against-work tables), without Embree.
 
 fn main() -> anyhow::Result<()> {
     if std::env::args().nth(1).as_deref() == Some("scaling") {
@@ -30,20 +31,17 @@ fn side_by_side() -> anyhow::Result<()> {
     side_by_side::run()
 }
 
-/// `embree-side-by-side scaling [--threads N] [--repeats R] [--out DIR]`: cost against work
-/// (`bench::scaling`), as tables on standard output and log-log charts in DIR (default
-/// `shadowbench-out`): `scaling-triangles.{png,svg}` and `scaling-pixels.{png,svg}`.
+/// `embree-side-by-side scaling [--threads N] [--repeats R] [--out DIR]`: cost against work,
+/// the `papers` report's two cost-against-work tables (`reports::tables`, measured by the
+/// same code), as Markdown on standard output and log-log charts in DIR (default
+/// `shadowbench-out`): `cost-against-triangles.{png,svg}` and `cost-against-pixels.{png,svg}`.
 mod scaling {
     use anyhow::{bail, Context};
-    use bench::scaling::{fit_exponent, methods, time};
-    use instrumentation::Recorder;
-    use methods::Frame;
-    use reports::plots::{write_chart, Chart, Marker, Point, Series};
+    use reports::tables::{chart, markdown, run_table, PaperTable, TableSpec};
     use std::path::PathBuf;
 
     pub fn run() -> anyhow::Result<()> {
-        let (mut threads, mut repeats, mut out) =
-            (0usize, 1usize, PathBuf::from("shadowbench-out"));
+        let (mut threads, mut repeats, mut out) = (0usize, 1u32, PathBuf::from("shadowbench-out"));
         let mut it = std::env::args().skip(2);
         while let Some(flag) = it.next() {
             let mut value = || it.next().with_context(|| format!("{flag} needs a value"));
@@ -61,78 +59,23 @@ mod scaling {
         }
         std::fs::create_dir_all(&out)
             .with_context(|| format!("cannot create {}", out.display()))?;
-        let by_triangles: Vec<(String, (u32, u32))> =
-            ["random-1k", "random-10k", "random-100k", "random-1m"]
-                .iter()
-                .map(|s| ((*s).to_owned(), (1024, 768)))
-                .collect();
-        let by_pixels: Vec<(String, (u32, u32))> =
-            [(320, 240), (640, 480), (1280, 720), (1920, 1080), (3840, 2160)]
-                .iter()
-                .map(|&f| ("bunny-plane".to_owned(), f))
-                .collect();
         println!(
             "# Cost against work ({} rayon threads, median of {repeats} runs)\n",
             rayon::current_num_threads()
         );
-        for (what, cases, stem) in [
-            ("triangles", &by_triangles, "scaling-triangles"),
-            ("pixels", &by_pixels, "scaling-pixels"),
-        ] {
-            let mut series: Vec<Series> = Vec::new();
-            let mut gbuffer = Vec::new();
-            let mut header = String::from("| method |");
-            let mut rows: Vec<Vec<(f64, f64)>> = vec![Vec::new(); methods().len()];
-            for (name, (w, h)) in cases.iter() {
-                let scene = match scenes::load(name) {
-                    Ok(s) => s,
-                    Err(e) => {
-                        eprintln!("note: {name} skipped: {e}");
-                        continue;
-                    }
-                };
-                let mut rec = Recorder::default();
-                let frame = Frame::new(&scene, *w, *h, &mut rec);
-                let work = if what == "triangles" {
-                    frame.geometry.len() as f64
-                } else {
-                    f64::from(w * h)
-                };
-                gbuffer.push((work, rec.stages.total_ms()));
-                header += &format!(" {name} {w}x{h} ms |");
-                for (k, (_, method, options)) in methods().iter().enumerate() {
-                    rows[k].push((work, time(&frame, method, options, repeats)?));
-                }
+        for paper in [PaperTable::CostAgainstTriangles, PaperTable::CostAgainstPixels] {
+            let spec = TableSpec { paper, scenes: Vec::new(), width: 0, height: 0 };
+            let mut skipped = Vec::new();
+            let table = run_table(&spec, 0, repeats, &mut skipped, |_| {});
+            for s in &skipped {
+                eprintln!("note: {s}");
             }
-            println!("## Time against {what}\n\n{header} fitted exponent |");
-            println!("|{}", "---|".repeat(cases.len() + 2));
-            let mut all = vec![("camera G-buffer".to_owned(), gbuffer)];
-            all.extend(methods().iter().map(|(label, ..)| (*label).to_owned()).zip(rows));
-            for (label, points) in all {
-                let cells: Vec<String> = points.iter().map(|(_, ms)| format!("{ms:.1}")).collect();
-                let b = fit_exponent(&points).map_or("–".to_owned(), |b| format!("{b:.2}"));
-                println!("| {label} | {} | {b} |", cells.join(" | "));
-                series.push(Series {
-                    label: format!("{label} (exponent {b})"),
-                    marker: Marker::Circle,
-                    points: points.iter().map(|&(w, t)| Point::at(w, t)).collect(),
-                });
+            println!("{}", markdown(&table));
+            if let Some(c) = chart(&table) {
+                reports::plots::write_chart(&out.join(paper.name()), &c)?;
             }
-            println!();
-            let chart = Chart {
-                title: format!("time against {what}"),
-                x_label: if what == "triangles" {
-                    "triangles (random scenes, 1024x768)".into()
-                } else {
-                    "pixels (bunny-plane)".into()
-                },
-                y_label: "time, median (ms)".into(),
-                series,
-                pareto: false,
-            };
-            write_chart(&out.join(stem), &chart)?;
         }
-        println!("charts: {}", out.join("scaling-*.png").display());
+        println!("charts: {}", out.join("cost-against-*.png").display());
         Ok(())
     }
 }

@@ -18,6 +18,10 @@
 //! Across scenes, **best error within a time budget**: per scene a panel, per method the least
 //! error among its runs whose median time fits each budget of [`BUDGETS_MS`].
 //!
+//! Per cost-against-work table (`crate::tables`), its log-log chart of time against work
+//! (`plots/cost-against-triangles.png`, `plots/cost-against-pixels.png`), which the page shows
+//! under the table.
+//!
 //! The error is the shadow-only headline (planar and surface pixels, see `analysis::metrics`).
 //! GPU runs are separate series marked with triangles, named with the adapter, and a software
 //! adapter (llvmpipe, lavapipe) is said to be one.
@@ -371,6 +375,12 @@ pub fn write_plots(dir: &Path, report: &Report) -> Result<Vec<PlotFile>, OutputE
             png: format!("plots/{stem}.png"),
             pareto: Vec::new(),
         });
+    }
+    // The cost-against-work tables' charts, shown under their tables.
+    for t in &report.tables {
+        if let Some(chart) = crate::tables::chart(t) {
+            write_chart(&plots.join(t.paper.name()), &chart)?;
+        }
     }
     Ok(files)
 }

@@ -250,6 +250,16 @@ pub fn index_html(report: &Report, plots: &[PlotFile], baseline: Option<&Compari
                 let _ = writeln!(s, "<tr>{cells}</tr>");
             }
             s.push_str("</table>\n");
+            if crate::tables::chart(t).is_some() {
+                let _ = writeln!(
+                    s,
+                    "<figure id=\"table-{id}-chart\"><img src=\"plots/{id}.png\" alt=\"{t}\">\
+                     <figcaption>{t}, log-log (<a href=\"plots/{id}.svg\">SVG</a>)</figcaption>\
+                     </figure>",
+                    id = t.paper.name(),
+                    t = escape(&t.title),
+                );
+            }
         }
     }
     s.push_str(GLOSSARY);

@@ -4,7 +4,8 @@
 //! under the timing protocol of [`timing`] with references from the [`cache`], held in the
 //! [`model`], written by [`write`] as JSON, CSV, Markdown tables, EXR images and HTML pages
 //! ([`index`], [`run_pages`]), with the charts chosen by [`figures`] and drawn by [`plots`];
-//! the papers' tables are measured by [`tables`]; shards are put back together by [`merge`].
+//! the papers' tables and the cost-against-work tables are measured by [`tables`]; shards are
+//! put back together by [`merge`].
 
 pub mod baseline;
 pub mod cache;

@@ -156,10 +156,16 @@ pub fn plan(suite: &Suite) -> Vec<WorkItem> {
         }
     }
     for (k, spec) in suite.tables.iter().enumerate() {
-        let (pw, ph) = spec.paper.paper_frame();
-        let (w, h) = if spec.width == 0 { (pw, ph) } else { (spec.width, spec.height) };
-        let runs = crate::tables::table_run_count(spec) as f64;
-        let cost = runs * runs_per * run_cost(f64::from(w) * f64::from(h), 0.0, None, None);
+        let frames = crate::tables::frames_of(spec);
+        // The item names its largest frame; its cost is every frame's.
+        let (w, h) = frames.iter().copied().max_by_key(|&(w, h)| w * h).unwrap_or((0, 0));
+        let runs_per_frame = crate::tables::table_run_count(spec) as f64 / frames.len() as f64;
+        let cost: f64 = frames
+            .iter()
+            .map(|&(w, h)| {
+                runs_per_frame * runs_per * run_cost(f64::from(w) * f64::from(h), 0.0, None, None)
+            })
+            .sum();
         items.push(WorkItem {
             item: items.len(),
             scene: None,

@@ -27,6 +27,17 @@
 //!   the paper's Cage, Plant and Bunny. Paper: NVIDIA GeForce GTX 280.
 //! - `lecocq-table2`: Lecocq et al. 2014, Table 2: `sm` and `spsm` at maps 512 .. 4096 on one
 //!   model (YeahRight; our stand-in `bunny-plane`) at 1920 x 1080, with the overhead.
+//! - `cost-against-triangles` and `cost-against-pixels`: cost against work, the measure behind
+//!   the papers' speed claims (Aila and Laine's scalability with the triangle count, Pan et
+//!   al.'s and Lecocq et al.'s with the frame). The time of `afsm`, `raytrace` (1 sample per
+//!   pixel), `exact`, `sm`, `pan09` (32x) and `spsm` against the scene's triangles
+//!   (`random-1k` .. `random-1m` at 1024 x 768), and against the frame's pixels (`bunny-plane`
+//!   at 320 x 240 .. 3840 x 2160, the frames of [`COST_FRAMES`]; a `width` gives one frame
+//!   instead), with the camera G-buffer as a row of its own. Each row ends with the exponent `b`
+//!   of the power law `ms = a work^b` fitted by least squares to `(ln work, ln ms)` (the
+//!   `linreg` crate): 1 is linear, below 1 fixed costs dominate, above 1 the time grows faster
+//!   than the work. The report draws each as a log-log chart (`plots/NAME.png`, [`chart`]).
+//!   No paper prints these figures, so they have no paper column.
 //!
 //! The papers' times include rendering the scene; ours give the method's own stages, and the
 //! camera G-buffer (our scene rendering) apart, so that both overheads can be read.
@@ -53,6 +64,57 @@ pub enum PaperTable {
     LecocqTable2,
     /// Pan et al. 2009, Table 1 (statistics of the test scenes and `pan09`'s stage times).
     PanTable1,
+    /// Cost against work: every method's time against the scene's triangle count.
+    CostAgainstTriangles,
+    /// Cost against work: every method's time against the frame's pixel count.
+    CostAgainstPixels,
+}
+
+/// The frames of `cost-against-pixels`, smallest first.
+pub const COST_FRAMES: [(u32, u32); 5] =
+    [(320, 240), (640, 480), (1280, 720), (1920, 1080), (3840, 2160)];
+
+/// The runs of the cost-against-work tables: each method at its default settings, the
+/// supersampled ones at the rates the papers compare (`raytrace` at one sample per pixel, the
+/// brute force a shadow method replaces; `pan09` at 32x, Pan et al.'s setting).
+fn cost_runs() -> Vec<(&'static str, MethodOptions)> {
+    let rate = |r| MethodOptions { rate: Some(r), ..Default::default() };
+    vec![
+        ("afsm", MethodOptions::default()),
+        ("raytrace", rate(1)),
+        ("exact", MethodOptions::default()),
+        ("sm", MethodOptions::default()),
+        ("pan09", rate(32)),
+        ("spsm", MethodOptions::default()),
+    ]
+}
+
+/// A run's row label: the method, and its rate where one is set (`pan09 32x`).
+fn run_label(method: &str, options: &MethodOptions) -> String {
+    options.rate.map_or_else(|| method.to_owned(), |r| format!("{method} {r}x"))
+}
+
+/// One measured curve of a cost-against-work table: a row's `(work, ms)` points, in the
+/// order of the table's columns, and the fitted exponent.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Curve {
+    /// The row: a method with its rate, or `camera G-buffer`.
+    pub label: String,
+    /// `(work, ms)`: triangles or pixels, and the median time.
+    pub points: Vec<(f64, f64)>,
+    /// Exponent of the power law fitted to the points; `None` for fewer than two works.
+    pub exponent: Option<f64>,
+}
+
+/// The exponent `b` of the power law `ms = a work^b` that fits `points` `(work, ms)` best in
+/// the least-squares sense on logarithms; `None` for fewer than two distinct, positive works.
+pub fn fit_exponent(points: &[(f64, f64)]) -> Option<f64> {
+    let (x, y): (Vec<f64>, Vec<f64>) = points
+        .iter()
+        .filter(|(w, t)| *w > 0.0 && *t > 0.0 && w.is_finite() && t.is_finite())
+        .map(|(w, t)| (w.ln(), t.ln()))
+        .unzip();
+    linreg::linear_regression::<f64, f64, f64>(&x, &y).ok().map(|(slope, _)| slope)
 }
 
 /// A `[[table]]` entry of a suite.
@@ -85,6 +147,8 @@ enum Cell {
     Ms(f64),
     /// A percentage, printed to 1.
     Percent(f64),
+    /// A fitted exponent, printed to 0.01.
+    Exponent(f64),
     /// A figure of a paper as printed there (`16K`, `2.3M`, `4.2`).
     Paper(&'static str),
     /// No figure (a run that failed, a paper without this scene).
@@ -100,6 +164,7 @@ impl Cell {
             Cell::Int(v) => v.to_string(),
             Cell::Ms(v) => format!("{v:.1}"),
             Cell::Percent(v) => format!("{v:.0}"),
+            Cell::Exponent(v) => format!("{v:.2}"),
             Cell::Paper(p) => (*p).to_owned(),
             Cell::Missing => "–".to_owned(),
         }
@@ -109,7 +174,7 @@ impl Cell {
     fn value(&self) -> String {
         match self {
             Cell::Text(t) => t.clone(),
-            Cell::Count(v) | Cell::Ms(v) | Cell::Percent(v) => v.to_string(),
+            Cell::Count(v) | Cell::Ms(v) | Cell::Percent(v) | Cell::Exponent(v) => v.to_string(),
             Cell::Int(v) => v.to_string(),
             Cell::Paper(p) => paper_number(p).map_or_else(String::new, |v| v.to_string()),
             Cell::Missing => String::new(),
@@ -155,6 +220,9 @@ pub struct Table {
     pub rows: Vec<Vec<String>>,
     /// The same rows as numbers in full for `tables/*.csv` (empty for a missing figure).
     pub values: Vec<Vec<String>>,
+    /// The curves a cost-against-work table draws ([`chart`]); empty for the papers' tables.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub curves: Vec<Curve>,
 }
 
 impl PaperTable {
@@ -165,6 +233,8 @@ impl PaperTable {
             Self::LecocqTable1 => "lecocq-table1",
             Self::LecocqTable2 => "lecocq-table2",
             Self::PanTable1 => "pan-table1",
+            Self::CostAgainstTriangles => "cost-against-triangles",
+            Self::CostAgainstPixels => "cost-against-pixels",
         }
     }
 
@@ -175,15 +245,27 @@ impl PaperTable {
             Self::LecocqTable1 => &["spheres", "bunny-plane", "random-1m"],
             Self::LecocqTable2 => &["bunny-plane"],
             Self::PanTable1 => &["cage", "plant", "spheres", "bunny-plane", "bumpy"],
+            Self::CostAgainstTriangles => &["random-1k", "random-10k", "random-100k", "random-1m"],
+            Self::CostAgainstPixels => &["bunny-plane"],
         }
     }
 
-    /// The paper's frame size.
+    /// The paper's frame size (for `cost-against-pixels`, the largest of [`COST_FRAMES`]).
     pub fn paper_frame(self) -> (u32, u32) {
         match self {
-            Self::AilaLaineTable1 => (1024, 768),
+            Self::AilaLaineTable1 | Self::CostAgainstTriangles => (1024, 768),
             Self::LecocqTable1 | Self::LecocqTable2 => (1920, 1080),
             Self::PanTable1 => (800, 600),
+            Self::CostAgainstPixels => COST_FRAMES[COST_FRAMES.len() - 1],
+        }
+    }
+
+    /// What a cost-against-work table's columns grow (`None` for a paper's table).
+    pub fn work(self) -> Option<&'static str> {
+        match self {
+            Self::CostAgainstTriangles => Some("triangles"),
+            Self::CostAgainstPixels => Some("pixels"),
+            _ => None,
         }
     }
 
@@ -192,6 +274,9 @@ impl PaperTable {
             Self::AilaLaineTable1 => "1.6 GHz Mobile Pentium 4 (CPU)",
             Self::LecocqTable1 | Self::LecocqTable2 => "NVIDIA GeForce GTX 580 (GPU)",
             Self::PanTable1 => "NVIDIA GeForce GTX 280 (GPU) with a 3.0 GHz CPU",
+            Self::CostAgainstTriangles | Self::CostAgainstPixels => {
+                "none (no paper prints these figures)"
+            }
         }
     }
 
@@ -212,13 +297,25 @@ impl PaperTable {
                 .into_iter()
                 .flat_map(|res| [map("sm", res), map("spsm", res)])
                 .collect(),
+            Self::CostAgainstTriangles | Self::CostAgainstPixels => cost_runs(),
         }
+    }
+}
+
+/// The frames a table runs each scene at: the suite's `width` x `height` where given, else
+/// [`COST_FRAMES`] for `cost-against-pixels` and the paper's frame for the others.
+pub fn frames_of(spec: &TableSpec) -> Vec<(u32, u32)> {
+    match (spec.width, spec.paper) {
+        (0, PaperTable::CostAgainstPixels) => COST_FRAMES.to_vec(),
+        (0, paper) => vec![paper.paper_frame()],
+        (w, _) => vec![(w, spec.height)],
     }
 }
 
 /// Method runs a table makes, for progress bars.
 pub fn table_run_count(spec: &TableSpec) -> u64 {
-    scenes_of(spec).iter().map(|s| spec.paper.runs(s).len() as u64).sum()
+    let frames = frames_of(spec).len() as u64;
+    scenes_of(spec).iter().map(|s| spec.paper.runs(s).len() as u64 * frames).sum()
 }
 
 fn scenes_of(spec: &TableSpec) -> Vec<String> {
@@ -229,18 +326,19 @@ fn scenes_of(spec: &TableSpec) -> Vec<String> {
     }
 }
 
-/// One scene's measurements for a table.
+/// One scene's measurements at one frame for a table.
 struct SceneRuns {
     name: String,
+    frame: (u32, u32),
     triangles: usize,
     gbuffer_ms: f64,
     /// In the order of [`PaperTable::runs`]; `None` where the run failed.
     runs: Vec<Option<Timed>>,
 }
 
-/// Measures the table: every scene of `spec`, every run the table needs, `warmup` untimed and
-/// `repeats` timed runs each. Runs that cannot be made are listed in `skipped` and shown as
-/// "–" (empty in the CSV).
+/// Measures the table: every scene of `spec` at every frame of [`frames_of`], every run the
+/// table needs, `warmup` untimed and `repeats` timed runs each. Runs that cannot be made are
+/// listed in `skipped` and shown as "–" (empty in the CSV).
 pub fn run_table(
     spec: &TableSpec,
     warmup: u32,
@@ -249,8 +347,7 @@ pub fn run_table(
     mut progress: impl FnMut(&str),
 ) -> Table {
     let paper = spec.paper;
-    let (pw, ph) = paper.paper_frame();
-    let (w, h) = if spec.width == 0 { (pw, ph) } else { (spec.width, spec.height) };
+    let frames = frames_of(spec);
     let mut measured = Vec::new();
     for name in scenes_of(spec) {
         let runs = paper.runs(&name);
@@ -258,49 +355,62 @@ pub fn run_table(
             Ok(s) => s,
             Err(e) => {
                 skipped.push(format!("{}: scene {name}: {e}", paper.name()));
-                runs.iter().for_each(|_| progress(&name));
+                (0..runs.len() * frames.len()).for_each(|_| progress(&name));
                 continue;
             }
         };
-        let mut rec = Recorder::default();
-        let frame = Frame::new(&scene, w, h, &mut rec);
-        let mut out = Vec::new();
-        for (method, options) in &runs {
-            progress(&format!("{} {name} {method}", paper.name()));
-            let timed = analysis::registry::technique(method, options)
-                .map_err(|e| e.to_string())
-                .and_then(|t| time_method(t.as_ref(), &frame, warmup, repeats));
-            match timed {
-                Ok(t) => out.push(Some(t)),
-                Err(e) => {
-                    skipped.push(format!("{}: {method} on {name}: {e}", paper.name()));
-                    out.push(None);
+        for &(w, h) in &frames {
+            let mut rec = Recorder::default();
+            let frame = Frame::new(&scene, w, h, &mut rec);
+            let mut out = Vec::new();
+            for (method, options) in &runs {
+                progress(&format!("{} {name} {w}x{h} {method}", paper.name()));
+                let timed = analysis::registry::technique(method, options)
+                    .map_err(|e| e.to_string())
+                    .and_then(|t| time_method(t.as_ref(), &frame, warmup, repeats));
+                match timed {
+                    Ok(t) => out.push(Some(t)),
+                    Err(e) => {
+                        skipped.push(format!("{}: {method} on {name}: {e}", paper.name()));
+                        out.push(None);
+                    }
                 }
             }
+            measured.push(SceneRuns {
+                name: name.clone(),
+                frame: (w, h),
+                triangles: frame.geometry.len(),
+                gbuffer_ms: rec.stages.total_ms(),
+                runs: out,
+            });
         }
-        measured.push(SceneRuns {
-            name,
-            triangles: frame.geometry.len(),
-            gbuffer_ms: rec.stages.total_ms(),
-            runs: out,
-        });
     }
+    let frame_text = match &frames[..] {
+        [(w, h)] => format!("{w}x{h}"),
+        _ => "the frames of the columns".to_owned(),
+    };
     let mut notes = vec![format!(
-        "Ours: {w}x{h}, median of {} timed runs after {warmup} warm-up, on the machine named \
-         at the top of the report.",
+        "Ours: {frame_text}, median of {} timed runs after {warmup} warm-up, on the machine \
+         named at the top of the report.",
         repeats.max(1)
     )];
+    let mut curves = Vec::new();
     let (header, rows) = match paper {
         PaperTable::AilaLaineTable1 => aila_laine(&measured, &mut notes),
         PaperTable::LecocqTable1 => lecocq1(&measured, &mut notes),
         PaperTable::LecocqTable2 => lecocq2(&measured, &mut notes),
         PaperTable::PanTable1 => pan1(&measured, &mut notes),
+        PaperTable::CostAgainstTriangles | PaperTable::CostAgainstPixels => {
+            cost(paper, &measured, &mut notes, &mut curves)
+        }
     };
     let title = match paper {
         PaperTable::AilaLaineTable1 => "Aila & Laine 2004, Table 1: alias-free shadow maps",
         PaperTable::LecocqTable1 => "Lecocq et al. 2014, Table 1: SM and SPSM times (ms)",
         PaperTable::LecocqTable2 => "Lecocq et al. 2014, Table 2: SPSM overhead against map size",
         PaperTable::PanTable1 => "Pan et al. 2009, Table 1: statistics of the test scenes",
+        PaperTable::CostAgainstTriangles => "Cost against work: time against triangles",
+        PaperTable::CostAgainstPixels => "Cost against work: time against pixels",
     };
     Table {
         paper,
@@ -310,6 +420,7 @@ pub fn run_table(
         header,
         values: rows.iter().map(|r| r.iter().map(Cell::value).collect()).collect(),
         rows: rows.iter().map(|r| r.iter().map(Cell::text).collect()).collect(),
+        curves,
     }
 }
 
@@ -559,6 +670,82 @@ fn pan1(measured: &[SceneRuns], notes: &mut Vec<String>) -> (Vec<String>, Vec<Ve
     (header, rows)
 }
 
+/// A cost-against-work table: per column a scene at a frame, per row the work (triangles,
+/// pixels), the camera G-buffer and each run, in milliseconds, and the fitted exponent.
+fn cost(
+    paper: PaperTable,
+    measured: &[SceneRuns],
+    notes: &mut Vec<String>,
+    curves: &mut Vec<Curve>,
+) -> (Vec<String>, Vec<Vec<Cell>>) {
+    notes.push(
+        "A method's time is its own stages; the camera G-buffer, which every method starts \
+         from, is a row of its own. The fitted exponent is b of ms = a work^b, by least squares \
+         on the logarithms."
+            .into(),
+    );
+    let triangles: fn(&SceneRuns) -> f64 = |s| s.triangles as f64;
+    let pixels: fn(&SceneRuns) -> f64 = |s| f64::from(s.frame.0) * f64::from(s.frame.1);
+    let work = if paper == PaperTable::CostAgainstPixels { pixels } else { triangles };
+    let mut header = vec!["".to_owned()];
+    header.extend(measured.iter().map(|s| format!("{} {}x{}", s.name, s.frame.0, s.frame.1)));
+    header.push("fitted exponent".into());
+    let mut rows = Vec::new();
+    for (label, count) in [("triangles", triangles), ("pixels", pixels)] {
+        let mut cells = vec![Cell::Text(label.to_owned())];
+        cells.extend(measured.iter().map(|s| Cell::Count(count(s))));
+        cells.push(Cell::Missing);
+        rows.push(cells);
+    }
+    let mut series: Vec<(String, Vec<Option<f64>>)> =
+        vec![("camera G-buffer".into(), measured.iter().map(|s| Some(s.gbuffer_ms)).collect())];
+    for (k, (method, options)) in cost_runs().iter().enumerate() {
+        let times = measured
+            .iter()
+            .map(|s| s.runs.get(k).and_then(Option::as_ref).map(|t| t.total_ms.median))
+            .collect();
+        series.push((run_label(method, options), times));
+    }
+    for (label, times) in series {
+        let points: Vec<(f64, f64)> =
+            measured.iter().zip(&times).filter_map(|(s, t)| t.map(|t| (work(s), t))).collect();
+        let exponent = fit_exponent(&points);
+        let mut cells = vec![Cell::Text(format!("{label} (ms)"))];
+        cells.extend(times.iter().map(|t| ms_or_missing(*t)));
+        cells.push(exponent.map_or(Cell::Missing, Cell::Exponent));
+        rows.push(cells);
+        curves.push(Curve { label, points, exponent });
+    }
+    (header, rows)
+}
+
+/// The log-log chart of a cost-against-work table: one line per row, time against work, the
+/// fitted exponent in the legend; `None` for a paper's table.
+pub fn chart(t: &Table) -> Option<crate::plots::Chart> {
+    use crate::plots::{Chart, Marker, Point, Series};
+    let work = t.paper.work()?;
+    let series = t
+        .curves
+        .iter()
+        .filter(|c| !c.points.is_empty())
+        .map(|c| Series {
+            label: match c.exponent {
+                Some(b) => format!("{} (exponent {b:.2})", c.label),
+                None => c.label.clone(),
+            },
+            marker: Marker::Circle,
+            points: c.points.iter().map(|&(w, ms)| Point::at(w, ms)).collect(),
+        })
+        .collect::<Vec<_>>();
+    (!series.is_empty()).then(|| Chart {
+        title: t.title.clone(),
+        x_label: work.to_owned(),
+        y_label: "time (ms), median".to_owned(),
+        series,
+        pareto: false,
+    })
+}
+
 /// The table as Markdown, with its title, the paper's hardware and the notes.
 pub fn markdown(t: &Table) -> String {
     let mut s = format!("### {}\n\nPaper's figures measured on: {}.", t.title, t.paper_hardware);
@@ -630,6 +817,7 @@ mod tests {
             header: vec!["a".into(), "b".into(), "c".into()],
             values: cells.iter().map(|r| r.iter().map(Cell::value).collect()).collect(),
             rows: cells.iter().map(|r| r.iter().map(Cell::text).collect()).collect(),
+            curves: vec![],
         };
         assert_eq!(csv(&t).expect("writes"), "a,b,c\n\"1, 2\",1500,\n");
         let md = markdown(&t);
@@ -644,9 +832,12 @@ mod tests {
             PaperTable::PanTable1,
             PaperTable::LecocqTable1,
             PaperTable::LecocqTable2,
+            PaperTable::CostAgainstTriangles,
+            PaperTable::CostAgainstPixels,
         ] {
             let spec = TableSpec { paper: p, scenes: vec![], width: 0, height: 0 };
-            let runs: usize = p.default_scenes().iter().map(|s| p.runs(s).len()).sum();
+            let frames = frames_of(&spec).len();
+            let runs: usize = p.default_scenes().iter().map(|s| p.runs(s).len() * frames).sum();
             assert_eq!(table_run_count(&spec) as usize, runs);
             assert!(!p.hardware().is_empty());
         }
@@ -661,5 +852,69 @@ mod tests {
             assert_eq!((runs[2 * k].0, runs[2 * k].1.map_res), ("sm", Some(*res)));
             assert_eq!((runs[2 * k + 1].0, runs[2 * k + 1].1.map_res), ("spsm", Some(*res)));
         }
+    }
+
+    #[test]
+    fn a_power_law_gives_its_exponent() {
+        let pts: Vec<(f64, f64)> =
+            [1e3, 1e4, 1e5, 1e6].iter().map(|&w: &f64| (w, 3.0 * w.powf(0.8))).collect();
+        let b = fit_exponent(&pts).expect("fits");
+        assert!((b - 0.8).abs() < 1e-12, "{b}");
+        assert_eq!(fit_exponent(&pts[..1]), None);
+        assert_eq!(fit_exponent(&[(1.0, 2.0), (1.0, 3.0)]), None, "one work only");
+        assert_eq!(fit_exponent(&[(0.0, 2.0), (10.0, 3.0)]), None, "no log of 0");
+        // Noise around a line: the fit lies between the extremes' slopes.
+        let noisy = [(1.0, 1.0), (10.0, 12.0), (100.0, 90.0), (1000.0, 1100.0)];
+        let b = fit_exponent(&noisy).expect("fits");
+        assert!((0.9..1.1).contains(&b), "{b}");
+    }
+
+    #[test]
+    fn cost_tables_measure_every_method_against_work_and_draw_it() {
+        // Two scenes of different triangle counts at a small frame.
+        let spec = TableSpec {
+            paper: PaperTable::CostAgainstTriangles,
+            scenes: vec!["plane-square".into(), "cage".into()],
+            width: 48,
+            height: 32,
+        };
+        let mut skipped = Vec::new();
+        let t = run_table(&spec, 0, 1, &mut skipped, |_| {});
+        assert!(skipped.is_empty(), "{skipped:?}");
+        assert_eq!(t.header[1..], ["plane-square 48x32", "cage 48x32", "fitted exponent"]);
+        let labels: Vec<&str> = t.rows.iter().map(|r| r[0].as_str()).collect();
+        assert_eq!(
+            labels,
+            [
+                "triangles",
+                "pixels",
+                "camera G-buffer (ms)",
+                "afsm (ms)",
+                "raytrace 1x (ms)",
+                "exact (ms)",
+                "sm (ms)",
+                "pan09 32x (ms)",
+                "spsm (ms)",
+            ]
+        );
+        assert_eq!(t.curves.len(), 7, "the G-buffer and six runs");
+        for c in &t.curves {
+            let works: Vec<f64> = c.points.iter().map(|p| p.0).collect();
+            assert_eq!(works.len(), 2, "{}: a point per scene", c.label);
+            assert!(works[0] < works[1], "{}: triangles grow along the row", c.label);
+            assert!(c.exponent.is_some_and(f64::is_finite), "{}", c.label);
+        }
+        let drawn = chart(&t).expect("a cost table has a chart");
+        assert_eq!((drawn.x_label.as_str(), drawn.series.len()), ("triangles", 7));
+        assert!(drawn.series[2].label.starts_with("raytrace 1x (exponent "), "{:?}", drawn.series);
+        assert!(markdown(&t).contains("| fitted exponent |"));
+        // The papers' tables draw no chart.
+        let paper = Table { paper: PaperTable::LecocqTable2, curves: vec![], ..t };
+        assert!(chart(&paper).is_none());
+        // `cost-against-pixels` runs one scene at every frame unless a frame is given.
+        let pixels = TableSpec { paper: PaperTable::CostAgainstPixels, ..spec };
+        assert_eq!(frames_of(&pixels), vec![(48, 32)]);
+        let pixels = TableSpec { width: 0, height: 0, ..pixels };
+        assert_eq!(frames_of(&pixels), COST_FRAMES.to_vec());
     }
 }

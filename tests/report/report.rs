@@ -33,6 +33,12 @@ paper = "aila-laine-table1"
 scenes = ["random-1k", "plane-square"]
 width = 64
 height = 48
+
+[[table]]
+paper = "cost-against-triangles"
+scenes = ["plane-square", "random-1k"]
+width = 64
+height = 48
 "#;
 
 #[test]
@@ -45,10 +51,11 @@ fn a_suite_file_writes_tables_that_parse_back() {
     // Standard error is a pipe here: a progress line per scene and table, and one at the end.
     let log = stderr(&o);
     let starts = |p: &str| log.lines().filter(|l| l.starts_with(p)).count();
-    assert_eq!(starts("scene 1/2 plane-square: 0/14 runs done, "), 1, "{log}");
-    assert_eq!(starts("scene 2/2 hairball: 6/14 runs done, "), 1, "{log}");
-    assert_eq!(starts("table 1/1 aila-laine-table1: 12/14 runs done, "), 1, "{log}");
-    assert_eq!(starts("done: 14/14 runs done, "), 1, "{log}");
+    assert_eq!(starts("scene 1/2 plane-square: 0/26 runs done, "), 1, "{log}");
+    assert_eq!(starts("scene 2/2 hairball: 6/26 runs done, "), 1, "{log}");
+    assert_eq!(starts("table 1/2 aila-laine-table1: 12/26 runs done, "), 1, "{log}");
+    assert_eq!(starts("table 2/2 cost-against-triangles: 14/26 runs done, "), 1, "{log}");
+    assert_eq!(starts("done: 26/26 runs done, "), 1, "{log}");
 
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("runs.json")).expect("runs.json"))
@@ -216,7 +223,7 @@ fn a_suite_file_writes_tables_that_parse_back() {
 
     // The paper's table: our figures beside the paper's, its hardware named.
     let tables = json["tables"].as_array().expect("tables");
-    assert_eq!(tables.len(), 1);
+    assert_eq!(tables.len(), 2);
     let t = &tables[0];
     assert!(t["paper_hardware"].as_str().expect("hardware").contains("Pentium 4"));
     let header: Vec<&str> =
@@ -247,6 +254,26 @@ fn a_suite_file_writes_tables_that_parse_back() {
     assert!((950.0..1050.0).contains(&triangles), "1.0K in full: {triangles}");
     assert_eq!(&records[0][2], "1000", "the paper's 1K in full");
     assert_eq!(&records[0][3], "4");
+
+    // Cost against work: every method's time per scene, the fitted exponent, and its chart
+    // under the table on the page.
+    let cost = &tables[1];
+    let header: Vec<&str> =
+        cost["header"].as_array().expect("header").iter().filter_map(|h| h.as_str()).collect();
+    assert_eq!(header, ["", "plane-square 64x48", "random-1k 64x48", "fitted exponent"]);
+    let rows = cost["rows"].as_array().expect("rows");
+    assert_eq!(rows.len(), 9, "triangles, pixels, the G-buffer and six methods");
+    for r in &rows[2..] {
+        let exponent: f64 = r[3].as_str().expect("cell").parse().expect("an exponent");
+        assert!(exponent.is_finite(), "{r}");
+    }
+    let chart = image::open(out.join("plots/cost-against-triangles.png")).expect("chart");
+    assert!(chart.width() > 400, "a chart, not a stub");
+    assert!(out.join("plots/cost-against-triangles.svg").is_file());
+    let html = std::fs::read_to_string(out.join("index.html")).expect("index.html");
+    assert!(html.contains("<img src=\"plots/cost-against-triangles.png\""), "chart on the page");
+    let csv = std::fs::read_to_string(out.join("tables/cost-against-triangles.csv")).expect("csv");
+    assert!(csv.starts_with(",plane-square 64x48,random-1k 64x48,fitted exponent\n"), "{csv}");
 }
 
 #[test]
