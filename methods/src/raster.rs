@@ -87,6 +87,10 @@ pub fn inside_edge(a: DVec2, b: DVec2, p: DVec2) -> bool {
 
 /// Clips a triangle at `depth >= near`; returns the clipped polygon (0, 3 or 4 corners).
 pub(crate) fn clip_near(corners: [DVec3; 3], depths: [f64; 3], near: f64) -> ([DVec3; 4], usize) {
+    if depths.iter().all(|&d| d >= near) {
+        // Wholly beyond the near plane, the common case: the loop below would copy the corners.
+        return ([corners[0], corners[1], corners[2], DVec3::ZERO], 3);
+    }
     let mut out = [DVec3::ZERO; 4];
     let mut n = 0;
     for i in 0..3 {
@@ -143,10 +147,8 @@ fn setup(geometry: &Geometry, t: usize, proj: &Projector, shift: DVec2) -> Optio
             (lo.min(p), hi.max(p))
         });
     // Samples at i + 0.5 with lo <= i + 0.5 <= hi.
-    let first = |v: f64| (v - 0.5).ceil().max(0.0);
-    let last = |v: f64, size: f64| (v - 0.5).floor().min(size - 1.0);
-    let (x0, x1) = (first(lo.x), last(hi.x, proj.width));
-    let (y0, y1) = (first(lo.y), last(hi.y, proj.height));
+    let (x0, x1) = (ceil_max(lo.x - 0.5, 0.0), floor_min(hi.x - 0.5, proj.width - 1.0));
+    let (y0, y1) = (ceil_max(lo.y - 0.5, 0.0), floor_min(hi.y - 0.5, proj.height - 1.0));
     if x0 > x1 || y0 > y1 {
         return None;
     }
@@ -177,6 +179,39 @@ fn setup(geometry: &Geometry, t: usize, proj: &Projector, shift: DVec2) -> Optio
     })
 }
 
+/// `u.ceil().max(lo)` for a whole `lo >= 0` (NaN gives `lo`, as `max` does), without calling `ceil`: baseline
+/// x86-64 has no rounding instruction, and libm's `ceil` was a tenth of the setup's time.
+/// Exact: truncating a positive `f64` below 2^52 to an integer is exact.
+#[inline]
+fn ceil_max(u: f64, lo: f64) -> f64 {
+    if u <= lo || u.is_nan() {
+        lo
+    } else if u < 4_503_599_627_370_496.0 {
+        let t = u as u64 as f64;
+        if t < u {
+            t + 1.0
+        } else {
+            t
+        }
+    } else {
+        u
+    }
+}
+
+/// `u.floor().min(hi)` for a whole `hi >= 0` (NaN gives `hi`, as `min` does), except that a negative floor is
+/// given as `-1` (both lie below every sample index, all the callers ask); without calling
+/// `floor` (see [`ceil_max`]).
+#[inline]
+fn floor_min(u: f64, hi: f64) -> f64 {
+    if u >= hi || u.is_nan() {
+        hi
+    } else if u >= 0.0 {
+        u as u64 as f64
+    } else {
+        -1.0
+    }
+}
+
 /// The columns `x0..=x1` (within `lo..=hi`) whose centres on the row `py` may lie inside the
 /// convex outline: where the line `y = py` crosses the outline, widened by a margin that
 /// covers the rounding of the crossing points. Conservative: the exact edge tests decide.
@@ -200,8 +235,8 @@ fn row_span(outline: &[DVec2], py: f64, lo: usize, hi: usize) -> Option<(usize, 
         return None;
     }
     let margin = 1.0 + 1e-9 * xmin.abs().max(xmax.abs());
-    let first = ((xmin - 0.5 - margin).ceil().max(lo as f64)) as usize;
-    let last = (xmax - 0.5 + margin).floor().min(hi as f64);
+    let first = ceil_max(xmin - 0.5 - margin, lo as f64) as usize;
+    let last = floor_min(xmax - 0.5 + margin, hi as f64);
     if last < first as f64 {
         return None;
     }
@@ -436,6 +471,58 @@ pub(crate) mod tests {
             (0..ring.len()).map(|i| [c, ring[i], ring[(i + 1) % ring.len()]]).collect();
         let counts = coverage_counts(&tris, 9, 9);
         assert!(counts.iter().all(|&n| n == 1), "{counts:?}");
+    }
+
+    #[test]
+    fn rounding_without_libm_equals_ceil_and_floor() {
+        // SplitMix64: a fixed stream of bit patterns.
+        let mut state = 7u64;
+        let mut next = || {
+            state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = state;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            z ^ (z >> 31)
+        };
+        let mut values = vec![
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            1023.0,
+            1023.5,
+            1024.0,
+            4_503_599_627_370_495.5,
+            4_503_599_627_370_496.0,
+            9.1e15,
+            1e300,
+            -1e300,
+            f64::MIN_POSITIVE,
+            f64::EPSILON,
+            1.0 - f64::EPSILON / 2.0,
+            1.0 + f64::EPSILON,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+        ];
+        values.extend((0..20_000).map(|_| ((next() >> 11) as f64 / 2f64.powi(53) - 0.3) * 2048.0));
+        values.extend((0..2_000).map(|_| f64::from_bits(next())));
+        for &u in &values {
+            for bound in [0.0, 1.0, 767.0, 1023.0] {
+                let want = u.ceil().max(bound);
+                let got = ceil_max(u, bound);
+                assert!(got == want || (got.is_nan() && want.is_nan()), "ceil {u}: {got} {want}");
+                let want = u.floor().min(bound);
+                let got = floor_min(u, bound);
+                if want < 0.0 {
+                    assert!(got < 0.0, "floor {u}: {got}, a negative floor {want}");
+                } else {
+                    assert_eq!(got, want, "floor {u} within {bound}");
+                }
+            }
+        }
     }
 
     #[test]
