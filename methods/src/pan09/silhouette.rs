@@ -39,46 +39,46 @@ pub struct EdgeAdjacency {
 impl EdgeAdjacency {
     /// The adjacency of the triangles `t` of `geometry` with `include(t)`.
     pub fn new(geometry: &Geometry, include: impl Fn(usize) -> bool + Sync) -> Self {
-        let p = &geometry.positions;
-        // Canonical vertex: the lowest index at the same position.
-        let mut order: Vec<u32> = (0..p.len() as u32).collect();
-        let key = |v: u32| p[v as usize].to_array().map(f64::to_bits);
-        order.par_sort_unstable_by_key(|&v| (key(v), v));
-        let mut canon = vec![0u32; p.len()];
-        let mut first = 0usize;
-        for i in 0..order.len() {
-            if key(order[i]) != key(order[first]) {
-                first = i;
-            }
-            canon[order[i] as usize] = order[first];
-        }
+        let canon = canonical_vertices(&geometry.positions);
         // Half-edges keyed by their canonical endpoints, sorted so that faces of an edge meet.
-        let mut half: Vec<(u64, u32)> = (0..geometry.len())
+        // Three slots per triangle, in place (an indexed collect, nothing moved afterwards);
+        // a slot without a half-edge (a zero-length edge, a triangle not included) holds
+        // `NONE`, which sorts after every edge (its low half is no vertex a < b can give).
+        const NONE: (u64, u32) = (u64::MAX, u32::MAX);
+        let mut half: Vec<(u64, u32)> = (0..geometry.len() * 3)
             .into_par_iter()
-            .filter(|&t| include(t))
-            .flat_map_iter(|t| {
-                let v = geometry.triangles[t].map(|i| canon[i as usize]);
-                (0..3).filter_map(move |e| {
-                    let (a, b, c) = (v[e], v[(e + 1) % 3], v[(e + 2) % 3]);
-                    (a != b).then(|| ((u64::from(a.min(b)) << 32) | u64::from(a.max(b)), c))
-                })
+            .with_min_len(4096)
+            .map(|slot| {
+                let (t, e) = (slot / 3, slot % 3);
+                if !include(t) {
+                    return NONE;
+                }
+                let v = geometry.triangles[t];
+                let [a, b, c] = [v[e], v[(e + 1) % 3], v[(e + 2) % 3]].map(|i| canon[i as usize]);
+                if a == b {
+                    return NONE;
+                }
+                ((u64::from(a.min(b)) << 32) | u64::from(a.max(b)), c)
             })
             .collect();
         half.par_sort_unstable();
-        let mut adjacency = Self { ends: Vec::new(), faces: Vec::new(), opposite: Vec::new() };
-        let mut i = 0;
-        while i < half.len() {
-            let k = half[i].0;
-            let mut j = i + 1;
-            while j < half.len() && half[j].0 == k {
-                j += 1;
-            }
-            adjacency.ends.push([(k >> 32) as u32, k as u32]);
-            adjacency.faces.push((j - i) as u32);
-            adjacency.opposite.push([half[i].1, half[(i + 1).min(j - 1)].1]);
-            i = j;
+        half.truncate(half.partition_point(|h| *h != NONE));
+        // One edge per run of equal keys, the runs found and read in parallel.
+        let starts: Vec<usize> = (0..half.len())
+            .into_par_iter()
+            .with_min_len(4096)
+            .filter(|&i| i == 0 || half[i - 1].0 != half[i].0)
+            .collect();
+        let run = |r: usize| {
+            let (i, j) = (starts[r], starts.get(r + 1).copied().unwrap_or(half.len()));
+            (half[i].0, (j - i) as u32, [half[i].1, half[(i + 1).min(j - 1)].1])
+        };
+        let runs = || (0..starts.len()).into_par_iter();
+        Self {
+            ends: runs().map(|r| run(r).0).map(|k| [(k >> 32) as u32, k as u32]).collect(),
+            faces: runs().map(|r| run(r).1).collect(),
+            opposite: runs().map(|r| run(r).2).collect(),
         }
-        adjacency
     }
 
     /// Number of edges.
@@ -90,6 +90,56 @@ impl EdgeAdjacency {
     pub fn is_empty(&self) -> bool {
         self.ends.is_empty()
     }
+}
+
+/// For each vertex, the lowest index of a vertex at the same position (exact `f64` bits).
+///
+/// The vertices are sorted by a 64-bit hash of their position's bits with their index
+/// (16-byte entries: sorting the 24-byte positions themselves took twice as long), and a
+/// run of equal hashes is split by exact comparison: each vertex takes the first of the run
+/// at its position. Hash collisions cost comparisons, never a wrong weld.
+fn canonical_vertices(p: &[DVec3]) -> Vec<u32> {
+    weld(p, position_hash)
+}
+
+/// SplitMix64's finalizer over the three coordinates' bits.
+fn position_hash(q: &DVec3) -> u64 {
+    let mix = |mut z: u64| {
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    };
+    let [x, y, z] = q.to_array().map(f64::to_bits);
+    mix(mix(mix(x) ^ y) ^ z)
+}
+
+/// [`canonical_vertices`] with the hash given (tests pass one that collides).
+fn weld(p: &[DVec3], hash: impl Fn(&DVec3) -> u64 + Sync) -> Vec<u32> {
+    let mut order: Vec<(u64, u32)> =
+        p.par_iter().enumerate().map(|(v, q)| (hash(q), v as u32)).collect();
+    order.par_sort_unstable();
+    let same = |a: u32, b: u32| {
+        p[a as usize].to_array().map(f64::to_bits) == p[b as usize].to_array().map(f64::to_bits)
+    };
+    let mut canon = vec![0u32; p.len()];
+    // The distinct positions of the current run of equal hashes, by their first vertex.
+    let mut firsts: Vec<u32> = Vec::new();
+    for (i, &(h, v)) in order.iter().enumerate() {
+        if i == 0 || order[i - 1].0 != h {
+            firsts.clear();
+        }
+        // Within a run the indices increase: the first vertex met at a position is its
+        // lowest.
+        let first = match firsts.iter().find(|&&f| same(f, v)) {
+            Some(&f) => f,
+            None => {
+                firsts.push(v);
+                v
+            }
+        };
+        canon[v as usize] = first;
+    }
+    canon
 }
 
 /// Where the light is, for the side tests of silhouettes and shadows.
@@ -174,6 +224,30 @@ mod tests {
             }
         }
         g
+    }
+
+    #[test]
+    fn welding_takes_the_lowest_index_at_each_position_whatever_the_hash() {
+        // Positions on a small grid, many repeated, with -0.0 and 0.0 kept apart (their bits
+        // differ) and a NaN, equal to itself by bits.
+        let mut p = Vec::new();
+        for k in 0u32..2000 {
+            let c = |m: u32| f64::from((k * m) % 5) - 2.0;
+            p.push(DVec3::new(c(7), c(11), c(13)));
+        }
+        p.extend([DVec3::new(-0.0, 0.0, 0.0), DVec3::ZERO, DVec3::splat(f64::NAN)]);
+        p.extend([DVec3::new(-0.0, 0.0, 0.0), DVec3::ZERO, DVec3::splat(f64::NAN)]);
+        let mut lowest = std::collections::BTreeMap::new();
+        let want: Vec<u32> = p
+            .iter()
+            .enumerate()
+            .map(|(v, q)| *lowest.entry(q.to_array().map(f64::to_bits)).or_insert(v as u32))
+            .collect();
+        assert_eq!(canonical_vertices(&p), want);
+        // Every position colliding, or two hashes for all: runs split by exact comparison.
+        assert_eq!(weld(&p, |_| 7), want);
+        assert_eq!(weld(&p, |q| u64::from(q.x > 0.0)), want);
+        assert!(canonical_vertices(&[]).is_empty());
     }
 
     #[test]
