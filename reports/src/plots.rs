@@ -99,12 +99,13 @@ pub fn pareto_front(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
     front
 }
 
-/// A tick label: whole numbers from 100 up, up to two significant digits from 1, and
-/// scientific notation below 1 (`5e-3`).
+/// A tick label: scientific notation from 100,000 up (`2e6`, the triangle and pixel counts of
+/// the cost charts) and below 1 (`5e-3`), whole numbers from 100, and up to two significant
+/// digits from 1.
 fn tick(v: f64) -> String {
-    if v >= 100.0 {
+    if (100.0..1e5).contains(&v) {
         format!("{v:.0}")
-    } else if v >= 1.0 {
+    } else if (1.0..100.0).contains(&v) {
         let s = format!("{v:.1}");
         s.trim_end_matches(".0").to_owned()
     } else {
@@ -315,6 +316,11 @@ mod tests {
         assert_eq!(tick(5e-3), "5e-3");
         assert_eq!(tick(2.0), "2");
         assert_eq!(tick(300.0), "300");
+        assert_eq!(tick(50_000.0), "50000");
+        assert_eq!(
+            (tick(1e5), tick(2e6), tick(8.3e6)),
+            ("1e5".into(), "2e6".into(), "8.3e6".into())
+        );
     }
 
     #[test]
