@@ -250,13 +250,14 @@ impl PaperTable {
         }
     }
 
-    /// The paper's frame size (for `cost-against-pixels`, the largest of [`COST_FRAMES`]).
-    pub fn paper_frame(self) -> (u32, u32) {
+    /// The table's own frames: the paper's frame size, or [`COST_FRAMES`] for
+    /// `cost-against-pixels`.
+    pub fn frames(self) -> &'static [(u32, u32)] {
         match self {
-            Self::AilaLaineTable1 | Self::CostAgainstTriangles => (1024, 768),
-            Self::LecocqTable1 | Self::LecocqTable2 => (1920, 1080),
-            Self::PanTable1 => (800, 600),
-            Self::CostAgainstPixels => COST_FRAMES[COST_FRAMES.len() - 1],
+            Self::AilaLaineTable1 | Self::CostAgainstTriangles => &[(1024, 768)],
+            Self::LecocqTable1 | Self::LecocqTable2 => &[(1920, 1080)],
+            Self::PanTable1 => &[(800, 600)],
+            Self::CostAgainstPixels => &COST_FRAMES,
         }
     }
 
@@ -303,12 +304,11 @@ impl PaperTable {
 }
 
 /// The frames a table runs each scene at: the suite's `width` x `height` where given, else
-/// [`COST_FRAMES`] for `cost-against-pixels` and the paper's frame for the others.
+/// the table's own ([`PaperTable::frames`]).
 pub fn frames_of(spec: &TableSpec) -> Vec<(u32, u32)> {
-    match (spec.width, spec.paper) {
-        (0, PaperTable::CostAgainstPixels) => COST_FRAMES.to_vec(),
-        (0, paper) => vec![paper.paper_frame()],
-        (w, _) => vec![(w, spec.height)],
+    match spec.width {
+        0 => spec.paper.frames().to_vec(),
+        w => vec![(w, spec.height)],
     }
 }
 
