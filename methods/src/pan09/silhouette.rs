@@ -69,16 +69,16 @@ impl EdgeAdjacency {
             .with_min_len(4096)
             .filter(|&i| i == 0 || half[i - 1].0 != half[i].0)
             .collect();
-        let run = |r: usize| {
-            let (i, j) = (starts[r], starts.get(r + 1).copied().unwrap_or(half.len()));
-            (half[i].0, (j - i) as u32, [half[i].1, half[(i + 1).min(j - 1)].1])
-        };
-        let runs = || (0..starts.len()).into_par_iter();
-        Self {
-            ends: runs().map(|r| run(r).0).map(|k| [(k >> 32) as u32, k as u32]).collect(),
-            faces: runs().map(|r| run(r).1).collect(),
-            opposite: runs().map(|r| run(r).2).collect(),
-        }
+        let (ends, (faces, opposite)) = (0..starts.len())
+            .into_par_iter()
+            .map(|r| {
+                let (i, j) = (starts[r], starts.get(r + 1).copied().unwrap_or(half.len()));
+                let k = half[i].0;
+                let opposite = [half[i].1, half[(i + 1).min(j - 1)].1];
+                ([(k >> 32) as u32, k as u32], ((j - i) as u32, opposite))
+            })
+            .unzip();
+        Self { ends, faces, opposite }
     }
 
     /// Number of edges.
