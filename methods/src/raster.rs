@@ -179,9 +179,9 @@ fn setup(geometry: &Geometry, t: usize, proj: &Projector, shift: DVec2) -> Optio
     })
 }
 
-/// `u.ceil().max(lo)` for a whole `lo >= 0` (NaN gives `lo`, as `max` does), without calling `ceil`: baseline
-/// x86-64 has no rounding instruction, and libm's `ceil` was a tenth of the setup's time.
-/// Exact: truncating a positive `f64` below 2^52 to an integer is exact.
+/// `u.ceil().max(lo)` for a whole `lo >= 0` (NaN gives `lo`, as `max` does), without calling
+/// `ceil`: baseline x86-64 has no rounding instruction, and libm's `ceil` was a tenth of the
+/// setup's time. Exact: truncating a positive `f64` below 2^52 to an integer is exact.
 #[inline]
 fn ceil_max(u: f64, lo: f64) -> f64 {
     if u <= lo || u.is_nan() {
@@ -198,9 +198,9 @@ fn ceil_max(u: f64, lo: f64) -> f64 {
     }
 }
 
-/// `u.floor().min(hi)` for a whole `hi >= 0` (NaN gives `hi`, as `min` does), except that a negative floor is
-/// given as `-1` (both lie below every sample index, all the callers ask); without calling
-/// `floor` (see [`ceil_max`]).
+/// `u.floor().min(hi)` for a whole `hi >= 0` (NaN gives `hi`, as `min` does), except that a
+/// negative floor is given as `-1` (both lie below every sample index, all the callers ask);
+/// without calling `floor` (see [`ceil_max`]).
 #[inline]
 fn floor_min(u: f64, hi: f64) -> f64 {
     if u >= hi || u.is_nan() {
@@ -473,18 +473,25 @@ pub(crate) mod tests {
         assert!(counts.iter().all(|&n| n == 1), "{counts:?}");
     }
 
+    /// The libm-free rounding against `ceil` and `floor` at `u`, for bounds the callers pass.
+    fn rounds_as_libm(u: f64) {
+        for bound in [0.0, 1.0, 767.0, 1023.0] {
+            let want = u.ceil().max(bound);
+            let got = ceil_max(u, bound);
+            assert!(got == want || (got.is_nan() && want.is_nan()), "ceil {u}: {got} {want}");
+            let want = u.floor().min(bound);
+            let got = floor_min(u, bound);
+            if want < 0.0 {
+                assert!(got < 0.0, "floor {u}: {got}, a negative floor {want}");
+            } else {
+                assert_eq!(got, want, "floor {u} within {bound}");
+            }
+        }
+    }
+
     #[test]
-    fn rounding_without_libm_equals_ceil_and_floor() {
-        // SplitMix64: a fixed stream of bit patterns.
-        let mut state = 7u64;
-        let mut next = || {
-            state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-            let mut z = state;
-            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-            z ^ (z >> 31)
-        };
-        let mut values = vec![
+    fn rounding_without_libm_equals_ceil_and_floor_at_edge_values() {
+        for u in [
             0.0,
             -0.0,
             0.5,
@@ -506,22 +513,8 @@ pub(crate) mod tests {
             f64::INFINITY,
             f64::NEG_INFINITY,
             f64::NAN,
-        ];
-        values.extend((0..20_000).map(|_| ((next() >> 11) as f64 / 2f64.powi(53) - 0.3) * 2048.0));
-        values.extend((0..2_000).map(|_| f64::from_bits(next())));
-        for &u in &values {
-            for bound in [0.0, 1.0, 767.0, 1023.0] {
-                let want = u.ceil().max(bound);
-                let got = ceil_max(u, bound);
-                assert!(got == want || (got.is_nan() && want.is_nan()), "ceil {u}: {got} {want}");
-                let want = u.floor().min(bound);
-                let got = floor_min(u, bound);
-                if want < 0.0 {
-                    assert!(got < 0.0, "floor {u}: {got}, a negative floor {want}");
-                } else {
-                    assert_eq!(got, want, "floor {u} within {bound}");
-                }
-            }
+        ] {
+            rounds_as_libm(u);
         }
     }
 
@@ -567,6 +560,20 @@ pub(crate) mod tests {
         assert!(shifted.triangle.iter().filter(|&&t| t != NO_TRIANGLE).count() > 20);
         assert_eq!(shifted.depth, plain.depth);
     }
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(20_000))]
+
+        /// Values around the frame's sample range, and any bit pattern.
+        #[test]
+        fn rounding_without_libm_equals_ceil_and_floor(
+            u in -700.0..1400.0f64,
+            bits in proptest::prelude::any::<u64>(),
+        ) {
+            rounds_as_libm(u);
+            rounds_as_libm(f64::from_bits(bits));
+        }
+    }
+
     proptest::proptest! {
         /// A convex quad split along either diagonal covers every centre strictly inside it
         /// exactly once and nothing outside it; corners on the half-pixel grid put many
