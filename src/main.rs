@@ -10,9 +10,11 @@
 //! ([`prepare_out`]: created, and written once with a probe file). A method error is bad
 //! input, except a GPU device failure, which is internal ([`method_failure`]).
 
-use analysis::{exact::ExactCoverage, metrics::Comparison, pixel_class::PixelClass, Reference};
+use analysis::{compare::Truth, exact::ExactCoverage, pixel_class::PixelClass, Reference};
 use anyhow::Context;
 use clap::{Parser, Subcommand, ValueEnum};
+use instrumentation::measure::{measure, Protocol};
+use instrumentation::stats::Summary;
 use instrumentation::{Recorder, RunRecord};
 #[cfg(feature = "gpu")]
 use methods::gpu::GpuError;
@@ -21,6 +23,7 @@ use methods::{
     MethodOptions, ShadowMethod, Visibility,
 };
 use reports::suite::{check_frame, MAX_FRAME_SIDE};
+use reports::write::summary_text;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -707,40 +710,33 @@ struct Ran {
     classes: Option<Vec<PixelClass>>,
 }
 
-/// Runs the job's technique on `frame`. A reference is evaluated as such (keeping its pixel
-/// classes), and its values are rounded to `f32` ([`ReferenceImage::to_visibility`]).
-fn run(job: &Job, frame: &Frame<'_>, mut rec: Recorder) -> Result<Ran, Failure> {
-    let (visibility, classes) = match &job.reference {
-        Some(r) => {
-            let image = r.evaluate(frame, &mut rec).map_err(input)?;
-            (image.to_visibility(), image.classes)
-        }
-        None => (job.technique.run(frame, &mut rec).map_err(method_failure)?, None),
-    };
-    Ok(Ran { visibility, record: record(job, frame, rec, classes.as_deref()), classes })
-}
-
-/// The run record of `rec`, a run of the job's technique on `frame`.
-fn record(
+/// Runs the job's technique on `frame`, recording into `rec`. A reference is evaluated as
+/// such (keeping its pixel classes), and its values are rounded to `f32`
+/// ([`ReferenceImage::to_visibility`]).
+fn run(
     job: &Job,
     frame: &Frame<'_>,
-    rec: Recorder,
-    classes: Option<&[PixelClass]>,
-) -> RunRecord {
-    let mut record = rec.into_record(instrumentation::RunIdentity {
+    rec: &mut Recorder,
+) -> Result<(Visibility, Option<Vec<PixelClass>>), Failure> {
+    match &job.reference {
+        Some(r) => {
+            let image = r.evaluate(frame, rec).map_err(input)?;
+            Ok((image.to_visibility(), image.classes))
+        }
+        None => Ok((job.technique.run(frame, rec).map_err(method_failure)?, None)),
+    }
+}
+
+/// Who ran on `frame`: the job's scene, technique and frame size.
+fn identity(job: &Job, frame: &Frame<'_>) -> instrumentation::RunIdentity {
+    instrumentation::RunIdentity {
         scene: job.scene.name.clone(),
         method: job.technique.name().to_owned(),
         params: job.technique.params(),
         width: job.width,
         height: job.height,
         effects: frame.effects.names().into_iter().map(String::from).collect(),
-    });
-    record.pixel_classes = classes.map(analysis::metrics::class_pixels);
-    record.provenance = Some(instrumentation::Provenance::capture(
-        instrumentation::Provenance::command_line(),
-        gpu_adapter(job),
-    ));
-    record
+    }
 }
 
 /// The GPU adapter a job ran on (`--device gpu`), for its provenance.
@@ -751,49 +747,56 @@ fn gpu_adapter(job: &Job) -> Option<String> {
 
 /// The spread of the total times of repeated runs (`--repeat`).
 struct Spread {
-    /// Timed runs.
-    runs: u32,
-    /// Shortest total, milliseconds.
-    min_ms: f64,
-    /// Longest total, milliseconds.
-    max_ms: f64,
+    /// Wall-clock totals.
+    wall: Summary,
+    /// CPU totals, where measured.
+    cpu: Option<Summary>,
+    /// Timed runs whose CPU share was below the protocol's threshold.
+    contended: usize,
 }
 
 impl Spread {
     /// How the time printed beside it was taken.
     fn describe(&self) -> String {
+        let cpu = self.cpu.map_or(String::new(), |c| format!("; CPU time {}", summary_text(&c)));
+        let contended = match self.contended {
+            0 => String::new(),
+            n => format!("; {n} contended (another process took the cores)"),
+        };
         format!(
-            "median of {} runs after a warm-up, min {:.1} ms, max {:.1} ms",
-            self.runs, self.min_ms, self.max_ms
+            "wall {} over {} runs after a warm-up{cpu}{contended}",
+            summary_text(&self.wall),
+            self.wall.n
         )
     }
 }
 
-/// Runs the job's technique `repeat` times (see `--repeat`), each on a frame of its own so
-/// that the G-buffer is timed too: once, cold, for 1; else after an untimed warm-up. Gives
-/// the last frame, the result with the record of median total time, and the spread of the
-/// totals when there was more than one timed run. Prints the record's warnings.
+/// Runs the job's technique `repeat` times (see `--repeat`) under the measurement engine's
+/// protocol, each on a frame of its own so that the G-buffer is timed too: once, cold, for 1;
+/// else after an untimed warm-up. Gives the last frame, the result with the record of the run
+/// of median CPU time, and the spread of the totals when there was more than one timed run.
+/// Prints the record's warnings.
 fn run_repeated(job: &Job, repeat: u32) -> Result<(Frame<'_>, Ran, Option<Spread>), Failure> {
-    let once = || {
-        let mut rec = Recorder::default();
-        let frame = Frame::new(&job.scene, job.width, job.height, &mut rec);
-        run(job, &frame, rec).map(|ran| (frame, ran))
-    };
-    let (mut frame, mut ran) = once()?;
-    // With one run it is the timed one; else it is the warm-up, and `repeat` runs follow.
-    let (mut records, more) =
-        if repeat > 1 { (Vec::new(), repeat) } else { (vec![ran.record.clone()], 0) };
-    for _ in 0..more {
-        (frame, ran) = once()?;
-        records.push(ran.record.clone());
-    }
-    records.sort_by(|a, b| a.total_ms.total_cmp(&b.total_ms));
-    let spread = (records.len() > 1).then(|| Spread {
-        runs: records.len() as u32,
-        min_ms: records[0].total_ms,
-        max_ms: records[records.len() - 1].total_ms,
+    let warmup = u32::from(repeat > 1);
+    let protocol = Protocol::fixed(warmup, repeat);
+    let measured = measure(&protocol, |rec: &mut Recorder| {
+        let frame = Frame::new(&job.scene, job.width, job.height, rec);
+        run(job, &frame, rec).map(|(v, classes)| (frame, v, classes))
+    })?;
+    // The record kept is the median run's; every run computes the same values.
+    let mut record = measured.run_record(identity(job, &measured.output.0), warmup);
+    let (frame, visibility, classes) = measured.output;
+    record.pixel_classes = classes.as_deref().map(analysis::metrics::class_pixels);
+    record.provenance = Some(instrumentation::Provenance::capture(
+        instrumentation::Provenance::command_line(),
+        gpu_adapter(job),
+    ));
+    let spread = (measured.samples.len() > 1).then(|| Spread {
+        wall: measured.wall_ms,
+        cpu: measured.cpu_ms,
+        contended: measured.samples.iter().filter(|s| s.contended).count(),
     });
-    ran.record = records.swap_remove((records.len() - 1) / 2);
+    let ran = Ran { visibility, record, classes };
     for w in &ran.record.warnings {
         eprintln!("warning: {w}");
     }
@@ -889,35 +892,18 @@ fn compare(c: CompareArgs) -> Result<(), Failure> {
 
     let (frame, ran, spread) = run_repeated(&job, a.repeat)?;
     let mut ref_rec = Recorder::default();
-    let truth = reference.evaluate(&frame, &mut ref_rec).map_err(input)?;
+    let image = reference.evaluate(&frame, &mut ref_rec).map_err(input)?;
     // A reference without classes (`raytrace`) is measured per class all the same: the
     // classes are the camera's view of the triangles, whatever the reference.
-    let classes = match &truth.classes {
-        Some(c) => c.clone(),
-        None => {
-            let c = ref_rec.stages.time("pixel classes", || analysis::exact::classify(&frame));
-            ref_rec.counters.pixel_triangle_overlaps += c.overlaps;
-            c.class
-        }
-    };
+    let truth = Truth::new(&frame, image, &mut ref_rec);
     let v = &ran.visibility;
-    let headline = analysis::metrics::headline_pixels(&truth, &classes);
-    // Lecocq et al.'s pixel match: a binary result against one ray per pixel (the grid's
-    // single sample is the pixel centre), traced only when the result is binary.
-    let raytrace1 = if analysis::metrics::is_binary(v, &headline) {
-        let one_ray = analysis::registry::reference("raytrace", 1, PatternKind::Grid);
-        Some(one_ray.map_err(input)?.evaluate(&frame, &mut Recorder::default()).map_err(input)?)
-    } else {
-        None
-    };
-    let comparison = Comparison::new(v, &truth, &classes, raytrace1.as_ref());
+    let comparison = truth.compare(&frame, v).map_err(input)?;
 
     write_run(&out, &frame, &ran)?;
-    let boundary: Vec<bool> =
-        truth.lit.iter().zip(&headline).map(|(&r, &e)| e && r > 0.0 && r < 1.0).collect();
-    for (name, mask) in [("error.png", &headline), ("error_boundary.png", &boundary)] {
+    for (name, mask) in [("error.png", &truth.headline), ("error_boundary.png", &truth.boundary())]
+    {
         let path = out.join(name);
-        analysis::error_map::error_map(v, &truth.lit, mask, error_scale)?
+        analysis::error_map::error_map(v, &truth.reference.lit, mask, error_scale)?
             .save(&path)
             .with_context(|| format!("cannot write {}", path.display()))?;
     }

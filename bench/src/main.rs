@@ -66,7 +66,8 @@ mod scaling {
         for paper in [PaperTable::CostAgainstTriangles, PaperTable::CostAgainstPixels] {
             let spec = TableSpec { paper, scenes: Vec::new(), width: 0, height: 0 };
             let mut skipped = Vec::new();
-            let table = run_table(&spec, 0, repeats, &mut skipped, |_| {});
+            let protocol = instrumentation::measure::Protocol::fixed(0, repeats as u32);
+            let table = run_table(&spec, &protocol, &mut skipped, |_| {});
             for s in &skipped {
                 eprintln!("note: {s}");
             }

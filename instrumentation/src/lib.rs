@@ -6,6 +6,10 @@
 //! name and lists the stages a scene did not call for as skipped. [`cpu_model`] names the
 //! CPU that times were taken on, and [`Provenance`] what a result was produced by.
 
+pub mod clock;
+pub mod measure;
+pub mod stats;
+
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -121,8 +125,14 @@ impl std::iter::Sum for Counters {
 pub struct Stage {
     /// The stage's name.
     pub name: String,
-    /// Wall-clock time in milliseconds.
+    /// Wall-clock time in milliseconds (for a GPU stage timed by timestamp queries, the GPU's
+    /// time).
     pub ms: f64,
+    /// CPU time of the process's threads (the rayon pool included) in milliseconds, where the
+    /// stage was timed on the CPU ([`Stages::time`]); absent for a stage added from another
+    /// clock ([`Stages::add`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cpu_ms: Option<f64>,
 }
 
 /// Stage times and skipped stages of one run.
@@ -135,11 +145,16 @@ pub struct Stages {
 }
 
 impl Stages {
-    /// Runs `f` as the stage `name`, recording its wall-clock time.
+    /// Runs `f` as the stage `name`, recording its wall-clock time and the CPU time of the
+    /// process's threads ([`clock::cpu_now`]).
     pub fn time<T>(&mut self, name: &str, f: impl FnOnce() -> T) -> T {
+        let cpu = clock::cpu_now();
         let start = Instant::now();
         let out = f();
-        self.stages.push(Stage { name: name.to_owned(), ms: start.elapsed().as_secs_f64() * 1e3 });
+        let ms = start.elapsed().as_secs_f64() * 1e3;
+        let cpu_ms =
+            cpu.zip(clock::cpu_now()).map(|(a, b)| b.saturating_sub(a).as_secs_f64() * 1e3);
+        self.stages.push(Stage { name: name.to_owned(), ms, cpu_ms });
         out
     }
 
@@ -148,8 +163,12 @@ impl Stages {
     /// beside a GPU pass) is one entry, its parts' time summed.
     pub fn add(&mut self, name: &str, ms: f64) {
         match self.stages.iter_mut().rev().find(|s| s.name == name) {
-            Some(stage) => stage.ms += ms,
-            None => self.stages.push(Stage { name: name.to_owned(), ms }),
+            Some(stage) => {
+                // A part from another clock: the stage's CPU time is no longer known whole.
+                stage.ms += ms;
+                stage.cpu_ms = None;
+            }
+            None => self.stages.push(Stage { name: name.to_owned(), ms, cpu_ms: None }),
         }
     }
 
@@ -208,6 +227,9 @@ impl Recorder {
             effects: who.effects,
             counters: self.counters,
             total_ms: self.stages.total_ms(),
+            cpu_ms: None,
+            clocks: CLOCKS.to_owned(),
+            timing: None,
             stages: self.stages.stages,
             skipped_stages: self.stages.skipped,
             notes: self.notes,
@@ -247,6 +269,17 @@ pub struct RunRecord {
     pub warnings: Vec<String>,
     /// Sum of the stage times, milliseconds.
     pub total_ms: f64,
+    /// CPU time of the process's threads over the run, milliseconds; absent where it was not
+    /// measured.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cpu_ms: Option<f64>,
+    /// Which clock each time of the record is ([`CLOCKS`]).
+    #[serde(default = "clocks")]
+    pub clocks: String,
+    /// How the times were taken: the timed runs, their summaries on both clocks, contention
+    /// and the machine's load ([`measure`]); absent where the record is not of a measurement.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub timing: Option<measure::Timing>,
     /// Pixels of each class (`uncovered`, `planar`, `surface`, `edge`), for a reference that
     /// classifies pixels (`exact`); absent otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -255,6 +288,15 @@ pub struct RunRecord {
     /// recorded.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub provenance: Option<Provenance>,
+}
+
+/// Which clock each time of a run record is.
+pub const CLOCKS: &str = "total_ms and stages[].ms: wall-clock time (a GPU stage timed by \
+    timestamp queries: the GPU's time); cpu_ms and stages[].cpu_ms: CPU time of the process's \
+    threads, the rayon pool included";
+
+fn clocks() -> String {
+    CLOCKS.to_owned()
 }
 
 /// The CPU's model name, from `/proc/cpuinfo` where there is one, for labelling times.

@@ -1,19 +1,25 @@
 //! Comparison of a report with an earlier one (`report --baseline DIR`): per run present in
 //! both, the change of the shadow-only error and the ratio of the median times with its
-//! confidence interval; regressions flagged; a summary first.
+//! interval; regressions flagged; a summary first.
 //!
-//! Runs are matched by scene, frame, method and parameters. The time ratio is
-//! `median_now / median_before`, and its interval `[ci_low_now / ci_high_before,
-//! ci_high_now / ci_low_before]` combines the two medians' 95 % bootstrap intervals
-//! ([`crate::timing`]) conservatively: a run is flagged **slower** only when the whole interval
-//! lies above `1 + time_tolerance` and the two intervals lie more than `min_change_ms` apart
-//! (and **faster**, an improvement, only when the interval lies below `1 / (1 + time_tolerance)`
-//! and the intervals lie as far apart the other way), so the noise of repeated timing flags
-//! nothing at the defaults (see [`BaselineOptions`] for how they were chosen). Errors are
-//! deterministic for a given commit and machine (seeded sampling), so a run is flagged **less
-//! accurate** when its mean error grows by more than `error_tolerance`.
+//! Runs are matched by scene, frame, method and parameters. Times are compared on the
+//! report's clock ([`Report::clock`], CPU time by default: the time the work took on the
+//! cores, which another process on the machine moves little), on both reports' figures of
+//! that clock (wall time for a run either report has no CPU time for, said per run). The ratio
+//! is `median_now / median_before`, and its interval `[low_now / high_before, high_now /
+//! low_before]` combines the two medians' confidence intervals ([`instrumentation::stats`])
+//! conservatively, or their ranges where a run had too few timed runs for an interval (said
+//! per run). A run is flagged **slower** only when the whole interval lies above `1 +
+//! time_tolerance` and the two intervals lie more than `min_change_ms` apart (and **faster**,
+//! an improvement, only when the interval lies below `1 / (1 + time_tolerance)` and the
+//! intervals lie as far apart the other way). Wall-time ratios are given beside, and only for
+//! runs contended in neither report: a contended run's wall time measures the other work.
+//! Errors are deterministic for a given commit and machine (seeded sampling), so a run is
+//! flagged **less accurate** when its mean error grows by more than `error_tolerance`.
 
 use crate::model::{Report, Row};
+use instrumentation::measure::Clock;
+use instrumentation::stats::Summary;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -21,19 +27,14 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BaselineOptions {
     /// Relative slow-down the whole time-ratio interval must exceed to flag a run as slower.
-    /// Default 0.5 (50 %): two reports of the `quick` suite taken one after the other on a
-    /// shared 2-core machine had time-ratio intervals up to [1.30, 1.96] for unchanged code
-    /// (3 timed runs each, so an interval is about the runs' [min, max]), while a real
-    /// regression worth flagging in a sweep is a factor, not a few per cent. On a quiet machine
-    /// with more repeats, lower it (`report --baseline-tolerance`).
+    /// Default 0.2 (20 %): CPU times of unchanged code, one report on a quiet 2-core machine
+    /// and one with a core taken by another process, had ratio intervals within it (see the
+    /// README's timing protocol), and a method made 1.5 times slower is flagged.
     pub time_tolerance: f64,
     /// Milliseconds by which the run's time interval must lie above the baseline's (its
-    /// lower bound over the baseline's upper bound) to flag it as slower. Default 5 ms: on a
-    /// shared machine a run of a few milliseconds is delayed by a scheduler time slice or two
-    /// whenever another process takes a core, whatever the method; in two `quick` reports one
-    /// after the other, a `pcf-gems4` run of 3.4-3.6 ms took 5.6-7.4 ms in the second (a ratio
-    /// interval of [1.58, 2.20], 2 ms apart), and no run with a real difference under 5 ms
-    /// was seen. `report --baseline-min-ms 0` compares ratios alone.
+    /// lower bound over the baseline's upper bound) to flag it as slower. Default 1 ms: a
+    /// run of a few milliseconds moves by a fraction of a millisecond of CPU time with the
+    /// caches another process shares; `report --baseline-min-ms 0` compares ratios alone.
     pub min_change_ms: f64,
     /// Growth of the mean error (lit fraction) that flags a run as less accurate. Default
     /// 1e-6.
@@ -42,7 +43,7 @@ pub struct BaselineOptions {
 
 impl Default for BaselineOptions {
     fn default() -> Self {
-        Self { time_tolerance: 0.5, min_change_ms: 5.0, error_tolerance: 1e-6 }
+        Self { time_tolerance: 0.2, min_change_ms: 1.0, error_tolerance: 1e-6 }
     }
 }
 
@@ -72,10 +73,18 @@ pub struct RunChange {
     pub params: String,
     /// Mean error before and now.
     pub error: (f64, f64),
+    /// The clock the times were compared on.
+    pub clock: Clock,
+    /// Whether both runs had confidence intervals (else their ranges bound the ratio).
+    pub intervals: bool,
     /// Median time now over before.
     pub time_ratio: f64,
     /// The ratio's interval (see the module documentation).
     pub time_ratio_ci: (f64, f64),
+    /// The wall-time ratio and its interval, where neither run was contended.
+    pub wall_ratio: Option<(f64, (f64, f64))>,
+    /// Whether either run was contended.
+    pub contended: bool,
     /// The run's time interval lies above the tolerance.
     pub slower: bool,
     /// The run's time interval lies below the tolerance.
@@ -130,26 +139,48 @@ fn params(r: &Row) -> String {
         .join(" ")
 }
 
+/// The ratio of two summaries' medians and its interval, and whether both bounds were
+/// confidence intervals.
+fn ratio(now: &Summary, before: &Summary) -> (f64, (f64, f64), bool) {
+    let ((lo, hi), a) = now.bounds();
+    let ((lo_b, hi_b), b) = before.bounds();
+    (now.median / before.median, (lo / hi_b, hi / lo_b), a && b)
+}
+
 /// Sets `now` against `before` (the report read from `dir`).
 pub fn compare(now: &Report, before: &Report, dir: &Path, options: BaselineOptions) -> Comparison {
     let mut runs = Vec::new();
     for r in &now.rows {
         let Some(b) = before.rows.iter().find(|b| key(b) == key(r)) else { continue };
-        let (t, tb) = (&r.total_ms, &b.total_ms);
-        let ratio = t.median / tb.median;
-        let ci = (t.ci_low / tb.ci_high, t.ci_high / tb.ci_low);
+        // A clock both runs have: the report's, or wall time where either lacks CPU time.
+        let clock = match (now.clock, &r.cpu_ms, &b.cpu_ms) {
+            (Clock::Cpu, Some(_), Some(_)) => Clock::Cpu,
+            _ => Clock::Wall,
+        };
+        let (t, tb) = (r.time(clock), b.time(clock));
+        let (time_ratio, ci, intervals) = ratio(t, tb);
+        let ((lo, hi), _) = t.bounds();
+        let ((lo_b, hi_b), _) = tb.bounds();
+        let contended = r.contended || b.contended;
+        let wall = (!contended).then(|| {
+            let (q, ci, _) = ratio(&r.total_ms, &b.total_ms);
+            (q, ci)
+        });
         let (e0, e1) = (b.metrics.mean_abs_error, r.metrics.mean_abs_error);
         runs.push(RunChange {
             scene: r.scene.clone(),
             method: r.method.clone(),
             params: params(r),
             error: (e0, e1),
-            time_ratio: ratio,
+            clock,
+            intervals,
+            time_ratio,
             time_ratio_ci: ci,
-            slower: ci.0 > 1.0 + options.time_tolerance
-                && t.ci_low - tb.ci_high > options.min_change_ms,
+            wall_ratio: wall,
+            contended,
+            slower: ci.0 > 1.0 + options.time_tolerance && lo - hi_b > options.min_change_ms,
             faster: ci.1 < 1.0 / (1.0 + options.time_tolerance)
-                && tb.ci_low - t.ci_high > options.min_change_ms,
+                && lo_b - hi > options.min_change_ms,
             less_accurate: e1 - e0 > options.error_tolerance,
         });
     }
@@ -206,24 +237,46 @@ pub fn markdown(c: &Comparison) -> String {
         }
         s.push('\n');
     }
-    s.push_str("| scene | method | parameters | error before | error now | time ratio [95 % CI] | flag |\n");
-    s.push_str("|---|---|---|---|---|---|---|\n");
+    s.push_str(
+        "Time ratios are now over before, on the clock named per run; the interval combines \
+         both medians' 95 % confidence intervals, or their ranges (`range`) where a run had \
+         too few timed runs for one. Wall ratios only where neither run was contended.\n\n",
+    );
+    s.push_str(
+        "| scene | method | parameters | error before | error now | time ratio [interval] | \
+         wall ratio | flag |\n",
+    );
+    s.push_str("|---|---|---|---|---|---|---|---|\n");
     for r in &c.runs {
+        let wall = r.wall_ratio.map_or_else(
+            || "contended".to_owned(),
+            |(q, (lo, hi))| format!("{q:.2} [{lo:.2}, {hi:.2}]"),
+        );
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {:.6} | {:.6} | {:.2} [{:.2}, {:.2}] | {} |",
+            "| {} | {} | {} | {:.6} | {:.6} | {} | {wall} | {} |",
             r.scene,
             r.method,
             r.params,
             r.error.0,
             r.error.1,
-            r.time_ratio,
-            r.time_ratio_ci.0,
-            r.time_ratio_ci.1,
+            time_text(r),
             flags(r)
         );
     }
     s
+}
+
+/// A run's time ratio on its clock with its interval, as `cpu 1.02 [0.95, 1.10]`.
+fn time_text(r: &RunChange) -> String {
+    let range = if r.intervals { "" } else { " range" };
+    format!(
+        "{} {:.2} [{:.2}, {:.2}]{range}",
+        r.clock.name(),
+        r.time_ratio,
+        r.time_ratio_ci.0,
+        r.time_ratio_ci.1
+    )
 }
 
 /// The flags of a run, as words.
@@ -238,10 +291,7 @@ pub fn flags(r: &RunChange) -> String {
 
 /// One line on what changed in a run.
 fn describe(r: &RunChange) -> String {
-    format!(
-        "time x{:.2} [{:.2}, {:.2}], error {:.6} -> {:.6}",
-        r.time_ratio, r.time_ratio_ci.0, r.time_ratio_ci.1, r.error.0, r.error.1
-    )
+    format!("time {}, error {:.6} -> {:.6}", time_text(r), r.error.0, r.error.1)
 }
 
 #[cfg(test)]
@@ -255,6 +305,7 @@ mod tests {
             height = 36
             warmup = 0
             repeats = 1
+            max_repeats = 1
             scenes = ["plane-square"]
             [[run]]
             method = "sm"
@@ -266,34 +317,36 @@ mod tests {
         crate::sweep::report_of(toml)
     }
 
+    /// A summary of nine timed runs around `ms`, with its interval.
+    fn around(ms: f64) -> Summary {
+        Summary::of(&[0.9, 0.95, 0.97, 0.99, 1.0, 1.01, 1.03, 1.05, 1.1].map(|f| f * ms))
+            .expect("values")
+    }
+
     #[test]
     fn a_report_against_itself_flags_nothing_and_a_slowed_method_is_flagged() {
         // Times of a tiny frame are too short to compare: every run is given the same spread.
         let mut report = small_report();
         for r in &mut report.rows {
-            r.total_ms = crate::timing::Summary {
-                median: 10.0,
-                ci_low: 9.0,
-                ci_high: 11.0,
-                min: 8.0,
-                max: 12.0,
-            };
+            r.total_ms = around(10.0);
+            r.cpu_ms = Some(around(15.0));
+            r.contended = false;
         }
         let dir = Path::new("earlier");
         let same = compare(&report, &report, dir, BaselineOptions::default());
         assert_eq!(same.runs.len(), report.rows.len());
         assert_eq!((same.new_runs, same.dropped_runs), (0, 0));
         assert_eq!(same.regressions().count(), 0);
+        assert!(same.runs.iter().all(|r| r.clock == Clock::Cpu && r.intervals));
         assert!(markdown(&same).contains("No regression."));
 
-        // `pcf-gems4` made three times slower, `sm` less accurate.
+        // `pcf-gems4` made 1.5 times slower in CPU time, `sm` less accurate; every wall time
+        // doubled, as on a loaded machine, which the CPU clock does not see.
         let mut slowed = report.clone();
         for r in &mut slowed.rows {
+            r.total_ms = around(20.0);
             if r.method == "pcf-gems4" {
-                let t = &mut r.total_ms;
-                for v in [&mut t.median, &mut t.ci_low, &mut t.ci_high, &mut t.min, &mut t.max] {
-                    *v *= 3.0;
-                }
+                r.cpu_ms = Some(around(22.5));
             } else {
                 r.metrics.mean_abs_error += 1e-3;
             }
@@ -303,38 +356,65 @@ mod tests {
             assert_eq!(r.slower, r.method == "pcf-gems4", "{r:?}");
             assert_eq!(r.less_accurate, r.method == "sm", "{r:?}");
             assert!(!r.faster);
+            assert_eq!(r.wall_ratio.map(|w| w.0), Some(2.0));
         }
         let md = markdown(&c);
         assert!(md.contains("Regressions:") && md.contains("**pcf-gems4**"), "{md}");
+        assert!(md.contains("cpu 1.50 ["), "{md}");
         // And the other way round the slowed method got faster.
         let back = compare(&report, &slowed, dir, BaselineOptions::default());
         assert!(back.runs.iter().filter(|r| r.method == "pcf-gems4").all(|r| r.faster));
+
+        // On the wall clock the doubled times are flagged; a contended run has no wall ratio.
+        let wall = Report { clock: Clock::Wall, ..slowed.clone() };
+        assert!(compare(&wall, &report, dir, BaselineOptions::default())
+            .runs
+            .iter()
+            .all(|r| r.slower));
+        slowed.rows[0].contended = true;
+        let c = compare(&slowed, &report, dir, BaselineOptions::default());
+        assert_eq!((c.runs[0].wall_ratio, c.runs[0].contended), (None, true));
+        assert!(markdown(&c).contains("| contended |"));
     }
 
     #[test]
-    fn a_short_run_is_flagged_only_when_it_slows_by_more_than_the_time_slice_floor() {
-        // A 3.5 ms run taking twice as long: a time slice of a shared machine at the default
-        // floor, a regression when the floor is 0.
+    fn a_short_run_is_flagged_only_when_it_slows_by_more_than_the_floor() {
+        // A 0.5 ms run taking twice as long: within the default floor, a regression when the
+        // floor is 0.
         let mut report = small_report();
         report.rows.truncate(1);
-        let at = |ms: f64| crate::timing::Summary {
-            median: ms,
-            ci_low: ms - 0.1,
-            ci_high: ms + 0.1,
-            min: ms - 0.2,
-            max: ms + 0.2,
-        };
-        report.rows[0].total_ms = at(3.5);
+        report.rows[0].cpu_ms = Some(around(0.5));
         let mut slowed = report.clone();
-        slowed.rows[0].total_ms = at(7.0);
+        slowed.rows[0].cpu_ms = Some(around(1.0));
         let dir = Path::new("earlier");
         let default = compare(&slowed, &report, dir, BaselineOptions::default());
         assert!(!default.runs[0].slower, "{:?}", default.runs[0]);
         let strict = BaselineOptions { min_change_ms: 0.0, ..Default::default() };
         assert!(compare(&slowed, &report, dir, strict).runs[0].slower);
-        // 3.5 ms to 14 ms is more than the floor.
-        slowed.rows[0].total_ms = at(14.0);
+        // 0.5 ms to 4 ms is more than the floor.
+        slowed.rows[0].cpu_ms = Some(around(4.0));
         assert!(compare(&slowed, &report, dir, BaselineOptions::default()).runs[0].slower);
+    }
+
+    #[test]
+    fn without_intervals_the_ranges_bound_the_ratio_and_a_missing_clock_falls_back_to_wall() {
+        let mut report = small_report();
+        report.rows.truncate(1);
+        report.rows[0].cpu_ms = Summary::of(&[9.0, 10.0, 11.0]);
+        let mut now = report.clone();
+        now.rows[0].cpu_ms = Summary::of(&[13.0, 14.0, 15.0]);
+        let dir = Path::new("earlier");
+        let c = compare(&now, &report, dir, BaselineOptions::default());
+        assert!(!c.runs[0].intervals);
+        assert_eq!(c.runs[0].time_ratio_ci, (13.0 / 11.0, 15.0 / 9.0));
+        assert!(!c.runs[0].slower, "13/11 is within 20 %");
+        assert!(markdown(&c).contains("] range |"), "{}", markdown(&c));
+        // A baseline of a version without CPU times is compared on wall time.
+        report.rows[0].cpu_ms = None;
+        assert_eq!(
+            compare(&now, &report, dir, BaselineOptions::default()).runs[0].clock,
+            Clock::Wall
+        );
     }
 
     #[test]

@@ -247,6 +247,7 @@ fn assemble(
         suite: suite.clone(),
         provenance,
         machine,
+        clock: suite.clock,
         scenes: scenes.into_values().collect(),
         rows,
         skipped,

@@ -13,9 +13,11 @@ use crate::output::MetricsRecord;
 use crate::plan::Shard;
 use crate::suite::Suite;
 use crate::tables::Table;
-use crate::timing::{Machine, StageTimes, Summary};
+use crate::timing::Machine;
 use analysis::{metrics::PerClass, pixel_class::PixelClass, Metrics, ReferenceImage};
 use image::RgbImage;
+use instrumentation::measure::{Clock, Conditions, StageTimes};
+use instrumentation::stats::Summary;
 use instrumentation::{Counters, Provenance, RunRecord};
 use methods::Visibility;
 use serde::{Deserialize, Serialize};
@@ -60,9 +62,19 @@ pub struct Row {
     /// The shard that ran it, in a merged report ([`Report::shards`]); `None` when unsharded.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shard: Option<u32>,
-    /// Total time of the method's stages.
+    /// Wall-clock total of the method's stages.
     pub total_ms: Summary,
-    /// Each stage's time.
+    /// CPU time of the process's threads over each run; `None` where unmeasured.
+    #[serde(default)]
+    pub cpu_ms: Option<Summary>,
+    /// Whether a timed run was contended (its threads' CPU share below the protocol's
+    /// threshold, after a retry): its wall times are not to be compared.
+    #[serde(default)]
+    pub contended: bool,
+    /// The machine's load and the runs' CPU share over the timed runs.
+    #[serde(default)]
+    pub conditions: Option<Conditions>,
+    /// Each stage's time, on both clocks.
     pub stages: Vec<StageTimes>,
     /// Stages the scene did not call for.
     pub skipped_stages: Vec<String>,
@@ -73,6 +85,14 @@ pub struct Row {
 }
 
 impl Row {
+    /// The run's times on `clock` (wall time where CPU time was not measured).
+    pub fn time(&self, clock: Clock) -> &Summary {
+        match (clock, &self.cpu_ms) {
+            (Clock::Cpu, Some(cpu)) => cpu,
+            _ => &self.total_ms,
+        }
+    }
+
     /// Whether the run was on a GPU (its parameters say `"device": "gpu"`).
     pub fn on_gpu(&self) -> bool {
         self.params.get("device").and_then(|d| d.as_str()) == Some("gpu")
@@ -100,8 +120,11 @@ pub struct SceneInfo {
     pub width: u32,
     /// Frame size.
     pub height: u32,
-    /// Camera G-buffer time (shared by every method).
+    /// Camera G-buffer wall time (shared by every method).
     pub gbuffer_ms: f64,
+    /// Camera G-buffer CPU time.
+    #[serde(default)]
+    pub gbuffer_cpu_ms: Option<f64>,
     /// Reference used and its time.
     pub reference: String,
     /// Reference time.
@@ -118,6 +141,9 @@ pub struct Report {
     pub provenance: Provenance,
     /// Where the times were taken.
     pub machine: Machine,
+    /// The clock of the report's cost axis (charts, Pareto fronts, budgets, baselines).
+    #[serde(default)]
+    pub clock: Clock,
     /// Per-scene shared work.
     pub scenes: Vec<SceneInfo>,
     /// Every measured run.

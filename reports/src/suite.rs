@@ -8,7 +8,11 @@
 //! width = 320
 //! height = 240
 //! warmup = 1        # untimed runs before the timed ones
-//! repeats = 3       # timed runs; the report gives median, min and max
+//! repeats = 6       # timed runs at least (6: the fewest whose median has a 95 % interval)
+//! max_repeats = 30  # timed runs at most: more are run while the interval is wider than
+//! target = 0.05     # this share of the median (its half-width), until
+//! time_cap_s = 20   # this many seconds of timed runs per scene have passed
+//! clock = "cpu"     # the cost axis of charts, Pareto fronts, budgets and baselines: "cpu" or "wall"
 //! reference = "auto" # exact where it applies (opaque casters), else raytrace at ref_rate; or "exact", "raytrace"
 //! ref_rate = 64
 //! scenes = ["plane-square", "cage"]
@@ -35,6 +39,7 @@
 //! has not been fetched is the one thing left to the run, which lists it as not run.
 
 use crate::tables::TableSpec;
+use instrumentation::measure::{Clock, Protocol};
 use methods::{registry::Device, MethodOptions};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -339,9 +344,23 @@ pub struct Suite {
     /// Untimed runs before the timed ones. Default 1.
     #[serde(default = "one")]
     pub warmup: u32,
-    /// Timed runs. Default 3.
-    #[serde(default = "three")]
+    /// Timed runs at least. Default 6.
+    #[serde(default = "six")]
     pub repeats: u32,
+    /// Timed runs at most. Default 30.
+    #[serde(default = "thirty")]
+    pub max_repeats: u32,
+    /// The half-width of a run's interval, relative to its median, at which it is timed
+    /// enough. Default 0.05.
+    #[serde(default = "target")]
+    pub target: f64,
+    /// Seconds of timed runs per scene after which runs with `repeats` timed runs stop.
+    /// Default 20.
+    #[serde(default = "time_cap_s")]
+    pub time_cap_s: f64,
+    /// The clock of the report's cost axis. Default CPU time.
+    #[serde(default)]
+    pub clock: Clock,
     /// Reference choice. Default `auto`.
     #[serde(default)]
     pub reference: ReferenceChoice,
@@ -364,11 +383,38 @@ pub struct Suite {
 fn one() -> u32 {
     1
 }
-fn three() -> u32 {
-    3
+fn six() -> u32 {
+    6
+}
+fn thirty() -> u32 {
+    30
+}
+fn target() -> f64 {
+    0.05
+}
+fn time_cap_s() -> f64 {
+    20.0
 }
 fn ref_rate() -> u32 {
     256
+}
+
+/// The most timed runs a suite may ask for.
+pub const MAX_REPEATS: u32 = 1000;
+
+impl Suite {
+    /// The timing protocol of the suite's runs ([`instrumentation::measure`]).
+    pub fn protocol(&self) -> Protocol {
+        Protocol {
+            warmup: self.warmup,
+            min_repeats: self.repeats,
+            max_repeats: self.max_repeats,
+            target_half_width: self.target,
+            clock: self.clock,
+            time_cap: std::time::Duration::from_secs_f64(self.time_cap_s),
+            ..Protocol::default()
+        }
+    }
 }
 
 /// The built-in suites: name and TOML text.
@@ -396,6 +442,18 @@ impl Suite {
         let invalid = |key: &str, message: String| at(None, key, message);
         if suite.repeats == 0 {
             return Err(invalid("repeats", "must be at least 1".into()));
+        }
+        if suite.max_repeats < suite.repeats || suite.max_repeats > MAX_REPEATS {
+            return Err(invalid(
+                "max_repeats",
+                format!("must be in repeats..={MAX_REPEATS} ({}..={MAX_REPEATS})", suite.repeats),
+            ));
+        }
+        if !(suite.target.is_finite() && suite.target > 0.0) {
+            return Err(invalid("target", "must be a finite number > 0 (0.05 is 5 %)".into()));
+        }
+        if !(suite.time_cap_s.is_finite() && suite.time_cap_s >= 0.0) {
+            return Err(invalid("time_cap_s", "must be a finite number of seconds >= 0".into()));
         }
         if (suite.width == 0) != (suite.height == 0) {
             return Err(invalid("width", "give both width and height, or neither".into()));

@@ -25,11 +25,13 @@ use crate::output::MetricsRecord;
 use crate::plan::{Work, WorkItem};
 use crate::suite::{GridSpec, PanelSpec, ReferenceChoice, Suite};
 use crate::tables::{run_table, table_run_count};
-use crate::timing::{time_method, Machine};
-use analysis::metrics::{exceedance, Comparison};
-use analysis::{error_image, pixel_class::PixelClass, Metrics, ReferenceImage};
+use crate::timing::Machine;
+use analysis::compare::Truth;
+use analysis::metrics::exceedance;
+use analysis::{error_image, Metrics, ReferenceImage};
+use instrumentation::measure::{measure_all, Measured};
 use instrumentation::{Provenance, Recorder, RunIdentity};
-use methods::{registry::Device, Frame, MethodOptions, Visibility};
+use methods::{registry::Device, Frame, MethodOptions, ShadowMethod, Visibility};
 use std::cell::Cell;
 use std::io::IsTerminal;
 use std::time::{Duration, Instant};
@@ -238,14 +240,19 @@ struct SceneRun<'s> {
     ref_name: String,
     ref_rate: Option<u32>,
     reference_ms: f64,
-    truth: ReferenceImage,
-    classes: Vec<PixelClass>,
-    /// The shadow-only pixels the metrics are taken over.
-    compared: Vec<bool>,
-    /// `raytrace` at one sample per pixel, traced the first time a binary result needs it.
-    raytrace1: Option<Option<ReferenceImage>>,
+    /// The reference, the pixel classes and the shadow-only pixels the metrics are taken over.
+    truth: Truth,
     /// Index of its images in [`Images::scenes`].
     images: usize,
+}
+
+/// One combination of a `[[run]]` on a scene, built and waiting to be measured.
+struct Planned<'a> {
+    /// The plan's item.
+    item: usize,
+    spec: &'a crate::suite::RunSpec,
+    options: MethodOptions,
+    technique: Box<dyn ShadowMethod>,
 }
 
 /// Runs the items of `plan` numbered in `items` (in plan order; a scene's frame and reference
@@ -269,6 +276,7 @@ pub fn run_items(
         suite: suite.clone(),
         provenance: Provenance::capture(Provenance::command_line(), None),
         machine: Machine::current(),
+        clock: suite.clock,
         scenes: Vec::new(),
         rows: Vec::new(),
         skipped: Vec::new(),
@@ -296,13 +304,7 @@ pub fn run_items(
                 tables_started += 1;
                 log.print(&format!("table {tables_started}/{table_count} {paper}"), done.get());
                 let spec = &suite.tables[*table];
-                let t = run_table(
-                    spec,
-                    suite.warmup,
-                    suite.repeats,
-                    &mut report.skipped,
-                    &mut progress,
-                );
+                let t = run_table(spec, &suite.protocol(), &mut report.skipped, &mut progress);
                 report.tables.push(t);
             }
             at += 1;
@@ -354,11 +356,7 @@ pub fn run_items(
         // The metrics are taken over the shadow-only pixels, by the frame's pixel classes
         // (the reference's own, or the camera's view of the triangles when it has none), as
         // `compare`'s headline is.
-        let classes = match &truth.classes {
-            Some(c) => c.clone(),
-            None => analysis::exact::classify(&frame).class,
-        };
-        let compared = analysis::metrics::headline_pixels(&truth, &classes);
+        let truth = Truth::new(&frame, truth, &mut Recorder::default());
         let effects: Vec<String> = frame.effects.names().into_iter().map(String::from).collect();
         report.scenes.push(SceneInfo {
             scene: scene.name.clone(),
@@ -367,10 +365,11 @@ pub fn run_items(
             width: w,
             height: h,
             gbuffer_ms: rec.stages.total_ms(),
+            gbuffer_cpu_ms: rec.stages.stages.iter().map(|s| s.cpu_ms).sum(),
             reference: ref_name.clone(),
             reference_ms,
         });
-        let mut ctx = SceneRun {
+        let ctx = SceneRun {
             scene: &scene,
             frame,
             effects,
@@ -378,28 +377,49 @@ pub fn run_items(
             ref_rate,
             reference_ms,
             truth,
-            classes,
-            compared,
-            raytrace1: None,
             images: images.scenes.len(),
         };
+        // Every run of the scene is measured together, interleaved round by round.
+        let mut planned = Vec::new();
         for item in &group {
-            match &item.work {
-                Work::Runs { spec, .. } => {
-                    let spec = &suite.runs[*spec];
-                    for options in spec.expand() {
-                        progress(&format!("{} {}", scene.name, spec.method));
-                        let at = (item.item, &options);
-                        run_one(suite, &mut ctx, spec, at, &mut report, &mut images);
+            if let Work::Runs { spec, .. } = &item.work {
+                let spec = &suite.runs[*spec];
+                for options in spec.expand() {
+                    match analysis::registry::technique(&spec.method, &options) {
+                        Ok(technique) => {
+                            planned.push(Planned { item: item.item, spec, options, technique })
+                        }
+                        Err(e) => {
+                            report.skipped.push(format!("{} on {}: {e}", spec.method, scene.name));
+                            progress(&format!("{} {}", scene.name, spec.method));
+                        }
                     }
                 }
+            }
+        }
+        let frame = &ctx.frame;
+        let mut subjects: Vec<_> =
+            planned.iter().map(|p| move |rec: &mut Recorder| p.technique.run(frame, rec)).collect();
+        let measured = measure_all(&suite.protocol(), &mut subjects, |k| {
+            progress(&format!("{} {}", scene.name, planned[k].spec.method));
+        });
+        drop(subjects);
+        for (p, m) in planned.iter().zip(measured) {
+            match m {
+                Ok(m) => add_run(suite, &ctx, p, m, &mut report, &mut images),
+                Err(e) => report.skipped.push(format!("{} on {}: {e}", p.spec.method, scene.name)),
+            }
+        }
+        for item in &group {
+            match &item.work {
+                Work::Runs { .. } => {}
                 Work::Grid { grid, .. } => {
                     let g = &suite.grids[*grid];
                     let panels = grid_panels(
                         g,
                         &ctx.frame,
-                        &ctx.truth,
-                        &ctx.compared,
+                        &ctx.truth.reference,
+                        &ctx.truth.headline,
                         &ctx.ref_name,
                         &mut report.skipped,
                     );
@@ -420,14 +440,16 @@ pub fn run_items(
                 Work::Table { .. } => {}
             }
         }
+        let Truth { reference, classes, headline, .. } = ctx.truth;
         images.scenes.push(SceneImages {
             scene: report.scenes.len() - 1,
-            reference: ctx.truth,
-            classes: ctx.classes,
-            compared: ctx.compared,
+            reference,
+            classes,
+            compared: headline,
         });
     }
     log.print("done", done.get());
+    report.machine.load_end = instrumentation::clock::Load::now().map(|l| l.loadavg);
     // A scene that cannot be loaded is said once, however many of its items there are.
     let mut seen = std::collections::HashSet::new();
     report.skipped.retain(|s| seen.insert(s.clone()));
@@ -436,59 +458,41 @@ pub fn run_items(
     (report, images)
 }
 
-/// Times one combination of `spec` on the scene, measures it against the reference, and adds
-/// its row and images; a method that cannot run is added to the report's skipped runs.
-fn run_one(
+/// Adds the row and images of one measured combination: its comparison with the reference,
+/// its times on both clocks and its record; a run whose comparison fails is added to the
+/// report's skipped runs.
+fn add_run(
     suite: &Suite,
-    ctx: &mut SceneRun<'_>,
-    spec: &crate::suite::RunSpec,
-    (item, options): (usize, &MethodOptions),
+    ctx: &SceneRun<'_>,
+    p: &Planned<'_>,
+    m: Measured<Visibility>,
     report: &mut Report,
     images: &mut Images,
 ) {
     let scene = ctx.scene;
     let (w, h) = (ctx.frame.width(), ctx.frame.height());
-    let technique = match analysis::registry::technique(&spec.method, options) {
-        Ok(t) => t,
-        Err(e) => {
-            report.skipped.push(format!("{} on {}: {e}", spec.method, scene.name));
-            return;
-        }
-    };
-    let timed = match time_method(technique.as_ref(), &ctx.frame, suite.warmup, suite.repeats) {
-        Ok(t) => t,
-        Err(why) => {
-            report.skipped.push(format!("{} on {}: {why}", spec.method, scene.name));
-            return;
-        }
-    };
-    let v = timed.visibility;
-    if options.device == Device::Gpu && report.machine.gpu.is_none() {
+    if p.options.device == Device::Gpu && report.machine.gpu.is_none() {
         report.machine.gpu = methods::registry::gpu_adapter_name();
     }
-    let frame = &ctx.frame;
-    let rt1 = if analysis::metrics::is_binary(&v, &ctx.compared) {
-        ctx.raytrace1
-            .get_or_insert_with(|| {
-                analysis::registry::reference("raytrace", 1, Default::default())
-                    .ok()?
-                    .evaluate(frame, &mut Recorder::default())
-                    .ok()
-            })
-            .as_ref()
-    } else {
-        None
+    let v = &m.output;
+    let comparison = match ctx.truth.compare(&ctx.frame, v) {
+        Ok(c) => c,
+        Err(e) => {
+            report.skipped.push(format!("{} on {}: {e}", p.spec.method, scene.name));
+            return;
+        }
     };
-    let comparison = Comparison::new(&v, &ctx.truth, &ctx.classes, rt1);
-    let rec = timed.record;
-    let mut record = rec.into_record(RunIdentity {
-        scene: scene.name.clone(),
-        method: technique.name().to_owned(),
-        params: technique.params(),
-        width: w,
-        height: h,
-        effects: ctx.effects.clone(),
-    });
+    let mut record = m.run_record(
+        RunIdentity {
+            scene: scene.name.clone(),
+            method: p.technique.name().to_owned(),
+            params: p.technique.params(),
+            width: w,
+            height: h,
+            effects: ctx.effects.clone(),
+        },
+        suite.warmup,
+    );
     record.provenance = Some(report.provenance.clone());
     let metrics = MetricsRecord {
         comparison: comparison.clone(),
@@ -503,6 +507,7 @@ fn run_one(
         method_ms: record.total_ms,
         reference_ms: ctx.reference_ms,
     };
+    let truth = &ctx.truth;
     report.rows.push(Row {
         scene: scene.name.clone(),
         method: record.method.clone(),
@@ -511,15 +516,18 @@ fn run_one(
         height: h,
         reference: ctx.ref_name.clone(),
         ref_rate: ctx.ref_rate,
-        metrics: Metrics::compare(&v, &ctx.truth.lit, &ctx.compared),
+        metrics: Metrics::compare(v, &truth.reference.lit, &truth.headline),
         flip_mean: comparison.flip_mean,
         pixel_match_lecocq: comparison.pixel_match_lecocq,
-        error_exceedance: exceedance(&v, &ctx.truth.lit, &ctx.compared).unwrap_or_default(),
+        error_exceedance: exceedance(v, &truth.reference.lit, &truth.headline).unwrap_or_default(),
         classes: Some(comparison.classes),
-        item,
+        item: p.item,
         shard: None,
-        total_ms: timed.total_ms,
-        stages: timed.stages,
+        total_ms: m.wall_ms,
+        cpu_ms: m.cpu_ms,
+        contended: m.contended(),
+        conditions: Some(m.conditions),
+        stages: m.stages.clone(),
         skipped_stages: record.skipped_stages.clone(),
         counters: record.counters,
         notes: record.notes.clone(),
@@ -527,7 +535,7 @@ fn run_one(
     images.runs.push(Produced {
         row: report.rows.len() - 1,
         scene: ctx.images,
-        visibility: v,
+        visibility: m.output,
         record,
         metrics,
     });

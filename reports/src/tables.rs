@@ -12,7 +12,7 @@
 //! ```
 //!
 //! A table runs its own frames (the papers' frame sizes differ from a suite's) under the suite's
-//! timing protocol ([`crate::timing::time_method`]); it measures times and counters only, so no
+//! timing protocol ([`instrumentation::measure`]); it measures times and counters only, so no
 //! reference is computed. Where our scenes stand in for the paper's models, the row names both.
 //!
 //! - `aila-laine-table1`: Aila and Laine 2004, Table 1: `afsm` on `random-1k` .. `random-1m`
@@ -47,7 +47,7 @@
 //! prints (counts as the papers print them, `32.8K`; the paper's figures as printed) and as
 //! the numbers `tables/*.csv` holds (`32768`; an empty cell where a figure is missing).
 
-use crate::timing::{time_method, StageTimes, Timed};
+use instrumentation::measure::{measure_all, Measured, Protocol, StageTimes};
 use instrumentation::Recorder;
 use methods::{pan09::PAPER_TABLE1 as PAN_TABLE1, Frame, MethodOptions};
 use serde::{Deserialize, Serialize};
@@ -333,16 +333,15 @@ struct SceneRuns {
     triangles: usize,
     gbuffer_ms: f64,
     /// In the order of [`PaperTable::runs`]; `None` where the run failed.
-    runs: Vec<Option<Timed>>,
+    runs: Vec<Option<Measured<()>>>,
 }
 
 /// Measures the table: every scene of `spec` at every frame of [`frames_of`], every run the
-/// table needs, `warmup` untimed and `repeats` timed runs each. Runs that cannot be made are
-/// listed in `skipped` and shown as "–" (empty in the CSV).
+/// table needs under `protocol`, the runs of one frame interleaved. Runs that cannot be made
+/// are listed in `skipped` and shown as "–" (empty in the CSV).
 pub fn run_table(
     spec: &TableSpec,
-    warmup: u32,
-    repeats: u32,
+    protocol: &Protocol,
     skipped: &mut Vec<String>,
     mut progress: impl FnMut(&str),
 ) -> Table {
@@ -362,20 +361,35 @@ pub fn run_table(
         for &(w, h) in &frames {
             let mut rec = Recorder::default();
             let frame = Frame::new(&scene, w, h, &mut rec);
-            let mut out = Vec::new();
-            for (method, options) in &runs {
-                progress(&format!("{} {name} {w}x{h} {method}", paper.name()));
-                let timed = analysis::registry::technique(method, options)
-                    .map_err(|e| e.to_string())
-                    .and_then(|t| time_method(t.as_ref(), &frame, warmup, repeats));
-                match timed {
-                    Ok(t) => out.push(Some(t)),
-                    Err(e) => {
-                        skipped.push(format!("{}: {method} on {name}: {e}", paper.name()));
-                        out.push(None);
+            let built: Vec<_> = runs
+                .iter()
+                .map(|(method, options)| {
+                    analysis::registry::technique(method, options).map_err(|e| e.to_string())
+                })
+                .collect();
+            let mut subjects: Vec<_> = built
+                .iter()
+                .map(|t| {
+                    let frame = &frame;
+                    move |rec: &mut Recorder| match t {
+                        Ok(t) => t.run(frame, rec).map(|_| ()).map_err(|e| e.to_string()),
+                        Err(e) => Err(e.clone()),
                     }
-                }
-            }
+                })
+                .collect();
+            let results = measure_all(protocol, &mut subjects, |k| {
+                progress(&format!("{} {name} {w}x{h} {}", paper.name(), runs[k].0));
+            });
+            let out = results
+                .into_iter()
+                .zip(&runs)
+                .map(|(r, (method, _))| {
+                    r.map_err(|e| {
+                        skipped.push(format!("{}: {method} on {name}: {e}", paper.name()))
+                    })
+                    .ok()
+                })
+                .collect();
             measured.push(SceneRuns {
                 name: name.clone(),
                 frame: (w, h),
@@ -390,9 +404,11 @@ pub fn run_table(
         _ => "the frames of the columns".to_owned(),
     };
     let mut notes = vec![format!(
-        "Ours: {frame_text}, median of {} timed runs after {warmup} warm-up, on the machine \
-         named at the top of the report.",
-        repeats.max(1)
+        "Ours: {frame_text}, wall-clock medians of {} to {} timed runs after {} warm-up, on \
+         the machine named at the top of the report.",
+        protocol.min_repeats.max(1),
+        protocol.max_repeats.max(protocol.min_repeats).max(1),
+        protocol.warmup
     )];
     let mut curves = Vec::new();
     let (header, rows) = match paper {
@@ -436,7 +452,7 @@ pub fn si(v: f64) -> String {
     }
 }
 
-fn counter(t: &Timed, name: &str) -> Option<u64> {
+fn counter(t: &Measured<()>, name: &str) -> Option<u64> {
     t.record.counters.entries().into_iter().find(|(n, _)| *n == name).map(|(_, v)| v)
 }
 
@@ -489,7 +505,7 @@ fn aila_laine(measured: &[SceneRuns], notes: &mut Vec<String>) -> (Vec<String>, 
                     5 => st(STAGE_TRANSFORMATION),
                     6 => st(STAGE_BSP),
                     7 => st(STAGE_RASTERIZATION),
-                    _ => ms_or_missing(t.map(|t| t.total_ms.median)),
+                    _ => ms_or_missing(t.map(|t| t.wall_ms.median)),
                 });
                 cells.push(paper_or_missing(PAPER_TABLE1[row].get(k)));
             }
@@ -532,7 +548,7 @@ fn lecocq1(measured: &[SceneRuns], notes: &mut Vec<String>) -> (Vec<String>, Vec
                 Cell::Ms(s.gbuffer_ms),
             ];
             for (j, t) in s.runs.iter().enumerate() {
-                cells.push(ms_or_missing(t.as_ref().map(|t| t.total_ms.median)));
+                cells.push(ms_or_missing(t.as_ref().map(|t| t.wall_ms.median)));
                 cells.push(paper_or_missing(paper.map(|p| &p.2[j])));
             }
             cells
@@ -573,7 +589,7 @@ fn lecocq2(measured: &[SceneRuns], notes: &mut Vec<String>) -> (Vec<String>, Vec
     let mut rows = Vec::new();
     for s in measured {
         for (k, (res, sm_paper, spsm_paper, over_paper)) in LECOCQ2.iter().enumerate() {
-            let t = |j: usize| s.runs.get(j).and_then(Option::as_ref).map(|t| t.total_ms.median);
+            let t = |j: usize| s.runs.get(j).and_then(Option::as_ref).map(|t| t.wall_ms.median);
             let (sm, spsm) = (t(2 * k), t(2 * k + 1));
             let over = |extra: f64| match (sm, spsm) {
                 (Some(a), Some(b)) => Cell::Percent(100.0 * ((b + extra) / (a + extra) - 1.0)),
@@ -702,7 +718,7 @@ fn cost(
     for (k, (method, options)) in cost_runs().iter().enumerate() {
         let times = measured
             .iter()
-            .map(|s| s.runs.get(k).and_then(Option::as_ref).map(|t| t.total_ms.median))
+            .map(|s| s.runs.get(k).and_then(Option::as_ref).map(|t| t.wall_ms.median))
             .collect();
         series.push((run_label(method, options), times));
     }
@@ -879,7 +895,7 @@ mod tests {
             height: 32,
         };
         let mut skipped = Vec::new();
-        let t = run_table(&spec, 0, 1, &mut skipped, |_| {});
+        let t = run_table(&spec, &Protocol::fixed(0, 1), &mut skipped, |_| {});
         assert!(skipped.is_empty(), "{skipped:?}");
         assert_eq!(t.header[1..], ["plane-square 48x32", "cage 48x32", "fitted exponent"]);
         let labels: Vec<&str> = t.rows.iter().map(|r| r[0].as_str()).collect();

@@ -49,6 +49,16 @@ pub const CSV_COLUMNS: &[&str] = &[
     "time_ci_high_ms",
     "time_min_ms",
     "time_max_ms",
+    "cpu_median_ms",
+    "cpu_ci_low_ms",
+    "cpu_ci_high_ms",
+    "cpu_min_ms",
+    "cpu_max_ms",
+    "timed_runs",
+    "contended",
+    "min_cpu_share",
+    "loadavg_before",
+    "loadavg_after",
     "commit",
     "version",
 ];
@@ -114,10 +124,20 @@ pub fn csv(report: &Report) -> Result<String, OutputError> {
             opt(m.boundary_p99_abs_error),
             r.flip_mean.to_string(),
             r.total_ms.median.to_string(),
-            r.total_ms.ci_low.to_string(),
-            r.total_ms.ci_high.to_string(),
+            opt(r.total_ms.ci_low),
+            opt(r.total_ms.ci_high),
             r.total_ms.min.to_string(),
             r.total_ms.max.to_string(),
+            opt(r.cpu_ms.map(|c| c.median)),
+            opt(r.cpu_ms.and_then(|c| c.ci_low)),
+            opt(r.cpu_ms.and_then(|c| c.ci_high)),
+            opt(r.cpu_ms.map(|c| c.min)),
+            opt(r.cpu_ms.map(|c| c.max)),
+            r.total_ms.n.to_string(),
+            r.contended.to_string(),
+            opt(r.conditions.and_then(|c| c.min_share)),
+            opt(r.conditions.and_then(|c| c.loadavg_before)),
+            opt(r.conditions.and_then(|c| c.loadavg_after)),
             report.provenance.commit.clone(),
             report.provenance.version.clone(),
         ];
@@ -146,6 +166,16 @@ pub const RUN_COLUMNS: [&str; 7] = [
     "time ms (95 % CI) [min, max]",
 ];
 
+/// A summary as `12.3 (11.9–12.8) [11.5, 14.0]`, or `12.3 (no interval) [11.5, 14.0]` with
+/// too few timed runs for a confidence interval.
+pub fn summary_text(t: &instrumentation::stats::Summary) -> String {
+    let ci = match (t.ci_low, t.ci_high) {
+        (Some(lo), Some(hi)) => format!("{lo:.1}–{hi:.1}"),
+        _ => "no interval".to_owned(),
+    };
+    format!("{:.1} ({ci}) [{:.1}, {:.1}]", t.median, t.min, t.max)
+}
+
 /// A row's cells in the per-scene run tables, under [`RUN_COLUMNS`].
 pub fn run_cells(r: &Row) -> [String; 7] {
     [
@@ -159,14 +189,7 @@ pub fn run_cells(r: &Row) -> [String; 7] {
         },
         format!("{:.2} %", 100.0 * r.metrics.pixel_match),
         format!("{:.4}", r.flip_mean),
-        format!(
-            "{:.1} ({:.1}–{:.1}) [{:.1}, {:.1}]",
-            r.total_ms.median,
-            r.total_ms.ci_low,
-            r.total_ms.ci_high,
-            r.total_ms.min,
-            r.total_ms.max
-        ),
+        summary_text(&r.total_ms),
     ]
 }
 
