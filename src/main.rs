@@ -568,15 +568,21 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
     let started = std::time::Instant::now();
-    let bar = indicatif::ProgressBar::new(reports::sweep::items_run_count(&suite, &plan, &items));
+    let runs_planned = reports::sweep::items_run_count(&suite, &plan, &items);
+    let bar = indicatif::ProgressBar::new(runs_planned);
     bar.set_style(
         indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} runs, {elapsed} {msg}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     let (mut report, images) =
-        reports::sweep::run_items(&suite, &plan, &items, Some(&mut cache), |label| {
-            bar.set_message(label.to_owned());
-            bar.inc(1);
+        reports::sweep::run_items(&suite, &plan, &items, Some(&mut cache), |p| {
+            // The time left from the plan's cost model, corrected by the time taken so far.
+            let left = p.time_left(started.elapsed()).map_or_else(
+                || "time left unknown".to_owned(),
+                |d| format!("about {} left", humantime_secs(d)),
+            );
+            bar.set_message(format!("{left}; {}", p.label));
+            bar.set_position(p.runs_done);
         });
     bar.finish_and_clear();
     if let Some(shard) = a.shard {
@@ -623,14 +629,26 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
         }
         None => format!("suite {}", suite.name),
     };
+    let measured = report.rows.len() + report.table_runs.len();
+    let not_run = match runs_planned.saturating_sub(measured as u64) {
+        0 => String::new(),
+        n => format!(" ({n} not run, see the notes above)"),
+    };
     println!(
-        "{what}: {} runs on {} scenes; {}; wrote {}",
-        report.rows.len(),
+        "{what}: {measured} of {runs_planned} planned runs measured{not_run} on {} scenes; {}; \
+         wrote {}",
         report.scenes.len(),
         cache_line(cache.dir(), cache.stats),
         out.display()
     );
     Ok(())
+}
+
+/// `d` to the second, as `3m42s`.
+fn humantime_secs(d: std::time::Duration) -> String {
+    humantime::format_duration(std::time::Duration::from_secs(d.as_secs()))
+        .to_string()
+        .replace(' ', "")
 }
 
 /// What a reference cache did, in words.

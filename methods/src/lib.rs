@@ -25,6 +25,8 @@ pub mod pcf_gems;
 pub mod pcf_reeves;
 pub mod raster;
 pub mod registry;
+#[cfg(feature = "slowdown")]
+pub mod slowdown;
 pub mod sm;
 pub mod spsm;
 

@@ -155,10 +155,13 @@ fn check_rate(name: &str, options: &MethodOptions) -> Result<(), MethodError> {
 pub fn method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMethod>, MethodError> {
     check_rate(name, options)?;
     let cpu = cpu_method(name, options)?;
-    match options.device {
-        Device::Cpu => Ok(cpu),
-        Device::Gpu => gpu_method(name, options),
-    }
+    let method = match options.device {
+        Device::Cpu => cpu,
+        Device::Gpu => gpu_method(name, options)?,
+    };
+    #[cfg(feature = "slowdown")]
+    let method = crate::slowdown::wrap(name, method)?;
+    Ok(method)
 }
 
 /// The GPU kernels of `name`, configured as [`cpu_method`] configures its twin.

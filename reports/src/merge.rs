@@ -9,8 +9,9 @@
 //!   not finish (naming each one and how to run only those again), when two folders hold the
 //!   same shard, or when the shards are of different suites, shard counts or plans;
 //! - checks that each shard ran exactly its share of the plan ([`crate::plan::Shard::items`]);
-//! - puts the scenes, runs, grids and tables in the order an unsharded report has them (the
-//!   plan's order), each run marked with its shard; skipped runs are listed once;
+//! - puts the scenes, runs, grids and the tables' runs in the order an unsharded report has
+//!   them (the plan's order), each run marked with its shard, and builds the papers' tables
+//!   from every shard's table runs (`crate::tables::build`); skipped runs are listed once;
 //! - copies the shards' per-run and per-scene files (`visibility/`, `runs/`, `scenes/`,
 //!   `grids/`) and writes everything made from the report alone (`crate::write::write_summary`):
 //!   runs.json, runs.csv, report.md, index.html, plots, tables, the run pages.
@@ -21,7 +22,7 @@
 //! cache counts and wall time are in `shards`, and its `provenance` is the merge's.
 
 use crate::model::{Report, ShardInfo};
-use crate::plan::{Shard, Work};
+use crate::plan::Shard;
 use instrumentation::Provenance;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -196,25 +197,18 @@ pub fn merge(dirs: &[PathBuf]) -> Result<(Report, Vec<PathBuf>), MergeError> {
             });
         }
     }
-    Ok((
-        assemble(&suite, &plan, finished.iter().collect()),
-        finished.into_iter().map(|f| f.dir).collect(),
-    ))
+    Ok((assemble(&suite, finished.iter().collect()), finished.into_iter().map(|f| f.dir).collect()))
 }
 
 /// The merged report of finished shards that cover the plan.
-fn assemble(
-    suite: &crate::suite::Suite,
-    plan: &[crate::plan::WorkItem],
-    shards: Vec<&Finished>,
-) -> Report {
+fn assemble(suite: &crate::suite::Suite, shards: Vec<&Finished>) -> Report {
     let first = &shards[0];
     let mut machine = first.info.machine.clone();
     machine.gpu = shards.iter().find_map(|f| f.info.machine.gpu.clone());
     let mut rows = Vec::new();
     let mut grids = Vec::new();
     let mut scenes = BTreeMap::new();
-    let mut tables = BTreeMap::new();
+    let mut table_runs = Vec::new();
     let mut skipped = Vec::new();
     for f in &shards {
         let k = f.info.shard.index;
@@ -227,16 +221,15 @@ fn assemble(
             let at = suite.scenes.iter().position(|n| *n == s.scene).unwrap_or(usize::MAX);
             scenes.entry((at, s.scene.clone())).or_insert_with(|| s.clone());
         }
-        // A shard's tables are its table items' tables, in its items' order.
-        let table_items =
-            f.info.items.iter().filter(|&&i| matches!(plan[i].work, Work::Table { .. }));
-        for (item, t) in table_items.zip(&f.report.tables) {
-            tables.insert(*item, t.clone());
-        }
+        table_runs.extend(f.report.table_runs.iter().cloned().map(|mut r| {
+            r.shard = Some(k);
+            r
+        }));
         skipped.extend(f.report.skipped.iter().cloned());
     }
     // Stable sorts keep each item's runs in the order they ran.
     rows.sort_by_key(|r| r.item);
+    table_runs.sort_by_key(|r| r.item);
     grids.sort_by_key(|g| g.item);
     let mut seen = std::collections::HashSet::new();
     skipped.retain(|s| seen.insert(s.clone()));
@@ -252,7 +245,8 @@ fn assemble(
         rows,
         skipped,
         grids,
-        tables: tables.into_values().collect(),
+        tables: crate::tables::build_all(&suite.tables, &table_runs),
+        table_runs,
         cache,
         shards: shards.iter().map(|f| f.info.clone()).collect(),
     }

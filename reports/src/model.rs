@@ -12,7 +12,7 @@ use crate::cache::CacheStats;
 use crate::output::MetricsRecord;
 use crate::plan::Shard;
 use crate::suite::Suite;
-use crate::tables::Table;
+use crate::tables::{Table, TableRun};
 use crate::timing::Machine;
 use analysis::{metrics::PerClass, pixel_class::PixelClass, Metrics, ReferenceImage};
 use image::RgbImage;
@@ -148,6 +148,10 @@ pub struct Report {
     pub scenes: Vec<SceneInfo>,
     /// Every measured run.
     pub rows: Vec<Row>,
+    /// Every run the papers' tables measured (times and counters; [`crate::tables::build`]
+    /// makes the tables of them).
+    #[serde(default)]
+    pub table_runs: Vec<TableRun>,
     /// What could not run, and why.
     pub skipped: Vec<String>,
     /// Image grids, by title and file.

@@ -3,14 +3,18 @@
 //!
 //! The items, in the order an unsharded report runs them: for each scene of the suite, one
 //! item per `[[run]]` (every combination of its parameters on that scene), then one per image
-//! grid of that scene; then one per paper's table. Each item names its scene, frame and
-//! reference, lists its runs and carries an estimate of its cost ([`WorkItem::cost`]), so that
-//! a user sees the size of a sweep before starting it, and shards can be balanced.
+//! grid of that scene; then the papers' tables, one item per scene and frame of a table (its
+//! runs there, [`crate::tables::table_items`]). A table's item whose scene and frame are a
+//! suite scene's follows that scene's items, so that its runs share the scene's frame and are
+//! measured with its runs; the others come last. Each item names its scene, frame and
+//! reference (none for a table's own frame: a table measures times and counters), lists its
+//! runs and carries an estimate of its cost ([`WorkItem::cost`]), so that a user sees the size
+//! of a sweep before starting it, shards can be balanced and progress can be estimated.
 //!
 //! The cost estimate, in arbitrary units, is what dominates a run at these sizes: per timed or
 //! warm-up run, the frame's pixels times the samples per pixel, plus the shadow map's texels,
-//! plus the scene's triangles; a grid counts one run per panel; a table its runs at the
-//! paper's frame. It orders items, it does not predict seconds.
+//! plus the scene's triangles; a grid counts one run per panel. It orders items and weighs the
+//! progress of a sweep ([`run_cost`]); it does not predict seconds.
 //!
 //! Shards take items by longest processing time first ([`assign`]): items sorted by falling
 //! cost (ties by their index), each given to the shard with the least cost so far (ties to the
@@ -40,12 +44,15 @@ pub enum Work {
         /// Its title.
         title: String,
     },
-    /// The suite's paper's table number `table`.
+    /// The runs the suite's table number `table` makes on the item's scene at the item's
+    /// frame (a table's scenes and frames are its own, [`crate::tables::table_items`]).
     Table {
         /// Index into the suite's tables.
         table: usize,
         /// The paper's table.
         paper: String,
+        /// Its runs, as `pcf-gems16 map_res=512` (method, then what it sets).
+        runs: Vec<String>,
     },
 }
 
@@ -95,7 +102,7 @@ fn facts(suite: &Suite, name: &str) -> Option<SceneFacts> {
 }
 
 /// The cost of one method run with `rate` samples and a `map_res` map on `pixels` pixels.
-fn run_cost(pixels: f64, triangles: f64, rate: Option<u32>, map_res: Option<u32>) -> f64 {
+pub fn run_cost(pixels: f64, triangles: f64, rate: Option<u32>, map_res: Option<u32>) -> f64 {
     let texels = map_res.map_or(1024.0 * 1024.0, |m| f64::from(m) * f64::from(m));
     pixels * f64::from(rate.unwrap_or(1).max(1)) + texels + triangles
 }
@@ -155,28 +162,52 @@ pub fn plan(suite: &Suite) -> Vec<WorkItem> {
             items.push(it);
         }
     }
+    // A table's items: one per scene and frame. One whose scene and frame are a suite
+    // scene's joins that scene's items, so that they share its frame (and its reference);
+    // the others follow, in the order of the tables.
+    let mut tail = Vec::new();
     for (k, spec) in suite.tables.iter().enumerate() {
-        let frames = crate::tables::frames_of(spec);
-        // The item names its largest frame; its cost is every frame's.
-        let (w, h) = frames.iter().copied().max_by_key(|&(w, h)| w * h).unwrap_or((0, 0));
-        let runs_per_frame = crate::tables::table_run_count(spec) as f64 / frames.len() as f64;
-        let cost: f64 = frames
-            .iter()
-            .map(|&(w, h)| {
-                runs_per_frame * runs_per * run_cost(f64::from(w) * f64::from(h), 0.0, None, None)
-            })
-            .sum();
-        items.push(WorkItem {
-            item: items.len(),
-            scene: None,
-            scene_index: None,
-            width: w,
-            height: h,
-            reference: None,
-            ref_rate: None,
-            work: Work::Table { table: k, paper: spec.paper.name().to_owned() },
-            cost,
-        });
+        for (name, (w, h), runs) in crate::tables::table_items(spec) {
+            let triangles = scenes::load(&name).map_or(0.0, |s| s.triangle_count() as f64);
+            let pixels = f64::from(w) * f64::from(h);
+            let cost = runs
+                .iter()
+                .map(|(_, o)| runs_per * run_cost(pixels, triangles, o.rate, o.map_res))
+                .sum();
+            let labels = runs
+                .iter()
+                .map(|(m, o)| [*m, &combo_label(o)].join(" ").trim().to_owned())
+                .collect();
+            let work = Work::Table { table: k, paper: spec.paper.name().to_owned(), runs: labels };
+            let shared = items.iter().rposition(|i: &WorkItem| {
+                i.scene.as_deref() == Some(name.as_str()) && (i.width, i.height) == (w, h)
+            });
+            let (scene_index, reference, ref_rate) = match shared {
+                Some(at) => {
+                    (items[at].scene_index, items[at].reference.clone(), items[at].ref_rate)
+                }
+                None => (None, None, None),
+            };
+            let item = WorkItem {
+                item: 0,
+                scene: Some(name),
+                scene_index,
+                width: w,
+                height: h,
+                reference,
+                ref_rate,
+                work,
+                cost,
+            };
+            match shared {
+                Some(at) => items.insert(at + 1, item),
+                None => tail.push(item),
+            }
+        }
+    }
+    items.extend(tail);
+    for (k, item) in items.iter_mut().enumerate() {
+        item.item = k;
     }
     items
 }
@@ -274,7 +305,7 @@ mod tests {
             height: 0,
             reference: None,
             ref_rate: None,
-            work: Work::Table { table: k, paper: String::new() },
+            work: Work::Table { table: k, paper: String::new(), runs: Vec::new() },
             cost,
         }
     }
@@ -321,7 +352,13 @@ mod tests {
         let p = plan(&suite);
         let runs = suite.scenes.len() * suite.runs.len();
         let grids = suite.grids.iter().filter(|g| suite.scenes.contains(&g.scene)).count();
-        assert_eq!(p.len(), runs + grids + suite.tables.len());
+        let tables: usize = suite.tables.iter().map(|t| crate::tables::table_items(t).len()).sum();
+        assert_eq!(p.len(), runs + grids + tables);
+        // The tables' own frames are not the suite's 320x240: their items come last, without
+        // a reference, each naming its scene.
+        let table_items = &p[runs + grids..];
+        assert!(table_items.iter().all(|i| matches!(i.work, Work::Table { .. })));
+        assert!(table_items.iter().all(|i| i.reference.is_none() && i.scene.is_some()));
         assert!(p.iter().enumerate().all(|(k, i)| i.item == k && i.cost > 0.0));
         assert_eq!(p[0].scene.as_deref(), Some(suite.scenes[0].as_str()));
         assert!(matches!(p[0].work, Work::Runs { spec: 0, .. }));

@@ -24,7 +24,7 @@ use crate::output::shade;
 use crate::output::MetricsRecord;
 use crate::plan::{Work, WorkItem};
 use crate::suite::{GridSpec, PanelSpec, ReferenceChoice, Suite};
-use crate::tables::{run_table, table_run_count};
+use crate::tables::{table_run_count, TableRun};
 use crate::timing::Machine;
 use analysis::compare::Truth;
 use analysis::metrics::exceedance;
@@ -170,7 +170,8 @@ fn hms(d: Duration) -> String {
 }
 
 /// Progress lines of a sweep for a log: what starts, the runs done of the total, the time
-/// elapsed and the time left at the mean time per run so far.
+/// elapsed and the time left, from the share of the estimated cost done so far (the plan's
+/// cost model, corrected by the time the work done took: [`Progress::time_left`]).
 pub struct ProgressLog {
     start: Instant,
     total: u64,
@@ -184,22 +185,22 @@ impl ProgressLog {
         Self { start: Instant::now(), total, enabled: !std::io::stderr().is_terminal() }
     }
 
-    /// The line for `what` (e.g. `scene 2/5 cage`) after `done` runs in `elapsed`.
-    pub fn line(&self, what: &str, done: u64, elapsed: Duration) -> String {
-        let left = if done == 0 {
-            "time left unknown".to_owned()
-        } else {
-            let per_run = elapsed.as_secs_f64() / done as f64;
-            let left = per_run * self.total.saturating_sub(done) as f64;
+    /// The line for `what` (e.g. `frame 2/5 cage 320x240`) after `done` runs, `share` of the
+    /// estimated cost, in `elapsed`.
+    pub fn line(&self, what: &str, done: u64, share: f64, elapsed: Duration) -> String {
+        let left = if share > 0.0 {
+            let left = elapsed.as_secs_f64() * (1.0 - share).max(0.0) / share;
             format!("about {} left", hms(Duration::from_secs_f64(left)))
+        } else {
+            "time left unknown".to_owned()
         };
         format!("{what}: {done}/{} runs done, {} elapsed, {left}", self.total, hms(elapsed))
     }
 
-    /// Prints the line for `what` after `done` runs, when enabled.
-    pub fn print(&self, what: &str, done: u64) {
+    /// Prints the line for `what` after `done` runs and `share` of the cost, when enabled.
+    pub fn print(&self, what: &str, done: u64, share: f64) {
         if self.enabled {
-            eprintln!("{}", self.line(what, done, self.start.elapsed()));
+            eprintln!("{}", self.line(what, done, share, self.start.elapsed()));
         }
     }
 }
@@ -214,7 +215,7 @@ pub(crate) fn report_of(toml: &str) -> Report {
 /// Runs `suite`; `progress` is called once per method run with a short label. The report's
 /// provenance names this process's command line ([`Provenance::command_line`]). Returns the
 /// report and what its image outputs need ([`Images`]).
-pub fn run_suite(suite: &Suite, progress: impl FnMut(&str)) -> (Report, Images) {
+pub fn run_suite(suite: &Suite, progress: impl FnMut(&Progress<'_>)) -> (Report, Images) {
     let plan = crate::plan::plan(suite);
     let all: Vec<usize> = (0..plan.len()).collect();
     run_items(suite, &plan, &all, None, progress)
@@ -235,7 +236,7 @@ pub fn items_run_count(suite: &Suite, plan: &[WorkItem], items: &[usize]) -> u64
 /// What every item of one scene shares: the frame, the reference and the pixel classes.
 struct SceneRun<'s> {
     scene: &'s scenes::Scene,
-    frame: Frame<'s>,
+    frame: &'s Frame<'s>,
     effects: Vec<String>,
     ref_name: String,
     ref_rate: Option<u32>,
@@ -246,31 +247,83 @@ struct SceneRun<'s> {
     images: usize,
 }
 
-/// One combination of a `[[run]]` on a scene, built and waiting to be measured.
+/// What a planned run is for.
+enum Purpose<'a> {
+    /// A combination of a suite's `[[run]]`: a row of the report.
+    Suite(&'a crate::suite::RunSpec),
+    /// Run `run` of the suite's table `table`: a [`TableRun`].
+    Table {
+        /// Index into the suite's tables.
+        table: usize,
+        /// Index into the table's runs on the scene.
+        run: usize,
+    },
+}
+
+/// One run on a frame, built and waiting to be measured.
 struct Planned<'a> {
     /// The plan's item.
     item: usize,
-    spec: &'a crate::suite::RunSpec,
+    purpose: Purpose<'a>,
     options: MethodOptions,
     technique: Box<dyn ShadowMethod>,
+    /// Its estimated cost ([`crate::plan::run_cost`]), for the progress.
+    cost: f64,
 }
 
-/// Runs the items of `plan` numbered in `items` (in plan order; a scene's frame and reference
-/// are prepared once for its consecutive items, and taken from `cache` when it holds them);
-/// `progress` is called once per method run. Running every item of the plan is running the
-/// suite ([`run_suite`]); a shard runs its own ([`crate::plan::Shard::items`]).
+/// How far a sweep has come: runs and estimated cost done of the total.
+#[derive(Debug, Clone, Copy)]
+pub struct Progress<'a> {
+    /// What just finished (`cage pcf-gems16`).
+    pub label: &'a str,
+    /// Runs done (measured, failed or not run).
+    pub runs_done: u64,
+    /// Runs of the sweep.
+    pub runs_total: u64,
+    /// Estimated cost done ([`crate::plan`]'s units).
+    pub cost_done: f64,
+    /// Estimated cost of the sweep.
+    pub cost_total: f64,
+}
+
+impl Progress<'_> {
+    /// The time left after `elapsed`, at the time per unit of estimated cost so far: the
+    /// plan's cost model, corrected by what the machine has taken for the work done. `None`
+    /// before any cost is done.
+    pub fn time_left(&self, elapsed: Duration) -> Option<Duration> {
+        (self.cost_done > 0.0).then(|| {
+            let left = (self.cost_total - self.cost_done).max(0.0) / self.cost_done;
+            Duration::from_secs_f64(elapsed.as_secs_f64() * left)
+        })
+    }
+}
+
+/// The frame an item runs on: its scene and size.
+fn frame_key(item: &WorkItem) -> (Option<&str>, u32, u32) {
+    (item.scene.as_deref(), item.width, item.height)
+}
+
+/// Runs the items of `plan` numbered in `items` (in plan order; consecutive items on one
+/// scene and frame share the frame and its reference, taken from `cache` when it holds them,
+/// and their runs are measured together, interleaved); `progress` is called once per method
+/// run. Running every item of the plan is running the suite ([`run_suite`]), which also builds
+/// the papers' tables from their runs; a shard runs its own ([`crate::plan::Shard::items`]).
 pub fn run_items(
     suite: &Suite,
     plan: &[WorkItem],
     items: &[usize],
     mut cache: Option<&mut ReferenceCache>,
-    mut progress: impl FnMut(&str),
+    mut progress: impl FnMut(&Progress<'_>),
 ) -> (Report, Images) {
-    let log = ProgressLog::new(items_run_count(suite, plan, items));
-    let done = Cell::new(0u64);
-    let mut progress = |label: &str| {
-        done.set(done.get() + 1);
-        progress(label);
+    let runs_total = items_run_count(suite, plan, items);
+    let cost_total: f64 = items.iter().map(|&k| plan[k].cost).sum();
+    let log = ProgressLog::new(runs_total);
+    let done = Cell::new((0u64, 0.0f64));
+    let mut tick = |label: &str, cost: f64| {
+        let (runs, spent) = done.get();
+        done.set((runs + 1, spent + cost));
+        let (runs_done, cost_done) = done.get();
+        progress(&Progress { label, runs_done, runs_total, cost_done, cost_total });
     };
     let mut report = Report {
         suite: suite.clone(),
@@ -279,6 +332,7 @@ pub fn run_items(
         clock: suite.clock,
         scenes: Vec::new(),
         rows: Vec::new(),
+        table_runs: Vec::new(),
         skipped: Vec::new(),
         grids: Vec::new(),
         tables: Vec::new(),
@@ -286,158 +340,214 @@ pub fn run_items(
         shards: Vec::new(),
     };
     let mut images = Images::default();
-    let scene_count = items
-        .iter()
-        .filter_map(|&k| plan[k].scene_index)
-        .collect::<std::collections::BTreeSet<_>>()
-        .len();
-    let table_count = items.iter().filter(|&&k| matches!(plan[k].work, Work::Table { .. })).count();
-    let mut tables_started = 0;
-    let mut scenes_started = 0;
+    let protocol = suite.protocol();
+    let mut groups: Vec<Vec<&WorkItem>> = Vec::new();
+    for &k in items {
+        match groups.last_mut() {
+            Some(g) if frame_key(g[0]) == frame_key(&plan[k]) => g.push(&plan[k]),
+            _ => groups.push(vec![&plan[k]]),
+        }
+    }
     // What identifies this build in the cache's keys, worked out when a cache is first used.
     let mut build: Option<String> = None;
-    let mut at = 0;
-    while at < items.len() {
-        let first = &plan[items[at]];
-        let Some(scene_index) = first.scene_index else {
-            if let Work::Table { table, paper } = &first.work {
-                tables_started += 1;
-                log.print(&format!("table {tables_started}/{table_count} {paper}"), done.get());
-                let spec = &suite.tables[*table];
-                let t = run_table(spec, &suite.protocol(), &mut report.skipped, &mut progress);
-                report.tables.push(t);
+    for (n, group) in groups.iter().enumerate() {
+        let first = group[0];
+        let scene_name = first.scene.as_deref().unwrap_or_default();
+        let label = |method: &str| format!("{scene_name} {method}");
+        log.print(
+            &format!(
+                "frame {}/{} {scene_name} {}x{}",
+                n + 1,
+                groups.len(),
+                first.width,
+                first.height
+            ),
+            done.get().0,
+            done.get().1 / cost_total.max(f64::MIN_POSITIVE),
+        );
+        // Per item, what failing to load the scene leaves undone and how to say it.
+        let not_run = |report: &mut Report, tick: &mut dyn FnMut(&str, f64), why: &str| {
+            for item in group {
+                let runs = match &item.work {
+                    Work::Runs { runs, .. } | Work::Table { runs, .. } => runs.len(),
+                    Work::Grid { .. } => 0,
+                };
+                let per = item.cost / runs.max(1) as f64;
+                (0..runs).for_each(|_| tick(scene_name, per));
+                if let Work::Table { paper, .. } = &item.work {
+                    report.skipped.push(format!("{paper}: scene {scene_name}: {why}"));
+                }
             }
-            at += 1;
-            continue;
-        };
-        let end = at
-            + items[at..].iter().take_while(|&&k| plan[k].scene_index == Some(scene_index)).count();
-        let group: Vec<&WorkItem> = items[at..end].iter().map(|&k| &plan[k]).collect();
-        at = end;
-        scenes_started += 1;
-        let scene_name = &suite.scenes[scene_index];
-        log.print(&format!("scene {scenes_started}/{scene_count} {scene_name}"), done.get());
-        let runs_in_group = |group: &[&WorkItem]| -> usize {
-            group
-                .iter()
-                .map(|i| if let Work::Runs { runs, .. } = &i.work { runs.len() } else { 0 })
-                .sum()
         };
         let scene = match scenes::load(scene_name) {
             Ok(s) => s,
             Err(e) => {
-                report.skipped.push(format!("scene {scene_name}: {e}"));
-                (0..runs_in_group(&group)).for_each(|_| progress(scene_name));
+                if group.iter().any(|i| !matches!(i.work, Work::Table { .. })) {
+                    report.skipped.push(format!("scene {scene_name}: {e}"));
+                }
+                not_run(&mut report, &mut tick, &e.to_string());
                 continue;
             }
         };
-        let (w, h) = if suite.width == 0 {
-            (scene.width, scene.height)
-        } else {
-            (suite.width, suite.height)
+        let (w, h) = match (first.width, first.height) {
+            (0, _) | (_, 0) => (scene.width, scene.height),
+            size => size,
         };
         let mut rec = Recorder::default();
         let frame = Frame::new(&scene, w, h, &mut rec);
-        let build: &str = match cache {
-            Some(_) => build.get_or_insert_with(|| {
-                crate::cache::build_id(&report.provenance.commit, report.provenance.dirty)
-            }),
-            None => "",
-        };
-        let reference = reference_for(suite, &scene, &frame, cache.as_deref_mut(), build);
-        let (ref_name, ref_rate, truth, reference_ms) = match reference {
-            Ok(r) => r,
-            Err(e) => {
-                report.skipped.push(format!("scene {}: reference: {e}", scene.name));
-                (0..runs_in_group(&group)).for_each(|_| progress(&scene.name));
-                continue;
+        let gbuffer_ms = rec.stages.total_ms();
+        let pixels = f64::from(w) * f64::from(h);
+        let triangles = frame.geometry.len() as f64;
+        // The suite's runs and grids need the scene's reference; a table's own frame does not.
+        let mut ctx = None;
+        if group.iter().any(|i| !matches!(i.work, Work::Table { .. })) {
+            let build: &str = match cache {
+                Some(_) => build.get_or_insert_with(|| {
+                    crate::cache::build_id(&report.provenance.commit, report.provenance.dirty)
+                }),
+                None => "",
+            };
+            match reference_for(suite, &scene, &frame, cache.as_deref_mut(), build) {
+                Ok((ref_name, ref_rate, image, reference_ms)) => {
+                    // The metrics are taken over the shadow-only pixels, by the frame's pixel
+                    // classes (the reference's own, or the camera's view of the triangles when
+                    // it has none), as `compare`'s headline is.
+                    let truth = Truth::new(&frame, image, &mut Recorder::default());
+                    let effects: Vec<String> =
+                        frame.effects.names().into_iter().map(String::from).collect();
+                    report.scenes.push(SceneInfo {
+                        scene: scene.name.clone(),
+                        triangles: triangles as u64,
+                        effects: effects.clone(),
+                        width: w,
+                        height: h,
+                        gbuffer_ms,
+                        gbuffer_cpu_ms: rec.stages.stages.iter().map(|s| s.cpu_ms).sum(),
+                        reference: ref_name.clone(),
+                        reference_ms,
+                    });
+                    ctx = Some(SceneRun {
+                        scene: &scene,
+                        frame: &frame,
+                        effects,
+                        ref_name,
+                        ref_rate,
+                        reference_ms,
+                        truth,
+                        images: images.scenes.len(),
+                    });
+                }
+                Err(e) => report.skipped.push(format!("scene {}: reference: {e}", scene.name)),
             }
-        };
-        // The metrics are taken over the shadow-only pixels, by the frame's pixel classes
-        // (the reference's own, or the camera's view of the triangles when it has none), as
-        // `compare`'s headline is.
-        let truth = Truth::new(&frame, truth, &mut Recorder::default());
-        let effects: Vec<String> = frame.effects.names().into_iter().map(String::from).collect();
-        report.scenes.push(SceneInfo {
-            scene: scene.name.clone(),
-            triangles: frame.geometry.len() as u64,
-            effects: effects.clone(),
-            width: w,
-            height: h,
-            gbuffer_ms: rec.stages.total_ms(),
-            gbuffer_cpu_ms: rec.stages.stages.iter().map(|s| s.cpu_ms).sum(),
-            reference: ref_name.clone(),
-            reference_ms,
-        });
-        let ctx = SceneRun {
-            scene: &scene,
-            frame,
-            effects,
-            ref_name,
-            ref_rate,
-            reference_ms,
-            truth,
-            images: images.scenes.len(),
-        };
-        // Every run of the scene is measured together, interleaved round by round.
+        }
+        // Every run on the frame is measured together, interleaved round by round.
         let mut planned = Vec::new();
-        for item in &group {
-            if let Work::Runs { spec, .. } = &item.work {
-                let spec = &suite.runs[*spec];
-                for options in spec.expand() {
-                    match analysis::registry::technique(&spec.method, &options) {
-                        Ok(technique) => {
-                            planned.push(Planned { item: item.item, spec, options, technique })
-                        }
-                        Err(e) => {
-                            report.skipped.push(format!("{} on {}: {e}", spec.method, scene.name));
-                            progress(&format!("{} {}", scene.name, spec.method));
-                        }
+        for item in group {
+            let runs: Vec<(Purpose<'_>, &str, MethodOptions)> = match &item.work {
+                Work::Runs { spec, .. } => {
+                    let spec = &suite.runs[*spec];
+                    if ctx.is_none() {
+                        let per = item.cost / spec.expand().len().max(1) as f64;
+                        spec.expand().iter().for_each(|_| tick(&label(&spec.method), per));
+                        continue;
+                    }
+                    spec.expand()
+                        .into_iter()
+                        .map(|o| (Purpose::Suite(spec), spec.method.as_str(), o))
+                        .collect()
+                }
+                Work::Table { table, .. } => {
+                    let spec = &suite.tables[*table];
+                    let made = spec.paper.runs(scene_name);
+                    made.into_iter()
+                        .enumerate()
+                        .map(|(run, (m, o))| (Purpose::Table { table: *table, run }, m, o))
+                        .collect()
+                }
+                Work::Grid { .. } => continue,
+            };
+            for (purpose, method, options) in runs {
+                let cost = crate::plan::run_cost(pixels, triangles, options.rate, options.map_res);
+                match analysis::registry::technique(method, &options) {
+                    Ok(technique) => {
+                        planned.push(Planned { item: item.item, purpose, options, technique, cost })
+                    }
+                    Err(e) => {
+                        report.skipped.push(not_run_text(suite, &purpose, method, scene_name, &e));
+                        tick(&label(method), cost);
                     }
                 }
             }
         }
-        let frame = &ctx.frame;
-        let mut subjects: Vec<_> =
-            planned.iter().map(|p| move |rec: &mut Recorder| p.technique.run(frame, rec)).collect();
-        let measured = measure_all(&suite.protocol(), &mut subjects, |k| {
-            progress(&format!("{} {}", scene.name, planned[k].spec.method));
+        let mut subjects: Vec<_> = planned
+            .iter()
+            .map(|p| {
+                let frame = &frame;
+                move |rec: &mut Recorder| p.technique.run(frame, rec)
+            })
+            .collect();
+        let measured = measure_all(&protocol, &mut subjects, |k| {
+            tick(&label(planned[k].technique.name()), planned[k].cost);
         });
         drop(subjects);
         for (p, m) in planned.iter().zip(measured) {
-            match m {
-                Ok(m) => add_run(suite, &ctx, p, m, &mut report, &mut images),
-                Err(e) => report.skipped.push(format!("{} on {}: {e}", p.spec.method, scene.name)),
+            let m = match m {
+                Ok(m) => m,
+                Err(e) => {
+                    let why = not_run_text(suite, &p.purpose, p.technique.name(), scene_name, &e);
+                    report.skipped.push(why);
+                    continue;
+                }
+            };
+            match (&p.purpose, &ctx) {
+                (Purpose::Suite(spec), Some(ctx)) => {
+                    add_run(suite, ctx, p, spec, m, &mut report, &mut images)
+                }
+                (Purpose::Table { table, run }, _) => report.table_runs.push(TableRun {
+                    table: *table,
+                    run: *run,
+                    item: p.item,
+                    shard: None,
+                    scene: scene.name.clone(),
+                    width: w,
+                    height: h,
+                    triangles: triangles as u64,
+                    gbuffer_ms,
+                    method: p.technique.name().to_owned(),
+                    params: p.technique.params(),
+                    total_ms: m.wall_ms,
+                    cpu_ms: m.cpu_ms,
+                    contended: m.contended(),
+                    stages: m.stages,
+                    counters: m.record.counters,
+                }),
+                (Purpose::Suite(_), None) => {}
             }
         }
-        for item in &group {
-            match &item.work {
-                Work::Runs { .. } => {}
-                Work::Grid { grid, .. } => {
-                    let g = &suite.grids[*grid];
-                    let panels = grid_panels(
-                        g,
-                        &ctx.frame,
-                        &ctx.truth.reference,
-                        &ctx.truth.headline,
-                        &ctx.ref_name,
-                        &mut report.skipped,
-                    );
-                    if !panels.is_empty() {
-                        report.grids.push(GridFile {
-                            item: item.item,
-                            scene: scene.name.clone(),
-                            title: g.title.clone(),
-                            png: format!("grids/grid-{}.png", grid + 1),
-                        });
-                        images.grids.push(GridImages {
-                            grid: report.grids.len() - 1,
-                            panels,
-                            inset: g.inset,
-                        });
-                    }
-                }
-                Work::Table { .. } => {}
+        let Some(ctx) = ctx else { continue };
+        for item in group {
+            let Work::Grid { grid, .. } = &item.work else { continue };
+            let g = &suite.grids[*grid];
+            let panels = grid_panels(
+                g,
+                ctx.frame,
+                &ctx.truth.reference,
+                &ctx.truth.headline,
+                &ctx.ref_name,
+                &mut report.skipped,
+            );
+            if !panels.is_empty() {
+                report.grids.push(GridFile {
+                    item: item.item,
+                    scene: scene.name.clone(),
+                    title: g.title.clone(),
+                    png: format!("grids/grid-{}.png", grid + 1),
+                });
+                images.grids.push(GridImages {
+                    grid: report.grids.len() - 1,
+                    panels,
+                    inset: g.inset,
+                });
             }
         }
         let Truth { reference, classes, headline, .. } = ctx.truth;
@@ -448,7 +558,10 @@ pub fn run_items(
             compared: headline,
         });
     }
-    log.print("done", done.get());
+    log.print("done", done.get().0, 1.0);
+    if items.len() == plan.len() {
+        report.tables = crate::tables::build_all(&suite.tables, &report.table_runs);
+    }
     report.machine.load_end = instrumentation::clock::Load::now().map(|l| l.loadavg);
     // A scene that cannot be loaded is said once, however many of its items there are.
     let mut seen = std::collections::HashSet::new();
@@ -458,6 +571,54 @@ pub fn run_items(
     (report, images)
 }
 
+/// Why a run could not be made, for the report's list of what did not run.
+fn not_run_text(
+    suite: &Suite,
+    purpose: &Purpose<'_>,
+    method: &str,
+    scene: &str,
+    e: &dyn std::fmt::Display,
+) -> String {
+    match purpose {
+        Purpose::Suite(_) => format!("{method} on {scene}: {e}"),
+        Purpose::Table { table, .. } => {
+            format!("{}: {method} on {scene}: {e}", suite.tables[*table].paper.name())
+        }
+    }
+}
+
+/// Measures the suite's table `spec` alone under `protocol`: its runs planned and swept as a
+/// report sweeps them, then the table built from them ([`crate::tables::build`]). What could
+/// not run is added to `skipped`; `progress` is called once per run.
+pub fn run_table(
+    spec: &crate::tables::TableSpec,
+    protocol: &instrumentation::measure::Protocol,
+    skipped: &mut Vec<String>,
+    mut progress: impl FnMut(&str),
+) -> crate::tables::Table {
+    let suite = Suite {
+        name: spec.paper.name().to_owned(),
+        description: String::new(),
+        width: 0,
+        height: 0,
+        warmup: protocol.warmup,
+        repeats: protocol.min_repeats,
+        max_repeats: protocol.max_repeats,
+        target: protocol.target_half_width,
+        time_cap_s: protocol.time_cap.as_secs_f64(),
+        clock: protocol.clock,
+        reference: Default::default(),
+        ref_rate: 1,
+        scenes: Vec::new(),
+        runs: Vec::new(),
+        grids: Vec::new(),
+        tables: vec![spec.clone()],
+    };
+    let (report, _) = run_suite(&suite, |p| progress(p.label));
+    skipped.extend(report.skipped);
+    report.tables.into_iter().next().unwrap_or_else(|| crate::tables::build(spec, 0, &[]))
+}
+
 /// Adds the row and images of one measured combination: its comparison with the reference,
 /// its times on both clocks and its record; a run whose comparison fails is added to the
 /// report's skipped runs.
@@ -465,6 +626,7 @@ fn add_run(
     suite: &Suite,
     ctx: &SceneRun<'_>,
     p: &Planned<'_>,
+    spec: &crate::suite::RunSpec,
     m: Measured<Visibility>,
     report: &mut Report,
     images: &mut Images,
@@ -475,10 +637,10 @@ fn add_run(
         report.machine.gpu = methods::registry::gpu_adapter_name();
     }
     let v = &m.output;
-    let comparison = match ctx.truth.compare(&ctx.frame, v) {
+    let comparison = match ctx.truth.compare(ctx.frame, v) {
         Ok(c) => c,
         Err(e) => {
-            report.skipped.push(format!("{} on {}: {e}", p.spec.method, scene.name));
+            report.skipped.push(format!("{} on {}: {e}", spec.method, scene.name));
             return;
         }
     };
@@ -546,16 +708,83 @@ mod tests {
     use super::*;
 
     #[test]
-    fn progress_lines_estimate_the_time_left_from_the_mean_run() {
+    fn progress_lines_estimate_the_time_left_from_the_cost_done() {
         let log = ProgressLog { start: Instant::now(), total: 120, enabled: false };
+        // A third of the cost in 72 s: twice that is left, whatever the count of runs.
         assert_eq!(
-            log.line("scene 2/5 cage", 40, Duration::from_secs(72)),
-            "scene 2/5 cage: 40/120 runs done, 1m12s elapsed, about 2m24s left"
+            log.line("frame 2/5 cage 320x240", 100, 1.0 / 3.0, Duration::from_secs(72)),
+            "frame 2/5 cage 320x240: 100/120 runs done, 1m12s elapsed, about 2m24s left"
         );
         assert_eq!(
-            log.line("scene 1/5 cage", 0, Duration::from_millis(300)),
-            "scene 1/5 cage: 0/120 runs done, 0s elapsed, time left unknown"
+            log.line("frame 1/5 cage 320x240", 0, 0.0, Duration::from_millis(300)),
+            "frame 1/5 cage 320x240: 0/120 runs done, 0s elapsed, time left unknown"
         );
         assert_eq!(hms(Duration::from_secs(3723)), "1h02m03s");
+        let p =
+            Progress { label: "x", runs_done: 3, runs_total: 9, cost_done: 10.0, cost_total: 40.0 };
+        assert_eq!(p.time_left(Duration::from_secs(5)), Some(Duration::from_secs(15)));
+        assert_eq!(Progress { cost_done: 0.0, ..p }.time_left(Duration::from_secs(5)), None);
+    }
+
+    #[test]
+    fn cost_tables_measure_every_method_against_work_and_draw_it() {
+        // Two scenes of different triangle counts at a small frame, planned and swept as a
+        // suite's table items are.
+        let spec = crate::tables::TableSpec {
+            paper: crate::tables::PaperTable::CostAgainstTriangles,
+            scenes: vec!["plane-square".into(), "cage".into()],
+            width: 48,
+            height: 32,
+        };
+        let mut skipped = Vec::new();
+        let t = run_table(
+            &spec,
+            &instrumentation::measure::Protocol::fixed(0, 1),
+            &mut skipped,
+            |_| {},
+        );
+        assert!(skipped.is_empty(), "{skipped:?}");
+        assert_eq!(t.header[1..], ["plane-square 48x32", "cage 48x32", "fitted exponent"]);
+        let labels: Vec<&str> = t.rows.iter().map(|r| r[0].as_str()).collect();
+        assert_eq!(
+            labels,
+            [
+                "triangles",
+                "pixels",
+                "camera G-buffer (ms)",
+                "afsm (ms)",
+                "raytrace 1x (ms)",
+                "exact (ms)",
+                "sm (ms)",
+                "pan09 32x (ms)",
+                "spsm (ms)",
+            ]
+        );
+        assert_eq!(t.curves.len(), 7, "the G-buffer and six runs");
+        for c in &t.curves {
+            let works: Vec<f64> = c.points.iter().map(|p| p.0).collect();
+            assert_eq!(works.len(), 2, "{}: a point per scene", c.label);
+            assert!(works[0] < works[1], "{}: triangles grow along the row", c.label);
+            assert!(c.exponent.is_some_and(f64::is_finite), "{}", c.label);
+        }
+        let drawn = crate::tables::chart(&t).expect("a cost table has a chart");
+        assert_eq!((drawn.x_label.as_str(), drawn.series.len()), ("triangles", 7));
+        assert!(drawn.series[2].label.starts_with("raytrace 1x (exponent "), "{:?}", drawn.series);
+        assert!(crate::tables::markdown(&t).contains("| fitted exponent |"));
+        // The papers' tables draw no chart.
+        let paper = crate::tables::Table {
+            paper: crate::tables::PaperTable::LecocqTable2,
+            curves: vec![],
+            ..t
+        };
+        assert!(crate::tables::chart(&paper).is_none());
+        // `cost-against-pixels` runs one scene at every frame unless a frame is given.
+        let pixels = crate::tables::TableSpec {
+            paper: crate::tables::PaperTable::CostAgainstPixels,
+            ..spec
+        };
+        assert_eq!(crate::tables::frames_of(&pixels), vec![(48, 32)]);
+        let pixels = crate::tables::TableSpec { width: 0, height: 0, ..pixels };
+        assert_eq!(crate::tables::frames_of(&pixels), crate::tables::COST_FRAMES.to_vec());
     }
 }

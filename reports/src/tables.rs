@@ -47,9 +47,10 @@
 //! prints (counts as the papers print them, `32.8K`; the paper's figures as printed) and as
 //! the numbers `tables/*.csv` holds (`32768`; an empty cell where a figure is missing).
 
-use instrumentation::measure::{measure_all, Measured, Protocol, StageTimes};
-use instrumentation::Recorder;
-use methods::{pan09::PAPER_TABLE1 as PAN_TABLE1, Frame, MethodOptions};
+use instrumentation::measure::StageTimes;
+use instrumentation::stats::Summary;
+use instrumentation::Counters;
+use methods::{pan09::PAPER_TABLE1 as PAN_TABLE1, MethodOptions};
 use serde::{Deserialize, Serialize};
 
 /// A paper's table that a report can reproduce.
@@ -282,7 +283,7 @@ impl PaperTable {
     }
 
     /// The method runs the table makes on `scene`.
-    fn runs(self, scene: &str) -> Vec<(&'static str, MethodOptions)> {
+    pub fn runs(self, scene: &str) -> Vec<(&'static str, MethodOptions)> {
         let map =
             |method, res| (method, MethodOptions { map_res: Some(res), ..Default::default() });
         match self {
@@ -326,89 +327,110 @@ fn scenes_of(spec: &TableSpec) -> Vec<String> {
     }
 }
 
-/// One scene's measurements at one frame for a table.
-struct SceneRuns {
-    name: String,
-    frame: (u32, u32),
-    triangles: usize,
-    gbuffer_ms: f64,
-    /// In the order of [`PaperTable::runs`]; `None` where the run failed.
-    runs: Vec<Option<Measured<()>>>,
+/// The scenes of a table at its frames, each with the runs the table makes there: what a
+/// suite's plan turns into work items, one per scene and frame.
+pub fn table_items(
+    spec: &TableSpec,
+) -> Vec<(String, (u32, u32), Vec<(&'static str, MethodOptions)>)> {
+    let frames = frames_of(spec);
+    scenes_of(spec)
+        .into_iter()
+        .flat_map(|scene| {
+            let runs = spec.paper.runs(&scene);
+            frames.iter().map(move |&f| (scene.clone(), f, runs.clone()))
+        })
+        .collect()
 }
 
-/// Measures the table: every scene of `spec` at every frame of [`frames_of`], every run the
-/// table needs under `protocol`, the runs of one frame interleaved. Runs that cannot be made
-/// are listed in `skipped` and shown as "–" (empty in the CSV).
-pub fn run_table(
-    spec: &TableSpec,
-    protocol: &Protocol,
-    skipped: &mut Vec<String>,
-    mut progress: impl FnMut(&str),
-) -> Table {
+/// One run a table measured: a method on a scene at a frame, its times and counters. A
+/// report keeps them (`runs.json`'s `table_runs`) and builds its tables from them
+/// ([`build`]), so that a table's runs are planned, sharded and merged as any run is.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TableRun {
+    /// Index of the table in the suite's tables.
+    pub table: usize,
+    /// Index of the run in the table's runs on the scene ([`table_items`]).
+    pub run: usize,
+    /// The plan's item that ran it.
+    pub item: usize,
+    /// The shard that ran it, in a merged report.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shard: Option<u32>,
+    /// Scene.
+    pub scene: String,
+    /// Frame width.
+    pub width: u32,
+    /// Frame height.
+    pub height: u32,
+    /// Triangles of the frame.
+    pub triangles: u64,
+    /// The frame's camera G-buffer, wall-clock milliseconds.
+    pub gbuffer_ms: f64,
+    /// Method.
+    pub method: String,
+    /// The method's parameters.
+    pub params: serde_json::Map<String, serde_json::Value>,
+    /// Wall-clock totals of the timed runs.
+    pub total_ms: Summary,
+    /// CPU totals.
+    #[serde(default)]
+    pub cpu_ms: Option<Summary>,
+    /// Whether a timed run was contended.
+    #[serde(default)]
+    pub contended: bool,
+    /// Each stage.
+    pub stages: Vec<StageTimes>,
+    /// Counters of the run kept.
+    pub counters: Counters,
+}
+
+/// One scene's measurements at one frame for a table.
+struct SceneRuns<'a> {
+    name: String,
+    frame: (u32, u32),
+    triangles: u64,
+    gbuffer_ms: f64,
+    /// In the order of [`PaperTable::runs`]; `None` where the run failed.
+    runs: Vec<Option<&'a TableRun>>,
+}
+
+/// The suite's table number `index`, `spec`, built from the runs measured for it (`runs` may
+/// hold other tables' runs too). A pure function of the runs: a scene and frame without runs
+/// is left out, a run that is missing shows as "–" (empty in the CSV).
+pub fn build(spec: &TableSpec, index: usize, runs: &[TableRun]) -> Table {
     let paper = spec.paper;
     let frames = frames_of(spec);
+    let mine: Vec<&TableRun> = runs.iter().filter(|r| r.table == index).collect();
     let mut measured = Vec::new();
-    for name in scenes_of(spec) {
-        let runs = paper.runs(&name);
-        let scene = match scenes::load(&name) {
-            Ok(s) => s,
-            Err(e) => {
-                skipped.push(format!("{}: scene {name}: {e}", paper.name()));
-                (0..runs.len() * frames.len()).for_each(|_| progress(&name));
-                continue;
-            }
-        };
-        for &(w, h) in &frames {
-            let mut rec = Recorder::default();
-            let frame = Frame::new(&scene, w, h, &mut rec);
-            let built: Vec<_> = runs
-                .iter()
-                .map(|(method, options)| {
-                    analysis::registry::technique(method, options).map_err(|e| e.to_string())
-                })
-                .collect();
-            let mut subjects: Vec<_> = built
-                .iter()
-                .map(|t| {
-                    let frame = &frame;
-                    move |rec: &mut Recorder| match t {
-                        Ok(t) => t.run(frame, rec).map(|_| ()).map_err(|e| e.to_string()),
-                        Err(e) => Err(e.clone()),
-                    }
-                })
-                .collect();
-            let results = measure_all(protocol, &mut subjects, |k| {
-                progress(&format!("{} {name} {w}x{h} {}", paper.name(), runs[k].0));
-            });
-            let out = results
-                .into_iter()
-                .zip(&runs)
-                .map(|(r, (method, _))| {
-                    r.map_err(|e| {
-                        skipped.push(format!("{}: {method} on {name}: {e}", paper.name()))
-                    })
-                    .ok()
-                })
-                .collect();
-            measured.push(SceneRuns {
-                name: name.clone(),
-                frame: (w, h),
-                triangles: frame.geometry.len(),
-                gbuffer_ms: rec.stages.total_ms(),
-                runs: out,
-            });
-        }
+    for (name, (w, h), made) in table_items(spec) {
+        let here: Vec<&TableRun> = mine
+            .iter()
+            .copied()
+            .filter(|r| r.scene == name && (r.width, r.height) == (w, h))
+            .collect();
+        let Some(first) = here.first() else { continue };
+        measured.push(SceneRuns {
+            name: name.clone(),
+            frame: (w, h),
+            triangles: first.triangles,
+            gbuffer_ms: first.gbuffer_ms,
+            runs: (0..made.len()).map(|k| here.iter().copied().find(|r| r.run == k)).collect(),
+        });
     }
+    let counts: Vec<u32> = mine.iter().map(|r| r.total_ms.n).collect();
+    let (fewest, most) = (counts.iter().min().copied(), counts.iter().max().copied());
     let frame_text = match &frames[..] {
         [(w, h)] => format!("{w}x{h}"),
         _ => "the frames of the columns".to_owned(),
     };
+    let runs_text = match (fewest, most) {
+        (Some(a), Some(b)) if a == b => format!("{a}"),
+        (Some(a), Some(b)) => format!("{a} to {b}"),
+        _ => "no".to_owned(),
+    };
     let mut notes = vec![format!(
-        "Ours: {frame_text}, wall-clock medians of {} to {} timed runs after {} warm-up, on \
-         the machine named at the top of the report.",
-        protocol.min_repeats.max(1),
-        protocol.max_repeats.max(protocol.min_repeats).max(1),
-        protocol.warmup
+        "Ours: {frame_text}, wall-clock medians of {runs_text} timed runs after the suite's \
+         warm-up (the papers give frame times), on the machine named at the top of the report."
     )];
     let mut curves = Vec::new();
     let (header, rows) = match paper {
@@ -440,6 +462,12 @@ pub fn run_table(
     }
 }
 
+/// Every table of a suite (its `[[table]]` entries, `specs`), built from the runs measured
+/// for them.
+pub fn build_all(specs: &[TableSpec], runs: &[TableRun]) -> Vec<Table> {
+    specs.iter().enumerate().map(|(k, spec)| build(spec, k, runs)).collect()
+}
+
 /// `1234567` as `1.23M`, as the papers print counts.
 pub fn si(v: f64) -> String {
     let a = v.abs();
@@ -452,8 +480,8 @@ pub fn si(v: f64) -> String {
     }
 }
 
-fn counter(t: &Measured<()>, name: &str) -> Option<u64> {
-    t.record.counters.entries().into_iter().find(|(n, _)| *n == name).map(|(_, v)| v)
+fn counter(t: &TableRun, name: &str) -> Option<u64> {
+    t.counters.entries().into_iter().find(|(n, _)| *n == name).map(|(_, v)| v)
 }
 
 fn stage_ms(stages: &[StageTimes], name: &str) -> Option<f64> {
@@ -490,7 +518,7 @@ fn aila_laine(measured: &[SceneRuns], notes: &mut Vec<String>) -> (Vec<String>, 
         .map(|(row, label)| {
             let mut cells = vec![Cell::Text((*label).to_owned())];
             for (k, s) in measured.iter().enumerate() {
-                let t = s.runs.first().and_then(Option::as_ref);
+                let t = s.runs.first().copied().flatten();
                 let c = |name| {
                     t.and_then(|t| counter(t, name))
                         .map_or(Cell::Missing, |v| Cell::Count(v as f64))
@@ -505,7 +533,7 @@ fn aila_laine(measured: &[SceneRuns], notes: &mut Vec<String>) -> (Vec<String>, 
                     5 => st(STAGE_TRANSFORMATION),
                     6 => st(STAGE_BSP),
                     7 => st(STAGE_RASTERIZATION),
-                    _ => ms_or_missing(t.map(|t| t.wall_ms.median)),
+                    _ => ms_or_missing(t.map(|t| t.total_ms.median)),
                 });
                 cells.push(paper_or_missing(PAPER_TABLE1[row].get(k)));
             }
@@ -548,7 +576,7 @@ fn lecocq1(measured: &[SceneRuns], notes: &mut Vec<String>) -> (Vec<String>, Vec
                 Cell::Ms(s.gbuffer_ms),
             ];
             for (j, t) in s.runs.iter().enumerate() {
-                cells.push(ms_or_missing(t.as_ref().map(|t| t.wall_ms.median)));
+                cells.push(ms_or_missing(t.map(|t| t.total_ms.median)));
                 cells.push(paper_or_missing(paper.map(|p| &p.2[j])));
             }
             cells
@@ -589,7 +617,7 @@ fn lecocq2(measured: &[SceneRuns], notes: &mut Vec<String>) -> (Vec<String>, Vec
     let mut rows = Vec::new();
     for s in measured {
         for (k, (res, sm_paper, spsm_paper, over_paper)) in LECOCQ2.iter().enumerate() {
-            let t = |j: usize| s.runs.get(j).and_then(Option::as_ref).map(|t| t.wall_ms.median);
+            let t = |j: usize| s.runs.get(j).copied().flatten().map(|t| t.total_ms.median);
             let (sm, spsm) = (t(2 * k), t(2 * k + 1));
             let over = |extra: f64| match (sm, spsm) {
                 (Some(a), Some(b)) => Cell::Percent(100.0 * ((b + extra) / (a + extra) - 1.0)),
@@ -650,7 +678,7 @@ fn pan1(measured: &[SceneRuns], notes: &mut Vec<String>) -> (Vec<String>, Vec<Ve
         .iter()
         .map(|s| {
             let paper = PAN_TABLE1.iter().find(|(n, ..)| *n == s.name).and_then(|r| r.2);
-            let t = s.runs.first().and_then(Option::as_ref);
+            let t = s.runs.first().copied().flatten();
             let c = |name| t.and_then(|t| counter(t, name)).map_or(Cell::Missing, Cell::Int);
             let groups: Vec<Option<f64>> = TABLE1
                 .iter()
@@ -718,7 +746,7 @@ fn cost(
     for (k, (method, options)) in cost_runs().iter().enumerate() {
         let times = measured
             .iter()
-            .map(|s| s.runs.get(k).and_then(Option::as_ref).map(|t| t.wall_ms.median))
+            .map(|s| s.runs.get(k).copied().flatten().map(|t| t.total_ms.median))
             .collect();
         series.push((run_label(method, options), times));
     }
@@ -883,54 +911,5 @@ mod tests {
         let noisy = [(1.0, 1.0), (10.0, 12.0), (100.0, 90.0), (1000.0, 1100.0)];
         let b = fit_exponent(&noisy).expect("fits");
         assert!((0.9..1.1).contains(&b), "{b}");
-    }
-
-    #[test]
-    fn cost_tables_measure_every_method_against_work_and_draw_it() {
-        // Two scenes of different triangle counts at a small frame.
-        let spec = TableSpec {
-            paper: PaperTable::CostAgainstTriangles,
-            scenes: vec!["plane-square".into(), "cage".into()],
-            width: 48,
-            height: 32,
-        };
-        let mut skipped = Vec::new();
-        let t = run_table(&spec, &Protocol::fixed(0, 1), &mut skipped, |_| {});
-        assert!(skipped.is_empty(), "{skipped:?}");
-        assert_eq!(t.header[1..], ["plane-square 48x32", "cage 48x32", "fitted exponent"]);
-        let labels: Vec<&str> = t.rows.iter().map(|r| r[0].as_str()).collect();
-        assert_eq!(
-            labels,
-            [
-                "triangles",
-                "pixels",
-                "camera G-buffer (ms)",
-                "afsm (ms)",
-                "raytrace 1x (ms)",
-                "exact (ms)",
-                "sm (ms)",
-                "pan09 32x (ms)",
-                "spsm (ms)",
-            ]
-        );
-        assert_eq!(t.curves.len(), 7, "the G-buffer and six runs");
-        for c in &t.curves {
-            let works: Vec<f64> = c.points.iter().map(|p| p.0).collect();
-            assert_eq!(works.len(), 2, "{}: a point per scene", c.label);
-            assert!(works[0] < works[1], "{}: triangles grow along the row", c.label);
-            assert!(c.exponent.is_some_and(f64::is_finite), "{}", c.label);
-        }
-        let drawn = chart(&t).expect("a cost table has a chart");
-        assert_eq!((drawn.x_label.as_str(), drawn.series.len()), ("triangles", 7));
-        assert!(drawn.series[2].label.starts_with("raytrace 1x (exponent "), "{:?}", drawn.series);
-        assert!(markdown(&t).contains("| fitted exponent |"));
-        // The papers' tables draw no chart.
-        let paper = Table { paper: PaperTable::LecocqTable2, curves: vec![], ..t };
-        assert!(chart(&paper).is_none());
-        // `cost-against-pixels` runs one scene at every frame unless a frame is given.
-        let pixels = TableSpec { paper: PaperTable::CostAgainstPixels, ..spec };
-        assert_eq!(frames_of(&pixels), vec![(48, 32)]);
-        let pixels = TableSpec { width: 0, height: 0, ..pixels };
-        assert_eq!(frames_of(&pixels), COST_FRAMES.to_vec());
     }
 }
