@@ -80,19 +80,19 @@ struct ReportArgs {
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
     /// An earlier report's folder: every run present in both is compared (error change, time
-    /// ratio with its 95 % interval) and regressions are flagged at the top of report.md and
-    /// index.html, and in baseline.md. Read before anything is computed.
+    /// ratio on the report's clock, CPU time by default, with its interval; wall-time ratio
+    /// beside where neither run was contended) and regressions are flagged at the top of
+    /// report.md and index.html, and in baseline.md. Read before anything is computed.
     #[arg(long, value_name = "DIR")]
     baseline: Option<PathBuf>,
-    /// With --baseline: the relative slow-down the whole 95 % interval of a run's time ratio
-    /// must exceed for the run to be flagged slower; default 0.5 (enough for the timing noise
-    /// of a shared machine at a few repeats; lower it on a quiet machine with more repeats).
+    /// With --baseline: the relative slow-down the whole interval of a run's time ratio must
+    /// exceed for the run to be flagged slower; default 0.2 (CPU times of unchanged code, one
+    /// report quiet and one with a core busy, stay within it).
     #[arg(long, value_name = "T", allow_negative_numbers = true)]
     baseline_tolerance: Option<f64>,
     /// With --baseline: milliseconds by which a run's time interval must lie above the
-    /// baseline's for the run to be flagged slower (or below, faster); default 5 (a scheduler
-    /// time slice or two, which delays short runs on a shared machine whatever the method; 0
-    /// compares ratios alone).
+    /// baseline's for the run to be flagged slower (or below, faster); default 1 (0 compares
+    /// ratios alone).
     #[arg(long, value_name = "MS", allow_negative_numbers = true)]
     baseline_min_ms: Option<f64>,
     /// Print the suite's work list and stop: one JSON line per item (scene, frame, reference,

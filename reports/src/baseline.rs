@@ -305,7 +305,6 @@ mod tests {
             height = 36
             warmup = 0
             repeats = 1
-            max_repeats = 1
             scenes = ["plane-square"]
             [[run]]
             method = "sm"

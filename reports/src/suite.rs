@@ -9,9 +9,9 @@
 //! height = 240
 //! warmup = 1        # untimed runs before the timed ones
 //! repeats = 6       # timed runs at least (6: the fewest whose median has a 95 % interval)
-//! max_repeats = 30  # timed runs at most: more are run while the interval is wider than
-//! target = 0.05     # this share of the median (its half-width), until
-//! time_cap_s = 20   # this many seconds of timed runs per scene have passed
+//! max_repeats = 30  # timed runs at most (default: repeats): more are run while the interval
+//! target = 0.05     # is wider than this share of the median (its half-width), until
+//! time_cap_s = 20   # this many seconds of timed runs per frame have passed
 //! clock = "cpu"     # the cost axis of charts, Pareto fronts, budgets and baselines: "cpu" or "wall"
 //! reference = "auto" # exact where it applies (opaque casters), else raytrace at ref_rate; or "exact", "raytrace"
 //! ref_rate = 64
@@ -347,9 +347,10 @@ pub struct Suite {
     /// Timed runs at least. Default 6.
     #[serde(default = "six")]
     pub repeats: u32,
-    /// Timed runs at most. Default 30.
-    #[serde(default = "thirty")]
-    pub max_repeats: u32,
+    /// Timed runs at most; default `repeats` (a fixed count). Above `repeats`, runs are timed
+    /// again while their interval is wider than `target`, until `time_cap_s`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_repeats: Option<u32>,
     /// The half-width of a run's interval, relative to its median, at which it is timed
     /// enough. Default 0.05.
     #[serde(default = "target")]
@@ -386,9 +387,6 @@ fn one() -> u32 {
 fn six() -> u32 {
     6
 }
-fn thirty() -> u32 {
-    30
-}
 fn target() -> f64 {
     0.05
 }
@@ -408,7 +406,7 @@ impl Suite {
         Protocol {
             warmup: self.warmup,
             min_repeats: self.repeats,
-            max_repeats: self.max_repeats,
+            max_repeats: self.max_repeats.unwrap_or(self.repeats),
             target_half_width: self.target,
             clock: self.clock,
             time_cap: std::time::Duration::from_secs_f64(self.time_cap_s),
@@ -443,7 +441,7 @@ impl Suite {
         if suite.repeats == 0 {
             return Err(invalid("repeats", "must be at least 1".into()));
         }
-        if suite.max_repeats < suite.repeats || suite.max_repeats > MAX_REPEATS {
+        if suite.max_repeats.is_some_and(|m| m < suite.repeats || m > MAX_REPEATS) {
             return Err(invalid(
                 "max_repeats",
                 format!("must be in repeats..={MAX_REPEATS} ({}..={MAX_REPEATS})", suite.repeats),

@@ -603,7 +603,7 @@ pub fn run_table(
         height: 0,
         warmup: protocol.warmup,
         repeats: protocol.min_repeats,
-        max_repeats: protocol.max_repeats,
+        max_repeats: Some(protocol.max_repeats),
         target: protocol.target_half_width,
         time_cap_s: protocol.time_cap.as_secs_f64(),
         clock: protocol.clock,

@@ -1,5 +1,5 @@
 //! `shadowbench report`: a suite's tables and data, its pages in headless Chromium, a sweep in
-//! shards merged back, and the same on a real Slurm cluster.
+//! shards merged back, the same on a real Slurm cluster, and timing that holds under load.
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -8,3 +8,4 @@ mod report;
 mod report_browser;
 mod shard;
 mod slurm;
+mod timing;
