@@ -29,6 +29,7 @@
 
 pub mod afsm;
 pub mod afsm_ss;
+pub mod common;
 mod context;
 pub mod frame;
 mod layout;
