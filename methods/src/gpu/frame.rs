@@ -14,11 +14,12 @@ use super::{
     raster::{rasterize, RasterJob},
     GpuContext, GpuError,
 };
-use crate::{depth_map::LightDepthMap, frame::Frame, gbuffer::GBuffer};
+use crate::{
+    depth_map::LightDepthMap,
+    frame::{Frame, STAGE_GPU_GBUFFER},
+    gbuffer::GBuffer,
+};
 use scenes::projection::Projector;
-
-/// Name of the stage that renders the camera G-buffer on the GPU.
-pub use crate::registry::STAGE_GPU_GBUFFER;
 
 /// The frame's geometry and camera G-buffer on the GPU.
 #[derive(Debug)]
