@@ -97,6 +97,7 @@
 pub mod antialias;
 pub mod classify;
 pub mod depth;
+pub mod neighbourhood;
 pub mod quantize;
 pub mod raster;
 pub mod recover;
