@@ -21,10 +21,7 @@ mod common;
 
 use instrumentation::Recorder;
 use methods::{
-    gpu::GpuContext,
-    method,
-    registry::{Device, STAGE_GPU_GBUFFER},
-    Frame, MethodOptions,
+    frame::STAGE_GPU_GBUFFER, gpu::GpuContext, method, registry::Device, Frame, MethodOptions,
 };
 use scenes::Scene;
 

@@ -10,6 +10,8 @@ use scenes::{Effects, Geometry, Projector, Scene};
 pub const STAGE_GBUFFER: &str = "camera G-buffer";
 /// Name of the stage that renders the light depth map.
 pub const STAGE_LIGHT_DEPTH_MAP: &str = "light depth map";
+/// Name of the stage in which a GPU run renders its own camera G-buffer.
+pub const STAGE_GPU_GBUFFER: &str = "G-buffer (GPU)";
 
 /// A scene at one resolution, with everything the methods share.
 #[derive(Debug, Clone)]

@@ -257,9 +257,6 @@ fn bs_options(options: &MethodOptions) -> Result<BsOptions, MethodError> {
     Ok(o)
 }
 
-/// Name of the stage in which a GPU run renders its own camera G-buffer.
-pub const STAGE_GPU_GBUFFER: &str = "G-buffer (GPU)";
-
 /// Whether this build has the GPU kernels (the `gpu` feature).
 pub const HAS_GPU: bool = cfg!(feature = "gpu");
 

@@ -24,7 +24,7 @@ impl DevicePair<'_> {
             .gpu
             .stages
             .iter()
-            .filter(|s| s.name == methods::registry::STAGE_GPU_GBUFFER)
+            .filter(|s| s.name == methods::frame::STAGE_GPU_GBUFFER)
             .map(|s| s.ms.median)
             .sum();
         self.gpu.total_ms.median - gbuffer

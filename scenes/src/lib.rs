@@ -9,6 +9,7 @@ pub mod io;
 pub mod light;
 pub mod limits;
 pub mod mesh;
+pub mod models;
 pub mod projection;
 pub mod scene;
 

@@ -1,9 +1,8 @@
 //! Built-in scenes, and loading a scene by name or path.
 //!
 //! Every built-in is a [`SceneDesc`], so it can be written out as a scene file and edited
-//! (`shadowbench scenes --toml NAME`). Models (`bunny-plane`) are read from the models folder:
-//! `$SHADOWBENCH_MODELS` if set, else `scenes/models/` in the source tree, filled by
-//! `scripts/fetch-models`.
+//! (`shadowbench scenes --toml NAME`). Models (`bunny-plane`) are read from the models folder
+//! ([`crate::models`]).
 
 use crate::{
     camera::Camera,
@@ -12,6 +11,7 @@ use crate::{
         RandomTrianglesParams, SpheresParams,
     },
     light::Light,
+    models::models_dir,
     scene::{Material, Scene},
     scene_file::{FileShape, ObjectDesc, SceneDesc, SceneError, Shape, Transform},
 };
@@ -44,13 +44,6 @@ pub const BUILTINS: &[(&str, &str)] = &[
         "the Stanford bunny (CGAL's bunny00.off, 75k triangles) over a plane (Pan et al. Fig. 8)",
     ),
 ];
-
-/// The folder models are read from.
-pub fn models_dir() -> PathBuf {
-    std::env::var_os("SHADOWBENCH_MODELS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("models"))
-}
 
 fn ground(size: f64) -> ObjectDesc {
     ObjectDesc {

@@ -318,7 +318,7 @@ impl SceneDesc {
             let mut mesh = o.shape.build(base).map_err(|e| match e {
                 ShapeError::Param(p) => invalid(key(&format!("shape.{}", p.key)), p.message),
                 ShapeError::Missing(model) => {
-                    let hint = if model.starts_with(crate::registry::models_dir()) {
+                    let hint = if model.starts_with(crate::models::models_dir()) {
                         ": run `scripts/fetch-models` to fetch it".to_owned()
                     } else {
                         String::new()

@@ -76,7 +76,7 @@ fn missing_models_say_how_to_get_them() {
         .resolve(
             "bunny-plane",
             Path::new("builtin:bunny-plane"),
-            &registry::models_dir().join("nowhere"),
+            &scenes::models::models_dir().join("nowhere"),
         )
         .expect_err("no model there");
     assert!(err.to_string().contains("scripts/fetch-models"), "{err}");

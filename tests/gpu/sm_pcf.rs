@@ -213,7 +213,7 @@ fn gpu_methods_run_end_to_end_with_the_twins_stages() {
         cpu.run(&frame, &mut cpu_rec).expect("the CPU method runs");
         let names =
             |r: &Recorder| r.stages.stages.iter().map(|s| s.name.clone()).collect::<Vec<_>>();
-        let mut want = vec![methods::gpu::frame::STAGE_GPU_GBUFFER.to_owned()];
+        let mut want = vec![methods::frame::STAGE_GPU_GBUFFER.to_owned()];
         want.extend(names(&cpu_rec));
         assert_eq!(names(&rec), want, "{}", gpu.name());
         assert!(rec.stages.stages.iter().all(|s| s.ms.is_finite() && s.ms >= 0.0));

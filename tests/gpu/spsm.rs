@@ -214,7 +214,7 @@ fn gpu_parity_conservative_rasterization_texel_for_texel() {
 fn gpu_parity_packing_texel_for_texel() {
     use methods::{
         gpu::spsm::pack as gpu_pack,
-        spsm::{quantize::DEFAULT_POWER, raster, texel},
+        spsm::{pack, quantize::DEFAULT_POWER, raster, texel},
     };
     let ctx = GpuContext::shared().expect("a GPU adapter (Mesa's lavapipe on CI)");
     let bits = |m: &texel::SpsmMap| -> Vec<u32> {
@@ -244,7 +244,7 @@ fn gpu_parity_packing_texel_for_texel() {
                 &mut Default::default(),
             );
             for format in [TexelFormat::Packed, TexelFormat::F32] {
-                let cpu = texel::pack_map(&map, space, format, DEFAULT_POWER);
+                let cpu = pack::pack_map(&map, space, format, DEFAULT_POWER);
                 let mut rec = Recorder::default();
                 let gpu = gpu_pack::pack_map(
                     ctx,

@@ -1,6 +1,7 @@
 //! Each technique end to end against its paper and the references, the shared kernels on
-//! whole scenes, the two references against each other, and the hard cases (scale, grazing
-//! light, slivers, far objects) through every method. One test binary, one module per concern.
+//! whole scenes, the two references against each other, the hard cases (scale, grazing light,
+//! slivers, far objects) through every method, and the workspace's module graph (no import
+//! cycles in any crate). One test binary, one module per concern.
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -9,6 +10,7 @@ mod afsm;
 mod frame;
 mod ground_truth;
 mod hard_cases;
+mod modules;
 mod pan09;
 mod pcf;
 mod shadow_maps;

@@ -56,7 +56,7 @@
 //!   applicable.
 
 use super::{
-    frame::{ProjectorData, COMMON},
+    common::{ProjectorData, COMMON},
     shader::{compose, Part},
     GpuContext, GpuError, GpuFrame,
 };

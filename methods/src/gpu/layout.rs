@@ -8,7 +8,7 @@
 //! member's name, offset and size to be the Rust struct's. A field added, removed, renamed,
 //! resized or moved on one side only fails that test (`tests` below shows it failing).
 //!
-//! The layouts checked: `frame::ProjectorData` and `frame::Xyz` (`common.wgsl`, every
+//! The layouts checked: `common::ProjectorData` and `common::Xyz` (`common.wgsl`, every
 //! projector the kernels read), `raster::Params` (`raster.wgsl`), `sm::Params`
 //! (`receiver.wgsl`, shared by `sm` and the PCF kernels), `spsm::texel::Params`
 //! (`texel.wgsl`), `spsm::antialias::Record` (`spsm/antialias.wgsl`, a silhouette per

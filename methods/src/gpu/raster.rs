@@ -17,7 +17,7 @@
 //! within `f32` depth precision; `tests/gpu/raster.rs` measures how many samples that touches.
 
 use super::{
-    frame::{ProjectorData, COMMON},
+    common::{ProjectorData, COMMON},
     shader::{compose, Part},
     GpuContext, GpuError,
 };

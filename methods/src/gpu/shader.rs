@@ -4,7 +4,7 @@
 //! file is a [`Part`] that names the parts it needs; [`compose`] writes a kernel's parts with
 //! everything they need first, each file once, in a fixed order (depth first, in the order the
 //! needs are listed), each after a `// <file>` line. The parts are `const`s beside the code
-//! that binds their buffers (`COMMON` in [`super::frame`], the receiver and counters in
+//! that binds their buffers (`COMMON` in [`super::common`], the receiver and counters in
 //! [`super::sm`], ...). A small module of our own rather than naga_oil: the kernels need
 //! ordering and de-duplication only, no conditional compilation or renaming.
 

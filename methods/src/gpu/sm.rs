@@ -16,7 +16,7 @@
 //! [`RECEIVER`] (receiver, texel lookup, depth codes) and [`COUNTERS`].
 
 use super::{
-    frame::COMMON,
+    common::COMMON,
     shader::{compose, Part},
     GpuContext, GpuDepthMap, GpuError, GpuFrame,
 };

@@ -15,8 +15,8 @@
 //!   tol`, Algorithm 1's early rejection) and `p` lies inside its 2D projection whatever the
 //!   vertex quantization ([`Tri::surely_contains`], exact predicates).
 //! - **shadowed by the neighbourhood**: the same test succeeds for a triangle stored in one
-//!   of the 8 neighbouring texels (they are tried in [`super::recover::RING`] order and the
-//!   first hit ends the search).
+//!   of the 8 neighbouring texels (they are tried in [`super::neighbourhood::RING`] order and
+//!   the first hit ends the search).
 //! - **uncertain** otherwise: left to silhouette recovery.
 //!
 //! Tolerance: the constant term of the shared bias rule ([`crate::depth_test`]), converted to
@@ -29,7 +29,7 @@
 //! Counters: `lit_by_one_lookup`, `shadowed_by_one_lookup`, `shadowed_by_neighbourhood`,
 //! `uncertain_pixels`, and `shadow_map_lookups` (texels decoded: 1 to 9 per pixel).
 
-use super::recover::RING;
+use super::neighbourhood::RING;
 use super::texel::{LightSpace, SpsmMap, Tri};
 use crate::depth_test::{texel_at, DepthTester};
 use crate::frame::Frame;

@@ -11,9 +11,10 @@
 //!    fragment to every texel its projection touches; the texel keeps the fragment of smallest
 //!    minimum conservative depth (Hasselgren et al. 2005). Counters `triangles_rasterized`,
 //!    `raster_samples_tested` (texels tested exactly), `conservative_fragments`.
-//! 2. **packing** ([`texel`], sections 3.3 and 3.4): the kept triangle as a 128-bit texel
-//!    (three 16-bit 2D vertices, 16-bit depth at the texel centre, two 8-bit derivative codes
-//!    [`quantize`]) for `spsm`, or as `f32` for `spsm-f32`. Counter `packed_texels`.
+//! 2. **packing** ([`pack`](mod@pack), in the texel layout of [`texel`], sections 3.3 and
+//!    3.4): the kept triangle as a 128-bit texel (three 16-bit 2D vertices, 16-bit depth at
+//!    the texel centre, two 8-bit derivative codes [`quantize`]) for `spsm`, or as `f32` for
+//!    `spsm-f32`. Counter `packed_texels`.
 //! 3. **classification** ([`classify`], section 4.1, Algorithm 1): lit by one lookup,
 //!    shadowed by one lookup, shadowed by the 3x3 neighbourhood, or uncertain. Counters
 //!    `lit_by_one_lookup`, `shadowed_by_one_lookup`, `shadowed_by_neighbourhood`,
@@ -97,6 +98,8 @@
 pub mod antialias;
 pub mod classify;
 pub mod depth;
+pub mod neighbourhood;
+pub mod pack;
 pub mod quantize;
 pub mod raster;
 pub mod recover;
@@ -240,7 +243,7 @@ pub(crate) fn pack(
 ) -> texel::SpsmMap {
     let (map, packed, clamped) = rec
         .stages
-        .time(STAGE_PACKING, || texel::pack_map(&raster, space, o.texel, o.derivative_power));
+        .time(STAGE_PACKING, || pack::pack_map(&raster, space, o.texel, o.derivative_power));
     drop(raster);
     record_packing(packed, clamped, rec);
     map

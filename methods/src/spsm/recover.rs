@@ -59,6 +59,7 @@
 
 use super::classify::{Lookup, MapPoint, UncertainPixel};
 use super::depth::{clip_to_texel, consistent_min_depth, ConsistentDepths};
+use super::neighbourhood::{CENTRE_BIT, NEIGHBOURHOOD, RING};
 use super::texel::{SpsmMap, Tri};
 use crate::depth_test::texel_at;
 use crate::frame::Frame;
@@ -66,18 +67,6 @@ use glam::DVec2;
 use instrumentation::Counters;
 use rayon::prelude::*;
 use std::sync::OnceLock;
-
-/// The 8 neighbours around the centre, in cyclic order (image coordinates, `y` down):
-/// NW, N, NE, E, SE, S, SW, W. Bit `k` of a ring mask is `RING[k]`; bit 8 is the centre.
-pub const RING: [(i64, i64); 8] =
-    [(-1, -1), (0, -1), (1, -1), (1, 0), (1, 1), (0, 1), (-1, 1), (-1, 0)];
-
-/// Bit of the centre texel in a 9-bit pattern.
-pub const CENTRE_BIT: u16 = 1 << 8;
-
-/// The texel offsets of the bits of a 9-bit pattern: the ring, then the centre.
-pub const NEIGHBOURHOOD: [(i64, i64); 9] =
-    [(-1, -1), (0, -1), (1, -1), (1, 0), (1, 1), (0, 1), (-1, 1), (-1, 0), (0, 0)];
 
 /// Grid position `(column, row)` in `0..3` of pattern bit `k`.
 fn cell(k: usize) -> (i64, i64) {

@@ -3,7 +3,7 @@
 //! facets' records.
 
 use super::{params::slot, read_counters, Kernels, Run};
-use crate::gpu::{frame::Xyz, GpuContext, GpuError};
+use crate::gpu::{common::Xyz, GpuContext, GpuError};
 use crate::pan09::STAGE_FACETS;
 use bytemuck::{Pod, Zeroable};
 use instrumentation::Recorder;

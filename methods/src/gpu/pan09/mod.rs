@@ -59,7 +59,7 @@ mod validity;
 mod visibility;
 
 use super::{
-    frame::COMMON,
+    common::COMMON,
     shader::{compose, Part},
     GpuContext, GpuDepthMap, GpuError, GpuFrame,
 };

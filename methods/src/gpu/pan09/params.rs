@@ -14,7 +14,7 @@ use crate::{
     afsm::SHADOW_OFFSET,
     depth_test::DepthTester,
     frame::Frame,
-    gpu::frame::{ProjectorData, Xyz},
+    gpu::common::{ProjectorData, Xyz},
     pan09::{
         facets::LightPlanes,
         mask::Mask,

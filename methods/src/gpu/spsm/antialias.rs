@@ -13,7 +13,7 @@
 use crate::{
     frame::Frame,
     gpu::{
-        frame::{ProjectorData, Xyz, COMMON},
+        common::{ProjectorData, Xyz, COMMON},
         shader::{compose, Part},
         GpuContext, GpuError,
     },

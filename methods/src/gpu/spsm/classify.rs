@@ -24,7 +24,7 @@ use crate::{
     depth_test::texel_at,
     frame::Frame,
     gpu::{
-        frame::ProjectorData,
+        common::ProjectorData,
         shader::{compose, Part},
         GpuContext, GpuError, GpuFrame,
     },

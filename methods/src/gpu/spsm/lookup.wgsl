@@ -185,7 +185,7 @@ fn lies_on(t: Tri, p: MapPoint) -> bool {
     return err <= p.tol + e.x + (d.x * e.y + d.y * e.z);
 }
 
-// recover::NEIGHBOURHOOD: the ring (recover::RING), then the centre.
+// neighbourhood::NEIGHBOURHOOD: the ring (neighbourhood::RING), then the centre.
 const NEIGHBOURHOOD = array<vec2<i32>, 9>(
     vec2<i32>(-1, -1), vec2<i32>(0, -1), vec2<i32>(1, -1), vec2<i32>(1, 0),
     vec2<i32>(1, 1), vec2<i32>(0, 1), vec2<i32>(-1, 1), vec2<i32>(-1, 0), vec2<i32>(0, 0),

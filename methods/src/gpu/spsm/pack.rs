@@ -1,5 +1,5 @@
 //! Stage "packing" of `spsm` on the GPU (`pack.wgsl`), equal to
-//! [`spsm::texel::pack_map`] texel for texel, in both texel formats.
+//! [`spsm::pack::pack_map`](crate::spsm::pack::pack_map) texel for texel, in both texel formats.
 //!
 //! What depends on the triangle only (its three vertex words, whether a vertex was clamped,
 //! and, under an orthographic light, its derivative codes) is computed per prepared triangle

@@ -22,7 +22,7 @@ use super::{
 use crate::{
     frame::Frame,
     gpu::{
-        frame::ProjectorData,
+        common::ProjectorData,
         shader::{compose, Part},
         GpuContext, GpuError, GpuFrame,
     },

@@ -4,7 +4,7 @@
 //! them with (`texel.wgsl`, the twin of [`SpsmMap::get`]).
 
 use crate::{
-    gpu::{frame::COMMON, shader::Part, GpuContext},
+    gpu::{common::COMMON, shader::Part, GpuContext},
     spsm::{
         classify::Lookup,
         quantize::DerivativeCode,
