@@ -37,7 +37,8 @@ fn side_by_side() -> anyhow::Result<()> {
 /// `shadowbench-out`): `cost-against-triangles.{png,svg}` and `cost-against-pixels.{png,svg}`.
 mod scaling {
     use anyhow::{bail, Context};
-    use reports::tables::{chart, markdown, run_table, PaperTable, TableSpec};
+    use reports::sweep::run_table;
+    use reports::tables::{chart, markdown, PaperTable, TableSpec};
     use std::path::PathBuf;
 
     pub fn run() -> anyhow::Result<()> {
