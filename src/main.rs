@@ -297,8 +297,10 @@ struct RenderArgs {
     height: Option<u32>,
     /// Timed runs of the method (1 to 1000): with N > 1 it runs N + 1 times, G-buffer
     /// included, the first as an untimed warm-up; run.json (and metrics.json's method_ms) then
-    /// holds the run of median total time (the lower middle one for even N) and the printed
-    /// line its total with the min and max of the N; default 1 (one cold run).
+    /// holds the run of median CPU time (the lower middle one for even N) with every run's wall
+    /// and CPU times in its `timing`, and the printed line the medians of both clocks with
+    /// their 95 % intervals (from 6 runs on) and ranges; a run another process starved of CPU
+    /// is run again once and counted as contended. Default 1 (one cold run).
     #[arg(long, value_name = "N", default_value_t = 1, allow_negative_numbers = true,
           value_parser = clap::value_parser!(u32).range(1..=1000))]
     repeat: u32,
