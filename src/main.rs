@@ -776,18 +776,31 @@ struct Spread {
 }
 
 impl Spread {
-    /// How the time printed beside it was taken.
+    /// The times of the repeated runs: both clocks' medians with their intervals and ranges,
+    /// and how many runs were contended.
     fn describe(&self) -> String {
-        let cpu = self.cpu.map_or(String::new(), |c| format!("; CPU time {}", summary_text(&c)));
+        let cpu = self.cpu.map_or(String::new(), |c| format!("CPU {} ms, ", summary_text(&c)));
         let contended = match self.contended {
             0 => String::new(),
             n => format!("; {n} contended (another process took the cores)"),
         };
         format!(
-            "wall {} over {} runs after a warm-up{cpu}{contended}",
+            "{cpu}wall {} ms, median of {} runs after a warm-up{contended}",
             summary_text(&self.wall),
             self.wall.n
         )
+    }
+}
+
+/// The time of a run, on both clocks: the record's own for one run, the spread of repeated
+/// runs.
+fn time_text(record: &RunRecord, spread: Option<&Spread>) -> String {
+    match spread {
+        Some(s) => s.describe(),
+        None => {
+            let cpu = record.cpu_ms.map_or(String::new(), |c| format!(", {c:.1} ms CPU"));
+            format!("{:.1} ms wall{cpu}", record.total_ms)
+        }
     }
 }
 
@@ -859,14 +872,13 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
     if a.json {
         println!("{}", serde_json::to_string_pretty(&record)?);
     }
-    let spread = spread.map_or(String::new(), |s| format!(" ({})", s.describe()));
     eprintln!(
-        "{} on {} at {}x{}: {:.1} ms{spread}; wrote {}",
+        "{} on {} at {}x{}: {}; wrote {}",
         record.method,
         record.scene,
         job.width,
         job.height,
-        record.total_ms,
+        time_text(record, spread.as_ref()),
         out.display()
     );
     Ok(())
@@ -948,15 +960,15 @@ fn compare(c: CompareArgs) -> Result<(), Failure> {
     if a.json {
         println!("{text}");
     } else {
-        print_metrics(&metrics, spread.as_ref());
+        print_metrics(&metrics, &time_text(&ran.record, spread.as_ref()));
     }
     eprintln!("wrote {}", out.display());
     Ok(())
 }
 
-/// Prints a comparison: the shadow-only headline, then one line per class; `spread` is that
-/// of the method's repeated runs (`--repeat`).
-fn print_metrics(m: &reports::MetricsRecord, spread: Option<&Spread>) {
+/// Prints a comparison: the shadow-only headline, then one line per class, then the method's
+/// time (`time`, on both clocks) and the reference's.
+fn print_metrics(m: &reports::MetricsRecord, time: &str) {
     let c = &m.comparison;
     let rate = |r: Option<u32>| r.map_or(String::new(), |r| format!(" at {r} samples/pixel"));
     let against = match m.edge_reference.as_deref() {
@@ -1016,8 +1028,7 @@ fn print_metrics(m: &reports::MetricsRecord, spread: Option<&Spread>) {
         "  (pixels: compared/in the frame; {} uncovered)",
         c.class_pixels.get("uncovered").copied().unwrap_or(0)
     );
-    let spread = spread.map_or(String::new(), |s| format!(" ({})", s.describe()));
-    println!("  time: method {:.1} ms{spread}, reference {:.1} ms", m.method_ms, m.reference_ms);
+    println!("  time: method {time}; reference {:.1} ms wall", m.reference_ms);
 }
 
 fn main() -> ExitCode {

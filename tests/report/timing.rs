@@ -98,10 +98,9 @@ fn a_loaded_machine_flags_nothing_and_a_slower_method_alone_is_flagged() {
     let quiet = dir.path().join("quiet");
     report(&suite, &quiet, None, &[]);
 
-    let runs: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(quiet.join("runs.json")).expect("runs.json"),
-    )
-    .expect("json");
+    let runs: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(quiet.join("runs.json")).expect("runs.json"))
+            .expect("json");
     let rows = runs["rows"].as_array().expect("rows");
     assert_eq!(rows.len(), 8);
     for r in rows {
