@@ -19,9 +19,9 @@ width = 320
 height = 240
 warmup = 1
 repeats = 6
-max_repeats = 16
+max_repeats = 12
 target = 0.05
-time_cap_s = 20
+time_cap_s = 10
 scenes = ["cage", "spheres"]
 
 [[run]]
@@ -105,7 +105,7 @@ fn a_loaded_machine_flags_nothing_and_a_slower_method_alone_is_flagged() {
     assert_eq!(rows.len(), 8);
     for r in rows {
         assert!(r["cpu_ms"]["median"].as_f64().is_some_and(|c| c > 0.0), "{r}");
-        assert!(r["total_ms"]["n"].as_u64().is_some_and(|n| (6..=16).contains(&n)), "{r}");
+        assert!(r["total_ms"]["n"].as_u64().is_some_and(|n| (6..=12).contains(&n)), "{r}");
         assert!(r["conditions"]["cores"].as_u64().is_some_and(|c| c >= 1), "{r}");
     }
 
@@ -113,6 +113,8 @@ fn a_loaded_machine_flags_nothing_and_a_slower_method_alone_is_flagged() {
     let loaded = dir.path().join("loaded");
     let o = report(&suite, &loaded, Some(&quiet), &[]);
     let (summary, flagged) = baseline_lines(&o);
+    // The ratios, for the log of a failure.
+    eprintln!("{}", std::fs::read_to_string(loaded.join("baseline.md")).unwrap_or_default());
     assert!(summary.contains("8 runs compared"), "{summary}");
     assert!(summary.contains("0 slower, 0 less accurate, 0 faster"), "{summary}\n{flagged:?}");
 
@@ -124,5 +126,6 @@ fn a_loaded_machine_flags_nothing_and_a_slower_method_alone_is_flagged() {
     assert!(summary.contains("2 slower, 0 less accurate, 0 faster"), "{summary}\n{flagged:?}");
     assert!(flagged.iter().all(|l| l.contains("pcf-gems16")), "{flagged:?}");
     let md = std::fs::read_to_string(slowed.join("baseline.md")).expect("baseline.md");
+    eprintln!("{md}");
     assert!(md.contains("cpu 1.") && md.contains("**pcf-gems16**"), "{md}");
 }
