@@ -70,7 +70,8 @@ pub fn lone_plane(light: Light) -> Scene {
 }
 
 /// A report's `runs.json` without what depends on where and when it ran: its provenance,
-/// machine, shards and cache counts, every run's times and shard, every scene's times, and
+/// machine, shards and cache counts, every run's times (both clocks, the timed runs' count,
+/// contention and load) and shard, every scene's times, the papers' tables' runs' times and
 /// every paper's table (whose cells are times).
 pub fn report_without_times(dir: &Path) -> serde_json::Value {
     let text = std::fs::read_to_string(dir.join("runs.json")).expect("runs.json");
@@ -81,13 +82,19 @@ pub fn report_without_times(dir: &Path) -> serde_json::Value {
     }
     for row in o["rows"].as_array_mut().expect("rows") {
         let row = row.as_object_mut().expect("a row");
-        for k in ["total_ms", "stages", "shard"] {
+        for k in ["total_ms", "cpu_ms", "contended", "conditions", "stages", "shard"] {
             row.remove(k);
+        }
+    }
+    for run in o["table_runs"].as_array_mut().into_iter().flatten() {
+        let run = run.as_object_mut().expect("a table's run");
+        for k in ["total_ms", "cpu_ms", "contended", "stages", "shard", "gbuffer_ms"] {
+            run.remove(k);
         }
     }
     for scene in o["scenes"].as_array_mut().expect("scenes") {
         let scene = scene.as_object_mut().expect("a scene");
-        for k in ["gbuffer_ms", "reference_ms"] {
+        for k in ["gbuffer_ms", "gbuffer_cpu_ms", "reference_ms"] {
             scene.remove(k);
         }
     }

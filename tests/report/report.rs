@@ -7,7 +7,7 @@ name = "tiny"
 width = 64
 height = 48
 warmup = 1
-repeats = 2
+repeats = 6
 ref_rate = 4
 scenes = ["plane-square", "hairball"]
 
@@ -48,14 +48,17 @@ fn a_suite_file_writes_tables_that_parse_back() {
     let out = dir.path().join("out");
     let o = shadowbench(&["report", "--suite", &suite, "--out", out.to_str().expect("utf-8")]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    // Standard error is a pipe here: a progress line per scene and table, and one at the end.
+    // Standard error is a pipe here: a progress line per frame, and one at the end. The
+    // tables' runs on plane-square at the suite's frame join its frame; random-1k's, of both
+    // tables, share one.
     let log = stderr(&o);
     let starts = |p: &str| log.lines().filter(|l| l.starts_with(p)).count();
-    assert_eq!(starts("scene 1/2 plane-square: 0/26 runs done, "), 1, "{log}");
-    assert_eq!(starts("scene 2/2 hairball: 6/26 runs done, "), 1, "{log}");
-    assert_eq!(starts("table 1/2 aila-laine-table1: 12/26 runs done, "), 1, "{log}");
-    assert_eq!(starts("table 2/2 cost-against-triangles: 14/26 runs done, "), 1, "{log}");
+    assert_eq!(starts("frame 1/3 plane-square 64x48: 0/26 runs done, "), 1, "{log}");
+    assert_eq!(starts("frame 2/3 hairball 64x48: 13/26 runs done, "), 1, "{log}");
+    assert_eq!(starts("frame 3/3 random-1k 64x48: 19/26 runs done, "), 1, "{log}");
     assert_eq!(starts("done: 26/26 runs done, "), 1, "{log}");
+    let last = String::from_utf8_lossy(&o.stdout);
+    assert!(last.contains("26 of 26 planned runs measured") || !methods::registry::HAS_GPU, "{last}");
 
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("runs.json")).expect("runs.json"))
@@ -159,10 +162,14 @@ fn a_suite_file_writes_tables_that_parse_back() {
         let err: f64 = l[col("mean_abs_error")].parse().expect("number");
         assert!((0.0..=1.0).contains(&err));
         let ms = |c: &str| -> f64 { l[col(c)].parse().expect(c) };
-        assert!(ms("time_min_ms") <= ms("time_ci_low_ms"));
-        assert!(ms("time_ci_low_ms") <= ms("time_median_ms"));
-        assert!(ms("time_median_ms") <= ms("time_ci_high_ms"));
-        assert!(ms("time_ci_high_ms") <= ms("time_max_ms"));
+        // Six timed runs at least: the median's 95 % interval is there, on both clocks.
+        for clock in ["time", "cpu"] {
+            let at = |q: &str| ms(&format!("{clock}_{q}_ms"));
+            assert!(at("min") <= at("ci_low") && at("ci_low") <= at("median"), "{clock}");
+            assert!(at("median") <= at("ci_high") && at("ci_high") <= at("max"), "{clock}");
+        }
+        assert!(l[col("timed_runs")].parse::<u32>().is_ok_and(|n| n >= 6));
+        assert!(["true", "false"].contains(&l[col("contended")].as_str()));
         // A run without boundary pixels has no boundary error: an empty cell, not 0.
         let boundary: u64 = l[col("boundary_pixels")].parse().expect("count");
         assert_eq!(boundary == 0, l[col("boundary_mean_abs_error")].is_empty());
