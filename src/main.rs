@@ -570,7 +570,7 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
     let started = std::time::Instant::now();
-    let runs_planned = reports::sweep::items_run_count(&suite, &plan, &items);
+    let runs_planned = reports::sweep::items_run_count(&plan, &items);
     let bar = indicatif::ProgressBar::new(runs_planned);
     bar.set_style(
         indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} runs, {elapsed} {msg}")
@@ -681,7 +681,7 @@ fn print_plan(suite: &reports::Suite, shard: Option<reports::plan::Shard>) -> Re
     print!("{out}");
     let cost: f64 = items.iter().map(|&k| plan[k].cost).sum();
     let total: f64 = plan.iter().map(|i| i.cost).sum();
-    let runs = reports::sweep::items_run_count(suite, &plan, &items);
+    let runs = reports::sweep::items_run_count(&plan, &items);
     let whose = shard.map_or_else(String::new, |s| format!("shard {s}: "));
     eprintln!(
         "{whose}{} items, {runs} runs, {:.1} % of the suite's estimated cost",

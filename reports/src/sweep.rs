@@ -24,7 +24,7 @@ use crate::output::shade;
 use crate::output::MetricsRecord;
 use crate::plan::{Work, WorkItem};
 use crate::suite::{GridSpec, PanelSpec, ReferenceChoice, Suite};
-use crate::tables::{table_run_count, TableRun};
+use crate::tables::TableRun;
 use crate::timing::Machine;
 use analysis::compare::Truth;
 use analysis::metrics::exceedance;
@@ -222,13 +222,13 @@ pub fn run_suite(suite: &Suite, progress: impl FnMut(&Progress<'_>)) -> (Report,
 }
 
 /// How many method runs the items of `plan` numbered in `items` make.
-pub fn items_run_count(suite: &Suite, plan: &[WorkItem], items: &[usize]) -> u64 {
+pub fn items_run_count(plan: &[WorkItem], items: &[usize]) -> u64 {
     items
         .iter()
         .map(|&k| match &plan[k].work {
             Work::Runs { runs, .. } => runs.len() as u64,
             Work::Grid { .. } => 0,
-            Work::Table { table, .. } => table_run_count(&suite.tables[*table]),
+            Work::Table { runs, .. } => runs.len() as u64,
         })
         .sum()
 }
@@ -315,7 +315,7 @@ pub fn run_items(
     mut cache: Option<&mut ReferenceCache>,
     mut progress: impl FnMut(&Progress<'_>),
 ) -> (Report, Images) {
-    let runs_total = items_run_count(suite, plan, items);
+    let runs_total = items_run_count(plan, items);
     let cost_total: f64 = items.iter().map(|&k| plan[k].cost).sum();
     let log = ProgressLog::new(runs_total);
     let done = Cell::new((0u64, 0.0f64));

@@ -313,12 +313,6 @@ pub fn frames_of(spec: &TableSpec) -> Vec<(u32, u32)> {
     }
 }
 
-/// Method runs a table makes, for progress bars.
-pub fn table_run_count(spec: &TableSpec) -> u64 {
-    let frames = frames_of(spec).len() as u64;
-    scenes_of(spec).iter().map(|s| spec.paper.runs(s).len() as u64 * frames).sum()
-}
-
 fn scenes_of(spec: &TableSpec) -> Vec<String> {
     if spec.scenes.is_empty() {
         spec.paper.default_scenes().iter().map(|s| (*s).to_owned()).collect()
@@ -882,7 +876,8 @@ mod tests {
             let spec = TableSpec { paper: p, scenes: vec![], width: 0, height: 0 };
             let frames = frames_of(&spec).len();
             let runs: usize = p.default_scenes().iter().map(|s| p.runs(s).len() * frames).sum();
-            assert_eq!(table_run_count(&spec) as usize, runs);
+            let planned: usize = table_items(&spec).iter().map(|(_, _, r)| r.len()).sum();
+            assert_eq!(planned, runs);
             assert!(!p.hardware().is_empty());
         }
         // Pan et al.'s rates: 128 for the cage, 32 for the plant and elsewhere.

@@ -58,7 +58,10 @@ fn a_suite_file_writes_tables_that_parse_back() {
     assert_eq!(starts("frame 3/3 random-1k 64x48: 19/26 runs done, "), 1, "{log}");
     assert_eq!(starts("done: 26/26 runs done, "), 1, "{log}");
     let last = String::from_utf8_lossy(&o.stdout);
-    assert!(last.contains("26 of 26 planned runs measured") || !methods::registry::HAS_GPU, "{last}");
+    assert!(
+        last.contains("26 of 26 planned runs measured") || !methods::registry::HAS_GPU,
+        "{last}"
+    );
 
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("runs.json")).expect("runs.json"))
@@ -169,7 +172,7 @@ fn a_suite_file_writes_tables_that_parse_back() {
             assert!(at("median") <= at("ci_high") && at("ci_high") <= at("max"), "{clock}");
         }
         assert!(l[col("timed_runs")].parse::<u32>().is_ok_and(|n| n >= 6));
-        assert!(["true", "false"].contains(&l[col("contended")].as_str()));
+        assert!(["true", "false"].contains(&&l[col("contended")]));
         // A run without boundary pixels has no boundary error: an empty cell, not 0.
         let boundary: u64 = l[col("boundary_pixels")].parse().expect("count");
         assert_eq!(boundary == 0, l[col("boundary_mean_abs_error")].is_empty());
