@@ -372,18 +372,26 @@ fn render_repeat_reports_the_median_run_with_its_spread() {
             .collect::<Vec<_>>()
     };
     assert_eq!(names(&once), names(&thrice));
-    // `sm on cage at 96x72: T ms (median of 3 runs after a warm-up, min A ms, max B ms); ...`
+    // `sm on cage at 96x72: CPU T (no interval) [A, B] ms, wall W (no interval) [C, D] ms,
+    // median of 3 runs after a warm-up; wrote ...`: the record kept is the run of median CPU
+    // time, and its `timing` holds every run's.
     let err = stderr(&o);
-    let ms = |after: &str| -> f64 {
-        let rest = &err
-            [err.find(after).unwrap_or_else(|| panic!("no `{after}` in {err}")) + after.len()..];
-        rest.split(" ms").next().and_then(|t| t.trim().parse().ok()).expect("a time")
+    let after = |key: &str| -> &str {
+        &err[err.find(key).unwrap_or_else(|| panic!("no `{key}` in {err}")) + key.len()..]
     };
+    let number = |t: &str| -> f64 { t.trim().parse().unwrap_or_else(|_| panic!("`{t}` in {err}")) };
     assert!(err.contains("median of 3 runs after a warm-up"), "{err}");
-    let (total, min, max) = (ms("96x72:"), ms("min"), ms("max"));
-    let recorded = thrice["total_ms"].as_f64().expect("total");
-    assert!((total - recorded).abs() < 0.06, "printed {total}, run.json {recorded}");
-    assert!(min <= total && total <= max, "{err}");
+    let cpu = after("96x72: CPU ");
+    let median = number(cpu.split(' ').next().expect("a median"));
+    let range = &cpu[cpu.find('[').expect("a range") + 1..cpu.find(']').expect("a range")];
+    let (min, max) = range.split_once(", ").map(|(a, b)| (number(a), number(b))).expect("a range");
+    let recorded = thrice["cpu_ms"].as_f64().expect("CPU time");
+    assert!((median - recorded).abs() < 0.06, "printed {median}, run.json {recorded}");
+    assert!(min <= median && median <= max, "{err}");
+    assert!(after("no interval").contains("wall "), "three runs have no 95 % interval: {err}");
+    let samples = thrice["timing"]["samples"].as_array().expect("the timed runs");
+    assert_eq!(samples.len(), 3);
+    assert!(samples.iter().all(|s| s["wall_ms"].as_f64().is_some_and(|w| w > 0.0)), "{samples:?}");
 
     for bad in ["0", "-1", "1001", "many"] {
         let (o, _) = render(&format!("bad{bad}"), bad);
@@ -429,7 +437,10 @@ fn identical_renders_write_identical_files() {
         let mut v: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(d.join("run.json")).expect("run.json"))
                 .expect("JSON");
-        v["total_ms"] = serde_json::Value::Null;
+        // Times: both clocks, and how they were taken (the timed runs, contention, load).
+        for key in ["total_ms", "cpu_ms", "timing"] {
+            v[key] = serde_json::Value::Null;
+        }
         // The provenance names the command (its output folder) and the time of the run.
         for key in ["command", "timestamp"] {
             assert!(v["provenance"][key].is_string(), "provenance.{key}");
@@ -437,6 +448,7 @@ fn identical_renders_write_identical_files() {
         }
         for s in v["stages"].as_array_mut().expect("stages") {
             s["ms"] = serde_json::Value::Null;
+            s["cpu_ms"] = serde_json::Value::Null;
         }
         v
     };
