@@ -8,19 +8,6 @@
 
 use instrumentation::measure::Protocol;
 
-/// Median of `v` (mean of the two middle values for an even count); NaN when empty.
-pub fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n == 0 {
-        f64::NAN
-    } else if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
 /// Timed runs per configuration: `SHADOWBENCH_BENCH_RUNS` when it is a positive number, else
 /// `default`.
 pub fn runs(default: usize) -> usize {
