@@ -12,18 +12,28 @@
 //! methods', so both sides' times are the wall-clock medians of the per-run stage sums
 //! (`Measured::wall_ms`), with the median CPU time of the process's threads over a run beside
 //! them (`Measured::cpu_ms`: the rayon pool and Embree's own threads included). Rays per
-//! second divide the median run's rays by the median of the ray stages' times.
+//! second divide the median run's rays by the median time of its ray stages (in the `afsm` row,
+//! Embree's BVH build and shadow rays together).
 //!
 //! Usage: `embree-side-by-side [--threads N] [--repeats R] [--scenes a,b,...]` (built with
 //! `--features embree`; `scripts/embree-bench` runs it at 1 and 2 threads), or
 //! `embree-side-by-side scaling [...]`: cost against work (the `papers` report's two
 //! cost-against-work tables), without Embree.
 
+/// The command lines the binary takes.
+const USAGE: &str = "embree-side-by-side [--threads N] [--repeats R] [--scenes a,b,...]   \
+                     (built with --features embree)\n\
+                     embree-side-by-side scaling [--threads N] [--repeats R] [--out DIR]";
+
 fn main() -> anyhow::Result<()> {
-    if std::env::args().nth(1).as_deref() == Some("scaling") {
-        return scaling::run();
+    match std::env::args().nth(1).as_deref() {
+        Some("scaling") => scaling::run(),
+        Some("--help" | "-h") => {
+            println!("{USAGE}");
+            Ok(())
+        }
+        _ => side_by_side(),
     }
-    side_by_side()
 }
 
 #[cfg(not(feature = "embree"))]
@@ -123,7 +133,7 @@ mod side_by_side {
                 "--repeats" => a.repeats = value()?.parse().context("--repeats: a count")?,
                 "--scenes" => a.scenes = value()?.split(',').map(String::from).collect(),
                 "--help" | "-h" => {
-                    println!("embree-side-by-side [--threads N] [--repeats R] [--scenes a,b,...]");
+                    println!("{}", super::USAGE);
                     std::process::exit(0);
                 }
                 other => bail!("unknown flag {other} (see --help)"),
