@@ -4,14 +4,31 @@
 //! time), on the calling rayon pool's threads, a row of pixels per task.
 //!
 //! Hot loops allocate nothing per ray: a stream's 16 rays live in one vector per row.
+//!
+//! Timing: the parts are stages of an [`instrumentation::Stages`] ([`STAGE_BVH_BUILD`],
+//! [`STAGE_CAMERA_RAYS`], [`STAGE_SHADOW_RAYS`]), each timed by [`Stages::time`] on both
+//! clocks (wall-clock, and CPU time of the process's threads, Embree's own threads included),
+//! so that a caller measuring [`trace_on`] or [`shadows_on`] through
+//! `instrumentation::measure` has Embree's figures from the stages. The Embree device is the
+//! caller's, made once outside the timed runs.
 
 use crate::{embree_shadow_start, shadow_ray, Samples};
 use cgmath::Vector3;
-use embree::{Device, Geometry, IntersectContext, Ray, RayHit, Scene, TriangleMesh};
+use embree::{
+    CommittedScene, Device, Geometry, IntersectContext, Ray, RayHit, Scene, TriangleMesh,
+};
 use glam::DVec3;
+use instrumentation::Stages;
 use methods::Frame;
 use rayon::prelude::*;
-use std::time::Instant;
+
+/// Stage name of Embree's BVH build (both scenes: every triangle, and the casters when some
+/// triangle casts no shadow).
+pub const STAGE_BVH_BUILD: &str = "Embree BVH build";
+/// Stage name of Embree's camera rays.
+pub const STAGE_CAMERA_RAYS: &str = "Embree camera rays";
+/// Stage name of Embree's shadow rays.
+pub const STAGE_SHADOW_RAYS: &str = "Embree shadow rays";
 
 /// How rays are handed to Embree.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -75,26 +92,116 @@ struct CameraHit {
     p: DVec3,
 }
 
-/// Traces `samples` of `frame` with Embree through `api` (see the module documentation).
-pub fn trace(frame: &Frame<'_>, samples: &Samples, api: Api) -> Traced {
-    let device = Device::new();
-    let start = Instant::now();
-    let mut all = Scene::new(&device);
-    all.attach_geometry(mesh(&device, frame, |_| true));
-    let mut casters_only = None;
-    if (0..frame.geometry.len()).any(|t| !frame.is_caster(t)) {
-        let mut s = Scene::new(&device);
-        s.attach_geometry(mesh(&device, frame, |t| frame.is_caster(t)));
-        casters_only = Some(s);
-    }
-    let all = all.commit();
-    let casters = casters_only.as_ref().map(|s| s.commit());
-    let build_ms = start.elapsed().as_secs_f64() * 1e3;
-    let casters = casters.as_ref().unwrap_or(&all);
+/// Embree's camera hits of a frame's samples, row by row, to trace shadow rays from.
+pub struct CameraHits {
+    rows: Vec<Vec<Option<CameraHit>>>,
+}
 
+impl CameraHits {
+    /// How many samples hit a surface: the shadow rays to trace.
+    pub fn shadow_rays(&self) -> u64 {
+        self.rows.iter().flatten().filter(|h| h.is_some()).count() as u64
+    }
+}
+
+/// The milliseconds of the latest stage `name` of `stages` (0 when there is none).
+fn stage_ms(stages: &Stages, name: &str) -> f64 {
+    stages.stages.iter().rev().find(|s| s.name == name).map_or(0.0, |s| s.ms)
+}
+
+/// Builds Embree's scenes over `frame` on `device` as the stage [`STAGE_BVH_BUILD`] of
+/// `stages`, then calls `f` with the scene of every triangle, the scene of the casters (the
+/// same one when every triangle casts) and `stages`.
+fn with_bvh<T>(
+    device: &Device,
+    frame: &Frame<'_>,
+    stages: &mut Stages,
+    f: impl FnOnce(&CommittedScene<'_>, &CommittedScene<'_>, &mut Stages) -> T,
+) -> T {
+    let needs_casters = (0..frame.geometry.len()).any(|t| !frame.is_caster(t));
+    let mut all = Scene::new(device);
+    let mut casters_only = needs_casters.then(|| Scene::new(device));
+    let (all_ref, casters_ref) = (&mut all, casters_only.as_mut());
+    let (all, casters) = stages.time(STAGE_BVH_BUILD, move || {
+        all_ref.attach_geometry(mesh(device, frame, |_| true));
+        let casters = casters_ref.map(|s| {
+            s.attach_geometry(mesh(device, frame, |t| frame.is_caster(t)));
+            let s: &Scene<'_> = s;
+            s.commit()
+        });
+        let all_ref: &Scene<'_> = all_ref;
+        (all_ref.commit(), casters)
+    });
+    f(&all, casters.as_ref().unwrap_or(&all), stages)
+}
+
+/// Traces `samples` of `frame` with Embree through `api` (see the module documentation), on a
+/// device of its own, its stages' times in the result only.
+pub fn trace(frame: &Frame<'_>, samples: &Samples, api: Api) -> Traced {
+    trace_on(&Device::new(), frame, samples, api, &mut Stages::default())
+}
+
+/// Traces `samples` of `frame` with Embree on `device` through `api`: the BVH build, the
+/// camera rays and the shadow rays, each a stage of `stages`.
+pub fn trace_on(
+    device: &Device,
+    frame: &Frame<'_>,
+    samples: &Samples,
+    api: Api,
+    stages: &mut Stages,
+) -> Traced {
+    with_bvh(device, frame, stages, |all, casters, stages| {
+        let hits = stages.time(STAGE_CAMERA_RAYS, || camera_rays(all, frame, samples, api));
+        let light = stages.time(STAGE_SHADOW_RAYS, || shadow_rays(casters, frame, &hits, api));
+        let triangle = hits
+            .rows
+            .iter()
+            .flatten()
+            .map(|h| h.as_ref().map_or(methods::raster::NO_TRIANGLE, |h| h.triangle))
+            .collect();
+        Traced {
+            triangle,
+            light,
+            build_ms: stage_ms(stages, STAGE_BVH_BUILD),
+            camera_ms: stage_ms(stages, STAGE_CAMERA_RAYS),
+            shadow_ms: stage_ms(stages, STAGE_SHADOW_RAYS),
+            camera_rays: samples.points.len() as u64,
+            shadow_rays: hits.shadow_rays(),
+        }
+    })
+}
+
+/// Embree's camera hits of `samples` of `frame` through `api`, on a BVH of their own, untimed.
+pub fn camera_hits(device: &Device, frame: &Frame<'_>, samples: &Samples, api: Api) -> CameraHits {
+    with_bvh(device, frame, &mut Stages::default(), |all, _, _| {
+        camera_rays(all, frame, samples, api)
+    })
+}
+
+/// Embree's BVH build and the shadow rays from `hits` through `api`, each a stage of
+/// `stages`; the shadow rays traced.
+pub fn shadows_on(
+    device: &Device,
+    frame: &Frame<'_>,
+    hits: &CameraHits,
+    api: Api,
+    stages: &mut Stages,
+) -> u64 {
+    with_bvh(device, frame, stages, |_, casters, stages| {
+        stages.time(STAGE_SHADOW_RAYS, || shadow_rays(casters, frame, hits, api));
+        hits.shadow_rays()
+    })
+}
+
+/// The camera rays of `samples` against `all`, a row of pixels per task.
+fn camera_rays(
+    all: &CommittedScene<'_>,
+    frame: &Frame<'_>,
+    samples: &Samples,
+    api: Api,
+) -> CameraHits {
     let w = samples.width as usize * samples.rate;
-    let start = Instant::now();
-    let hits: Vec<Vec<Option<CameraHit>>> = samples
+    let rows = samples
         .points
         .par_chunks(w.max(1))
         .map(|row| {
@@ -132,10 +239,19 @@ pub fn trace(frame: &Frame<'_>, samples: &Samples, api: Api) -> Traced {
             }
         })
         .collect();
-    let camera_ms = start.elapsed().as_secs_f64() * 1e3;
+    CameraHits { rows }
+}
 
-    let start = Instant::now();
+/// The shadow rays from `hits` against `casters`, a row of pixels per task: each sample's
+/// light, 1 lit (or background), 0 shadowed.
+fn shadow_rays(
+    casters: &CommittedScene<'_>,
+    frame: &Frame<'_>,
+    hits: &CameraHits,
+    api: Api,
+) -> Vec<f64> {
     let light: Vec<Vec<f64>> = hits
+        .rows
         .par_iter()
         .map(|row| {
             let mut ctx = IntersectContext::incoherent();
@@ -179,24 +295,7 @@ pub fn trace(frame: &Frame<'_>, samples: &Samples, api: Api) -> Traced {
             }
         })
         .collect();
-    let shadow_ms = start.elapsed().as_secs_f64() * 1e3;
-
-    let camera_rays = samples.points.len() as u64;
-    let shadow_rays = hits.iter().flatten().filter(|h| h.is_some()).count() as u64;
-    let triangle = hits
-        .iter()
-        .flatten()
-        .map(|h| h.as_ref().map_or(methods::raster::NO_TRIANGLE, |h| h.triangle))
-        .collect();
-    Traced {
-        triangle,
-        light: light.into_iter().flatten().collect(),
-        build_ms,
-        camera_ms,
-        shadow_ms,
-        camera_rays,
-        shadow_rays,
-    }
+    light.into_iter().flatten().collect()
 }
 
 /// The sample's hit from Embree's answer to the camera ray `origin + t direction`.

@@ -77,9 +77,3 @@ pub fn embree_shadow_start(eye: DVec3, p: DVec3, tmin: f64) -> f64 {
     let magnitude = eye.abs().max(p.abs()).max_element() + (p - eye).abs().max_element();
     tmin.max(64.0 * f64::from(f32::EPSILON) * magnitude)
 }
-
-/// Median of `times` (milliseconds), the lower middle one for an even count.
-pub fn median(times: &mut [f64]) -> f64 {
-    times.sort_by(f64::total_cmp);
-    times.get((times.len().max(1) - 1) / 2).copied().unwrap_or(f64::NAN)
-}

@@ -4,16 +4,36 @@
 //! faster); on `bunny-plane` also `spsm` against `sm` at 1920x1080 (there the ratio is
 //! `spsm / sm`, the "Embree" column holding `sm`'s time).
 //!
+//! Timing: every figure is measured by the workbench's one timing loop,
+//! `instrumentation::measure::measure_all`, under `Protocol::fixed(1, R)`: one untimed warm-up,
+//! then exactly `R` timed runs (`--repeats`, default 3), the runs of one frame (ours and
+//! Embree's, every row of the frame) interleaved round by round. Embree's BVH build, camera
+//! rays and shadow rays are stages of its runs (`bench::embree_tracer`), as ours are of our
+//! methods', so both sides' times are the wall-clock medians of the per-run stage sums
+//! (`Measured::wall_ms`), with the median CPU time of the process's threads over a run beside
+//! them (`Measured::cpu_ms`: the rayon pool and Embree's own threads included). Rays per
+//! second divide the median run's rays by the median time of its ray stages (in the `afsm` row,
+//! Embree's BVH build and shadow rays together).
+//!
 //! Usage: `embree-side-by-side [--threads N] [--repeats R] [--scenes a,b,...]` (built with
 //! `--features embree`; `scripts/embree-bench` runs it at 1 and 2 threads), or
 //! `embree-side-by-side scaling [...]`: cost against work (the `papers` report's two
 //! cost-against-work tables), without Embree.
 
+/// The command lines the binary takes.
+const USAGE: &str = "embree-side-by-side [--threads N] [--repeats R] [--scenes a,b,...]   \
+                     (built with --features embree)\n\
+                     embree-side-by-side scaling [--threads N] [--repeats R] [--out DIR]";
+
 fn main() -> anyhow::Result<()> {
-    if std::env::args().nth(1).as_deref() == Some("scaling") {
-        return scaling::run();
+    match std::env::args().nth(1).as_deref() {
+        Some("scaling") => scaling::run(),
+        Some("--help" | "-h") => {
+            println!("{USAGE}");
+            Ok(())
+        }
+        _ => side_by_side(),
     }
-    side_by_side()
 }
 
 #[cfg(not(feature = "embree"))]
@@ -67,7 +87,7 @@ mod scaling {
         for paper in [PaperTable::CostAgainstTriangles, PaperTable::CostAgainstPixels] {
             let spec = TableSpec { paper, scenes: Vec::new(), width: 0, height: 0 };
             let mut skipped = Vec::new();
-            let protocol = instrumentation::measure::Protocol::fixed(0, repeats as u32);
+            let protocol = instrumentation::measure::Protocol::fixed(0, repeats);
             let table = run_table(&spec, &protocol, &mut skipped, |_| {});
             for s in &skipped {
                 eprintln!("note: {s}");
@@ -84,12 +104,16 @@ mod scaling {
 
 #[cfg(feature = "embree")]
 mod side_by_side {
-    use anyhow::{bail, Context};
-    use bench::embree_tracer::{trace, Api};
-    use bench::{median, Samples};
+    use anyhow::{anyhow, bail, Context};
+    use bench::embree_tracer::{
+        camera_hits, shadows_on, trace_on, Api, STAGE_CAMERA_RAYS, STAGE_SHADOW_RAYS,
+    };
+    use bench::Samples;
+    use embree::Device;
+    use instrumentation::measure::{measure_all, Measured, Protocol};
     use instrumentation::Recorder;
     use methods::pattern::{PatternKind, SamplePattern};
-    use methods::{Frame, MethodOptions};
+    use methods::{Frame, MethodOptions, ShadowMethod};
 
     const SCENES: [&str; 6] =
         ["random-10k", "random-100k", "random-1m", "bunny-plane", "cage", "bumpy"];
@@ -110,7 +134,7 @@ mod side_by_side {
                 "--repeats" => a.repeats = value()?.parse().context("--repeats: a count")?,
                 "--scenes" => a.scenes = value()?.split(',').map(String::from).collect(),
                 "--help" | "-h" => {
-                    println!("embree-side-by-side [--threads N] [--repeats R] [--scenes a,b,...]");
+                    println!("{}", super::USAGE);
                     std::process::exit(0);
                 }
                 other => bail!("unknown flag {other} (see --help)"),
@@ -122,69 +146,65 @@ mod side_by_side {
         Ok(a)
     }
 
-    /// Median over `repeats` runs of `f`'s milliseconds.
-    fn timed(repeats: usize, mut f: impl FnMut() -> f64) -> f64 {
-        let mut t: Vec<f64> = (0..repeats).map(|_| f()).collect();
-        median(&mut t)
+    /// One timed run of a subject: ours or Embree's, on one frame.
+    type Subject<'a> = Box<dyn FnMut(&mut Recorder) -> anyhow::Result<()> + 'a>;
+
+    /// Our method `t` on `frame`: its stages are the run's.
+    fn ours<'a>(frame: &'a Frame<'_>, t: &'a dyn ShadowMethod) -> Subject<'a> {
+        Box::new(move |rec: &mut Recorder| {
+            t.run(frame, rec)?;
+            Ok(())
+        })
     }
 
-    /// Our `raytrace` at `rate`: BVH build and ray tracing, milliseconds, and rays traced.
-    fn ours_raytrace(
-        frame: &Frame<'_>,
-        rate: u32,
-        repeats: usize,
-    ) -> anyhow::Result<(f64, f64, u64)> {
-        let pattern = SamplePattern::new(rate, PatternKind::Grid)?;
-        let rt = analysis::raytrace::RayTrace { pattern };
-        let mut rays = 0;
-        let mut build = Vec::new();
-        let mut tracing = Vec::new();
-        for _ in 0..repeats {
-            let mut rec = Recorder::default();
-            analysis::Reference::evaluate(&rt, frame, &mut rec)?;
-            let stage = |n: &str| {
-                rec.stages.stages.iter().filter(|s| s.name == n).map(|s| s.ms).sum::<f64>()
-            };
-            build.push(stage(analysis::raytrace::STAGE_BVH_BUILD));
-            tracing.push(stage(analysis::raytrace::STAGE_RAY_TRACING));
-            rays = rec.counters.rays_traced;
-        }
-        Ok((median(&mut build), median(&mut tracing), rays))
+    /// Embree tracing `samples` of `frame` through `api`: BVH build, camera and shadow rays,
+    /// each a stage; the rays traced counted as `rays_traced`.
+    fn embree<'a>(
+        device: &'a Device,
+        frame: &'a Frame<'_>,
+        samples: &'a Samples,
+        api: Api,
+    ) -> Subject<'a> {
+        Box::new(move |rec: &mut Recorder| {
+            let t = trace_on(device, frame, samples, api, &mut rec.stages);
+            rec.counters.rays_traced = t.camera_rays + t.shadow_rays;
+            Ok(())
+        })
     }
 
-    /// A method's total stage time, milliseconds (the camera G-buffer is the frame's).
-    fn ours_method(
-        frame: &Frame<'_>,
-        name: &str,
-        options: &MethodOptions,
-        repeats: usize,
-    ) -> anyhow::Result<f64> {
-        let t = analysis::registry::technique(name, options)?;
-        let mut times = Vec::new();
-        for _ in 0..repeats {
-            let mut rec = Recorder::default();
-            t.run(frame, &mut rec)?;
-            times.push(rec.stages.total_ms());
-        }
-        Ok(median(&mut times))
+    /// The median of the stages `names` of `m`, summed (ms).
+    fn stages_ms(m: &Measured<()>, names: &[&str]) -> f64 {
+        m.stages.iter().filter(|s| names.contains(&s.name.as_str())).map(|s| s.ms.median).sum()
+    }
+
+    /// Measures `subjects` interleaved under `protocol`; the first failure is the error.
+    fn measure_frame(
+        protocol: &Protocol,
+        subjects: &mut [Subject<'_>],
+    ) -> anyhow::Result<Vec<Measured<()>>> {
+        measure_all(protocol, subjects, |_| {}).into_iter().collect()
     }
 
     pub fn run() -> anyhow::Result<()> {
         let a = args()?;
         rayon::ThreadPoolBuilder::new().num_threads(a.threads).build_global()?;
         let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
+        let protocol = Protocol::fixed(1, u32::try_from(a.repeats).context("--repeats")?);
         println!(
             "# Embree 3 beside shadowbench: {} rayon threads ({cores} cores available to the \
-             process, which bounds Embree's BVH build), median of {} runs\n",
+             process, which bounds Embree's BVH build); wall-clock medians of {} runs after one \
+             warm-up (instrumentation::measure, the runs of a frame interleaved); CPU time of \
+             the process's threads beside (Embree's threads included)\n",
             a.threads, a.repeats
         );
-        println!("| scene | frame | triangles | camera G-buffer ms | measure | ours ms | Embree ms | ours / Embree | ours Mrays/s | Embree Mrays/s |");
-        println!("|---|---|---|---|---|---|---|---|---|---|");
+        println!("| scene | frame | triangles | camera G-buffer ms | measure | ours ms | Embree ms | ours / Embree | ours Mrays/s | Embree Mrays/s | ours CPU ms | Embree CPU ms |");
+        println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+        let device = Device::new();
         for name in &a.scenes {
             let scene = match scenes::load(name) {
                 Ok(s) => s,
                 Err(e) => {
-                    println!("| {name} | skipped: {e} |||||||||");
+                    println!("| {name} | skipped: {e} |||||||||||");
                     continue;
                 }
             };
@@ -193,91 +213,103 @@ mod side_by_side {
                 let mut rec = Recorder::default();
                 let frame = Frame::new(&scene, w, h, &mut rec);
                 let gbuffer = rec.stages.total_ms();
+                let triangles = frame.geometry.len();
                 let pattern = SamplePattern::new(rate, PatternKind::Grid)?;
                 let samples = Samples::new(&frame, &pattern);
-                let (ob, ot, rays) = ours_raytrace(&frame, rate, a.repeats)?;
-                for api in [Api::PerRay, Api::Stream16] {
-                    let mut last = None;
-                    let e = timed(a.repeats, || {
-                        let t = trace(&frame, &samples, api);
-                        let ms = t.build_ms + t.camera_ms + t.shadow_ms;
-                        last = Some(t);
-                        ms
-                    });
-                    let Some(t) = last else { continue };
-                    let erays = t.camera_rays + t.shadow_rays;
-                    row(
-                        name,
-                        (w, h),
-                        frame.geometry.len(),
-                        gbuffer,
+                let rt = analysis::raytrace::RayTrace { pattern };
+                // At rate 1, what the rows after the ray tracers need: `afsm`, `pan09` at 32x,
+                // the 32x samples and Embree's camera hits (traced once here, untimed).
+                let at_rate_1 = (rate == 1)
+                    .then(|| -> anyhow::Result<_> {
+                        let afsm =
+                            analysis::registry::technique("afsm", &MethodOptions::default())?;
+                        let options = MethodOptions { rate: Some(32), ..Default::default() };
+                        let pan = analysis::registry::technique("pan09", &options)?;
+                        let s32 = Samples::new(&frame, &SamplePattern::new(32, PatternKind::Grid)?);
+                        let hits = camera_hits(&device, &frame, &samples, Api::PerRay);
+                        Ok((afsm, pan, s32, hits))
+                    })
+                    .transpose()?;
+                // The frame's subjects, in the order of the rows: our `raytrace`, then Embree
+                // per ray and in streams of 16; at rate 1 also `afsm` and Embree's BVH plus
+                // shadow rays from the camera's hits, and `pan09` at 32x and Embree
+                // supersampling the frame at 32x.
+                let mut subjects: Vec<Subject<'_>> = vec![
+                    Box::new(|rec: &mut Recorder| {
+                        analysis::Reference::evaluate(&rt, &frame, rec)?;
+                        Ok(())
+                    }),
+                    embree(&device, &frame, &samples, Api::PerRay),
+                    embree(&device, &frame, &samples, Api::Stream16),
+                ];
+                if let Some((afsm, pan, s32, hits)) = &at_rate_1 {
+                    let (device, frame) = (&device, &frame);
+                    subjects.push(ours(frame, afsm.as_ref()));
+                    subjects.push(Box::new(move |rec: &mut Recorder| {
+                        rec.counters.rays_traced =
+                            shadows_on(device, frame, hits, Api::PerRay, &mut rec.stages);
+                        Ok(())
+                    }));
+                    subjects.push(ours(frame, pan.as_ref()));
+                    subjects.push(embree(device, frame, s32, Api::PerRay));
+                }
+                let measured = measure_frame(&protocol, &mut subjects)?;
+                let line = |measure: &str, ours: &Measured<()>, theirs: &Measured<()>, rates| {
+                    row(name, (w, h), triangles, gbuffer, measure, ours, theirs, rates)
+                };
+                let rays = |m: &Measured<()>| m.record.counters.rays_traced as f64;
+                let ours_rt = &measured[0];
+                for (theirs, api) in measured[1..3].iter().zip([Api::PerRay, Api::Stream16]) {
+                    let traced = stages_ms(theirs, &[STAGE_CAMERA_RAYS, STAGE_SHADOW_RAYS]);
+                    let ours_traced = stages_ms(ours_rt, &[analysis::raytrace::STAGE_RAY_TRACING]);
+                    line(
                         &format!(
                             "raytrace rate {rate} vs Embree {api:?} (BVH + camera + shadow rays)"
                         ),
-                        ob + ot,
-                        e,
-                        (rays as f64 / ot, erays as f64 / (t.camera_ms + t.shadow_ms)),
+                        ours_rt,
+                        theirs,
+                        (rays(ours_rt) / ours_traced, rays(theirs) / traced),
                     );
                 }
-                if rate != 1 {
-                    continue;
+                if let [_, _, _, afsm, shadows, pan, ss32] = &measured[..] {
+                    // afsm decides the same pixel-centre shadows: its stages against Embree's
+                    // BVH build plus the shadow rays from the camera's hits.
+                    line(
+                        "afsm vs Embree BVH + shadow rays",
+                        afsm,
+                        shadows,
+                        (f64::NAN, rays(shadows) / shadows.wall_ms.median),
+                    );
+                    // pan09 at 32x against Embree supersampling the same frame at 32x.
+                    line("pan09 32x vs Embree 32x supersampling", pan, ss32, (f64::NAN, f64::NAN));
                 }
-                // afsm decides the same pixel-centre shadows: its stages against Embree's BVH
-                // over the casters plus the shadow rays from the camera's hits.
-                let afsm = ours_method(&frame, "afsm", &MethodOptions::default(), a.repeats)?;
-                let mut last = None;
-                let e = timed(a.repeats, || {
-                    let t = trace(&frame, &samples, Api::PerRay);
-                    let ms = t.build_ms + t.shadow_ms;
-                    last = Some(t);
-                    ms
-                });
-                let shadow_rays = last.map_or(0, |t| t.shadow_rays);
-                row(
-                    name,
-                    (w, h),
-                    frame.geometry.len(),
-                    gbuffer,
-                    "afsm vs Embree BVH + shadow rays",
-                    afsm,
-                    e,
-                    (f64::NAN, shadow_rays as f64 / e),
-                );
-                // pan09 at 32x against Embree supersampling the same frame at 32x.
-                let options = MethodOptions { rate: Some(32), ..Default::default() };
-                let pan = ours_method(&frame, "pan09", &options, a.repeats)?;
-                let p32 = SamplePattern::new(32, PatternKind::Grid)?;
-                let s32 = Samples::new(&frame, &p32);
-                let e = timed(a.repeats, || {
-                    let t = trace(&frame, &s32, Api::PerRay);
-                    t.build_ms + t.camera_ms + t.shadow_ms
-                });
-                row(
-                    name,
-                    (w, h),
-                    frame.geometry.len(),
-                    gbuffer,
-                    "pan09 32x vs Embree 32x supersampling",
-                    pan,
-                    e,
-                    (f64::NAN, f64::NAN),
-                );
-                if name == "bunny-plane" {
+                if rate == 1 && name == "bunny-plane" {
                     // Lecocq et al.'s Table 2: the sub-pixel shadow map's cost over a shadow map
-                    // of the same size, at 1920x1080.
+                    // of the same size, at 1920x1080, the four runs interleaved on the frame.
                     let mut rec = Recorder::default();
                     let hd = Frame::new(&scene, 1920, 1080, &mut rec);
-                    for map in [1024, 4096] {
-                        let options = MethodOptions { map_res: Some(map), ..Default::default() };
-                        let spsm = ours_method(&hd, "spsm", &options, a.repeats)?;
-                        let sm = ours_method(&hd, "sm", &options, a.repeats)?;
+                    let gbuffer = rec.stages.total_ms();
+                    let maps = [1024, 4096];
+                    let built = maps
+                        .iter()
+                        .flat_map(|&map| {
+                            let options =
+                                MethodOptions { map_res: Some(map), ..Default::default() };
+                            ["spsm", "sm"].map(|m| analysis::registry::technique(m, &options))
+                        })
+                        .collect::<Result<Vec<_>, _>>()?;
+                    let mut subjects: Vec<Subject<'_>> =
+                        built.iter().map(|t| ours(&hd, t.as_ref())).collect();
+                    let measured = measure_frame(&protocol, &mut subjects)?;
+                    for (map, pair) in maps.iter().zip(measured.chunks(2)) {
+                        let [spsm, sm] = pair else {
+                            return Err(anyhow!("two runs per map size, {} measured", pair.len()));
+                        };
                         let what = format!("spsm vs sm, map {map} (Lecocq et al.: 1.27-1.81)");
-                        let triangles = hd.geometry.len();
-                        let gbuffer = rec.stages.total_ms();
                         row(
                             name,
                             (1920, 1080),
-                            triangles,
+                            hd.geometry.len(),
                             gbuffer,
                             &what,
                             spsm,
@@ -291,6 +323,8 @@ mod side_by_side {
         Ok(())
     }
 
+    /// One row of the table: `ours` against `embree` (their wall-clock medians, ratio, rays
+    /// per millisecond shown as Mrays/s, and CPU medians).
     #[allow(clippy::too_many_arguments)]
     fn row(
         scene: &str,
@@ -298,16 +332,21 @@ mod side_by_side {
         triangles: usize,
         gbuffer: f64,
         measure: &str,
-        ours: f64,
-        embree: f64,
+        ours: &Measured<()>,
+        embree: &Measured<()>,
         (ours_rate, embree_rate): (f64, f64),
     ) {
         let mrays = |r: f64| if r.is_finite() { format!("{:.2}", r / 1e3) } else { "–".into() };
+        let cpu =
+            |m: &Measured<()>| m.cpu_ms.map_or_else(|| "–".into(), |c| format!("{:.1}", c.median));
+        let (o, e) = (ours.wall_ms.median, embree.wall_ms.median);
         println!(
-            "| {scene} | {w}x{h} | {triangles} | {gbuffer:.1} | {measure} | {ours:.1} | {embree:.1} | {:.2} | {} | {} |",
-            ours / embree,
+            "| {scene} | {w}x{h} | {triangles} | {gbuffer:.1} | {measure} | {o:.1} | {e:.1} | {:.2} | {} | {} | {} | {} |",
+            o / e,
             mrays(ours_rate),
-            mrays(embree_rate)
+            mrays(embree_rate),
+            cpu(ours),
+            cpu(embree)
         );
     }
 }

@@ -1,16 +1,24 @@
 //! Table 1 of Aila and Laine 2004 ("Alias-Free Shadow Maps", section 5.1): `afsm` on
 //! `random-1k` .. `random-1m` at 1024 x 768, our numbers beside the paper's.
 //!
-//! Each scene: one warm-up run, then `SHADOWBENCH_BENCH_RUNS` runs (default 5); the stage
-//! times are the medians over the runs, the total the median of the per-run sums of the three
-//! stages. The counters do not depend on the run. The camera G-buffer is rendered once per
-//! scene and is not part of the table (the paper starts from the depth buffer too).
+//! Timing: each scene is measured by the workbench's one timing loop,
+//! [`instrumentation::measure::measure`], under `Protocol::fixed(1, runs)`: one untimed
+//! warm-up, then `SHADOWBENCH_BENCH_RUNS` timed runs (default 5). The times are wall-clock
+//! medians from the engine's summaries: a stage's time is its median in `Measured::stages`,
+//! the total the median of the per-run sums of the three stages (`Measured::wall_ms`). Beside the total,
+//! the median CPU time of the process's threads over a run (`Measured::cpu_ms`, the rayon pool
+//! included). The counters are the median run's; they do not depend on the run. The camera
+//! G-buffer is rendered once per scene and is not part of the table (the paper starts from the
+//! depth buffer too).
 //!
 //! `cargo bench -p shadowbench-methods --bench afsm_table1` prints the Markdown table.
 
 mod common;
 
-use instrumentation::{Counters, Recorder};
+use instrumentation::{
+    measure::{measure, Protocol},
+    Counters, Recorder,
+};
 use methods::{
     afsm::{
         AfsmOptions, AliasFreeShadowMap, PAPER_TABLE1, STAGE_BSP, STAGE_RASTERIZATION,
@@ -24,41 +32,40 @@ const WIDTH: u32 = 1024;
 const HEIGHT: u32 = 768;
 
 /// One cell of a table row, from a scene's measurements.
-type Cell = fn(&Measured) -> String;
+type Cell = fn(&Row) -> String;
 
-struct Measured {
+/// One scene's column of the table.
+struct Row {
     triangles: usize,
     samples: usize,
     counters: Counters,
-    /// Median ms of transformation, BSP construction, rasterization, and of their sum.
+    /// Wall-clock median ms of transformation, BSP construction, rasterization, and of their
+    /// sum.
     ms: [f64; 4],
+    /// Median CPU ms of a run, where the clock is available.
+    cpu_ms: Option<f64>,
 }
 
-fn measure(name: &str, runs: usize) -> Result<Measured, String> {
+fn measure_scene(name: &str, protocol: &Protocol) -> Result<Row, String> {
     let scene = scenes::load(name).map_err(|e| e.to_string())?;
     let frame = Frame::new(&scene, WIDTH, HEIGHT, &mut Recorder::default());
     let method = AliasFreeShadowMap::pixel_centres(AfsmOptions::default());
-    let mut times: [Vec<f64>; 4] = Default::default();
-    let mut counters = Counters::default();
-    for run in 0..=runs {
-        let mut rec = Recorder::default();
-        method.run(&frame, &mut rec).map_err(|e| e.to_string())?;
-        if run == 0 {
-            continue; // warm-up
-        }
-        let stage = |n: &str| rec.stages.stages.iter().find(|s| s.name == n).map_or(0.0, |s| s.ms);
-        let ms = [stage(STAGE_TRANSFORMATION), stage(STAGE_BSP), stage(STAGE_RASTERIZATION)];
-        for (t, v) in times.iter_mut().zip(ms.iter().chain([&ms.iter().sum()])) {
-            t.push(*v);
-        }
-        counters = rec.counters;
-    }
+    let m = measure(protocol, |rec: &mut Recorder| {
+        method.run(&frame, rec).map(|_| ()).map_err(|e| e.to_string())
+    })?;
+    let stage = |n: &str| m.stages.iter().find(|s| s.name == n).map_or(0.0, |s| s.ms.median);
     let samples = frame.gbuffer.triangle.iter().filter(|&&t| t != methods::raster::NO_TRIANGLE);
-    Ok(Measured {
+    Ok(Row {
         triangles: scene.triangle_count(),
         samples: samples.count(),
-        counters,
-        ms: times.map(common::median),
+        counters: m.record.counters,
+        ms: [
+            stage(STAGE_TRANSFORMATION),
+            stage(STAGE_BSP),
+            stage(STAGE_RASTERIZATION),
+            m.wall_ms.median,
+        ],
+        cpu_ms: m.cpu_ms.map(|s| s.median),
     })
 }
 
@@ -83,9 +90,10 @@ fn short(n: u64) -> String {
 
 fn main() {
     let runs = common::runs(5);
+    let protocol = common::protocol(runs);
     let mut measured = Vec::new();
     for name in SCENES {
-        match measure(name, runs) {
+        match measure_scene(name, &protocol) {
             Ok(m) => measured.push(m),
             Err(e) => {
                 eprintln!("{name}: {e}");
@@ -94,7 +102,8 @@ fn main() {
         }
     }
     println!(
-        "afsm, {WIDTH}x{HEIGHT}, {} on {} threads; median of {runs} runs after one warm-up \
+        "afsm, {WIDTH}x{HEIGHT}, {} on {} threads; wall-clock medians of {runs} runs after one \
+         warm-up (instrumentation::measure); CPU time of the process's threads beside \
          (paper: 1.6 GHz Mobile Pentium 4). Times in ms.\n",
         instrumentation::cpu_model(),
         rayon::current_num_threads()
@@ -129,6 +138,11 @@ fn main() {
     let mut line = String::from("| **Total time (ms)** |");
     for (m, paper) in measured.iter().zip(PAPER_TABLE1[8]) {
         line.push_str(&format!(" **{:.1}** | {paper} |", m.ms[3]));
+    }
+    println!("{line}");
+    let mut line = String::from("| Total CPU time (ms, not in the paper) |");
+    for m in &measured {
+        line.push_str(&format!(" {} | – |", common::ms_or_dash(m.cpu_ms)));
     }
     println!("{line}");
     let mut line = String::from("| #nodes depth culled (not in the paper) |");

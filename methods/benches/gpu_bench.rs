@@ -9,17 +9,27 @@
 //! - `afsm-ss` at 32x against `pan09` at 32x on `bunny-plane` 800 x 600 (Pan et al.'s Fig. 10
 //!   sets its method against brute-force supersampling).
 //!
-//! `cargo bench -p shadowbench-methods --bench gpu_bench [-- --quick]`. Each configuration
-//! runs once to warm up (pipelines compiled, buffers first touched), then `RUNS` times
-//! (`SHADOWBENCH_BENCH_RUNS`, default 5); the median of the method's own stages is reported,
-//! the GPU G-buffer (shared by every method) apart. `--quick` divides every frame side by 8 and
-//! uses `random-10k` for `random-1m`, to check the bench itself on a software adapter. A
-//! software adapter is named as such in the header and in a warning: its times say nothing of
-//! a GPU's.
+//! `cargo bench -p shadowbench-methods --bench gpu_bench [-- --quick]`. `--quick` divides
+//! every frame side by 8 and uses `random-10k` for `random-1m`, to check the bench itself on a
+//! software adapter. A software adapter is named as such in the header and in a warning: its
+//! times say nothing of a GPU's.
+//!
+//! Timing: through the workbench's one timing loop, `instrumentation::measure::measure_all`,
+//! the configurations of one frame interleaved round by round (`pan09` and `afsm-ss` on the
+//! 800 x 600 frame; `sm` and `spsm` at the four map sizes on the 1920 x 1080 one), under
+//! `Protocol::fixed(1, runs)` on the wall clock: one untimed warm-up each (pipelines compiled,
+//! buffers first touched), then `SHADOWBENCH_BENCH_RUNS` timed runs (default 5). A GPU stage's
+//! time comes from timestamp queries or from submitting and waiting (the header names which),
+//! never from the CPU clock, so only wall (GPU) figures are printed. "With G-buffer" is the
+//! median of the per-run stage sums (`Measured::wall_ms`); "ours" leaves out the median of the
+//! GPU G-buffer stage (shared by every method), as `reports::devices` does.
 
 mod common;
 
-use instrumentation::Recorder;
+use instrumentation::{
+    measure::{measure_all, Clock, Protocol},
+    Recorder,
+};
 use methods::{
     frame::STAGE_GPU_GBUFFER, gpu::GpuContext, method, registry::Device, Frame, MethodOptions,
 };
@@ -41,7 +51,8 @@ fn main() {
     };
     let software = ctx.is_software();
     println!(
-        "GPU: {}{}; timing by {}; warm-up 1 run, median of {runs}{}",
+        "GPU: {}{}; timing by {}; warm-up 1 run, medians of {runs} (instrumentation::measure, \
+         the configurations of a frame interleaved){}",
         ctx.adapter_name(),
         if software { " (a SOFTWARE rasterizer: these times say nothing of a GPU)" } else { "" },
         ctx.timing.name(),
@@ -57,21 +68,21 @@ fn main() {
     println!("\n| target | ours (ms) | with G-buffer (ms) | paper / target |");
     println!("|---|---:|---:|---|");
     let pan_opts = MethodOptions { rate: Some(32), map_res: Some(512), ..gpu() };
+    let ss_opts = MethodOptions { rate: Some(32), ..gpu() };
     let (w, h) = (side(800), side(600));
-    let pan = time(&bunny, w, h, "pan09", &pan_opts, runs);
+    let [pan, ss] = two(time_all(&bunny, w, h, &[("pan09", pan_opts), ("afsm-ss", ss_opts)], runs));
     row(
         &format!("pan09 32x, {} {w}x{h}, map 512", bunny.name),
         &pan,
         "Pan et al.: 22 ms (GTX 280); target < 2 ms",
     );
-    let ss = time(&bunny, w, h, "afsm-ss", &MethodOptions { rate: Some(32), ..gpu() }, runs);
     let ratio = match (&ss, &pan) {
         (Ok((ss, _)), Ok((pan, _))) => format!("{:.1}x pan09 32x", ss / pan),
         _ => "n/a".to_owned(),
     };
     row(&format!("afsm-ss 32x, {} {w}x{h}", bunny.name), &ss, &ratio);
     let (w, h) = (side(1024), side(768));
-    let afsm = time(&random, w, h, "afsm", &gpu(), runs);
+    let afsm = time_all(&random, w, h, &[("afsm", gpu())], runs).remove(0);
     row(
         &format!("afsm, {} {w}x{h}", random.name),
         &afsm,
@@ -82,25 +93,34 @@ fn main() {
     println!("\nLecocq et al. Table 2 on {} {w}x{h} (paper: YeahRight, GTX 580)", bunny.name);
     println!("| map | sm (ms) | spsm (ms) | overhead | paper sm | paper spsm | paper overhead |");
     println!("|---:|---:|---:|---:|---:|---:|---:|");
-    for (map, paper_sm, paper_spsm, paper_overhead) in [
+    let paper = [
         (512, 5.5, 10.0, 81.0),
         (1024, 5.8, 9.1, 56.0),
         (2048, 7.4, 10.7, 44.0),
         (4096, 14.2, 18.1, 27.0),
-    ] {
-        let o = MethodOptions { map_res: Some(map), ..gpu() };
-        let ms =
-            |t: &Timed| t.as_ref().map_or_else(|e| format!("n/a ({e})"), |t| format!("{:.2}", t.0));
-        let sm = time(&bunny, w, h, "sm", &o, runs);
-        let spsm = time(&bunny, w, h, "spsm", &o, runs);
-        let overhead = match (&sm, &spsm) {
+    ];
+    let configs: Vec<(&str, MethodOptions)> = paper
+        .iter()
+        .flat_map(|&(map, ..)| {
+            let o = MethodOptions { map_res: Some(map), ..gpu() };
+            [("sm", o), ("spsm", o)]
+        })
+        .collect();
+    let timed = time_all(&bunny, w, h, &configs, runs);
+    let ms =
+        |t: &Timed| t.as_ref().map_or_else(|e| format!("n/a ({e})"), |t| format!("{:.2}", t.0));
+    for ((map, paper_sm, paper_spsm, paper_overhead), pair) in
+        paper.into_iter().zip(timed.chunks(2))
+    {
+        let [sm, spsm] = pair else { unreachable!("two configurations per map size") };
+        let overhead = match (sm, spsm) {
             (Ok((sm, _)), Ok((spsm, _))) => format!("{:.0} %", 100.0 * (spsm / sm - 1.0)),
             _ => "n/a".to_owned(),
         };
         println!(
             "| {map} | {} | {} | {overhead} | {paper_sm} | {paper_spsm} | {paper_overhead} % |",
-            ms(&sm),
-            ms(&spsm)
+            ms(sm),
+            ms(spsm)
         );
     }
 }
@@ -118,29 +138,50 @@ fn load(name: &str) -> Scene {
     })
 }
 
-/// `name` with `options` on `scene` at `w x h`: one warm-up, then the median of `runs`.
-fn time(scene: &Scene, w: u32, h: u32, name: &str, options: &MethodOptions, runs: usize) -> Timed {
+/// The two results of a two-configuration measurement.
+fn two(timed: Vec<Timed>) -> [Timed; 2] {
+    timed.try_into().unwrap_or_else(|_| unreachable!("two configurations, two results"))
+}
+
+/// Each `(method, options)` of `configs` on one frame of `scene` at `w x h`, interleaved: one
+/// warm-up, then `runs` timed runs each, on the wall clock (see the module documentation).
+fn time_all(
+    scene: &Scene,
+    w: u32,
+    h: u32,
+    configs: &[(&str, MethodOptions)],
+    runs: usize,
+) -> Vec<Timed> {
     let frame = Frame::new(scene, w, h, &mut Recorder::default());
-    let m = method(name, options).map_err(|e| e.to_string())?;
-    let mut own = Vec::with_capacity(runs);
-    let mut with = Vec::with_capacity(runs);
-    for run in 0..=runs {
-        let mut rec = Recorder::default();
-        m.run(&frame, &mut rec).map_err(|e| e.to_string())?;
-        if run > 0 {
-            let total = rec.stages.total_ms();
-            let g: f64 = rec
-                .stages
-                .stages
-                .iter()
-                .filter(|s| s.name == STAGE_GPU_GBUFFER)
-                .map(|s| s.ms)
-                .sum();
-            own.push(total - g);
-            with.push(total);
-        }
-    }
-    Ok((common::median(own), common::median(with)))
+    let built: Vec<_> = configs
+        .iter()
+        .map(|(name, options)| method(name, options).map_err(|e| e.to_string()))
+        .collect();
+    let mut subjects: Vec<_> = built
+        .iter()
+        .map(|m| {
+            let frame = &frame;
+            move |rec: &mut Recorder| match m {
+                Ok(m) => m.run(frame, rec).map(|_| ()).map_err(|e| e.to_string()),
+                Err(e) => Err(e.clone()),
+            }
+        })
+        .collect();
+    let protocol = Protocol { clock: Clock::Wall, ..common::protocol(runs) };
+    measure_all(&protocol, &mut subjects, |_| {})
+        .into_iter()
+        .map(|r| {
+            r.map(|m| {
+                let gbuffer: f64 = m
+                    .stages
+                    .iter()
+                    .filter(|s| s.name == STAGE_GPU_GBUFFER)
+                    .map(|s| s.ms.median)
+                    .sum();
+                (m.wall_ms.median - gbuffer, m.wall_ms.median)
+            })
+        })
+        .collect()
 }
 
 /// One row of the targets' table.
