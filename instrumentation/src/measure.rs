@@ -8,9 +8,9 @@
 //! 2. **Rounds, interleaved**: each round runs every subject not yet done once, in turn, so
 //!    that a drift of the machine (another job starting, the clock frequency falling) reaches
 //!    every subject alike rather than the ones that happened to run late.
-//! 3. **Each timed run** records, around the subject's call, the wall time of its stages
-//!    (their sum, as `total_ms` always was), the process's CPU time ([`clock::cpu_now`]:
-//!    every thread, the rayon pool included), the CPU share of its threads from the run queue
+//! 3. **Each timed run** records the wall time of its stages (their sum, as `total_ms`
+//!    always was) and their CPU time ([`clock::cpu_now`]: every thread, the rayon pool
+//!    included; over the whole call where a stage came from a GPU's timestamps), the CPU share of its threads from the run queue
 //!    ([`clock::Schedule`]) and the machine's load ([`clock::Load`]). A run whose share is
 //!    below [`Protocol::min_share`] is **contended**: it is run once more in its place
 //!    ([`Protocol::retry_contended`]), and kept marked contended when the retry is too.
@@ -128,8 +128,9 @@ impl Protocol {
 pub struct Sample {
     /// Wall-clock time of the run's stages, summed, milliseconds.
     pub wall_ms: f64,
-    /// CPU time of the process's threads over the run, milliseconds; `None` where the clock
-    /// is unavailable.
+    /// CPU time of the process's threads over the run's stages, milliseconds (over the whole
+    /// run where a stage was timed on another clock, a GPU's timestamps); `None` where the
+    /// clock is unavailable.
     pub cpu_ms: Option<f64>,
     /// The CPU share of the process's threads over the run ([`Schedule::share_since`]).
     pub share: Option<f64>,
@@ -283,9 +284,12 @@ fn timed_once<T, E>(
         others = b.others_since(&a, cpu.unwrap_or_default(), wall, cores).unwrap_or(0.0) * capacity;
         steal = b.steal_since(&a, wall, cores).unwrap_or(0.0) * capacity;
     }
+    // Both clocks over the same span, the run's stages: their CPU times where every stage was
+    // timed on the CPU, else (a stage from GPU timestamps) the process's over the whole call.
+    let stage_cpu: Option<f64> = rec.stages.stages.iter().map(|s| s.cpu_ms).sum();
     let sample = Sample {
         wall_ms: rec.stages.total_ms(),
-        cpu_ms: cpu.map(|c| c.as_secs_f64() * 1e3),
+        cpu_ms: stage_cpu.or(cpu.map(|c| c.as_secs_f64() * 1e3)),
         share,
         contended: share.is_some_and(|s| s < min_share),
         retried: false,

@@ -5,7 +5,7 @@
 //! `SHADOWBENCH_SLOWDOWN=NAME=FACTOR` makes every run of the method `NAME` cost `FACTOR` times
 //! its own CPU time: after the method's stages, a stage named [`STAGE_SLOWDOWN`] spins every
 //! thread of the rayon pool until, together, they have spent `FACTOR - 1` times the CPU time
-//! the method's run took. Its results are the method's own; only its cost changes, as a
+//! the method's stages took. Its results are the method's own; only its cost changes, as a
 //! regression of the method's code would change it.
 
 use crate::frame::Frame;
@@ -57,10 +57,11 @@ impl ShadowMethod for Slowed {
     }
 
     fn run(&self, frame: &Frame<'_>, rec: &mut Recorder) -> Result<Visibility, MethodError> {
-        let before = instrumentation::clock::cpu_now();
+        let first = rec.stages.stages.len();
         let v = self.inner.run(frame, rec)?;
-        let spent = before.zip(instrumentation::clock::cpu_now()).map(|(a, b)| b.saturating_sub(a));
-        let extra = spent.unwrap_or_default().mul_f64(self.factor - 1.0);
+        // The CPU time of the method's own stages, the span the measurement engine times.
+        let spent: f64 = rec.stages.stages[first..].iter().filter_map(|s| s.cpu_ms).sum();
+        let extra = Duration::from_secs_f64(spent.max(0.0) * 1e-3 * (self.factor - 1.0));
         rec.stages.time(STAGE_SLOWDOWN, || {
             let share = extra / rayon::current_num_threads().max(1) as u32;
             rayon::broadcast(|_| spin(share));
