@@ -578,10 +578,10 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
     );
     let (mut report, images) =
         reports::sweep::run_items(&suite, &plan, &items, Some(&mut cache), |p| {
-            // The time left from the plan's cost model, corrected by the time taken so far.
-            let left = p.time_left(started.elapsed()).map_or_else(
+            // The time left from the plan's cost model, corrected by the runs done so far.
+            let left = p.time_left.map_or_else(
                 || "time left unknown".to_owned(),
-                |d| format!("about {} left", humantime_secs(d)),
+                |d| format!("about {} left", reports::progress::hms(d)),
             );
             bar.set_message(format!("{left}; {}", p.label));
             bar.set_position(p.runs_done);
@@ -644,13 +644,6 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
         out.display()
     );
     Ok(())
-}
-
-/// `d` to the second, as `3m42s`.
-fn humantime_secs(d: std::time::Duration) -> String {
-    humantime::format_duration(std::time::Duration::from_secs(d.as_secs()))
-        .to_string()
-        .replace(' ', "")
 }
 
 /// What a reference cache did, in words.

@@ -182,7 +182,7 @@ mod side_by_side {
         protocol: &Protocol,
         subjects: &mut [Subject<'_>],
     ) -> anyhow::Result<Vec<Measured<()>>> {
-        measure_all(protocol, subjects, |_| {}).into_iter().collect()
+        measure_all(protocol, subjects, |_, _| {}).into_iter().collect()
     }
 
     pub fn run() -> anyhow::Result<()> {

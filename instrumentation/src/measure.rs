@@ -251,6 +251,8 @@ impl<T> Measured<T> {
 struct State<T, E> {
     failed: Option<E>,
     done: bool,
+    /// Wall time of every call so far, warm-up runs and retries included.
+    spent: Duration,
     samples: Vec<Sample>,
     records: Vec<Recorder>,
     output: Option<T>,
@@ -329,12 +331,14 @@ fn stage_times(records: &[Recorder]) -> Vec<StageTimes> {
 }
 
 /// Measures every subject under `protocol`, interleaved (see the module documentation);
-/// `done(k)` is called once subject `k` is measured or has failed. Results in the subjects'
+/// `done(k, spent)` is called once subject `k` is measured or has failed, with the wall time
+/// its calls took (warm-up runs and retries included), for estimates of the time left. Results
+/// in the subjects'
 /// order.
 pub fn measure_all<T, E, F>(
     protocol: &Protocol,
     subjects: &mut [F],
-    mut done: impl FnMut(usize),
+    mut done: impl FnMut(usize, Duration),
 ) -> Vec<Result<Measured<T>, E>>
 where
     F: FnMut(&mut Recorder) -> Result<T, E>,
@@ -345,6 +349,7 @@ where
         .map(|_| State {
             failed: None,
             done: false,
+            spent: Duration::ZERO,
             samples: Vec::new(),
             records: Vec::new(),
             output: None,
@@ -359,9 +364,12 @@ where
         for (k, subject) in subjects.iter_mut().enumerate() {
             let state = &mut states[k];
             if state.failed.is_none() {
-                if let Err(e) = subject(&mut Recorder::default()) {
+                let start = Instant::now();
+                let result = subject(&mut Recorder::default());
+                state.spent += start.elapsed();
+                if let Err(e) = result {
                     state.failed = Some(e);
-                    done(k);
+                    done(k, state.spent);
                 }
             }
         }
@@ -377,6 +385,7 @@ where
                 continue;
             }
             any = true;
+            let start = Instant::now();
             let mut once = timed_once(subject, protocol.min_share, cores);
             if protocol.retry_contended && matches!(&once, Ok((_, _, s, ..)) if s.contended) {
                 once = timed_once(subject, protocol.min_share, cores).map(|mut r| {
@@ -384,6 +393,7 @@ where
                     r
                 });
             }
+            state.spent += start.elapsed();
             match once {
                 Ok((out, rec, sample, (others, steal, capacity), before, after)) => {
                     state.loadavg_before = state.loadavg_before.or(before);
@@ -397,7 +407,7 @@ where
                 }
                 Err(e) => {
                     state.failed = Some(e);
-                    done(k);
+                    done(k, state.spent);
                 }
             }
         }
@@ -423,7 +433,7 @@ where
                 .is_some_and(|w| w <= protocol.target_half_width);
             if n >= max || (n >= min && (narrow || capped)) {
                 state.done = true;
-                done(k);
+                done(k, state.spent);
             }
         }
     }
@@ -474,7 +484,7 @@ pub fn measure<T, E>(
     subject: impl FnMut(&mut Recorder) -> Result<T, E>,
 ) -> Result<Measured<T>, E> {
     let mut subjects = [subject];
-    let mut results = measure_all(protocol, &mut subjects, |_| {});
+    let mut results = measure_all(protocol, &mut subjects, |_, _| {});
     results.remove(0)
 }
 
@@ -536,7 +546,7 @@ mod tests {
             ..Protocol::default()
         };
         let mut finished = Vec::new();
-        let results = measure_all(&protocol, &mut subjects, |k| finished.push(k));
+        let results = measure_all(&protocol, &mut subjects, |k, _| finished.push(k));
         // Constant times: the interval is a point after the sixth round, so all stop there.
         let order = order.into_inner();
         assert_eq!(order.len(), 18);
@@ -577,7 +587,7 @@ mod tests {
             min_share: 0.0,
             ..Protocol::default()
         };
-        let results = measure_all(&protocol, &mut subjects, |_| {});
+        let results = measure_all(&protocol, &mut subjects, |_, _| {});
         drop(subjects);
         assert_eq!(results[0].as_ref().expect("measured").samples.len(), 9);
         assert_eq!(results[1].as_ref().err().map(String::as_str), Some("broken"));

@@ -168,7 +168,7 @@ fn time_all(
         })
         .collect();
     let protocol = Protocol { clock: Clock::Wall, ..common::protocol(runs) };
-    measure_all(&protocol, &mut subjects, |_| {})
+    measure_all(&protocol, &mut subjects, |_, _| {})
         .into_iter()
         .map(|r| {
             r.map(|m| {

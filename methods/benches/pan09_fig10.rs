@@ -65,7 +65,7 @@ fn time_all(
             move |rec: &mut Recorder| method.run(frame, rec).map(|_| ()).map_err(|e| e.to_string())
         })
         .collect();
-    let results = measure_all(&common::protocol(runs), &mut subjects, |k| {
+    let results = measure_all(&common::protocol(runs), &mut subjects, |k, _| {
         eprintln!("{what} at rate {} measured", RATES[k]);
     });
     results.into_iter().map(|r| r.map(|m| Times::of(&m))).collect()

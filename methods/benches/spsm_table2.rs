@@ -84,12 +84,13 @@ fn main() {
             move |rec: &mut Recorder| m.run(frame, rec).map(|_| ())
         })
         .collect();
-    let measured: Vec<Measured<()>> = measure_all(&common::protocol(runs), &mut subjects, |k| {
-        eprintln!("{} at map {} measured", configs[k].1, configs[k].0);
-    })
-    .into_iter()
-    .map(|r| r.expect("runs"))
-    .collect();
+    let measured: Vec<Measured<()>> =
+        measure_all(&common::protocol(runs), &mut subjects, |k, _| {
+            eprintln!("{} at map {} measured", configs[k].1, configs[k].0);
+        })
+        .into_iter()
+        .map(|r| r.expect("runs"))
+        .collect();
     let cpu = |m: &Measured<()>| common::ms_or_dash(m.cpu_ms.map(|c| c.median));
     for ((map_res, paper_sm, paper_spsm, paper_overhead), pair) in
         PAPER.into_iter().zip(measured.chunks(2))

@@ -19,6 +19,7 @@ pub mod model;
 pub mod output;
 pub mod plan;
 pub mod plots;
+pub mod progress;
 pub mod run_pages;
 pub mod suite;
 pub mod sweep;

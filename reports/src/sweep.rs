@@ -12,9 +12,9 @@
 //! classes, for the run pages ([`Images`]).
 //!
 //! When standard error is not a terminal (a log, a pipe), the sweep prints a line there as it
-//! starts each scene and each paper's table, and when it ends: the runs done of the total, the
-//! time elapsed and an estimate of the time left from the mean time per run so far
-//! ([`ProgressLog`]). On a terminal the caller's progress bar shows the same.
+//! starts each frame, and when it ends: the runs done of the total, the time elapsed and an
+//! estimate of the time left ([`crate::progress`]). On a terminal the caller's progress bar
+//! shows the same.
 
 use crate::cache::ReferenceCache;
 use crate::model::{
@@ -23,6 +23,7 @@ use crate::model::{
 use crate::output::shade;
 use crate::output::MetricsRecord;
 use crate::plan::{Work, WorkItem};
+use crate::progress::{run_key, Estimate, Progress, ProgressLog};
 use crate::suite::{GridSpec, PanelSpec, ReferenceChoice, Suite};
 use crate::tables::TableRun;
 use crate::timing::Machine;
@@ -32,9 +33,7 @@ use analysis::{error_image, Metrics, ReferenceImage};
 use instrumentation::measure::{measure_all, Measured};
 use instrumentation::{Provenance, Recorder, RunIdentity};
 use methods::{registry::Device, Frame, MethodOptions, ShadowMethod, Visibility};
-use std::cell::Cell;
-use std::io::IsTerminal;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// The scene's reference on `frame`, from `cache` when it holds it (and stored there when it
 /// does not), with its name, rate and the time it took to compute.
@@ -159,52 +158,6 @@ fn grid_panels(
     panels
 }
 
-/// `d` as `1h02m03s`, `2m03s` or `3s`.
-fn hms(d: Duration) -> String {
-    let s = d.as_secs();
-    match (s / 3600, s / 60 % 60, s % 60) {
-        (0, 0, s) => format!("{s}s"),
-        (0, m, s) => format!("{m}m{s:02}s"),
-        (h, m, s) => format!("{h}h{m:02}m{s:02}s"),
-    }
-}
-
-/// Progress lines of a sweep for a log: what starts, the runs done of the total, the time
-/// elapsed and the time left, from the share of the estimated cost done so far (the plan's
-/// cost model, corrected by the time the work done took: [`Progress::time_left`]).
-pub struct ProgressLog {
-    start: Instant,
-    total: u64,
-    /// Printed only when standard error is not a terminal.
-    enabled: bool,
-}
-
-impl ProgressLog {
-    /// A log of `total` runs, starting now; it prints when standard error is not a terminal.
-    pub fn new(total: u64) -> Self {
-        Self { start: Instant::now(), total, enabled: !std::io::stderr().is_terminal() }
-    }
-
-    /// The line for `what` (e.g. `frame 2/5 cage 320x240`) after `done` runs, `share` of the
-    /// estimated cost, in `elapsed`.
-    pub fn line(&self, what: &str, done: u64, share: f64, elapsed: Duration) -> String {
-        let left = if share > 0.0 {
-            let left = elapsed.as_secs_f64() * (1.0 - share).max(0.0) / share;
-            format!("about {} left", hms(Duration::from_secs_f64(left)))
-        } else {
-            "time left unknown".to_owned()
-        };
-        format!("{what}: {done}/{} runs done, {} elapsed, {left}", self.total, hms(elapsed))
-    }
-
-    /// Prints the line for `what` after `done` runs and `share` of the cost, when enabled.
-    pub fn print(&self, what: &str, done: u64, share: f64) {
-        if self.enabled {
-            eprintln!("{}", self.line(what, done, share, self.start.elapsed()));
-        }
-    }
-}
-
 /// The report of the suite written as `toml`, for tests of what is made from reports.
 #[cfg(test)]
 pub(crate) fn report_of(toml: &str) -> Report {
@@ -267,35 +220,36 @@ struct Planned<'a> {
     purpose: Purpose<'a>,
     options: MethodOptions,
     technique: Box<dyn ShadowMethod>,
-    /// Its estimated cost ([`crate::plan::run_cost`]), for the progress.
+    /// Its share of its item's estimated cost ([`crate::plan`]), for the progress.
     cost: f64,
 }
 
-/// How far a sweep has come: runs and estimated cost done of the total.
-#[derive(Debug, Clone, Copy)]
-pub struct Progress<'a> {
-    /// What just finished (`cage pcf-gems16`).
-    pub label: &'a str,
-    /// Runs done (measured, failed or not run).
-    pub runs_done: u64,
-    /// Runs of the sweep.
-    pub runs_total: u64,
-    /// Estimated cost done ([`crate::plan`]'s units).
-    pub cost_done: f64,
-    /// Estimated cost of the sweep.
-    pub cost_total: f64,
+/// The key an estimate prices a run of `method` with `options` by.
+fn key_of(method: &str, options: &MethodOptions) -> String {
+    run_key(method, options.device == Device::Gpu)
 }
 
-impl Progress<'_> {
-    /// The time left after `elapsed`, at the time per unit of estimated cost so far: the
-    /// plan's cost model, corrected by what the machine has taken for the work done. `None`
-    /// before any cost is done.
-    pub fn time_left(&self, elapsed: Duration) -> Option<Duration> {
-        (self.cost_done > 0.0).then(|| {
-            let left = (self.cost_total - self.cost_done).max(0.0) / self.cost_done;
-            Duration::from_secs_f64(elapsed.as_secs_f64() * left)
-        })
-    }
+/// The runs of a plan's item, each with its key and its share of the item's estimated cost.
+fn item_runs(suite: &Suite, item: &WorkItem) -> Vec<(String, f64)> {
+    let runs: Vec<(String, MethodOptions)> = match &item.work {
+        Work::Runs { spec, .. } => {
+            let spec = &suite.runs[*spec];
+            spec.expand().into_iter().map(|o| (spec.method.clone(), o)).collect()
+        }
+        Work::Table { table, .. } => {
+            let scene = item.scene.as_deref().unwrap_or_default();
+            let made = suite.tables[*table].paper.runs(scene);
+            made.into_iter().map(|(m, o)| (m.to_owned(), o)).collect()
+        }
+        Work::Grid { .. } => Vec::new(),
+    };
+    let per = item.cost / runs.len().max(1) as f64;
+    runs.iter().map(|(m, o)| (key_of(m, o), per)).collect()
+}
+
+/// Every run of the items of `plan` numbered in `items`, with its key and estimated cost.
+fn planned_runs(suite: &Suite, plan: &[WorkItem], items: &[usize]) -> Vec<(String, f64)> {
+    items.iter().flat_map(|&k| item_runs(suite, &plan[k])).collect()
 }
 
 /// The frame an item runs on: its scene and size.
@@ -315,15 +269,14 @@ pub fn run_items(
     mut cache: Option<&mut ReferenceCache>,
     mut progress: impl FnMut(&Progress<'_>),
 ) -> (Report, Images) {
-    let runs_total = items_run_count(plan, items);
-    let cost_total: f64 = items.iter().map(|&k| plan[k].cost).sum();
-    let log = ProgressLog::new(runs_total);
-    let done = Cell::new((0u64, 0.0f64));
-    let mut tick = |label: &str, cost: f64| {
-        let (runs, spent) = done.get();
-        done.set((runs + 1, spent + cost));
-        let (runs_done, cost_done) = done.get();
-        progress(&Progress { label, runs_done, runs_total, cost_done, cost_total });
+    let estimate = std::cell::RefCell::new(Estimate::new(planned_runs(suite, plan, items)));
+    let log = ProgressLog::new();
+    // A run is done: `spent` is its wall time, `None` for one that did not run.
+    let mut tick = |label: &str, key: &str, cost: f64, spent: Option<Duration>| {
+        let mut e = estimate.borrow_mut();
+        e.done(key, cost, spent);
+        let (runs_done, runs_total) = e.runs();
+        progress(&Progress { label, runs_done, runs_total, time_left: e.time_left() });
     };
     let mut report = Report {
         suite: suite.clone(),
@@ -362,18 +315,15 @@ pub fn run_items(
                 first.width,
                 first.height
             ),
-            done.get().0,
-            done.get().1 / cost_total.max(f64::MIN_POSITIVE),
+            &estimate.borrow(),
         );
         // Per item, what failing to load the scene leaves undone and how to say it.
-        let not_run = |report: &mut Report, tick: &mut dyn FnMut(&str, f64), why: &str| {
+        type Tick<'t> = dyn FnMut(&str, &str, f64, Option<Duration>) + 't;
+        let not_run = |report: &mut Report, tick: &mut Tick<'_>, why: &str| {
             for item in group {
-                let runs = match &item.work {
-                    Work::Runs { runs, .. } | Work::Table { runs, .. } => runs.len(),
-                    Work::Grid { .. } => 0,
-                };
-                let per = item.cost / runs.max(1) as f64;
-                (0..runs).for_each(|_| tick(scene_name, per));
+                for (key, cost) in item_runs(suite, item) {
+                    tick(scene_name, &key, cost, None);
+                }
                 if let Work::Table { paper, .. } = &item.work {
                     report.skipped.push(format!("{paper}: scene {scene_name}: {why}"));
                 }
@@ -396,7 +346,6 @@ pub fn run_items(
         let mut rec = Recorder::default();
         let frame = Frame::new(&scene, w, h, &mut rec);
         let gbuffer_ms = rec.stages.total_ms();
-        let pixels = f64::from(w) * f64::from(h);
         let triangles = frame.geometry.len() as f64;
         // The suite's runs and grids need the scene's reference; a table's own frame does not.
         let mut ctx = None;
@@ -447,8 +396,9 @@ pub fn run_items(
                 Work::Runs { spec, .. } => {
                     let spec = &suite.runs[*spec];
                     if ctx.is_none() {
-                        let per = item.cost / spec.expand().len().max(1) as f64;
-                        spec.expand().iter().for_each(|_| tick(&label(&spec.method), per));
+                        for (key, cost) in item_runs(suite, item) {
+                            tick(&label(&spec.method), &key, cost, None);
+                        }
                         continue;
                     }
                     spec.expand()
@@ -466,15 +416,15 @@ pub fn run_items(
                 }
                 Work::Grid { .. } => continue,
             };
+            let cost = item.cost / runs.len().max(1) as f64;
             for (purpose, method, options) in runs {
-                let cost = crate::plan::run_cost(pixels, triangles, options.rate, options.map_res);
                 match analysis::registry::technique(method, &options) {
                     Ok(technique) => {
                         planned.push(Planned { item: item.item, purpose, options, technique, cost })
                     }
                     Err(e) => {
                         report.skipped.push(not_run_text(suite, &purpose, method, scene_name, &e));
-                        tick(&label(method), cost);
+                        tick(&label(method), &key_of(method, &options), cost, None);
                     }
                 }
             }
@@ -486,8 +436,10 @@ pub fn run_items(
                 move |rec: &mut Recorder| p.technique.run(frame, rec)
             })
             .collect();
-        let measured = measure_all(&protocol, &mut subjects, |k| {
-            tick(&label(planned[k].technique.name()), planned[k].cost);
+        let measured = measure_all(&protocol, &mut subjects, |k, spent| {
+            let p = &planned[k];
+            let key = key_of(p.technique.name(), &p.options);
+            tick(&label(p.technique.name()), &key, p.cost, Some(spent));
         });
         drop(subjects);
         for (p, m) in planned.iter().zip(measured) {
@@ -558,7 +510,7 @@ pub fn run_items(
             compared: headline,
         });
     }
-    log.print("done", done.get().0, 1.0);
+    log.print("done", &estimate.borrow());
     if items.len() == plan.len() {
         report.tables = crate::tables::build_all(&suite.tables, &report.table_runs);
     }
@@ -706,25 +658,6 @@ fn add_run(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn progress_lines_estimate_the_time_left_from_the_cost_done() {
-        let log = ProgressLog { start: Instant::now(), total: 120, enabled: false };
-        // A third of the cost in 72 s: twice that is left, whatever the count of runs.
-        assert_eq!(
-            log.line("frame 2/5 cage 320x240", 100, 1.0 / 3.0, Duration::from_secs(72)),
-            "frame 2/5 cage 320x240: 100/120 runs done, 1m12s elapsed, about 2m24s left"
-        );
-        assert_eq!(
-            log.line("frame 1/5 cage 320x240", 0, 0.0, Duration::from_millis(300)),
-            "frame 1/5 cage 320x240: 0/120 runs done, 0s elapsed, time left unknown"
-        );
-        assert_eq!(hms(Duration::from_secs(3723)), "1h02m03s");
-        let p =
-            Progress { label: "x", runs_done: 3, runs_total: 9, cost_done: 10.0, cost_total: 40.0 };
-        assert_eq!(p.time_left(Duration::from_secs(5)), Some(Duration::from_secs(15)));
-        assert_eq!(Progress { cost_done: 0.0, ..p }.time_left(Duration::from_secs(5)), None);
-    }
 
     #[test]
     fn cost_tables_measure_every_method_against_work_and_draw_it() {
