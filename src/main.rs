@@ -612,6 +612,9 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
     }
     if let Some(c) = &comparison {
         println!("{}", reports::baseline::summary_line(c));
+        if let Some(ratios) = reports::baseline::ratio_summary(c) {
+            println!("{ratios}");
+        }
         for r in c.regressions() {
             println!(
                 "  regression: {} {} on {}: {}",

@@ -61,7 +61,7 @@ pub struct Metrics {
 
 /// The `p`-th percentile (0 < `p` <= 100) of `values` by nearest rank (see the module doc);
 /// `None` when there are no values. Reorders `values`.
-fn nearest_rank(values: &mut [f64], p: usize) -> Option<f64> {
+pub fn nearest_rank(values: &mut [f64], p: usize) -> Option<f64> {
     let n = values.len();
     (n > 0).then(|| {
         // The ceil(p n / 100)-th smallest, computed in integers.

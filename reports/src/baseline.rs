@@ -83,6 +83,9 @@ pub struct RunChange {
     pub time_ratio_ci: (f64, f64),
     /// The wall-time ratio and its interval, where neither run was contended.
     pub wall_ratio: Option<(f64, (f64, f64))>,
+    /// The ratio of the wall-time medians, contended or not (for the distribution of what
+    /// the machine's load did to wall times, [`ratio_summary`]).
+    pub wall_median_ratio: f64,
     /// Whether either run was contended.
     pub contended: bool,
     /// The run's time interval lies above the tolerance.
@@ -177,6 +180,7 @@ pub fn compare(now: &Report, before: &Report, dir: &Path, options: BaselineOptio
             time_ratio,
             time_ratio_ci: ci,
             wall_ratio: wall,
+            wall_median_ratio: r.total_ms.median / b.total_ms.median,
             contended,
             slower: ci.0 > 1.0 + options.time_tolerance && lo - hi_b > options.min_change_ms,
             faster: ci.1 < 1.0 / (1.0 + options.time_tolerance)
@@ -215,10 +219,39 @@ pub fn summary_line(c: &Comparison) -> String {
     )
 }
 
+/// The distribution of the runs' time ratios, now over before: the median and the 95th
+/// percentile (nearest rank) on each run's clock, and of the wall-time medians' ratios of
+/// every run, contended ones included; `None` without runs.
+pub fn ratio_summary(c: &Comparison) -> Option<String> {
+    let spread = |mut v: Vec<f64>| {
+        v.retain(|x| x.is_finite());
+        let p50 = analysis::metrics::nearest_rank(&mut v, 50)?;
+        let p95 = analysis::metrics::nearest_rank(&mut v, 95)?;
+        Some(format!("median {p50:.2}, p95 {p95:.2}"))
+    };
+    let clocks: Vec<&str> = {
+        let mut v: Vec<&str> = c.runs.iter().map(|r| r.clock.name()).collect();
+        v.dedup();
+        v
+    };
+    let on_clock = spread(c.runs.iter().map(|r| r.time_ratio).collect())?;
+    let wall = spread(c.runs.iter().map(|r| r.wall_median_ratio).collect())?;
+    let contended = c.runs.iter().filter(|r| r.contended).count();
+    Some(format!(
+        "Time ratios ({} time) over {} runs: {on_clock}; wall-time ratios: {wall} ({contended} \
+         runs contended in either report)",
+        clocks.join(" and "),
+        c.runs.len()
+    ))
+}
+
 /// The comparison as Markdown: the summary first (counts and every regression), then every
 /// run.
 pub fn markdown(c: &Comparison) -> String {
     let mut s = format!("{}.\n\n", summary_line(c));
+    if let Some(ratios) = ratio_summary(c) {
+        let _ = writeln!(s, "{ratios}.\n");
+    }
     let regressions: Vec<&RunChange> = c.regressions().collect();
     if regressions.is_empty() {
         s.push_str("No regression.\n\n");
@@ -360,6 +393,10 @@ mod tests {
         let md = markdown(&c);
         assert!(md.contains("Regressions:") && md.contains("**pcf-gems4**"), "{md}");
         assert!(md.contains("cpu 1.50 ["), "{md}");
+        // Two runs of four at 1.5 in CPU time, every wall time doubled.
+        let ratios = ratio_summary(&c).expect("runs");
+        assert!(ratios.contains("(cpu time) over 4 runs: median 1.00, p95 1.50"), "{ratios}");
+        assert!(ratios.contains("wall-time ratios: median 2.00, p95 2.00"), "{ratios}");
         // And the other way round the slowed method got faster.
         let back = compare(&report, &slowed, dir, BaselineOptions::default());
         assert!(back.runs.iter().filter(|r| r.method == "pcf-gems4").all(|r| r.faster));
