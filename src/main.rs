@@ -111,6 +111,29 @@ struct ReportArgs {
     /// read, safe for several writers); default `cache/` in the output folder.
     #[arg(long, value_name = "DIR")]
     cache: Option<PathBuf>,
+    /// The clock of the report's cost axis (charts, Pareto fronts, budgets, --baseline):
+    /// `cpu`, the CPU time of the process's threads, which other work on the machine moves
+    /// little, or `wall`, the wall-clock time a user waits; the other is given beside. Default:
+    /// the suite's `clock` (cpu in the built-in suites).
+    #[arg(long, value_enum)]
+    clock: Option<ClockArg>,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum ClockArg {
+    /// CPU time of the process's threads.
+    Cpu,
+    /// Wall-clock time.
+    Wall,
+}
+
+impl From<ClockArg> for instrumentation::measure::Clock {
+    fn from(c: ClockArg) -> Self {
+        match c {
+            ClockArg::Cpu => Self::Cpu,
+            ClockArg::Wall => Self::Wall,
+        }
+    }
 }
 
 #[derive(clap::Subcommand)]
@@ -503,8 +526,11 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
     if let Some(ReportAction::Merge(m)) = a.action {
         return report_merge(m);
     }
-    let suite =
+    let mut suite =
         reports::Suite::load(&a.suite).map_err(|e| input(anyhow::anyhow!("--suite: {e}")))?;
+    if let Some(clock) = a.clock {
+        suite.clock = clock.into();
+    }
     if a.plan {
         return print_plan(&suite, a.shard);
     }
