@@ -5,7 +5,10 @@
 // between this run and another (s: this run left of the pointer, the other right of it).
 // Every page marks each image's data-loaded attribute (yes or no) once loaded; opened with
 // #selftest it exercises itself and writes what it found into a pre element of id selftest,
-// one "key: value" line each, for a headless browser's --dump-dom.
+// one "key: value" line each, for a headless browser's --dump-dom. On index.html the
+// self-test first checks the layout in a window of 1400 x 1000 pixels: whether the first
+// screen (nothing scrolled) holds the Pareto summary (#summary) and the machine line
+// (#measured), and whether any table of runs is wider than the window or its container.
 (function () {
   'use strict';
 
@@ -176,8 +179,59 @@
     return {state: st, views: views, fit: fit, viewer: viewer};
   }
 
+  // The layout findings of index.html: "first screen" and "runs tables", each "ok" or
+  // "FAILED" with what was measured.
+  var SCREEN = {width: 1400, height: 1000};
+  function layout(out) {
+    var tables = Array.prototype.slice.call(document.querySelectorAll('table.runs'));
+    if (!tables.length) return;
+    out.push('viewport: ' + window.innerWidth + 'x' + window.innerHeight);
+    function box(id) {
+      var el = document.getElementById(id);
+      if (!el) return null;
+      var r = el.getBoundingClientRect();
+      return {top: r.top + window.scrollY, bottom: r.bottom + window.scrollY,
+        right: r.right + window.scrollX};
+    }
+    function within(b) {
+      return b !== null && b.top >= 0 && b.bottom <= SCREEN.height && b.right <= SCREEN.width;
+    }
+    function where(name, b) {
+      return name + (b === null ? ' missing' : ' ' + Math.round(b.top) + '-' +
+        Math.round(b.bottom) + ' px');
+    }
+    var summary = box('summary'), machine = box('measured');
+    out.push('first screen: ' + (within(summary) && within(machine) ? 'ok' : 'FAILED') + ' (' +
+      where('Pareto summary', summary) + ', ' + where('machine line', machine) + ', in the top ' +
+      SCREEN.height + ' px)');
+    var page = document.documentElement.scrollWidth, wide = [], widest = 0, time = null;
+    tables.forEach(function (t) {
+      var room = t.parentElement.clientWidth, r = t.getBoundingClientRect();
+      widest = Math.max(widest, t.scrollWidth);
+      if (t.scrollWidth > room || r.right + window.scrollX > SCREEN.width) {
+        wide.push(t.scrollWidth + ' in ' + room);
+      }
+      Array.prototype.forEach.call(t.tHead.rows[0].cells, function (th) {
+        if (/\b(CPU|wall) ms\b/.test(th.textContent)) {
+          time = Math.max(time || 0, th.getBoundingClientRect().right + window.scrollX);
+        }
+      });
+    });
+    var ok = page <= SCREEN.width && wide.length === 0 && time !== null && time <= SCREEN.width;
+    // Where each scene's runs heading starts, for a screenshot of a runs table.
+    out.push('runs headings: ' + Array.prototype.map.call(
+      document.querySelectorAll('h3[id$="-runs"]'), function (h) {
+        return h.id + ' ' + Math.round(h.getBoundingClientRect().top + window.scrollY);
+      }).join(', '));
+    out.push('runs tables: ' + (ok ? 'ok' : 'FAILED') + ' (page ' + page + ' px wide; ' +
+      tables.length + ' tables, the widest ' + widest + ' px; time columns end at ' +
+      (time === null ? 'none' : Math.round(time) + ' px') +
+      (wide.length ? '; wider than their container: ' + wide.join(', ') : '') + ')');
+  }
+
   function selftest(v) {
     var out = [];
+    layout(out);
     var images = Array.prototype.slice.call(document.images);
     var bad = images.filter(function (i) { return !(i.complete && i.naturalWidth > 0); });
     out.push('images: ' + (images.length - bad.length) + ' of ' + images.length + ' loaded');

@@ -1,25 +1,21 @@
-//! HTML for the report's pages (`index.html`, written by the `index` module, and a page per
-//! run, by `run_pages`): escaping, the page head with the style and the script embedded
-//! (`reports/assets/report.css` and `report.js`; no server, nothing from the network), table
-//! cells that sort as numbers, the metric columns with `n/a` where a metric does not apply,
-//! and the split of a table's parameters into those stated once above it, once per method,
-//! or in a column of their own.
+//! The parts of the report's pages (`index.html`, built by the `index` module, and a page per
+//! run, by `run_pages`) that the templates (`reports/templates/`, rendered by `templates`)
+//! are given: the style and the script embedded in each page (`reports/assets/report.css`
+//! and `report.js`; no server, nothing from the network), table cells that sort as numbers
+//! ([`Cell`]), tables whose columns that read the same in every row are stated once above
+//! them ([`TableView::state_constant_columns`]), the metric columns with `n/a` where a metric
+//! does not apply, and the split of a table's parameters into those stated once above it,
+//! once per method, or in a column of their own ([`ParamSplit`]).
 //!
 //! Tables sort by clicking a header (numbers as numbers, `n/a` last) and filter by a text box.
 //! The script marks every image `data-loaded="yes"` or `"no"` once a page has loaded; a page
-//! opened as `PAGE.html#selftest` sorts and filters its first sortable table, drives its
-//! comparison view if it has one, and writes what it found into `<pre id="selftest">`, for a
-//! headless browser to check.
+//! opened as `PAGE.html#selftest` checks its layout, sorts and filters its first sortable
+//! table, drives its comparison view if it has one, and writes what it found into
+//! `<pre id="selftest">`, for a headless browser to check.
 
-use crate::devices::is_software_adapter;
 use crate::model::{params_of, Row};
+use serde::Serialize;
 use std::collections::BTreeMap;
-use std::fmt::Write as _;
-
-/// Escapes text for HTML.
-pub fn escape(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
-}
 
 /// The pages' style sheet.
 pub const STYLE: &str = include_str!("../assets/report.css");
@@ -28,51 +24,37 @@ pub const STYLE: &str = include_str!("../assets/report.css");
 /// the self-test.
 pub const SCRIPT: &str = include_str!("../assets/report.js");
 
-/// The start of a page, through `<body>`: title, style and script.
-pub fn page_head(title: &str) -> String {
-    format!(
-        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{}</title>\
-         <style>{STYLE}</style><script>{SCRIPT}</script></head><body>\n",
-        escape(title)
-    )
-}
-
 /// An identifier usable as an HTML anchor: letters and digits kept, the rest `-`.
 pub fn anchor(s: &str) -> String {
     s.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '-' }).collect()
 }
 
-/// The adapter's name as HTML, marked when it is a software rasterizer.
-pub fn adapter_html(name: Option<&str>) -> String {
-    match name {
-        None => "none used".to_owned(),
-        Some(n) if is_software_adapter(n) => format!(
-            "{} <span class=\"software\">(a software rasterizer: its \"GPU\" runs on the CPU, \
-             so its times say nothing of a hardware GPU's)</span>",
-            escape(n)
-        ),
-        Some(n) => escape(n),
-    }
-}
-
-/// One table cell: its text, and the number it sorts by (none for text and `n/a`).
+/// One table cell: its text, the number it sorts by (none for text and `n/a`), and where it
+/// links to.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Cell {
     /// What the cell shows.
     pub text: String,
     /// The value it sorts by.
     pub value: Option<f64>,
+    /// The page it links to, relative to the page it is on.
+    pub href: Option<String>,
 }
 
 impl Cell {
     /// A text cell.
     pub fn text(s: impl Into<String>) -> Self {
-        Self { text: s.into(), value: None }
+        Self { text: s.into(), value: None, href: None }
     }
 
     /// A number shown with `decimals` decimals.
     pub fn num(v: f64, decimals: usize) -> Self {
-        Self { text: format!("{v:.decimals$}"), value: Some(v) }
+        Self { text: format!("{v:.decimals$}"), value: Some(v), href: None }
+    }
+
+    /// A text that sorts by `v`.
+    pub fn sorted(text: impl Into<String>, v: f64) -> Self {
+        Self { text: text.into(), value: Some(v), href: None }
     }
 
     /// `n/a`: the quantity does not apply.
@@ -80,11 +62,114 @@ impl Cell {
         Self::text("n/a")
     }
 
-    /// The cell as `<td>`, its text escaped.
-    pub fn td(&self) -> String {
-        match self.value {
-            Some(v) if v.is_finite() => format!("<td data-v=\"{v}\">{}</td>", escape(&self.text)),
-            _ => format!("<td class=\"text\">{}</td>", escape(&self.text)),
+    /// The cell as a link to `href`.
+    pub fn link(mut self, href: impl Into<String>) -> Self {
+        self.href = Some(href.into());
+        self
+    }
+
+    /// A text cell that sorts by the number it reads as, when it reads as one.
+    pub fn parsed(s: String) -> Self {
+        match s.parse::<f64>() {
+            Ok(x) => Self::sorted(s, x),
+            Err(_) => Self::text(s),
+        }
+    }
+}
+
+impl Serialize for Cell {
+    /// As the templates read it: `text`, `sort` (the number as text, absent for text and
+    /// `n/a`) and `href`.
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        #[derive(Serialize)]
+        struct View<'a> {
+            text: &'a str,
+            sort: Option<String>,
+            href: Option<&'a str>,
+        }
+        View {
+            text: &self.text,
+            sort: self.value.filter(|v| v.is_finite()).map(|v| v.to_string()),
+            href: self.href.as_deref(),
+        }
+        .serialize(s)
+    }
+}
+
+/// A column head.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Head {
+    /// What it says.
+    pub text: String,
+    /// Whether its cells are numbers (right-aligned, sorted as numbers).
+    pub numeric: bool,
+}
+
+impl Head {
+    /// A head of text cells.
+    pub fn text(s: impl Into<String>) -> Self {
+        Self { text: s.into(), numeric: false }
+    }
+
+    /// A head of numbers.
+    pub fn num(s: impl Into<String>) -> Self {
+        Self { text: s.into(), numeric: true }
+    }
+}
+
+/// A line stated above a table: what holds for all its rows, or for one method's rows
+/// (`code`, the method).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Note {
+    /// The method it is about, shown as code; `None` for every row.
+    pub code: Option<String>,
+    /// What holds.
+    pub text: String,
+}
+
+/// A sortable, filterable table as the templates draw it (`macros.html`'s `table`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TableView {
+    /// Its class beside `sortable` (`runs`, `scenes`, `devices`).
+    pub class: String,
+    /// Lines stated once above it.
+    pub notes: Vec<Note>,
+    /// Column heads.
+    pub heads: Vec<Head>,
+    /// Rows of cells, one per head.
+    pub rows: Vec<Vec<Cell>>,
+}
+
+impl TableView {
+    /// A table of class `class` without notes.
+    pub fn new(class: &str, heads: Vec<Head>, rows: Vec<Vec<Cell>>) -> Self {
+        Self { class: class.to_owned(), notes: Vec::new(), heads, rows }
+    }
+
+    /// Moves each column among `candidates` (by head) whose cells read the same in every row
+    /// of a table of two rows or more out of the table, into one note above it (`boundary
+    /// pixels: 1234; contended: no`): the table keeps the columns that tell its rows apart.
+    pub fn state_constant_columns(&mut self, candidates: &[&str]) {
+        if self.rows.len() < 2 {
+            return;
+        }
+        let constant: Vec<usize> = (0..self.heads.len())
+            .filter(|&k| candidates.contains(&self.heads[k].text.as_str()))
+            .filter(|&k| self.rows.iter().all(|r| r[k].text == self.rows[0][k].text))
+            .collect();
+        if constant.is_empty() {
+            return;
+        }
+        let stated: Vec<String> = constant
+            .iter()
+            .map(|&k| format!("{}: {}", self.heads[k].text, self.rows[0][k].text))
+            .collect();
+        self.notes.push(Note { code: None, text: format!("Every run: {}.", stated.join("; ")) });
+        for &k in constant.iter().rev() {
+            self.heads.remove(k);
+            for r in &mut self.rows {
+                r.remove(k);
+            }
         }
     }
 }
@@ -102,6 +187,12 @@ pub const METRIC_COLUMNS: [&str; 10] = [
     "pixel match (Lecocq) %",
     "FLIP",
 ];
+
+/// The metric columns of the index's runs tables (the others are on the runs' pages), as
+/// indices into [`METRIC_COLUMNS`]: the mean, the boundary pixels (stated above the table,
+/// being the reference's), the boundary error and its 95th percentile, both pixel matches and
+/// FLIP.
+pub const RUN_TABLE_METRICS: [usize; 7] = [0, 2, 3, 5, 7, 8, 9];
 
 /// A row's metrics under [`METRIC_COLUMNS`]: `n/a` where nothing was compared, and the
 /// boundary statistics `n/a` where the reference has no boundary pixel.
@@ -135,9 +226,10 @@ pub struct ParamSplit {
     pub constant: BTreeMap<String, String>,
     /// Per method, the rest that is the same in all its rows: stated once per method.
     pub per_method: BTreeMap<String, BTreeMap<String, String>>,
-    /// Swept parameters that vary: a column each.
+    /// Swept parameters that vary within some method's rows: a column each.
     pub columns: Vec<&'static str>,
-    /// Whether some row has a parameter left for the "other parameters" column.
+    /// Whether some row has a parameter left for the "other" column (those that vary within
+    /// a method and have no column of their own).
     pub others: bool,
 }
 
@@ -154,9 +246,17 @@ impl ParamSplit {
             params.iter().flat_map(|p| p.keys()).collect();
         let constant: BTreeMap<String, String> =
             keys.iter().filter_map(|k| same(&all, k).map(|v| ((*k).clone(), v))).collect();
+        // A column for a swept parameter that varies within some method's rows; one that only
+        // tells methods apart is stated once per method.
+        let varies_within = |k: &str| {
+            rows.iter().zip(&params).any(|(r, p)| {
+                rows.iter().zip(&params).any(|(o, q)| o.method == r.method && q.get(k) != p.get(k))
+            })
+        };
         let columns: Vec<&'static str> = COLUMN_KEYS
             .into_iter()
             .filter(|k| keys.contains(&k.to_string()) && !constant.contains_key(*k))
+            .filter(|k| varies_within(k))
             .collect();
         let mut per_method = BTreeMap::new();
         for r in rows {
@@ -196,53 +296,20 @@ impl ParamSplit {
             .join(" ")
     }
 
-    /// The paragraph above the table: the constant parameters, then each method's.
-    pub fn html(&self) -> String {
+    /// The lines above the table: the constant parameters, then each method's.
+    pub fn notes(&self) -> Vec<Note> {
         let kv = |m: &BTreeMap<String, String>| {
             m.iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join(", ")
         };
-        let mut s = String::new();
+        let mut notes = Vec::new();
         if !self.constant.is_empty() {
-            let _ = write!(s, "Every row: {}.", escape(&kv(&self.constant)));
+            notes.push(Note { code: None, text: format!("Every row: {}.", kv(&self.constant)) });
         }
         for (method, fixed) in self.per_method.iter().filter(|(_, f)| !f.is_empty()) {
-            let _ = write!(s, " <code>{}</code>: {}.", escape(method), escape(&kv(fixed)));
+            notes.push(Note { code: Some(method.clone()), text: format!("{}.", kv(fixed)) });
         }
-        format!("<p class=\"constant\">{}</p>\n", s.trim())
+        notes
     }
-}
-
-/// A section of its own holding a bulleted list of texts (escaped): `<h2 id=ID>TITLE</h2>`;
-/// nothing when there is no item.
-pub fn list_section(id: &str, title: &str, items: &[String]) -> String {
-    if items.is_empty() {
-        return String::new();
-    }
-    let mut s = format!("<h2 id=\"{id}\">{}</h2>\n<ul>\n", escape(title));
-    for k in items {
-        let _ = writeln!(s, "<li>{}</li>", escape(k));
-    }
-    s.push_str("</ul>\n");
-    s
-}
-
-/// A sortable, filterable table: the filter box, the head and the body rows.
-pub fn sortable_table(class: &str, heads: &[(String, bool)], rows: &[String]) -> String {
-    let mut s = String::from(
-        "<input type=\"search\" class=\"filter\" placeholder=\"filter rows (words)\" \
-         aria-label=\"filter rows\">\n",
-    );
-    let _ = write!(s, "<table class=\"sortable {class}\"><thead><tr>");
-    for (h, numeric) in heads {
-        let _ =
-            write!(s, "<th class=\"{}\">{}</th>", if *numeric { "num" } else { "text" }, escape(h));
-    }
-    s.push_str("</tr></thead><tbody>\n");
-    for r in rows {
-        let _ = writeln!(s, "<tr>{r}</tr>");
-    }
-    s.push_str("</tbody></table>\n");
-    s
 }
 
 #[cfg(test)]
@@ -250,23 +317,25 @@ mod tests {
     use super::*;
 
     #[test]
-    fn escapes_markup() {
-        assert_eq!(escape("<a href=\"x\">&</a>"), "&lt;a href=&quot;x&quot;&gt;&amp;&lt;/a&gt;");
+    fn columns_the_same_in_every_row_are_stated_once() {
+        let heads = vec![Head::text("method"), Head::num("boundary pixels"), Head::num("FLIP")];
+        let rows = vec![
+            vec![Cell::text("sm"), Cell::num(12.0, 0), Cell::num(0.1, 2)],
+            vec![Cell::text("afsm"), Cell::num(12.0, 0), Cell::num(0.2, 2)],
+        ];
+        let mut t = TableView::new("runs", heads, rows);
+        t.state_constant_columns(&["boundary pixels", "FLIP"]);
+        assert_eq!(t.heads.iter().map(|h| h.text.as_str()).collect::<Vec<_>>(), ["method", "FLIP"]);
+        assert!(t.rows.iter().all(|r| r.len() == 2));
+        assert_eq!(t.notes[0].text, "Every run: boundary pixels: 12.");
+        let json = serde_json::to_value(&t.rows[0][1]).expect("serialises");
+        assert_eq!(json["sort"], "0.1");
+        assert_eq!(
+            serde_json::to_value(Cell::na()).expect("serialises")["sort"],
+            serde_json::Value::Null
+        );
     }
 
-    #[test]
-    fn software_adapters_are_marked() {
-        for n in [
-            "llvmpipe (LLVM 15.0.6, 256 bits) via Vulkan",
-            "Lavapipe",
-            "Microsoft Basic Render Driver (Software)",
-        ] {
-            assert!(is_software_adapter(n), "{n}");
-            assert!(adapter_html(Some(n)).contains("software rasterizer"), "{n}");
-        }
-        assert!(!is_software_adapter("NVIDIA H200"));
-        assert_eq!(adapter_html(Some("NVIDIA H200")), "NVIDIA H200");
-    }
     fn row(method: &str, params: serde_json::Value) -> Row {
         let v =
             methods::Visibility { width: 10, height: 1, lit: vec![0.25; 10], transmittance: None };
@@ -313,15 +382,22 @@ mod tests {
         let split = ParamSplit::of(&refs);
         let constant: Vec<&str> = split.constant.keys().map(String::as_str).collect();
         assert_eq!(constant, ["constant_bias", "device"]);
-        assert_eq!(split.columns, ["map_res", "rate"]);
+        assert_eq!(split.columns, ["map_res"], "rate only tells spsm from sm");
         assert_eq!(split.per_method["sm"].keys().collect::<Vec<_>>(), ["slope_bias"]);
-        assert!(split.per_method["spsm"].is_empty(), "texel varies within spsm");
+        assert_eq!(
+            split.per_method["spsm"].keys().collect::<Vec<_>>(),
+            ["rate"],
+            "texel varies within spsm"
+        );
         assert!(split.others);
         assert_eq!(split.other_params(&rows[0]), "");
         assert_eq!(split.other_params(&rows[2]), "texel=f32");
-        let above = split.html();
-        assert!(above.contains("Every row: constant_bias=0.00001, device=cpu."), "{above}");
-        assert!(above.contains("<code>sm</code>: slope_bias=1.0."), "{above}");
+        let notes = split.notes();
+        assert_eq!(notes[0].text, "Every row: constant_bias=0.00001, device=cpu.");
+        assert_eq!(
+            (notes[1].code.as_deref(), notes[1].text.as_str()),
+            (Some("sm"), "slope_bias=1.0.")
+        );
     }
 
     #[test]

@@ -1,401 +1,546 @@
 //! `index.html`: the report as one page that opens in any browser from the file system (no
-//! server, no script from elsewhere): a header with the machine, a contents list, the scenes,
-//! per scene its charts and its table of runs (each run linked to its page, `runs/ID.html`,
+//! server, no script from elsewhere), rendered by the `index.html` template
+//! (`reports/templates/`, [`crate::templates`]) from an [`IndexPage`] built from the
+//! [`Report`].
+//!
+//! The page leads with the answer. Its first screen (1400 x 1000 pixels) holds the machine and
+//! the load the times were taken under (the clock of the cost axis, how many runs were
+//! contended), per scene its Pareto front (mean error against time on the report's clock) as
+//! a compact table, and what the runs say of each method ([`crate::summary`]). Below it: the
+//! provenance, the contents list, the comparison with a baseline, the scenes, the best error
+//! within each time budget (figure and table), per scene its image grids, its whole front, its
+//! charts and its table of runs (each run linked to its page, `runs/ID.html`,
 //! [`crate::run_pages`]), CPU and GPU side by side, the papers' tables, a glossary of the
 //! metrics, and what did not run. Images are files beside the page (`plots/*.png`, with the
 //! SVG linked).
 //!
+//! A runs table fits a 1400-pixel window with its time column in view: parameters and columns
+//! that are the same over the whole table are stated once above it, a method's fixed
+//! parameters once per method; the columns are the method, the parameters that vary, a few
+//! error metrics, the time on the report's clock (median and its interval, or "no interval"),
+//! the wall time and whether the run was contended. Counts and the other metrics are on the
+//! run pages.
+//!
 //! The style and the script are embedded in the page (`reports/assets/report.css` and
 //! `report.js`): tables sort by clicking a header (numbers as numbers, `n/a` last) and filter
-//! by a text box; parameters that are the same over a whole table are stated once above it,
-//! and a method's parameters that are the same over all its rows once per method. The script
-//! marks every image `data-loaded="yes"` or `"no"` once the page has loaded, and the page
-//! opened as `index.html#selftest` sorts and filters its first run table and writes what it
-//! found into `<pre id="selftest">`, for a headless browser to check.
+//! by a text box. The script marks every image `data-loaded="yes"` or `"no"` once the page has
+//! loaded, and the page opened as `index.html#selftest` checks its own layout (the first
+//! screen holds the Pareto summary and the machine line; no runs table is wider than the
+//! window), sorts and filters its first run table and writes what it found into
+//! `<pre id="selftest">`, for a headless browser to check.
 
 use crate::baseline::Comparison;
-use crate::figures::PlotFile;
+use crate::figures::{clock_name, PlotFile};
 use crate::html::{
-    adapter_html, anchor, escape, list_section, metric_cells, page_head, sortable_table, Cell,
-    ParamSplit, METRIC_COLUMNS,
+    anchor, metric_cells, Cell, Head, Note, ParamSplit, TableView, METRIC_COLUMNS,
+    RUN_TABLE_METRICS,
 };
 use crate::model::{params_of, row_stem, Report, Row};
-use std::fmt::Write as _;
+use crate::summary::{
+    budget_table, error_text, fronts, measured, ms_text, time_text, verdicts, Front, Measured,
+    Verdict,
+};
+use crate::templates::{Pages, TemplateError};
+use serde::Serialize;
 
-/// The table of one scene's runs.
-fn runs_table(rows: &[&Row]) -> String {
-    let split = ParamSplit::of(rows);
-    let mut heads: Vec<(String, bool)> = vec![("method".into(), false)];
-    heads
-        .extend(split.columns.iter().map(|c| (c.to_string(), !matches!(*c, "pattern" | "device"))));
-    if split.others {
-        heads.push(("other parameters".into(), false));
+/// A link of the contents list, with the links under it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Link {
+    /// Anchor, `#scene-cage`.
+    pub href: String,
+    /// What it says.
+    pub text: String,
+    /// The links under it.
+    pub children: Vec<Link>,
+}
+
+impl Link {
+    fn to(id: &str, text: &str) -> Self {
+        Self { href: format!("#{id}"), text: text.to_owned(), children: Vec::new() }
     }
-    heads.extend(METRIC_COLUMNS.iter().map(|c| (c.to_string(), true)));
-    heads.extend(["time ms (median)", "min", "max"].iter().map(|c| (c.to_string(), true)));
-    let body: Vec<String> = rows
+}
+
+/// A chart or an image on the page.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Figure {
+    /// Its anchor.
+    pub id: String,
+    /// The PNG, relative to the page.
+    pub png: String,
+    /// The SVG beside it, for a chart.
+    pub svg: Option<String>,
+    /// Caption.
+    pub title: String,
+    /// Drawn smaller than the page's width.
+    pub small: bool,
+}
+
+/// The comparison with an earlier report.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BaselineView {
+    /// The counts, in a sentence.
+    pub summary: String,
+    /// Each regression, in a line.
+    pub regressions: Vec<String>,
+}
+
+/// What produced the report.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ProvenanceView {
+    /// Crate version.
+    pub version: String,
+    /// Commit.
+    pub commit: String,
+    /// Whether the checkout had uncommitted changes.
+    pub dirty: bool,
+    /// Compiler.
+    pub rustc: String,
+    /// When (UTC).
+    pub timestamp: String,
+    /// Command line.
+    pub command: String,
+}
+
+/// A scene's section.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SceneSection {
+    /// Anchor stem, `scene-cage`.
+    pub id: String,
+    /// Scene.
+    pub name: String,
+    /// Its image grids.
+    pub grids: Vec<Figure>,
+    /// Its whole Pareto front, with intervals and wall times.
+    pub front: Option<TableView>,
+    /// Its charts.
+    pub plots: Vec<Figure>,
+    /// What holds for its runs table: frame, reference, where the metrics are taken, clock.
+    pub runs_about: String,
+    /// Its runs.
+    pub runs: Option<TableView>,
+}
+
+/// CPU and GPU side by side.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DevicesView {
+    /// The adapter.
+    pub gpu: Option<String>,
+    /// Whether it is a software rasterizer.
+    pub gpu_software: bool,
+    /// The pairs.
+    pub table: TableView,
+}
+
+/// One of the papers' tables.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PaperTableView {
+    /// Anchor stem and CSV name.
+    pub id: String,
+    /// Title.
+    pub title: String,
+    /// The paper's hardware.
+    pub hardware: String,
+    /// Notes.
+    pub notes: String,
+    /// Header.
+    pub header: Vec<String>,
+    /// Rows.
+    pub rows: Vec<Vec<String>>,
+    /// Its chart, for a cost-against-work table.
+    pub chart: Option<Figure>,
+}
+
+/// Everything `index.html` shows, for its template.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct IndexPage {
+    /// `index`, for the page's `data-page`.
+    pub page: &'static str,
+    /// The page's title.
+    pub title: String,
+    /// Suite name.
+    pub suite: String,
+    /// Suite description.
+    pub description: String,
+    /// The machine, the clock and the load.
+    pub measured: Measured,
+    /// Contended runs, in a sentence.
+    pub contended_text: String,
+    /// The clock's name, `CPU` or `wall`.
+    pub clock: String,
+    /// Per scene, its Pareto front.
+    pub fronts: Vec<Front>,
+    /// Rows of a front shown on the first screen; the rest are in the scene's section.
+    pub front_rows: usize,
+    /// Per method, what the runs say of it.
+    pub verdicts: Vec<Verdict>,
+    /// The methods on no front and best nowhere.
+    pub off_front: Vec<String>,
+    /// What produced the report.
+    pub provenance: ProvenanceView,
+    /// The contents list.
+    pub contents: Vec<Link>,
+    /// The comparison with a baseline.
+    pub baseline: Option<BaselineView>,
+    /// The scenes.
+    pub scenes_table: TableView,
+    /// Figures across scenes.
+    pub summary_figures: Vec<Figure>,
+    /// The best error of every method within each budget.
+    pub budget: Option<TableView>,
+    /// Per scene, its section.
+    pub scenes: Vec<SceneSection>,
+    /// CPU and GPU side by side.
+    pub devices: Option<DevicesView>,
+    /// The papers' tables.
+    pub papers: Vec<PaperTableView>,
+    /// What did not run, and why.
+    pub skipped: Vec<String>,
+}
+
+/// Rows of a front on the first screen.
+const FRONT_ROWS: usize = 6;
+
+/// The metric and time columns a runs table may state above it when they are the same in
+/// every row.
+fn constant_candidates() -> Vec<&'static str> {
+    let mut c: Vec<&'static str> = RUN_TABLE_METRICS.iter().map(|&k| METRIC_COLUMNS[k]).collect();
+    c.push("contended");
+    c
+}
+
+/// The head of the time column on `clock`.
+fn time_head(clock: &str) -> String {
+    format!("{clock} ms (95 % interval)")
+}
+
+/// The table of one scene's runs (see the module documentation).
+pub fn runs_table(rows: &[&Row], report: &Report) -> TableView {
+    let clock = report.clock;
+    let split = ParamSplit::of(rows);
+    let mut heads = vec![Head::text("method")];
+    heads.extend(split.columns.iter().map(|c| {
+        if matches!(*c, "pattern" | "device") {
+            Head::text(*c)
+        } else {
+            Head::num(*c)
+        }
+    }));
+    if split.others {
+        heads.push(Head::text("other"));
+    }
+    heads.extend(RUN_TABLE_METRICS.iter().map(|&k| Head::num(METRIC_COLUMNS[k])));
+    heads.push(Head::num(time_head(clock_name(clock))));
+    heads.push(Head::num("wall ms"));
+    heads.push(Head::text("contended"));
+    let body: Vec<Vec<Cell>> = rows
         .iter()
         .map(|r| {
             let p = params_of(r);
-            let mut s = format!(
-                "<td><a href=\"runs/{}.html\">{}</a></td>",
-                escape(&row_stem(r)),
-                escape(&r.method)
+            let mut cells = vec![Cell::text(&r.method).link(format!("runs/{}.html", row_stem(r)))];
+            cells.extend(
+                split.columns.iter().map(|c| Cell::parsed(p.get(*c).cloned().unwrap_or_default())),
             );
-            for c in &split.columns {
-                let v = p.get(*c).cloned().unwrap_or_default();
-                let cell = match v.parse::<f64>() {
-                    Ok(x) => Cell { text: v, value: Some(x) },
-                    Err(_) => Cell::text(v),
-                };
-                s.push_str(&cell.td());
-            }
             if split.others {
-                s.push_str(&Cell::text(split.other_params(r)).td());
+                cells.push(Cell::text(split.other_params(r)));
             }
-            for c in metric_cells(r) {
-                s.push_str(&c.td());
-            }
-            for t in [r.total_ms.median, r.total_ms.min, r.total_ms.max] {
-                s.push_str(&Cell::num(t, 2).td());
-            }
-            s
+            let metrics = metric_cells(r);
+            cells.extend(RUN_TABLE_METRICS.iter().map(|&k| metrics[k].clone()));
+            let t = r.time(clock);
+            cells.push(Cell::sorted(time_text(t), t.median));
+            cells.push(Cell::sorted(ms_text(r.total_ms.median), r.total_ms.median));
+            cells.push(Cell::text(if r.contended { "yes" } else { "no" }));
+            cells
         })
         .collect();
-    split.html() + &sortable_table("runs", &heads, &body)
+    let mut table = TableView::new("runs", heads, body);
+    table.notes = split.notes();
+    table.state_constant_columns(&constant_candidates());
+    table
 }
 
-/// The glossary: what every quantity of the report means.
-const GLOSSARY: &str = "<h2 id=\"glossary\">Glossary</h2>\n<dl class=\"glossary\">\n\
-<dt>lit fraction</dt><dd>The fraction of a pixel's square that the light reaches, in [0, 1]: \
-what every method computes and every reference gives exactly (<code>exact</code>) or by \
-sampling (<code>raytrace</code>).</dd>\n\
-<dt>pixel classes</dt><dd>What a pixel's square sees, decided exactly from the camera's view \
-of the triangles: <b>planar</b>, the square sees one planar object and nothing else; \
-<b>surface</b>, the square is tiled without gap or overlap by front-facing triangles of one \
-continuous surface with nothing in front of them; <b>edge</b>, anything else (a silhouette, a \
-depth discontinuity, several objects, background, a visible back face); <b>uncovered</b>, the \
-square sees no geometry.</dd>\n\
-<dt>shadow-only pixels</dt><dd>The pixels the metrics are taken over: the planar and surface \
-pixels the reference evaluated (for <code>raytrace</code>, which has no classes of its own, \
-by the classes of the camera's view of the triangles). On edge \
-pixels the error is the camera's aliasing, not the shadow's, so they are left out.</dd>\n\
-<dt>mean abs error</dt><dd>The mean of |method - reference| of the lit fraction over the \
-shadow-only pixels.</dd>\n\
-<dt>RMSE</dt><dd>The root mean square of method - reference over the same pixels: it weighs \
-large errors more than the mean does.</dd>\n\
-<dt>boundary pixels</dt><dd>Shadow-only pixels whose reference lit fraction is strictly \
-between 0 and 1: the penumbra and the shadow's edges, where antialiasing matters.</dd>\n\
-<dt>boundary error</dt><dd>The mean abs error over the boundary pixels only.</dd>\n\
-<dt>p50 / p95 / p99 of the boundary error</dt><dd>The 50th, 95th and 99th percentiles of \
-|method - reference| over the boundary pixels, by the nearest-rank definition (with the n \
-errors sorted, the one of rank ceil(p n)): the typical and the worst errors at the shadow's \
-edges.</dd>\n\
-<dt>FLIP</dt><dd>NVIDIA's FLIP (Andersson et al., \"FLIP: A Difference Evaluator for \
-Alternating Images\", HPG 2020): the perceived difference between the shaded method image and \
-the shaded reference, per pixel in [0, 1], averaged over the frame; only shadow-only pixels \
-may differ.</dd>\n\
-<dt>pixel match</dt><dd>As reported here: the share of shadow-only pixels within half an \
-8-bit step (0.5/255) of the reference. Against an exact reference an antialiased value hits \
-a pixel's coverage only by luck, so this mostly measures how much of the frame is fully lit \
-or fully shadowed. In Lecocq et al.'s sense (\"Sub-Pixel Shadow Mapping\", I3D 2014): the \
-share of pixels whose binary lit/shadowed value equals that of <code>raytrace</code> at rate \
-1 (one sample per pixel), for methods whose output is binary at that setting.</dd>\n\
-<dt>error distribution</dt><dd>For the runs on a scene's Pareto front, the share of \
-shadow-only pixels whose |method - reference| exceeds x, for x from 1e-4 to 0.9 (log-log). A \
-curve ends where no pixel's error exceeds x. At x = 0.5/255 the share is one minus the pixel \
-match; a curve that falls late has a tail of large errors that its mean hides.</dd>\n\
-<dt>error map</dt><dd>On a run's page: |method - reference| on the shadow-only pixels in \
-false colour (magma, black at 0, pale yellow at 0.1 and above), dark grey where nothing is \
-compared, with its colour bar.</dd>\n\
-<dt>n/a</dt><dd>The quantity does not apply: no pixel was compared, or (boundary error) the \
-reference has no boundary pixel.</dd>\n\
-<dt>time</dt><dd>The method's own stages, median of the timed runs after the warm-up, with \
-their minimum and maximum; the camera G-buffer, shared by every method of a scene, is listed \
-per scene.</dd>\n</dl>\n";
+/// A scene's whole Pareto front as a table: method, parameters, error, time on the clock with
+/// its interval, wall time.
+fn front_table(f: &Front, clock: &str) -> TableView {
+    let heads = vec![
+        Head::text("method"),
+        Head::text("parameters"),
+        Head::num("mean abs error"),
+        Head::num(time_head(clock)),
+        Head::num("wall ms"),
+        Head::text("contended"),
+    ];
+    let rows = f
+        .runs
+        .iter()
+        .map(|r| {
+            vec![
+                Cell::text(&r.method).link(&r.page),
+                Cell::text(&r.params),
+                Cell::sorted(&r.error_text, r.error),
+                Cell::text(format!("{} ({})", r.time_text, r.interval_text)),
+                Cell::text(&r.wall_text),
+                Cell::text(if r.contended { "yes" } else { "no" }),
+            ]
+        })
+        .collect();
+    let mut t = TableView::new("front", heads, rows);
+    t.state_constant_columns(&["contended"]);
+    t
+}
 
-/// The page.
-pub fn index_html(report: &Report, plots: &[PlotFile], baseline: Option<&Comparison>) -> String {
-    let mut s = page_head(&format!("shadowbench report: {}", report.suite.name));
-    let (m, p) = (&report.machine, &report.provenance);
-    let _ = write!(
-        s,
-        "<header><h1>shadowbench report: suite <code>{name}</code></h1>\n<p>{desc}</p>\n\
-         <p id=\"machine\">Machine: {cpu} ({cores} cores, {threads} threads, {os}); GPU: {gpu}. \
-         Times: median of {rep} runs after {warm} warm-up, [min, max].</p>\n<p \
-         id=\"provenance\">Produced by shadowbench {version}, commit <code>{commit}</code>{dirty}, \
-         built with {rustc}, at {time}, by <code>{command}</code>. Everything as CSV: <a \
-         href=\"runs.csv\">runs.csv</a>, as JSON: <a href=\"runs.json\">runs.json</a>.</p>\
-         </header>\n",
-        name = escape(&report.suite.name),
-        desc = escape(&report.suite.description),
-        cpu = escape(&m.cpu),
-        cores = m.cores,
-        threads = m.threads,
-        os = escape(&m.os),
-        gpu = adapter_html(m.gpu.as_deref()),
-        rep = report.suite.repeats,
-        warm = report.suite.warmup,
-        version = escape(&p.version),
-        commit = escape(&p.commit),
-        dirty = if p.dirty { " (with local changes)" } else { "" },
-        rustc = escape(&p.rustc),
-        time = escape(&p.timestamp),
-        command = escape(&p.command),
+/// A chart of the page.
+fn figure(id: String, p: &PlotFile) -> Figure {
+    Figure { id, png: p.png.clone(), svg: Some(p.svg()), title: p.title.clone(), small: false }
+}
+
+/// The page's model.
+pub fn index_page(report: &Report, plots: &[PlotFile], baseline: Option<&Comparison>) -> IndexPage {
+    let clock = clock_name(report.clock).to_owned();
+    let measured = measured(report);
+    let (verdicts, off_front) = verdicts(report);
+    let fronts = fronts(report);
+    let p = &report.provenance;
+    let scenes_table = TableView::new(
+        "scenes",
+        vec![
+            Head::text("scene"),
+            Head::num("triangles"),
+            Head::text("effects"),
+            Head::text("frame"),
+            Head::num("G-buffer wall ms"),
+            Head::text("reference"),
+            Head::num("reference wall ms"),
+        ],
+        report
+            .scenes
+            .iter()
+            .map(|sc| {
+                vec![
+                    Cell::text(&sc.scene).link(format!("#scene-{}", anchor(&sc.scene))),
+                    Cell::num(sc.triangles as f64, 0),
+                    Cell::text(sc.effects.join(", ")),
+                    Cell::text(format!("{}x{}", sc.width, sc.height)),
+                    Cell::num(sc.gbuffer_ms, 1),
+                    Cell::text(&sc.reference),
+                    Cell::num(sc.reference_ms, 1),
+                ]
+            })
+            .collect(),
     );
-    s.push_str(&contents(report, plots, baseline.is_some()));
-    if let Some(c) = baseline {
-        s.push_str(&baseline_section(c));
-    }
-    s.push_str("<h2 id=\"scenes\">Scenes</h2>\n");
-    let heads: Vec<(String, bool)> = [
-        ("scene", false),
-        ("triangles", true),
-        ("effects", false),
-        ("frame", false),
-        ("G-buffer ms", true),
-        ("reference", false),
-        ("reference ms", true),
-    ]
-    .iter()
-    .map(|(h, n)| (h.to_string(), *n))
-    .collect();
-    let body: Vec<String> = report
+    let summary_figures: Vec<Figure> = plots
+        .iter()
+        .filter(|p| p.scene.is_empty())
+        .enumerate()
+        .map(|(k, p)| figure(format!("summary-plot-{k}"), p))
+        .collect();
+    let budget = (!report.rows.is_empty()).then(|| {
+        let t = budget_table(report);
+        let mut heads = vec![Head::text("scene"), Head::text("method")];
+        heads.extend(t.heads.iter().map(Head::num));
+        let rows = t
+            .rows
+            .iter()
+            .map(|r| {
+                let mut cells = vec![Cell::text(&r.scene), Cell::text(&r.method)];
+                cells.extend(r.best.iter().zip(&r.winner).map(|(b, &w)| match b {
+                    Some(e) if w => Cell::sorted(format!("{} (best)", error_text(*e)), *e),
+                    Some(e) => Cell::sorted(error_text(*e), *e),
+                    None => Cell::text("no run fits"),
+                }));
+                cells
+            })
+            .collect();
+        TableView::new("budgets", heads, rows)
+    });
+    let scenes: Vec<SceneSection> = report
         .scenes
         .iter()
         .map(|sc| {
-            format!(
-                "<td><a href=\"#scene-{id}\">{name}</a></td>{}{}{}{}{}{}",
-                Cell::num(sc.triangles as f64, 0).td(),
-                Cell::text(sc.effects.join(", ")).td(),
-                Cell::text(format!("{}x{}", sc.width, sc.height)).td(),
-                Cell::num(sc.gbuffer_ms, 1).td(),
-                Cell::text(&sc.reference).td(),
-                Cell::num(sc.reference_ms, 1).td(),
-                id = anchor(&sc.scene),
-                name = escape(&sc.scene),
-            )
+            let id = format!("scene-{}", anchor(&sc.scene));
+            let rows: Vec<&Row> = report.rows.iter().filter(|r| r.scene == sc.scene).collect();
+            let ref_rate = rows.first().and_then(|r| r.ref_rate);
+            SceneSection {
+                grids: report
+                    .grids
+                    .iter()
+                    .filter(|g| g.scene == sc.scene)
+                    .enumerate()
+                    .map(|(k, g)| Figure {
+                        id: format!("{id}-grid-{k}"),
+                        png: g.png.clone(),
+                        svg: None,
+                        title: g.title.clone(),
+                        small: false,
+                    })
+                    .collect(),
+                front: fronts.iter().find(|f| f.scene == sc.scene).map(|f| front_table(f, &clock)),
+                plots: plots
+                    .iter()
+                    .filter(|p| p.scene == sc.scene)
+                    .enumerate()
+                    .map(|(k, p)| figure(format!("{id}-plot-{k}"), p))
+                    .collect(),
+                runs_about: format!(
+                    "Frame {}x{}; reference {}{}; metrics over the shadow-only pixels (see the \
+                     glossary); time: the method's own stages on the {clock} clock, median of \
+                     the timed runs with the 95 % interval of the median, wall time beside it. \
+                     Each method links to its run's page, with every metric, stage and counter.",
+                    sc.width,
+                    sc.height,
+                    sc.reference,
+                    ref_rate.map_or_else(String::new, |r| format!(" at {r} samples per pixel")),
+                ),
+                runs: (!rows.is_empty()).then(|| runs_table(&rows, report)),
+                name: sc.scene.clone(),
+                id,
+            }
         })
         .collect();
-    s.push_str(&sortable_table("scenes", &heads, &body));
-    for (k, p) in plots.iter().filter(|p| p.scene.is_empty()).enumerate() {
-        let _ = writeln!(
-            s,
-            "<figure id=\"summary-plot-{k}\"><img src=\"{png}\" alt=\"{t}\"><figcaption>{t} (<a \
-             href=\"{svg}\">SVG</a>)</figcaption></figure>",
-            png = escape(&p.png),
-            svg = escape(&(p.png.trim_end_matches(".png").to_owned() + ".svg")),
-            t = escape(&p.title)
-        );
+    IndexPage {
+        page: "index",
+        title: format!("shadowbench report: {}", report.suite.name),
+        suite: report.suite.name.clone(),
+        description: report.suite.description.clone(),
+        contended_text: measured.contended_text(),
+        measured,
+        clock,
+        fronts,
+        front_rows: FRONT_ROWS,
+        verdicts,
+        off_front,
+        provenance: ProvenanceView {
+            version: p.version.clone(),
+            commit: p.commit.clone(),
+            dirty: p.dirty,
+            rustc: p.rustc.clone(),
+            timestamp: p.timestamp.clone(),
+            command: p.command.clone(),
+        },
+        contents: contents(report, &summary_figures, &scenes, baseline.is_some()),
+        baseline: baseline.map(baseline_view),
+        scenes_table,
+        summary_figures,
+        budget,
+        scenes,
+        devices: devices_view(report),
+        papers: report
+            .tables
+            .iter()
+            .map(|t| {
+                let id = t.paper.name().to_owned();
+                PaperTableView {
+                    title: t.title.clone(),
+                    hardware: t.paper_hardware.clone(),
+                    notes: t.notes.join(" "),
+                    header: t.header.clone(),
+                    rows: t.rows.clone(),
+                    chart: crate::tables::chart(t).map(|_| Figure {
+                        id: format!("table-{id}-chart"),
+                        png: format!("plots/{id}.png"),
+                        svg: Some(format!("plots/{id}.svg")),
+                        title: format!("{}, log-log", t.title),
+                        small: false,
+                    }),
+                    id,
+                }
+            })
+            .collect(),
+        skipped: report.skipped.clone(),
     }
-    for sc in &report.scenes {
-        let id = anchor(&sc.scene);
-        let _ = writeln!(s, "<h2 id=\"scene-{id}\">{}</h2>", escape(&sc.scene));
-        for (k, g) in report.grids.iter().filter(|g| g.scene == sc.scene).enumerate() {
-            let _ = writeln!(
-                s,
-                "<figure id=\"scene-{id}-grid-{k}\"><img src=\"{png}\" alt=\"{t}\">\
-                 <figcaption>{t}</figcaption></figure>",
-                png = escape(&g.png),
-                t = escape(&g.title)
-            );
-        }
-        for (k, p) in plots.iter().filter(|p| p.scene == sc.scene).enumerate() {
-            let svg = p.png.trim_end_matches(".png").to_owned() + ".svg";
-            let _ = writeln!(
-                s,
-                "<div class=\"beside\"><figure id=\"scene-{id}-plot-{k}\"><img src=\"{png}\" \
-                 alt=\"{t}\"><figcaption>{t} (<a href=\"{svg}\">SVG</a>)</figcaption></figure>{pareto}\
-                 </div>",
-                png = escape(&p.png),
-                svg = escape(&svg),
-                t = escape(&p.title),
-                pareto = pareto_table(p),
-            );
-        }
-        let rows: Vec<&Row> = report.rows.iter().filter(|r| r.scene == sc.scene).collect();
-        let ref_rate = rows.first().and_then(|r| r.ref_rate);
-        let _ = writeln!(
-            s,
-            "<h3 id=\"scene-{id}-runs\">Runs on {name}</h3>\n<p class=\"constant\">Frame {w}x{h}; \
-             reference <code>{reference}</code>{rate}; metrics over the shadow-only pixels (see \
-             the <a href=\"#glossary\">glossary</a>). Each method links to its run's page.</p>",
-            name = escape(&sc.scene),
-            w = sc.width,
-            h = sc.height,
-            reference = escape(&sc.reference),
-            rate = ref_rate.map_or_else(String::new, |r| format!(" at {r} samples per pixel")),
-        );
-        if !rows.is_empty() {
-            s.push_str(&runs_table(&rows));
-        }
-    }
-    s.push_str(&devices_section(report));
-    if !report.tables.is_empty() {
-        s.push_str("<h2 id=\"tables\">The papers' tables</h2>\n");
-        for t in &report.tables {
-            let _ = writeln!(
-                s,
-                "<h3 id=\"table-{id}\">{}</h3>\n<p>Paper's figures measured on: {}. {} (<a \
-                 href=\"tables/{}.csv\">CSV</a>)</p>\n<table><tr>{}</tr>",
-                escape(&t.title),
-                escape(&t.paper_hardware),
-                escape(&t.notes.join(" ")),
-                t.paper.name(),
-                t.header.iter().map(|c| format!("<th>{}</th>", escape(c))).collect::<String>(),
-                id = t.paper.name(),
-            );
-            for r in &t.rows {
-                let cells: String = r.iter().map(|c| format!("<td>{}</td>", escape(c))).collect();
-                let _ = writeln!(s, "<tr>{cells}</tr>");
-            }
-            s.push_str("</table>\n");
-            if crate::tables::chart(t).is_some() {
-                let _ = writeln!(
-                    s,
-                    "<figure id=\"table-{id}-chart\"><img src=\"plots/{id}.png\" alt=\"{t}\">\
-                     <figcaption>{t}, log-log (<a href=\"plots/{id}.svg\">SVG</a>)</figcaption>\
-                     </figure>",
-                    id = t.paper.name(),
-                    t = escape(&t.title),
-                );
-            }
-        }
-    }
-    s.push_str(GLOSSARY);
-    s.push_str(&list_section("skipped", "Not run", &report.skipped));
-    s.push_str("</body></html>\n");
-    s
 }
 
-/// The contents list: every section, and under each scene its figures and its table.
-fn contents(report: &Report, plots: &[PlotFile], baseline: bool) -> String {
-    let mut s = String::from("<nav class=\"contents\"><b>Contents</b><ul>\n");
+/// The page, rendered.
+pub fn index_html(
+    pages: &Pages,
+    report: &Report,
+    plots: &[PlotFile],
+    baseline: Option<&Comparison>,
+) -> Result<String, TemplateError> {
+    pages.render("index.html", &index_page(report, plots, baseline))
+}
+
+/// The contents list: every section, and under each scene its figures and its tables.
+fn contents(
+    report: &Report,
+    summary: &[Figure],
+    scenes: &[SceneSection],
+    baseline: bool,
+) -> Vec<Link> {
+    let mut c = vec![Link::to("summary", "Pareto fronts and what the runs say of each method")];
     if baseline {
-        s.push_str("<li><a href=\"#baseline\">Against the baseline</a></li>\n");
+        c.push(Link::to("baseline", "Against the baseline"));
     }
-    s.push_str("<li><a href=\"#scenes\">Scenes</a></li>\n");
-    for (k, p) in plots.iter().filter(|p| p.scene.is_empty()).enumerate() {
-        let _ = writeln!(s, "<li><a href=\"#summary-plot-{k}\">{}</a></li>", escape(&p.title));
+    c.push(Link::to("scenes", "Scenes"));
+    if !report.rows.is_empty() {
+        c.push(Link::to("budgets", "Best error within a time budget"));
     }
-    for sc in &report.scenes {
-        let id = anchor(&sc.scene);
-        let _ = write!(s, "<li><a href=\"#scene-{id}\">{}</a><ul>", escape(&sc.scene));
-        for (k, g) in report.grids.iter().filter(|g| g.scene == sc.scene).enumerate() {
-            let _ = write!(s, "<li><a href=\"#scene-{id}-grid-{k}\">{}</a></li>", escape(&g.title));
+    c.extend(summary.iter().map(|f| Link::to(&f.id, &f.title)));
+    for s in scenes {
+        let mut l = Link::to(&s.id, &s.name);
+        l.children.extend(s.grids.iter().map(|g| Link::to(&g.id, &g.title)));
+        if s.front.is_some() {
+            l.children.push(Link::to(&format!("{}-front", s.id), "Pareto front"));
         }
-        for (k, p) in plots.iter().filter(|p| p.scene == sc.scene).enumerate() {
-            let _ = write!(s, "<li><a href=\"#scene-{id}-plot-{k}\">{}</a></li>", escape(&p.title));
-        }
-        let _ = writeln!(s, "<li><a href=\"#scene-{id}-runs\">runs</a></li></ul></li>");
+        l.children.extend(s.plots.iter().map(|p| Link::to(&p.id, &p.title)));
+        l.children.push(Link::to(&format!("{}-runs", s.id), "runs"));
+        c.push(l);
     }
     if !crate::devices::pairs(&report.rows).is_empty() {
-        s.push_str("<li><a href=\"#devices\">CPU and GPU</a></li>\n");
+        c.push(Link::to("devices", "CPU and GPU"));
     }
     if !report.tables.is_empty() {
-        s.push_str("<li><a href=\"#tables\">The papers' tables</a><ul>");
-        for t in &report.tables {
-            let _ = write!(
-                s,
-                "<li><a href=\"#table-{}\">{}</a></li>",
-                t.paper.name(),
-                escape(&t.title)
-            );
-        }
-        s.push_str("</ul></li>\n");
-    }
-    s.push_str("<li><a href=\"#glossary\">Glossary</a></li>\n");
-    if !report.skipped.is_empty() {
-        s.push_str("<li><a href=\"#skipped\">Not run</a></li>\n");
-    }
-    s.push_str("</ul></nav>\n");
-    s
-}
-
-/// The runs on a chart's Pareto front as a table (empty for charts without one).
-fn pareto_table(p: &PlotFile) -> String {
-    if p.pareto.is_empty() {
-        return String::new();
-    }
-    let mut s = String::from(
-        "<table class=\"pareto\"><caption>Pareto front: no run is both faster and more \
-         accurate</caption><tr><th>method</th><th>parameters</th><th>time ms</th><th>mean \
-         error</th></tr>",
-    );
-    for e in &p.pareto {
-        let _ = write!(
-            s,
-            "<tr><td>{}</td><td>{}</td><td>{:.1}</td><td>{:.6}</td></tr>",
-            escape(&e.method),
-            escape(&e.params),
-            e.time_ms,
-            e.error
+        let mut l = Link::to("tables", "The papers' tables");
+        l.children.extend(
+            report.tables.iter().map(|t| Link::to(&format!("table-{}", t.paper.name()), &t.title)),
         );
+        c.push(l);
     }
-    s.push_str("</table>");
-    s
+    c.push(Link::to("glossary", "Glossary"));
+    if !report.skipped.is_empty() {
+        c.push(Link::to("skipped", "Not run"));
+    }
+    c
 }
 
-/// The comparison with an earlier report: counts, every regression, and a link to the whole
-/// comparison (`baseline.md`).
-fn baseline_section(c: &Comparison) -> String {
-    let mut s = String::from("<section id=\"baseline\"><h2>Against the baseline</h2>\n");
-    let _ = writeln!(
-        s,
-        "<p>{}. The whole comparison, run by run: <a href=\"baseline.md\">baseline.md</a>.</p>",
-        escape(&crate::baseline::summary_line(c))
-    );
-    let regressions: Vec<_> = c.regressions().collect();
-    if regressions.is_empty() {
-        s.push_str("<p>No regression.</p>\n");
-    } else {
-        s.push_str("<ul class=\"regressions\">\n");
-        for r in regressions {
-            let _ = writeln!(
-                s,
-                "<li><b>{}</b> {} on {}: {} (time x{:.2} [{:.2}, {:.2}], error {:.6} -> {:.6})</li>",
-                escape(&r.method),
-                escape(&r.params),
-                escape(&r.scene),
-                escape(&crate::baseline::flags(r)),
-                r.time_ratio,
-                r.time_ratio_ci.0,
-                r.time_ratio_ci.1,
-                r.error.0,
-                r.error.1
-            );
-        }
-        s.push_str("</ul>\n");
+/// The comparison with an earlier report: counts and every regression.
+fn baseline_view(c: &Comparison) -> BaselineView {
+    BaselineView {
+        summary: crate::baseline::summary_line(c),
+        regressions: c
+            .regressions()
+            .map(|r| {
+                format!(
+                    "{} {} on {}: {} (time x{:.2} [{:.2}, {:.2}], error {:.6} -> {:.6})",
+                    r.method,
+                    r.params,
+                    r.scene,
+                    crate::baseline::flags(r),
+                    r.time_ratio,
+                    r.time_ratio_ci.0,
+                    r.time_ratio_ci.1,
+                    r.error.0,
+                    r.error.1
+                )
+            })
+            .collect(),
     }
-    s.push_str("</section>\n");
-    s
 }
 
-/// CPU and GPU side by side, the parameters common to every pair stated once.
-fn devices_section(report: &Report) -> String {
+/// CPU and GPU side by side (wall-clock times: a GPU's work is not the CPU time of the
+/// process's threads), the parameters common to every pair stated once.
+fn devices_view(report: &Report) -> Option<DevicesView> {
     let pairs = crate::devices::pairs(&report.rows);
     if pairs.is_empty() {
-        return String::new();
+        return None;
     }
     let cpu_rows: Vec<&Row> = pairs.iter().map(|p| p.cpu).collect();
     let split = ParamSplit::of(&cpu_rows);
-    let mut s = format!(
-        "<h2 id=\"devices\">CPU and GPU</h2>\n<p>The same method and parameters on both devices; \
-         GPU: {}.</p>\n",
-        adapter_html(report.machine.gpu.as_deref())
-    );
-    if !split.constant.is_empty() {
-        let kv: Vec<String> = split
-            .constant
-            .iter()
-            .filter(|(k, _)| *k != "device")
-            .map(|(k, v)| format!("{k}={v}"))
-            .collect();
-        let _ = writeln!(s, "<p class=\"constant\">Every pair: {}.</p>", escape(&kv.join(", ")));
-    }
-    let heads: Vec<(String, bool)> =
-        crate::devices::COLUMNS.iter().enumerate().map(|(k, c)| (c.to_string(), k >= 3)).collect();
-    let body: Vec<String> = pairs
+    let heads: Vec<Head> = crate::devices::COLUMNS
+        .iter()
+        .enumerate()
+        .map(|(k, c)| if k >= 3 { Head::num(*c) } else { Head::text(*c) })
+        .collect();
+    let rows: Vec<Vec<Cell>> = pairs
         .iter()
         .map(|p| {
             let mut cells = crate::devices::cells(p);
@@ -405,8 +550,26 @@ fn devices_section(report: &Report) -> String {
                 .map(|(k, v)| format!("{k}={v}"))
                 .collect::<Vec<_>>()
                 .join(" ");
-            cells.iter().map(|c| format!("<td>{}</td>", escape(c))).collect()
+            cells.into_iter().map(Cell::parsed).collect()
         })
         .collect();
-    s + &sortable_table("devices", &heads, &body)
+    let mut table = TableView::new("devices", heads, rows);
+    let kv: Vec<String> = split
+        .constant
+        .iter()
+        .filter(|(k, _)| *k != "device")
+        .map(|(k, v)| format!("{k}={v}"))
+        .collect();
+    if !kv.is_empty() {
+        table.notes.push(Note { code: None, text: format!("Every pair: {}.", kv.join(", ")) });
+    }
+    Some(DevicesView {
+        gpu: report.machine.gpu.clone(),
+        gpu_software: report
+            .machine
+            .gpu
+            .as_deref()
+            .is_some_and(crate::devices::is_software_adapter),
+        table,
+    })
 }

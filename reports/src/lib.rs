@@ -2,8 +2,10 @@
 //! looking, and the run record as JSON ([`output`]). A report: a [`suite`] of scenes, methods
 //! and parameters, planned as items by [`plan`] (and split into shards there), run by [`sweep`]
 //! under the timing protocol of [`timing`] with references from the [`cache`], held in the
-//! [`model`], written by [`write`] as JSON, CSV, Markdown tables, EXR images and HTML pages
-//! ([`index`], [`run_pages`]), with the charts chosen by [`figures`] and drawn by [`plots`];
+//! [`model`], written by [`write`] as JSON, CSV, Markdown, EXR images and HTML pages
+//! ([`index`], [`run_pages`], rendered from [`templates`]), leading with the answer that
+//! [`summary`] computes (Pareto fronts, what the runs say of each method, the machine and its
+//! load), with the charts chosen by [`figures`] and drawn by [`plots`];
 //! the papers' tables and the cost-against-work tables are measured by [`tables`]; shards are
 //! put back together by [`merge`].
 
@@ -22,8 +24,10 @@ pub mod plots;
 pub mod progress;
 pub mod run_pages;
 pub mod suite;
+pub mod summary;
 pub mod sweep;
 pub mod tables;
+pub mod templates;
 pub mod timing;
 pub mod write;
 

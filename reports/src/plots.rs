@@ -1,10 +1,16 @@
 //! Plots of a report (plotters, PNG and SVG): log-log charts of one measure against another,
-//! what to draw given by the caller (the report's charts: `figures`). Each series is a line through its points in the
-//! order of the parameter it sweeps, each point may carry a label (the parameter's value) and
-//! a horizontal bar (the spread of a time), CPU runs are marked with circles and GPU runs
-//! with triangles, the legend sits beside the plot, never over the data, and both log axes
-//! label 1, 2 and 5 times each power of ten. The error-against-time chart also draws the
-//! Pareto front (the runs no other run beats in both error and time).
+//! what to draw given by the caller (the report's charts: `figures`). Each series is a line
+//! through its points in the order of the parameter it sweeps, each point may carry a label
+//! (the parameter's value) and a horizontal bar (the spread of a time), CPU runs are marked
+//! with circles and GPU runs with triangles, and a chart may set its series against the
+//! scene's other runs, drawn as small grey dots ([`Marker::Context`]). The legend sits beside
+//! the plot, never over the data, each entry whole (long ones wrapped onto more lines); both
+//! log axes label 1, 2 and 5 times each power of ten. The error-against-time charts also draw
+//! the Pareto front (the runs no other run beats in both error and time).
+//!
+//! A chart's series have distinct colours ([`series_colours`]; the figures draw at most
+//! [`MAX_SERIES`] a chart). Point labels are placed where they overlap neither another label
+//! nor a point ([`place_labels`]); a label that finds no such place is left out.
 //!
 //! Text is drawn with DejaVu Sans, compiled in (`reports/fonts/`, Bitstream Vera licence), so
 //! plots need no installed fonts. Values at or below zero cannot sit on a log axis; they are
@@ -18,6 +24,10 @@ use std::sync::Once;
 
 /// Smallest value drawn on a log axis.
 pub const LOG_FLOOR: f64 = 1e-7;
+
+/// The most coloured series a report's chart holds: more are not told apart by colour at a
+/// glance.
+pub const MAX_SERIES: usize = 8;
 
 static FONT: &[u8] = include_bytes!("../fonts/DejaVuSans.ttf");
 static REGISTER: Once = Once::new();
@@ -37,6 +47,9 @@ pub enum Marker {
     Circle,
     /// A filled triangle (runs on a GPU adapter).
     Triangle,
+    /// A small grey dot without line or label: the scene's other runs, for context; not a
+    /// coloured series.
+    Context,
 }
 
 /// One point of a series.
@@ -161,8 +174,150 @@ pub fn colour(k: usize) -> RGBAColor {
     RGBColor(c.r, c.g, c.b).to_rgba()
 }
 
+/// The grey of [`Marker::Context`] points.
+pub const CONTEXT_GREY: RGBColor = RGBColor(190, 190, 190);
+
+/// The colour of each series of `chart`, in order: the coloured series take [`colour`]`(0)`,
+/// `colour(1)`, ... in turn, and the context series ([`Marker::Context`]) are grey.
+pub fn series_colours(chart: &Chart) -> Vec<RGBAColor> {
+    let mut k = 0;
+    chart
+        .series
+        .iter()
+        .map(|s| match s.marker {
+            Marker::Context => CONTEXT_GREY.to_rgba(),
+            _ => {
+                k += 1;
+                colour(k - 1)
+            }
+        })
+        .collect()
+}
+
 /// Width, in pixels, of the legend beside the plotting area.
 const LEGEND_WIDTH: u32 = 300;
+
+/// Where a legend's text starts, from the legend's left edge.
+const LEGEND_TEXT_X: i32 = 36;
+
+/// Height of one line of legend text.
+const LEGEND_LINE: i32 = 15;
+
+/// A rectangle in pixels, `[x0, x1) x [y0, y1)`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Rect {
+    /// Left edge.
+    pub x0: i32,
+    /// Top edge.
+    pub y0: i32,
+    /// Right edge (outside).
+    pub x1: i32,
+    /// Bottom edge (outside).
+    pub y1: i32,
+}
+
+impl Rect {
+    /// Whether the two rectangles share a pixel.
+    pub fn intersects(&self, o: &Rect) -> bool {
+        self.x0 < o.x1 && o.x0 < self.x1 && self.y0 < o.y1 && o.y0 < self.y1
+    }
+
+    /// Whether `self` lies within `outer`.
+    pub fn inside(&self, outer: &Rect) -> bool {
+        self.x0 >= outer.x0 && self.y0 >= outer.y0 && self.x1 <= outer.x1 && self.y1 <= outer.y1
+    }
+}
+
+/// Half the side of the square a point's marker covers, in pixels.
+const MARKER_HALF: i32 = 6;
+
+/// The square a marker at `(x, y)` covers.
+fn marker_box(x: i32, y: i32) -> Rect {
+    Rect {
+        x0: x - MARKER_HALF,
+        y0: y - MARKER_HALF,
+        x1: x + MARKER_HALF + 1,
+        y1: y + MARKER_HALF + 1,
+    }
+}
+
+/// Places point labels: label `k`, of size `sizes[k]` (width, height), beside its point
+/// `anchors[k]`, at the first of six places around it (right above, right below, left above,
+/// left below, above, below) that lies within `bounds` and overlaps neither a label placed
+/// before it nor any point's marker (`markers`). A label without such a place is left out
+/// (`None`): a crowded chart thins its labels rather than print them over one another.
+pub fn place_labels(
+    anchors: &[(i32, i32)],
+    sizes: &[(u32, u32)],
+    markers: &[(i32, i32)],
+    bounds: Rect,
+) -> Vec<Option<Rect>> {
+    let obstacles: Vec<Rect> = markers.iter().map(|&(x, y)| marker_box(x, y)).collect();
+    let mut placed: Vec<Rect> = Vec::new();
+    anchors
+        .iter()
+        .zip(sizes)
+        .map(|(&(x, y), &(w, h))| {
+            let (w, h) = (w as i32, h as i32);
+            let gap = MARKER_HALF + 2;
+            let candidates = [
+                (x + gap, y - h - 2),
+                (x + gap, y + 2),
+                (x - gap - w, y - h - 2),
+                (x - gap - w, y + 2),
+                (x - w / 2, y - h - gap),
+                (x - w / 2, y + gap),
+            ];
+            let found = candidates
+                .iter()
+                .map(|&(x0, y0)| Rect { x0, y0, x1: x0 + w, y1: y0 + h })
+                .find(|r| {
+                    r.inside(&bounds)
+                        && !placed.iter().any(|p| p.intersects(r))
+                        && !obstacles.iter().any(|o| o.intersects(r))
+                });
+            if let Some(r) = found {
+                placed.push(r);
+            }
+            found
+        })
+        .collect()
+}
+
+/// Splits `text` into lines no wider than `max` pixels by `width_of`, at spaces; a word wider
+/// than a line is split between its characters. No character but the spaces between lines is
+/// dropped.
+pub fn wrap_text(text: &str, max: u32, width_of: impl Fn(&str) -> u32) -> Vec<String> {
+    let mut lines: Vec<String> = Vec::new();
+    let mut line = String::new();
+    for word in text.split(' ') {
+        let candidate = if line.is_empty() { word.to_owned() } else { format!("{line} {word}") };
+        if width_of(&candidate) <= max {
+            line = candidate;
+            continue;
+        }
+        if !line.is_empty() {
+            lines.push(std::mem::take(&mut line));
+        }
+        // The word alone, split where it is wider than a line.
+        for c in word.chars() {
+            line.push(c);
+            if width_of(&line) > max && line.chars().count() > 1 {
+                line.pop();
+                lines.push(std::mem::replace(&mut line, c.to_string()));
+            }
+        }
+    }
+    if !line.is_empty() || lines.is_empty() {
+        lines.push(line);
+    }
+    lines
+}
+
+/// The width of `text` in `font`, in pixels (an estimate where the font cannot lay it out).
+fn text_width(font: &FontDesc<'_>, text: &str) -> u32 {
+    font.box_size(text).map_or(7 * text.chars().count() as u32, |(w, _)| w)
+}
 
 fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, chart: &Chart) -> Result<(), String> {
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
@@ -186,7 +341,7 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, chart: &Chart) -> Resu
     let (yb, yl) = log_ticks(y0, y1);
     let mut c = ChartBuilder::on(&plot_area)
         .margin(12)
-        .caption(caption, ("sans-serif", 20))
+        .caption(caption, ("sans-serif", 18))
         .x_label_area_size(50)
         .y_label_area_size(80)
         .build_cartesian_2d(
@@ -203,10 +358,30 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, chart: &Chart) -> Resu
         .y_label_formatter(&|v| tick(*v))
         .draw()
         .map_err(e)?;
+    let colours = series_colours(chart);
     let mut legend: Vec<(String, RGBAColor, Option<Marker>)> = Vec::new();
-    for (k, s) in chart.series.iter().enumerate() {
-        let colour = colour(k);
+    // The context first, under the coloured series.
+    let order = chart
+        .series
+        .iter()
+        .zip(&colours)
+        .filter(|(s, _)| s.marker == Marker::Context)
+        .chain(chart.series.iter().zip(&colours).filter(|(s, _)| s.marker != Marker::Context));
+    let mut front_drawn = false;
+    for (s, &colour) in order {
         let pts: Vec<(f64, f64)> = s.points.iter().map(|p| (floor(p.x), floor(p.y))).collect();
+        if s.marker == Marker::Context {
+            c.draw_series(pts.iter().map(|&p| Circle::new(p, 3, colour.filled()))).map_err(e)?;
+            legend.push((s.label.clone(), colour, Some(Marker::Context)));
+            continue;
+        }
+        // The front over the context and under the coloured series, whose points stay in view.
+        if chart.pareto && !front_drawn {
+            let all: Vec<(f64, f64)> = points().map(|p| (floor(p.x), floor(p.y))).collect();
+            c.draw_series(LineSeries::new(pareto_front(&all), BLACK.mix(0.8).stroke_width(3)))
+                .map_err(e)?;
+            front_drawn = true;
+        }
         c.draw_series(LineSeries::new(pts.clone(), colour.stroke_width(2))).map_err(e)?;
         for p in &s.points {
             if let Some((a, b)) = p.x_span {
@@ -219,27 +394,50 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, chart: &Chart) -> Resu
             }
         }
         match s.marker {
-            Marker::Circle => {
-                c.draw_series(pts.iter().map(|&p| Circle::new(p, 4, colour.filled())))
-                    .map_err(e)?;
-            }
             Marker::Triangle => {
                 c.draw_series(pts.iter().map(|&p| TriangleMarker::new(p, 6, colour.filled())))
                     .map_err(e)?;
             }
+            _ => {
+                c.draw_series(pts.iter().map(|&p| Circle::new(p, 4, colour.filled())))
+                    .map_err(e)?;
+            }
         }
-        let text = ("sans-serif", 11).into_font().color(&colour.mix(0.9));
-        c.draw_series(s.points.iter().filter(|p| !p.label.is_empty()).map(|p| {
-            EmptyElement::at((floor(p.x), floor(p.y)))
-                + Text::new(p.label.clone(), (5, -14), text.clone())
-        }))
-        .map_err(e)?;
         legend.push((s.label.clone(), colour, Some(s.marker)));
     }
-    if chart.pareto {
+    if chart.pareto && !front_drawn {
         let all: Vec<(f64, f64)> = points().map(|p| (floor(p.x), floor(p.y))).collect();
-        let front = pareto_front(&all);
-        c.draw_series(LineSeries::new(front, BLACK.stroke_width(3))).map_err(e)?;
+        c.draw_series(LineSeries::new(pareto_front(&all), BLACK.mix(0.8).stroke_width(3)))
+            .map_err(e)?;
+    }
+    // Point labels where they overlap neither another label nor a point.
+    let font = ("sans-serif", 11).into_font();
+    let pixel = |p: &Point| c.backend_coord(&(floor(p.x), floor(p.y)));
+    let markers: Vec<(i32, i32)> = points().map(pixel).collect();
+    let labelled: Vec<(&Point, RGBAColor)> = chart
+        .series
+        .iter()
+        .zip(&colours)
+        .filter(|(s, _)| s.marker != Marker::Context)
+        .flat_map(|(s, &colour)| s.points.iter().map(move |p| (p, colour)))
+        .filter(|(p, _)| !p.label.is_empty())
+        .collect();
+    let anchors: Vec<(i32, i32)> = labelled.iter().map(|(p, _)| pixel(p)).collect();
+    let sizes: Vec<(u32, u32)> = labelled
+        .iter()
+        .map(|(p, _)| font.box_size(&p.label).unwrap_or((7 * p.label.len() as u32, 12)))
+        .collect();
+    let (xr, yr) = c.plotting_area().get_pixel_range();
+    let bounds = Rect { x0: xr.start, y0: yr.start, x1: xr.end, y1: yr.end };
+    for ((p, colour), place) in
+        labelled.iter().zip(place_labels(&anchors, &sizes, &markers, bounds))
+    {
+        if let Some(r) = place {
+            let style = font.clone().color(&colour.mix(0.9));
+            root.draw(&Text::new(p.label.clone(), (r.x0, r.y0), style)).map_err(e)?;
+        }
+    }
+    if chart.pareto {
         legend.push((
             "Pareto front (no run is both faster and more accurate)".into(),
             BLACK.into(),
@@ -250,30 +448,33 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, chart: &Chart) -> Resu
     root.present().map_err(e)
 }
 
-/// The legend, one line per series, in its own area beside the plot (never over the data).
+/// The legend, one entry per series, in its own area beside the plot (never over the data);
+/// a label too long for a line goes on over more lines, whole.
 fn draw_legend<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     entries: &[(String, RGBAColor, Option<Marker>)],
 ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
     let font = ("sans-serif", 12).into_font();
-    let line = 18;
-    for (k, (label, colour, marker)) in entries.iter().enumerate() {
-        let y = 40 + line * k as i32;
-        area.draw(&PathElement::new(vec![(6, y), (30, y)], colour.stroke_width(2)))?;
+    let max = LEGEND_WIDTH - LEGEND_TEXT_X as u32 - 6;
+    let mut y = 40;
+    for (label, colour, marker) in entries {
+        if *marker != Some(Marker::Context) {
+            area.draw(&PathElement::new(vec![(6, y), (30, y)], colour.stroke_width(2)))?;
+        }
         match marker {
             Some(Marker::Circle) => area.draw(&Circle::new((18, y), 4, colour.filled()))?,
+            Some(Marker::Context) => area.draw(&Circle::new((18, y), 3, colour.filled()))?,
             Some(Marker::Triangle) => {
                 area.draw(&TriangleMarker::new((18, y), 6, colour.filled()))?
             }
             None => {}
         }
-        // Long labels are cut so that they stay inside the legend.
-        let text: String = if label.chars().count() > 42 {
-            label.chars().take(41).chain(std::iter::once('…')).collect()
-        } else {
-            label.clone()
-        };
-        area.draw(&Text::new(text, (36, y - 7), font.clone()))?;
+        let lines = wrap_text(label, max, |t| text_width(&font, t));
+        for (k, line) in lines.iter().enumerate() {
+            let top = y - 7 + LEGEND_LINE * k as i32;
+            area.draw(&Text::new(line.clone(), (LEGEND_TEXT_X, top), font.clone()))?;
+        }
+        y += (LEGEND_LINE * lines.len() as i32).max(18) + 3;
     }
     Ok(())
 }
@@ -321,6 +522,75 @@ mod tests {
             (tick(1e5), tick(2e6), tick(8.3e6)),
             ("1e5".into(), "2e6".into(), "8.3e6".into())
         );
+    }
+
+    #[test]
+    fn labels_never_overlap_one_another_or_a_point() {
+        // A crowded cluster and a few points apart, in a 300 x 200 plot.
+        let mut rng = fastrand::Rng::with_seed(7);
+        let mut anchors: Vec<(i32, i32)> =
+            (0..40).map(|_| (100 + rng.i32(0..40), 80 + rng.i32(0..30))).collect();
+        anchors.extend([(20, 20), (280, 180), (250, 30)]);
+        let sizes: Vec<(u32, u32)> = anchors.iter().map(|_| (28, 12)).collect();
+        let bounds = Rect { x0: 0, y0: 0, x1: 300, y1: 200 };
+        let placed = place_labels(&anchors, &sizes, &anchors, bounds);
+        assert_eq!(placed.len(), anchors.len());
+        let boxes: Vec<Rect> = placed.iter().flatten().copied().collect();
+        for (k, a) in boxes.iter().enumerate() {
+            assert!(a.inside(&bounds), "{a:?}");
+            for b in &boxes[k + 1..] {
+                assert!(!a.intersects(b), "{a:?} and {b:?} overlap");
+            }
+            for &(x, y) in &anchors {
+                assert!(!a.intersects(&marker_box(x, y)), "{a:?} covers the point ({x}, {y})");
+            }
+        }
+        assert!(boxes.len() < anchors.len(), "the crowded cluster is thinned");
+        assert!(placed[40..].iter().all(Option::is_some), "the points apart keep their labels");
+    }
+
+    #[test]
+    fn legend_labels_wrap_whole() {
+        let width = |t: &str| 7 * t.chars().count() as u32;
+        let label = "Pareto front (no run is both faster and more accurate)";
+        let lines = wrap_text(label, 150, width);
+        assert!(lines.len() > 1 && lines.iter().all(|l| width(l) <= 150), "{lines:?}");
+        assert_eq!(lines.join(" "), label, "nothing is cut");
+        let long = wrap_text("abcdefghijklmnopqrstuvwxyz", 70, width);
+        assert_eq!(long.concat(), "abcdefghijklmnopqrstuvwxyz");
+        assert!(long.iter().all(|l| width(l) <= 70), "{long:?}");
+        assert_eq!(wrap_text("sm", 150, width), ["sm"]);
+    }
+
+    #[test]
+    fn series_have_distinct_colours_and_the_context_is_grey() {
+        let series = |label: &str, marker| Series {
+            label: label.into(),
+            marker,
+            points: vec![Point::at(1.0, 1.0)],
+        };
+        let mut list: Vec<Series> =
+            (0..MAX_SERIES).map(|k| series(&format!("s{k}"), Marker::Circle)).collect();
+        list.insert(3, series("other runs", Marker::Context));
+        let chart = Chart {
+            title: "t".into(),
+            x_label: "x".into(),
+            y_label: "y".into(),
+            series: list,
+            pareto: true,
+        };
+        let colours = series_colours(&chart);
+        assert_eq!(colours[3], CONTEXT_GREY.to_rgba());
+        let mut coloured: Vec<(u8, u8, u8)> = colours
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| *k != 3)
+            .map(|(_, c)| (c.0, c.1, c.2))
+            .collect();
+        coloured.sort();
+        coloured.dedup();
+        assert_eq!(coloured.len(), MAX_SERIES, "no colour twice");
+        assert!(!coloured.contains(&(190, 190, 190)) && !coloured.contains(&(0, 0, 0)));
     }
 
     #[test]

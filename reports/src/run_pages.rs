@@ -14,7 +14,10 @@
 //! fraction (`scenes/SCENE.reference.png`, and `.exr`) and the pixel classes
 //! (`scenes/SCENE.classes.png`).
 //!
-//! A page shows the run's parameters, metrics (the headline and each pixel class), stage
+//! A page is rendered by the `run.html` template (`reports/templates/`, [`crate::templates`])
+//! from a [`RunPage`] built from the report. It shows the run's parameters, metrics (the
+//! headline and each pixel class, every count), its times on both clocks (median, interval
+//! or "no interval", [min, max]) with the machine's load and whether it was contended, stage
 //! times and counters, and a comparison view (plain JavaScript from
 //! `reports/assets/report.js`, nothing from the network) over the run's image, the reference,
 //! the error map, the class map and the images of the scene's other runs: zoom with the wheel
@@ -25,12 +28,16 @@
 //! map, 3 the class map). Opened as `ID.html#selftest`, the page flips, zooms, pans and swipes itself
 //! and writes what it found into `<pre id="selftest">`.
 
-use crate::html::{anchor, escape, list_section, metric_cells, page_head, Cell, METRIC_COLUMNS};
+use crate::figures::clock_name;
+use crate::html::{anchor, metric_cells, Cell, METRIC_COLUMNS};
 use crate::model::{param_label, params_of, row_stem, scene_stem, Images, Report, Row};
 use crate::output::{write_run_json, write_visibility_exr, OutputError};
+use crate::summary::{full_time_text, ms_text};
+use crate::templates::{Pages, TemplateError};
 use analysis::metrics::PerClass;
+use instrumentation::measure::Clock;
 use methods::Visibility;
-use std::fmt::Write as _;
+use serde::Serialize;
 use std::path::Path;
 
 /// A run's lit fraction as 8-bit grey (0 in shadow, 255 lit).
@@ -51,18 +58,8 @@ fn title(r: &Row) -> String {
     }
 }
 
-/// A two-column table of names and cells.
-fn key_value_table(rows: &[(String, Cell)]) -> String {
-    let mut s = String::from("<table>\n");
-    for (k, c) in rows {
-        let _ = writeln!(s, "<tr><th class=\"text\">{}</th>{}</tr>", escape(k), c.td());
-    }
-    s.push_str("</table>\n");
-    s
-}
-
 /// One image of the comparison view.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct View {
     /// The image, relative to the page.
     pub src: String,
@@ -115,73 +112,75 @@ fn reference_text(r: &Row) -> String {
     }
 }
 
-/// The page of the run `report.rows[row]`.
-pub fn run_page(report: &Report, row: usize) -> String {
+/// A row of a table of cells under a name (a pixel class, a stage).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct NamedRow {
+    /// The row's name.
+    pub name: String,
+    /// Its cells.
+    pub cells: Vec<Cell>,
+}
+
+/// Everything a run's page shows, for its template.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RunPage {
+    /// `run`, for the page's `data-page`.
+    pub page: &'static str,
+    /// The page's title.
+    pub title: String,
+    /// Method.
+    pub method: String,
+    /// Scene.
+    pub scene: String,
+    /// Its parameters in a line.
+    pub params: String,
+    /// The anchor of the scene's runs table in `index.html`.
+    pub back: String,
+    /// The run's file stem.
+    pub stem: String,
+    /// The scene's file stem.
+    pub scene_stem: String,
+    /// The images of the comparison view.
+    pub views: Vec<View>,
+    /// Parameters, frame and reference.
+    pub parameters: Vec<(String, Cell)>,
+    /// The headline metrics, every count included.
+    pub metrics: Vec<(String, Cell)>,
+    /// Each pixel class's metrics.
+    pub classes: Vec<NamedRow>,
+    /// Its times on both clocks and the conditions they were taken under.
+    pub timing: Vec<(String, Cell)>,
+    /// The stage table's heads after `stage`.
+    pub stage_heads: Vec<String>,
+    /// Each stage's times, then the total.
+    pub stages: Vec<NamedRow>,
+    /// Stages the scene did not call for.
+    pub skipped_stages: Vec<String>,
+    /// The timing protocol, in words.
+    pub protocol: String,
+    /// Counters of the last timed run that are not zero.
+    pub counters: Vec<(String, Cell)>,
+    /// The method's notes.
+    pub notes: Vec<String>,
+}
+
+/// A time in milliseconds as a cell.
+fn ms(v: f64) -> Cell {
+    Cell::sorted(ms_text(v), v)
+}
+
+/// A share as a percentage cell, `n/a` where unknown.
+fn percent(v: Option<f64>) -> Cell {
+    v.map_or_else(Cell::na, |v| Cell::sorted(format!("{:.1} %", 100.0 * v), v))
+}
+
+/// The model of the page of the run `report.rows[row]`.
+pub fn run_page_model(report: &Report, row: usize) -> RunPage {
     let r = &report.rows[row];
-    let stem = row_stem(r);
-    let scene = scene_stem(&r.scene);
-    let mut s = page_head(&format!("{} on {}", title(r), r.scene));
-    let _ = writeln!(
-        s,
-        "<h1><code>{method}</code> on <code>{scene_name}</code></h1>\n<p>{params}</p>\n<p><a \
-         href=\"../index.html#scene-{id}-runs\">back to the report</a></p>\n<p>This run: <a \
-         href=\"../visibility/{stem}.exr\">visibility buffer (EXR)</a>, <a \
-         href=\"{stem}.png\">image (PNG)</a>, <a href=\"{stem}.error.png\">error map (PNG)</a>, \
-         <a href=\"{stem}.run.json\">run.json</a>, <a \
-         href=\"{stem}.metrics.json\">metrics.json</a>. The scene: <a \
-         href=\"../scenes/{scene}.reference.exr\">reference (EXR)</a>, <a \
-         href=\"../scenes/{scene}.reference.png\">reference (PNG)</a>, <a \
-         href=\"../scenes/{scene}.classes.png\">pixel classes (PNG)</a>. All runs: <a \
-         href=\"../runs.json\">runs.json</a>, <a href=\"../runs.csv\">runs.csv</a>.</p>",
-        method = escape(&r.method),
-        scene_name = escape(&r.scene),
-        params = escape(&param_label(r)),
-        id = anchor(&r.scene),
-        stem = escape(&stem),
-        scene = escape(&scene),
-    );
-    let views = views(report, row);
-    s.push_str(
-        "<h2 id=\"compare\">Comparison</h2>\n<p>Lit fraction in grey, black in shadow, white \
-         lit; the error map in magma from black (no error) to pale yellow (0.1 or more), dark \
-         grey where nothing is compared, with its colour bar below it. Wheel or \
-         <kbd>+</kbd>/<kbd>-</kbd> zoom, drag pans, <kbd>0</kbd> fits; <kbd>&larr;</kbd> \
-         <kbd>&rarr;</kbd> (or <kbd>p</kbd> <kbd>n</kbd>) step through the views, <kbd>f</kbd> \
-         flips between this run and the last other view (the reference at first), <kbd>s</kbd> \
-         swipes between them (this run left of the pointer, the other right of it).</p>\n<div \
-         class=\"controls\"><button id=\"prev\">&larr; previous</button><select \
-         id=\"view-select\" aria-label=\"image shown\">",
-    );
-    for (k, v) in views.iter().enumerate() {
-        let _ = write!(s, "<option value=\"{k}\">{}</option>", escape(&v.label));
-    }
-    s.push_str(
-        "</select><button id=\"next\">next &rarr;</button><button id=\"flip\">flip (f)</button>\
-         <button id=\"swipe\">swipe (s)</button><button id=\"fit\">fit (0)</button> <span \
-         id=\"view-label\"></span></div>\n<div \
-         class=\"viewer\" id=\"viewer\" tabindex=\"0\"><div class=\"stage\">",
-    );
-    for v in &views {
-        let _ = write!(
-            s,
-            "<img class=\"view\" src=\"{}\" alt=\"{label}\" data-label=\"{label}\">",
-            escape(&v.src),
-            label = escape(&v.label),
-        );
-    }
-    s.push_str("</div></div>\n");
-
-    s.push_str("<h2 id=\"parameters\">Parameters</h2>\n");
-    let mut params: Vec<(String, Cell)> =
+    let mut parameters: Vec<(String, Cell)> =
         params_of(r).into_iter().map(|(k, v)| (k, Cell::text(v))).collect();
-    params.push(("frame".into(), Cell::text(format!("{}x{}", r.width, r.height))));
-    params.push(("reference".into(), Cell::text(reference_text(r))));
-    s.push_str(&key_value_table(&params));
-
-    s.push_str(
-        "<h2 id=\"metrics\">Metrics</h2>\n<p>Over the reference's shadow-only pixels; see the \
-         <a href=\"../index.html#glossary\">glossary</a>.</p>\n",
-    );
+    parameters.push(("frame".into(), Cell::text(format!("{}x{}", r.width, r.height))));
+    parameters.push(("reference".into(), Cell::text(reference_text(r))));
     let mut metrics = vec![
         ("compared pixels".to_owned(), Cell::num(r.metrics.evaluated_pixels as f64, 0)),
         (
@@ -194,92 +193,115 @@ pub fn run_page(report: &Report, row: usize) -> String {
         ),
     ];
     metrics.extend(METRIC_COLUMNS.iter().map(|c| c.to_string()).zip(metric_cells(r)));
-    s.push_str(&key_value_table(&metrics));
-    if let Some(classes) = &r.classes {
-        s.push_str(&class_table(classes));
+    let clock = clock_name(report.clock);
+    let c = r.conditions.unwrap_or_default();
+    let load = match (c.loadavg_before, c.loadavg_after) {
+        (Some(a), Some(b)) => Cell::text(format!("{a:.2} -> {b:.2}")),
+        _ => Cell::na(),
+    };
+    let cost = |c: Clock| if c == report.clock { ", the report's cost" } else { "" };
+    let timing = vec![
+        (
+            format!("CPU ms{}", cost(Clock::Cpu)),
+            r.cpu_ms.map_or_else(Cell::na, |t| Cell::sorted(full_time_text(&t), t.median)),
+        ),
+        (
+            format!("wall ms{}", cost(Clock::Wall)),
+            Cell::sorted(full_time_text(&r.total_ms), r.total_ms.median),
+        ),
+        ("timed runs".to_owned(), Cell::num(f64::from(r.total_ms.n), 0)),
+        ("contended".to_owned(), Cell::text(if r.contended { "yes" } else { "no" })),
+        ("lowest CPU share of a kept run".to_owned(), percent(c.min_share)),
+        ("cores taken by other processes".to_owned(), percent(c.others_share)),
+        ("load average before -> after".to_owned(), load),
+    ];
+    let any_cpu = r.stages.iter().any(|s| s.cpu_ms.is_some());
+    let mut stage_heads: Vec<String> =
+        ["wall median", "wall min", "wall max"].iter().map(|s| s.to_string()).collect();
+    if any_cpu {
+        stage_heads.push("CPU median".into());
     }
-
-    let _ = writeln!(
-        s,
-        "<h2 id=\"times\">Stage times</h2>\n<p>Milliseconds, median of {} runs after {} warm-up, \
-         with minimum and maximum.</p>\n<table><tr><th class=\"text\">stage</th><th>median</th>\
-         <th>min</th><th>max</th></tr>",
-        report.suite.repeats, report.suite.warmup
-    );
-    for st in &r.stages {
-        let _ = writeln!(
-            s,
-            "<tr><td>{}</td>{}{}{}</tr>",
-            escape(&st.name),
-            Cell::num(st.ms.median, 3).td(),
-            Cell::num(st.ms.min, 3).td(),
-            Cell::num(st.ms.max, 3).td()
-        );
-    }
-    let t = &r.total_ms;
-    let _ = writeln!(
-        s,
-        "<tr><th class=\"text\">total</th>{}{}{}</tr></table>",
-        Cell::num(t.median, 3).td(),
-        Cell::num(t.min, 3).td(),
-        Cell::num(t.max, 3).td()
-    );
-    if !r.skipped_stages.is_empty() {
-        let _ = writeln!(
-            s,
-            "<p>Stages the scene did not call for: {}.</p>",
-            escape(&r.skipped_stages.join(", "))
-        );
-    }
-    let counters: Vec<(String, Cell)> = r
-        .counters
-        .entries()
-        .into_iter()
-        .filter(|(_, v)| *v != 0)
-        .map(|(k, v)| (k.to_owned(), Cell::num(v as f64, 0)))
+    let mut stages: Vec<NamedRow> = r
+        .stages
+        .iter()
+        .map(|st| {
+            let mut cells = vec![ms(st.ms.median), ms(st.ms.min), ms(st.ms.max)];
+            if any_cpu {
+                cells.push(st.cpu_ms.map_or_else(Cell::na, |t| ms(t.median)));
+            }
+            NamedRow { name: st.name.clone(), cells }
+        })
         .collect();
-    if !counters.is_empty() {
-        s.push_str("<h2 id=\"counters\">Counters</h2>\n<p>Of the last timed run; those at zero are left out.</p>\n");
-        s.push_str(&key_value_table(&counters));
+    let t = &r.total_ms;
+    let mut total = vec![ms(t.median), ms(t.min), ms(t.max)];
+    if any_cpu {
+        total.push(r.cpu_ms.map_or_else(Cell::na, |c| ms(c.median)));
     }
-    s.push_str(&list_section("notes", "Notes", &r.notes));
-    s.push_str("</body></html>\n");
-    s
+    stages.push(NamedRow { name: "total".into(), cells: total });
+    let s = &report.suite;
+    RunPage {
+        page: "run",
+        title: format!("{} on {}", title(r), r.scene),
+        method: r.method.clone(),
+        scene: r.scene.clone(),
+        params: param_label(r),
+        back: format!("scene-{}-runs", anchor(&r.scene)),
+        stem: row_stem(r),
+        scene_stem: scene_stem(&r.scene),
+        views: views(report, row),
+        parameters,
+        metrics,
+        classes: r.classes.as_ref().map(class_rows).unwrap_or_default(),
+        timing,
+        stage_heads,
+        stages,
+        skipped_stages: r.skipped_stages.clone(),
+        protocol: format!(
+            "Milliseconds, the median of {} timed runs ({} to {} by the suite) after {} warm-up, \
+             with minimum and maximum; the report's cost is the {clock} time.",
+            r.total_ms.n,
+            s.repeats,
+            s.protocol().max_repeats,
+            s.warmup
+        ),
+        counters: r
+            .counters
+            .entries()
+            .into_iter()
+            .filter(|(_, v)| *v != 0)
+            .map(|(k, v)| (k.to_owned(), Cell::num(v as f64, 0)))
+            .collect(),
+        notes: r.notes.clone(),
+    }
+}
+
+/// The page of the run `report.rows[row]`, rendered.
+pub fn run_page(pages: &Pages, report: &Report, row: usize) -> Result<String, TemplateError> {
+    pages.render("run.html", &run_page_model(report, row))
 }
 
 /// Each pixel class's metrics (`metrics.json`'s `classes`), `n/a` where a class has no
-/// compared pixel.
-fn class_table(classes: &PerClass) -> String {
-    let mut s = String::from(
-        "<h3 id=\"classes\">By pixel class</h3>\n<p>Pixels the reference evaluated, by class; \
-         the headline above is planar and surface together. Edge pixels are not referenced in \
-         a report (their error is the camera's aliasing), so their row is n/a.</p>\n<table><tr>\
-         <th class=\"text\">class</th><th>pixels</th><th>mean abs error</th><th>RMSE</th>\
-         <th>max</th><th>p95</th><th>boundary pixels</th><th>boundary error</th>\
-         <th>boundary p95</th></tr>\n",
-    );
-    for (name, m) in
-        [("planar", &classes.planar), ("surface", &classes.surface), ("edge", &classes.edge)]
-    {
-        let or_na = |v: Option<f64>| v.map_or_else(Cell::na, |v| Cell::num(v, 5));
-        let cells = [
-            Cell::num(m.pixels as f64, 0),
-            or_na(m.mean_abs_error),
-            or_na(m.rmse),
-            or_na(m.max_abs_error),
-            or_na(m.p95_abs_error),
-            Cell::num(m.boundary_pixels as f64, 0),
-            or_na(m.boundary_mean_abs_error),
-            or_na(m.boundary_p95_abs_error),
-        ];
-        let _ = write!(s, "<tr><td>{name}</td>");
-        for cell in cells {
-            s.push_str(&cell.td());
-        }
-        s.push_str("</tr>\n");
-    }
-    s.push_str("</table>\n");
-    s
+/// compared pixel: pixels, mean, RMSE, max, p95, boundary pixels, boundary error and its p95.
+fn class_rows(classes: &PerClass) -> Vec<NamedRow> {
+    [("planar", &classes.planar), ("surface", &classes.surface), ("edge", &classes.edge)]
+        .into_iter()
+        .map(|(name, m)| {
+            let or_na = |v: Option<f64>| v.map_or_else(Cell::na, |v| Cell::num(v, 5));
+            NamedRow {
+                name: name.to_owned(),
+                cells: vec![
+                    Cell::num(m.pixels as f64, 0),
+                    or_na(m.mean_abs_error),
+                    or_na(m.rmse),
+                    or_na(m.max_abs_error),
+                    or_na(m.p95_abs_error),
+                    Cell::num(m.boundary_pixels as f64, 0),
+                    or_na(m.boundary_mean_abs_error),
+                    or_na(m.boundary_p95_abs_error),
+                ],
+            }
+        })
+        .collect()
 }
 
 /// Writes every scene's shared images into `dir/scenes/`: `SCENE.reference.png` (the
@@ -334,11 +356,13 @@ pub fn run_files(dir: &Path, report: &Report, images: &Images) -> Result<(), Out
 pub fn write_run_pages(dir: &Path, report: &Report) -> Result<Vec<String>, OutputError> {
     let runs = dir.join("runs");
     std::fs::create_dir_all(&runs).map_err(|e| write_err(&runs, &e))?;
+    let templates = Pages::new().map_err(|e| write_err(&runs, &e))?;
     let mut pages = Vec::with_capacity(report.rows.len());
     for row in 0..report.rows.len() {
         let name = format!("runs/{}.html", row_stem(&report.rows[row]));
         let path = dir.join(&name);
-        std::fs::write(&path, run_page(report, row)).map_err(|e| write_err(&path, &e))?;
+        let html = run_page(&templates, report, row).map_err(|e| write_err(&path, &e))?;
+        std::fs::write(&path, html).map_err(|e| write_err(&path, &e))?;
         pages.push(name);
     }
     Ok(pages)

@@ -1,6 +1,9 @@
 //! A report's files: `runs.json` (everything), `runs.csv` (one line per run: parameters,
-//! metrics, times, counters), `report.md` (the tables), and `visibility/*.exr` (every
-//! visibility buffer).
+//! metrics, times, counters), `report.md` (the report in Markdown: the machine and the load,
+//! per scene its Pareto front and what the runs say of each method, the scenes, the budget
+//! figure and table, per scene its grids and charts as images and its table of runs, CPU and
+//! GPU side by side, the papers' tables), the pages (`index.html`, `runs/ID.html`), the
+//! charts (`plots/`), and `visibility/*.exr` (every visibility buffer).
 //!
 //! A report folder holds its own files only. [`write_report`] lists every file it leaves in
 //! the folder in a manifest, [`MANIFEST`]; before anything is computed, [`prepare_out_dir`]
@@ -9,10 +12,11 @@
 //! The one exception is the default reference cache, [`CACHE_DIR`], kept from report to report
 //! (its entries are verified on read, `crate::cache`).
 
-use crate::figures::write_plots;
+use crate::figures::{clock_name, write_plots, PlotFile};
 use crate::grids::write_grid;
 use crate::model::{param_label, row_stem, Images, Report, Row};
 use crate::output::{write_visibility_exr, OutputError};
+use crate::summary::{budget_table, error_text, fronts, measured, ms_text, time_text, verdicts};
 use analysis::metrics::EXCEEDANCE_THRESHOLDS;
 use instrumentation::Counters;
 use std::fmt::Write as _;
@@ -155,16 +159,9 @@ pub fn csv(report: &Report) -> Result<String, OutputError> {
     String::from_utf8(bytes).map_err(|e| fail(&e))
 }
 
-/// Column heads of the per-scene run tables.
-pub const RUN_COLUMNS: [&str; 7] = [
-    "method",
-    "parameters",
-    "mean abs error",
-    "boundary error",
-    "pixel match",
-    "FLIP",
-    "time ms (95 % CI) [min, max]",
-];
+/// Column heads of the per-scene run tables after the time on the report's clock's head.
+pub const RUN_COLUMNS: [&str; 6] =
+    ["method", "parameters", "mean abs error", "boundary error", "pixel match", "FLIP"];
 
 /// A summary as `12.3 (11.9–12.8) [11.5, 14.0]`, or `12.3 (no interval) [11.5, 14.0]` with
 /// too few timed runs for a confidence interval.
@@ -176,8 +173,9 @@ pub fn summary_text(t: &instrumentation::stats::Summary) -> String {
     format!("{:.1} ({ci}) [{:.1}, {:.1}]", t.median, t.min, t.max)
 }
 
-/// A row's cells in the per-scene run tables, under [`RUN_COLUMNS`].
-pub fn run_cells(r: &Row) -> [String; 7] {
+/// A row's cells in the per-scene run tables: [`RUN_COLUMNS`], the time on `clock` (median
+/// with its interval), the wall time and whether it was contended.
+pub fn run_cells(r: &Row, clock: instrumentation::measure::Clock) -> [String; 9] {
     [
         r.method.clone(),
         param_label(r),
@@ -189,14 +187,29 @@ pub fn run_cells(r: &Row) -> [String; 7] {
         },
         format!("{:.2} %", 100.0 * r.metrics.pixel_match),
         format!("{:.4}", r.flip_mean),
-        summary_text(&r.total_ms),
+        time_text(r.time(clock)),
+        ms_text(r.total_ms.median),
+        if r.contended { "yes" } else { "no" }.to_owned(),
     ]
 }
 
-/// `report.md`: the machine, the scenes, and per scene a table of every run.
-pub fn markdown(report: &Report) -> String {
+/// A Markdown table of `heads` and `rows`.
+fn md_table(s: &mut String, heads: &[String], rows: &[Vec<String>]) {
+    let _ = writeln!(s, "| {} |", heads.join(" | "));
+    let _ = writeln!(s, "|{}", "---|".repeat(heads.len()));
+    for r in rows {
+        let _ = writeln!(s, "| {} |", r.join(" | "));
+    }
+}
+
+/// `report.md`: the machine and the load; per scene its Pareto front and, per method, what
+/// the runs say of it; the scenes; the best error within each time budget (the figure and
+/// the table); per scene its grids and charts as images (`plots/*.png`) and a table of every
+/// run; CPU and GPU side by side; the papers' tables; what did not run. `plots` are the
+/// charts [`write_plots`] wrote.
+pub fn markdown(report: &Report, plots: &[PlotFile]) -> String {
     let mut s = String::new();
-    let m = &report.machine;
+    let clock = clock_name(report.clock);
     let _ = writeln!(s, "# shadowbench report: suite `{}`\n", report.suite.name);
     if !report.suite.description.is_empty() {
         let _ = writeln!(s, "{}\n", report.suite.description);
@@ -214,22 +227,70 @@ pub fn markdown(report: &Report) -> String {
     );
     let _ = writeln!(
         s,
-        "Machine: {} ({} cores, {} threads, {}); GPU: {}. Times: median of {} runs after {} \
-         warm-up, its 95 % confidence interval (percentile bootstrap) and [min, max]; a \
-         method's time is its own stages (the camera G-buffer is shared and listed per \
+        "{} A method's time is its own stages (the camera G-buffer is shared and listed per \
          scene).\n",
-        m.cpu,
-        m.cores,
-        m.threads,
-        m.os,
-        m.gpu.as_deref().unwrap_or("none used"),
-        report.suite.repeats,
-        report.suite.warmup
+        measured(report).text()
     );
+    let _ = writeln!(s, "## Pareto fronts: mean error against {clock} time\n");
+    for f in fronts(report) {
+        let _ = writeln!(
+            s,
+            "### {} ({} against {}; {} of {} runs on the front)\n",
+            f.scene,
+            f.frame,
+            f.reference,
+            f.runs.len(),
+            f.runs_total
+        );
+        let heads: Vec<String> = [
+            "method",
+            "parameters",
+            "mean abs error",
+            &format!("{clock} ms (95 % interval)"),
+            "wall ms",
+            "contended",
+        ]
+        .iter()
+        .map(|h| h.to_string())
+        .collect();
+        let rows: Vec<Vec<String>> = f
+            .runs
+            .iter()
+            .map(|r| {
+                vec![
+                    r.method.clone(),
+                    r.params.clone(),
+                    r.error_text.clone(),
+                    format!("{} ({})", r.time_text, r.interval_text),
+                    r.wall_text.clone(),
+                    if r.contended { "yes" } else { "no" }.to_owned(),
+                ]
+            })
+            .collect();
+        md_table(&mut s, &heads, &rows);
+        s.push('\n');
+    }
+    let (verdicts, nowhere) = verdicts(report);
+    if !verdicts.is_empty() || !nowhere.is_empty() {
+        let _ = writeln!(s, "## What the runs say of each method\n");
+        for v in &verdicts {
+            let _ = writeln!(s, "- `{}`: {}.", v.method, v.sentences.join("; "));
+        }
+        if !nowhere.is_empty() {
+            let names: Vec<String> = nowhere.iter().map(|m| format!("`{m}`")).collect();
+            let _ = writeln!(
+                s,
+                "- On no Pareto front, and neither the most accurate nor the fastest anywhere: \
+                 {}.",
+                names.join(", ")
+            );
+        }
+        s.push('\n');
+    }
     let _ = writeln!(s, "## Scenes\n");
     let _ = writeln!(
         s,
-        "| scene | triangles | effects | frame | G-buffer ms | reference | reference ms |"
+        "| scene | triangles | effects | frame | G-buffer wall ms | reference | reference wall ms |"
     );
     let _ = writeln!(s, "|---|---|---|---|---|---|---|");
     for sc in &report.scenes {
@@ -246,23 +307,60 @@ pub fn markdown(report: &Report) -> String {
             sc.reference_ms
         );
     }
+    if !report.rows.is_empty() {
+        let _ = writeln!(s, "\n## Best error within a time budget\n");
+        let _ = writeln!(
+            s,
+            "Per scene and method, the least mean error of its runs whose median {clock} time \
+             fits each budget; **bold** is the least of the scene's methods within it.\n"
+        );
+        for p in plots.iter().filter(|p| p.scene.is_empty()) {
+            let _ = writeln!(s, "![{}]({})\n", p.title, p.png);
+        }
+        let t = budget_table(report);
+        let mut heads = vec!["scene".to_owned(), "method".to_owned()];
+        heads.extend(t.heads.iter().cloned());
+        let rows: Vec<Vec<String>> = t
+            .rows
+            .iter()
+            .map(|r| {
+                let mut cells = vec![r.scene.clone(), r.method.clone()];
+                cells.extend(r.best.iter().zip(&r.winner).map(|(b, &w)| match b {
+                    Some(e) if w => format!("**{}**", error_text(*e)),
+                    Some(e) => error_text(*e),
+                    None => "no run fits".to_owned(),
+                }));
+                cells
+            })
+            .collect();
+        md_table(&mut s, &heads, &rows);
+    }
     for sc in &report.scenes {
         let _ = writeln!(s, "\n## {}\n", sc.scene);
         for g in report.grids.iter().filter(|g| g.scene == sc.scene) {
             let _ = writeln!(s, "![{}]({})\n", g.title, g.png);
         }
-        let _ = writeln!(s, "| {} |", RUN_COLUMNS.join(" | "));
-        let _ = writeln!(s, "|{}", "---|".repeat(RUN_COLUMNS.len()));
-        for r in report.rows.iter().filter(|r| r.scene == sc.scene) {
-            let _ = writeln!(s, "| {} |", run_cells(r).join(" | "));
+        for p in plots.iter().filter(|p| p.scene == sc.scene) {
+            let _ = writeln!(s, "![{}]({})\n", p.title, p.png);
         }
+        let _ = writeln!(s, "### Runs on {}\n", sc.scene);
+        let mut heads: Vec<String> = RUN_COLUMNS.iter().map(|c| c.to_string()).collect();
+        heads.extend([format!("{clock} ms (95 % interval)"), "wall ms".into(), "contended".into()]);
+        let rows: Vec<Vec<String>> = report
+            .rows
+            .iter()
+            .filter(|r| r.scene == sc.scene)
+            .map(|r| run_cells(r, report.clock).to_vec())
+            .collect();
+        md_table(&mut s, &heads, &rows);
     }
     let side_by_side = crate::devices::markdown(&report.rows);
     if !side_by_side.is_empty() {
         let _ = writeln!(
             s,
-            "\n## CPU and GPU\n\nThe same method and parameters on both devices; GPU: {}.\n",
-            m.gpu.as_deref().unwrap_or("none")
+            "\n## CPU and GPU\n\nThe same method and parameters on both devices, in wall-clock \
+             time; GPU: {}.\n",
+            report.machine.gpu.as_deref().unwrap_or("none")
         );
         s.push_str(&side_by_side);
     }
@@ -472,8 +570,11 @@ pub fn write_summary(
     };
     let json = serde_json::to_string_pretty(report).map_err(|e| err(dir, &e))?;
     let plots = write_plots(dir, report)?;
-    let html = crate::index::index_html(report, &plots, baseline);
-    let mut md = markdown(report);
+    let pages = crate::templates::Pages::new().map_err(|e| err(dir, &e))?;
+    let index = dir.join("index.html");
+    let html =
+        crate::index::index_html(&pages, report, &plots, baseline).map_err(|e| err(&index, &e))?;
+    let mut md = markdown(report, &plots);
     if let Some(c) = baseline {
         // The comparison's summary first, under the title; the whole of it in baseline.md.
         let summary = format!(

@@ -197,6 +197,20 @@ fn a_suite_file_writes_tables_that_parse_back() {
     let md = std::fs::read_to_string(out.join("report.md")).expect("report.md");
     assert!(md.contains("## plane-square") && md.contains("pcf-bs-fast-2x2"), "{md}");
     assert!(md.contains(&format!("at commit {commit}")), "provenance in the header: {md}");
+    // report.md holds what the README says: the Pareto fronts and the sentences per method
+    // first, the charts as images (every one a file of the report), the budget table.
+    assert!(md.contains("## Pareto fronts: mean error against CPU time"), "{md}");
+    assert!(md.contains("## What the runs say of each method"), "{md}");
+    assert!(md.contains("## Best error within a time budget"), "{md}");
+    assert!(md.contains("| scene | method | <= 10 CPU ms |"), "{md}");
+    for chart in ["error-vs-time-plane-square-pcf", "error-vs-time-plane-square-bs"] {
+        assert!(md.contains(&format!("](plots/{chart}.png)")), "no {chart} in {md}");
+    }
+    let images: Vec<&str> = md.split("](").skip(1).filter_map(|s| s.split(')').next()).collect();
+    assert!(images.len() >= 5, "{images:?}");
+    for png in images {
+        assert!(out.join(png).is_file(), "report.md shows {png}, which is missing");
+    }
     // CPU and GPU side by side: each sm run on both devices, paired, the adapter named. A
     // build without GPU kernels says it did not run them, and why.
     let devices: Vec<&str> = lines.iter().map(|l| &l[col("device")]).collect();

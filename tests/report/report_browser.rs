@@ -1,7 +1,10 @@
-//! A report's pages in headless Chromium: index.html and a run page open from the file system,
-//! every image loads, every local link names a file that exists and every anchor a section,
-//! clicking a table header sorts the table (ascending, then descending), the filter box hides
-//! rows, and the run page's comparison view flips between images, zooms, pans and swipes.
+//! A report's pages in headless Chromium, in a window of 1400 x 1000 pixels: index.html and a
+//! run page open from the file system, every image loads, every local link names a file that
+//! exists and every anchor a section, clicking a table header sorts the table (ascending,
+//! then descending), the filter box hides rows, and the run page's comparison view flips
+//! between images, zooms, pans and swipes. The index leads with the answer: its first screen
+//! (the top 1000 pixels, nothing scrolled) holds the Pareto summary and the machine line, and
+//! no table of runs is wider than the window, its time column in view.
 //!
 //! The pages test themselves when opened with `#selftest` (`reports/assets/report.js`) and
 //! write what they found into `<pre id="selftest">`, which `--dump-dom` prints. Chromium must
@@ -19,7 +22,7 @@ width = 96
 height = 72
 warmup = 1
 repeats = 2
-scenes = ["plane-square"]
+scenes = ["plane-square", "cage"]
 
 [[run]]
 method = "sm"
@@ -49,6 +52,7 @@ fn selftest(page: &Path) -> Vec<String> {
             "--disable-component-update",
             "--disable-sync",
             &format!("--user-data-dir={}", profile.path().display()),
+            "--window-size=1400,1000",
             "--virtual-time-budget=5000",
             "--dump-dom",
             &url,
@@ -110,21 +114,27 @@ fn index_and_run_pages_work_in_headless_chromium() {
     let dir = tempfile::tempdir().expect("tempdir");
     let suite = Suite::parse(SUITE, Path::new("browser.toml")).expect("suite");
     let (report, images) = run_suite(&suite, |_| {});
-    assert_eq!(report.rows.len(), 3, "{:?}", report.skipped);
+    assert_eq!(report.rows.len(), 6, "{:?}", report.skipped);
     let out = dir.path();
     write_report(out, &report, &images, None).expect("report written");
     let pages = write_run_pages(out, &report).expect("run pages written");
-    assert_eq!(pages.len(), 3);
+    assert_eq!(pages.len(), 6);
 
     let index = out.join("index.html");
     let html = std::fs::read_to_string(&index).expect("index.html");
-    // Parameters the same in every row are stated once, above the table.
-    assert_eq!(html.matches("constant_bias=").count(), 1, "{html}");
+    // Parameters the same in every row are stated once, above each scene's runs table.
+    assert_eq!(html.matches("constant_bias=").count(), 2, "{html}");
     for term in ["RMSE", "boundary pixels", "p50 / p95 / p99", "FLIP", "pixel match", "n/a"] {
         assert!(html.contains(&format!("<dt>{term}")), "glossary lacks {term}");
     }
     let lines = selftest(&index);
     images_and_links(&index, &lines);
+    // The first screen leads with the answer, and the runs tables fit the window. On the
+    // layout before the Pareto summary (a contents list first, runs tables of 17 columns) both
+    // fail.
+    assert!(finding(&lines, "viewport").starts_with("1400x"), "{lines:#?}");
+    assert!(finding(&lines, "first screen").starts_with("ok"), "{lines:#?}");
+    assert!(finding(&lines, "runs tables").starts_with("ok"), "{lines:#?}");
     assert!(finding(&lines, "sort").starts_with("ok"), "{lines:#?}");
     assert!(finding(&lines, "filter").starts_with("ok"), "{lines:#?}");
     for p in &pages {
