@@ -269,18 +269,18 @@ impl BvhFrame {
         let axis = |k: usize| {
             let mut centres: Vec<f64> =
                 boxes.iter().map(|(lo, hi)| 0.5 * lo[k] + 0.5 * hi[k]).collect();
-            median(&mut centres)
+            select_middle(&mut centres)
         };
         let centre = DVec3::new(axis(0), axis(1), axis(2));
         let mut sizes: Vec<f64> = boxes.iter().map(|(lo, hi)| (*hi - *lo).max_element()).collect();
-        let typical = median(&mut sizes);
+        let typical = select_middle(&mut sizes);
         // World distances from the centre (in the max norm) of each triangle's farthest corner.
         let mut radii: Vec<f64> = boxes
             .iter()
             .map(|&(lo, hi)| (lo - centre).abs().max(hi - centre).max_element())
             .collect();
         let farthest = radii.iter().copied().fold(0.0, f64::max);
-        let median_radius = median(&mut radii);
+        let median_radius = select_middle(&mut radii);
         let mut scale = if typical > 0.0 { power_of_two_near(1.0 / typical) } else { 1.0 };
         if farthest * scale > MAX_FRAME_COORDINATE {
             scale = power_of_two_near(MAX_FRAME_COORDINATE / farthest) * 0.5;
@@ -383,8 +383,11 @@ fn triangle_box(geometry: &Geometry, t: usize) -> Option<(DVec3, DVec3)> {
     Some((a.min(b).min(c), a.max(b).max(c)))
 }
 
-/// The median of `v` (the upper one for even lengths); `v` is reordered. `v` is not empty.
-fn median(v: &mut [f64]) -> f64 {
+/// The middle value of `v` by selection (the upper one for even lengths): the median of
+/// positions and sizes that places the BVH's frame, found in linear time, which is not a
+/// summary of times ([`instrumentation::stats`] has that one); `v` is reordered. `v` is not
+/// empty.
+fn select_middle(v: &mut [f64]) -> f64 {
     let k = v.len() / 2;
     *v.select_nth_unstable_by(k, f64::total_cmp).1
 }

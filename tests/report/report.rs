@@ -227,11 +227,11 @@ fn a_suite_file_writes_tables_that_parse_back() {
         assert_eq!(pairs.len(), 2, "{side}");
         for l in pairs {
             let cells: Vec<&str> = l.split(" | ").collect();
-            let median = |c: &str| -> f64 {
+            let time_of = |c: &str| -> f64 {
                 c.split_whitespace().next().expect("a time").parse().expect("ms")
             };
             // GPU time with its G-buffer, then without it; the ratio sets CPU against the latter.
-            let (with, without) = (median(cells[4]), median(cells[5]));
+            let (with, without) = (time_of(cells[4]), time_of(cells[5]));
             assert!(0.0 < without && without <= with, "{l}");
         }
     } else {
