@@ -352,7 +352,11 @@ pub fn measured(report: &Report) -> Measured {
             .is_some_and(crate::devices::is_software_adapter),
         clock: clock_name(report.clock).to_owned(),
         clock_means: report.clock.describe().to_owned(),
-        protocol: format!("median of {timed} timed runs after {} warm-up", s.warmup),
+        protocol: format!(
+            "median of {timed} timed {} after {} warm-up",
+            if max == 1 { "run" } else { "runs" },
+            s.warmup
+        ),
         contended: report.rows.iter().filter(|r| r.contended).count(),
         runs: report.rows.len(),
     }
