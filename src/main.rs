@@ -392,6 +392,49 @@ fn prepare_out(out: &Path, flag: &str) -> Result<(), Failure> {
     Ok(())
 }
 
+/// Checks, without creating anything, that `path` can be a folder: it is one, or it does not
+/// exist and its nearest existing ancestor is a folder. A file in the way is bad input naming
+/// `flag`.
+fn check_folder_path(path: &Path, flag: &str) -> Result<(), Failure> {
+    let blocked = path.ancestors().find(|a| a.exists() && !a.is_dir());
+    match blocked {
+        Some(file) => Err(input(anyhow::anyhow!(
+            "{flag} {}: {} is a file, not a folder",
+            path.display(),
+            file.display()
+        ))),
+        None => Ok(()),
+    }
+}
+
+/// Whether folders `a` and `b` are the same or one holds the other, by their absolute paths
+/// with symbolic links resolved (as far as they exist).
+fn overlaps(a: &Path, b: &Path) -> bool {
+    let real = |p: &Path| -> PathBuf {
+        // The deepest existing ancestor resolved, the rest appended as given.
+        let mut tail = Vec::new();
+        let mut at = p.to_path_buf();
+        loop {
+            if let Ok(r) = at.canonicalize() {
+                return tail.iter().rev().fold(r, |acc: PathBuf, c| acc.join(c));
+            }
+            match (at.file_name().map(ToOwned::to_owned), at.parent()) {
+                (Some(name), Some(parent)) => {
+                    tail.push(name);
+                    at = if parent.as_os_str().is_empty() {
+                        PathBuf::from(".")
+                    } else {
+                        parent.to_path_buf()
+                    };
+                }
+                _ => return p.to_path_buf(),
+            }
+        }
+    };
+    let (a, b) = (real(a), real(b));
+    a.starts_with(&b) || b.starts_with(&a)
+}
+
 fn scenes(json: bool, toml: Option<String>) -> Result<(), Failure> {
     if let Some(name) = toml {
         let desc = scenes::registry::builtin(&name).ok_or_else(|| {
@@ -570,13 +613,17 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
         &mut options.min_change_ms,
     )?;
     let before = match &a.baseline {
-        Some(dir) => Some(reports::baseline::load(dir).map_err(|e| input(anyhow::anyhow!("{e}")))?),
+        Some(dir) => {
+            Some(reports::baseline::load_baseline(dir).map_err(|e| input(anyhow::anyhow!("{e}")))?)
+        }
         None => None,
     };
+    let cache_dir = a.cache.clone().unwrap_or_else(|| out.join(reports::write::CACHE_DIR));
+    // Every path is checked before the output folder's earlier report is removed.
+    check_folder_path(&cache_dir, "--cache")?;
     prepare_out(&out, flag)?;
     reports::write::prepare_out_dir(&out)
         .map_err(|e| input(anyhow::anyhow!("{flag} {}: {e}", out.display())))?;
-    let cache_dir = a.cache.clone().unwrap_or_else(|| out.join(reports::write::CACHE_DIR));
     let mut cache = reports::cache::ReferenceCache::open(&cache_dir).map_err(|e| {
         input(anyhow::anyhow!("--cache {}: cannot create the folder: {e}", cache_dir.display()))
     })?;
@@ -716,10 +763,21 @@ fn print_plan(suite: &reports::Suite, shard: Option<reports::plan::Shard>) -> Re
 /// `report merge DIR... --out OUT`.
 fn report_merge(m: MergeArgs) -> Result<(), Failure> {
     let out = m.out;
+    // The shards are read and checked, and the output folder is none of them, before the
+    // output folder's earlier report is removed.
+    let (report, dirs) = reports::merge::merge(&m.dirs).map_err(input)?;
+    for dir in &dirs {
+        if overlaps(dir, &out) {
+            return Err(input(anyhow::anyhow!(
+                "--out {}: the merge would write over the shard {} (give a folder of its own)",
+                out.display(),
+                dir.display()
+            )));
+        }
+    }
     prepare_out(&out, "--out")?;
     reports::write::prepare_out_dir(&out)
         .map_err(|e| input(anyhow::anyhow!("--out {}: {e}", out.display())))?;
-    let (report, dirs) = reports::merge::merge(&m.dirs).map_err(input)?;
     reports::merge::copy_shard_files(&dirs, &out)
         .with_context(|| format!("cannot copy the shards' files into {}", out.display()))?;
     reports::write::write_summary(&out, &report, None)?;

@@ -50,6 +50,16 @@ impl Default for BaselineOptions {
 /// Why an earlier report could not be read.
 #[derive(Debug, thiserror::Error)]
 pub enum BaselineError {
+    /// The folder's `runs.json` cannot be compared with ([`validate`]).
+    #[error("--baseline {dir}: {file}: {source}")]
+    Invalid {
+        /// The baseline folder.
+        dir: PathBuf,
+        /// The file.
+        file: PathBuf,
+        /// What is wrong.
+        source: BaselineInvalid,
+    },
     /// The folder has no readable `runs.json`.
     #[error("--baseline {dir}: cannot read {file}: {message}")]
     Read {
@@ -60,6 +70,77 @@ pub enum BaselineError {
         /// Why.
         message: String,
     },
+}
+
+/// A baseline's `runs.json` that reads but cannot be compared with.
+#[derive(Debug, thiserror::Error)]
+pub enum BaselineInvalid {
+    /// Written by a later version of the workbench, whose fields may mean other things.
+    #[error("written by shadowbench {found}, later than this {ours}")]
+    Version {
+        /// The baseline's version.
+        found: String,
+        /// This workbench's.
+        ours: String,
+    },
+    /// A run's time is not a time to compare with.
+    #[error("run {run}: {field} {message}")]
+    Time {
+        /// The run, as `scene method parameters`.
+        run: String,
+        /// The field, as `total_ms.ci_low`.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+/// `a.b.c` as numbers; parts that are not numbers count as 0.
+fn version_parts(v: &str) -> Vec<u64> {
+    v.split(['.', '-', '+']).take(3).map(|p| p.parse().unwrap_or(0)).collect()
+}
+
+/// Checks that `report` can be compared with: a version no later than this one, and every
+/// run's times finite, not negative, a positive median, and ordered (`min <= ci_low <= median
+/// <= ci_high <= max`).
+pub fn validate(report: &Report) -> Result<(), BaselineInvalid> {
+    let ours = env!("CARGO_PKG_VERSION");
+    let found = &report.provenance.version;
+    if version_parts(found) > version_parts(ours) {
+        return Err(BaselineInvalid::Version { found: found.clone(), ours: ours.to_owned() });
+    }
+    for r in &report.rows {
+        let run = format!("{} {} {}", r.scene, r.method, params(r));
+        let clocks = [("total_ms", Some(&r.total_ms)), ("cpu_ms", r.cpu_ms.as_ref())];
+        for (name, summary) in clocks {
+            let Some(t) = summary else { continue };
+            let bad = |field: &str, message: String| BaselineInvalid::Time {
+                run: run.clone(),
+                field: format!("{name}.{field}"),
+                message,
+            };
+            let values = [("min", Some(t.min)), ("ci_low", t.ci_low), ("median", Some(t.median))]
+                .into_iter()
+                .chain([("ci_high", t.ci_high), ("max", Some(t.max))]);
+            let mut last: Option<(&str, f64)> = None;
+            for (field, v) in values {
+                let Some(v) = v else { continue };
+                if !(v.is_finite() && v >= 0.0) {
+                    return Err(bad(field, format!("is {v}, not a finite time >= 0")));
+                }
+                if let Some((before, u)) = last {
+                    if v < u {
+                        return Err(bad(field, format!("is {v}, below {before} {u}")));
+                    }
+                }
+                last = Some((field, v));
+            }
+            if t.median <= 0.0 {
+                return Err(bad("median", "is 0: no time to compare with".to_owned()));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// What changed in one run.
@@ -125,6 +206,17 @@ pub fn load(dir: &Path) -> Result<Report, BaselineError> {
         |message: String| BaselineError::Read { dir: dir.to_owned(), file: file.clone(), message };
     let text = std::fs::read_to_string(&file).map_err(|e| fail(e.to_string()))?;
     serde_json::from_str(&text).map_err(|e| fail(format!("not a report's runs.json ({e})")))
+}
+
+/// Reads the report in `dir` as a baseline: [`load`], then [`validate`].
+pub fn load_baseline(dir: &Path) -> Result<Report, BaselineError> {
+    let report = load(dir)?;
+    validate(&report).map_err(|source| BaselineError::Invalid {
+        dir: dir.to_owned(),
+        file: dir.join("runs.json"),
+        source,
+    })?;
+    Ok(report)
 }
 
 /// The key a run is matched by.
@@ -451,6 +543,38 @@ mod tests {
             compare(&now, &report, dir, BaselineOptions::default()).runs[0].clock,
             Clock::Wall
         );
+    }
+
+    #[test]
+    fn baselines_with_times_that_are_not_times_or_a_later_version_are_refused() {
+        let mut report = small_report();
+        report.rows.truncate(1);
+        report.rows[0].total_ms = around(10.0);
+        report.rows[0].cpu_ms = Some(around(12.0));
+        assert!(validate(&report).is_ok());
+        let refused = |edit: &dyn Fn(&mut Report)| {
+            let mut r = report.clone();
+            edit(&mut r);
+            validate(&r).expect_err("refused").to_string()
+        };
+        let e = refused(&|r| r.rows[0].total_ms.median = -1.0);
+        assert!(e.contains("total_ms.median") && e.contains("plane-square sm"), "{e}");
+        let e = refused(&|r| r.rows[0].total_ms = Summary::of(&[0.0]).expect("a value"));
+        assert!(e.contains("total_ms.median is 0"), "{e}");
+        let e = refused(&|r| r.rows[0].total_ms.max = f64::INFINITY);
+        assert!(e.contains("total_ms.max") && e.contains("inf"), "{e}");
+        // An interval whose low end is above its high end.
+        let e = refused(&|r| {
+            let t = r.rows[0].cpu_ms.as_mut().expect("cpu");
+            (t.ci_low, t.ci_high) = (t.ci_high, t.ci_low);
+        });
+        assert!(e.contains("cpu_ms.median") || e.contains("cpu_ms.ci_high"), "{e}");
+        let e = refused(&|r| r.provenance.version = "99.0.0".into());
+        assert!(e.contains("99.0.0") && e.contains("later"), "{e}");
+        // An earlier version is compared with.
+        let mut older = report.clone();
+        older.provenance.version = "0.0.1".into();
+        assert!(validate(&older).is_ok());
     }
 
     #[test]

@@ -425,6 +425,24 @@ fn a_report_is_set_against_its_baseline_and_foreign_folders_are_refused() {
         assert_eq!(o.status.code(), Some(2), "{flag} {value}");
         assert!(stderr(&o).contains(flag), "{}", stderr(&o));
     }
+    // A baseline whose times are not times, or of a later version, is refused naming the run
+    // and the field.
+    let edited = dir.path().join("edited");
+    std::fs::create_dir_all(&edited).expect("folder");
+    let text = std::fs::read_to_string(first.join("runs.json")).expect("runs.json");
+    let mut v: serde_json::Value = serde_json::from_str(&text).expect("json");
+    v["rows"][0]["total_ms"]["median"] = serde_json::json!(-3.0);
+    std::fs::write(edited.join("runs.json"), v.to_string()).expect("writes");
+    let o = run(&dir.path().join("fifth"), Some(&edited));
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("total_ms.median") && stderr(&o).contains("sm"), "{}", stderr(&o));
+    let mut v: serde_json::Value = serde_json::from_str(&text).expect("json");
+    v["provenance"]["version"] = serde_json::json!("99.0.0");
+    std::fs::write(edited.join("runs.json"), v.to_string()).expect("writes");
+    let o = run(&dir.path().join("fifth"), Some(&edited));
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("99.0.0"), "{}", stderr(&o));
+    assert!(!dir.path().join("fifth").exists(), "refused before anything is written");
     let o = run(&dir.path().join("third"), Some(&dir.path().join("nowhere")));
     assert_eq!(o.status.code(), Some(2));
     assert!(

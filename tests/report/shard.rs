@@ -1,7 +1,7 @@
 //! A report run in shards and merged (`report --plan`, `report --shard K/N`, `report merge`)
 //! equals the unsharded report on every field but times, machine and provenance; shards
 //! share references through the cache; a merge with a shard missing or unfinished refuses,
-//! naming it; a damaged cache entry is recomputed.
+//! naming it; a damaged cache entry is recomputed; a refused merge or report changes no file.
 
 use crate::common::{assert_same_report, shadowbench, stderr, write};
 use std::path::Path;
@@ -231,4 +231,77 @@ fn a_damaged_cache_entry_is_recomputed_and_replaced() {
     assert!(run("c").contains("1 hits, 0 misses"), "the entry was replaced");
     assert_same_report(&dir.path().join("a"), &dir.path().join("c"));
     assert_same_report(&dir.path().join("a"), &dir.path().join("b"));
+}
+
+/// Every file under `dir` with its size, sorted: what a refused command must leave as it was.
+fn snapshot(dir: &Path) -> Vec<(std::path::PathBuf, u64)> {
+    let mut out = Vec::new();
+    let mut todo = vec![dir.to_path_buf()];
+    while let Some(d) = todo.pop() {
+        for e in std::fs::read_dir(&d).expect("a folder") {
+            let e = e.expect("an entry");
+            let meta = e.metadata().expect("metadata");
+            if meta.is_dir() {
+                todo.push(e.path());
+            } else {
+                out.push((e.path(), meta.len()));
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// A refused merge or report changes no file: a merge into one of its own shards, a merge of
+/// a folder that is no shard into an earlier report, and a report whose `--cache` is a file
+/// are refused (exit 2) before the output folder's earlier report is removed.
+#[test]
+fn refused_merges_and_reports_change_no_file() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let suite = write(dir.path(), "tiny.toml", SUITE);
+    for k in 0..3 {
+        shard(&suite, dir.path(), k, 3);
+    }
+    let s = |k: u32| dir.path().join("shards").join(k.to_string());
+    let kept = snapshot(&s(0));
+    let o = merge(&[&s(0), &s(1), &s(2)], &s(0));
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("would write over the shard"), "{}", stderr(&o));
+    assert_eq!(snapshot(&s(0)), kept, "the shard is untouched");
+    // A folder inside one of the shards is refused too.
+    let o = merge(&[&s(0), &s(1), &s(2)], &s(1).join("merged"));
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+
+    let earlier = dir.path().join("earlier");
+    let o = shadowbench(&["report", "--suite", &suite, "--out", path(&earlier)]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let kept = snapshot(&earlier);
+    assert!(kept.len() > 10, "a whole report: {kept:?}");
+    let not_a_shard = dir.path().join("empty");
+    std::fs::create_dir_all(&not_a_shard).expect("folder");
+    let o = merge(&[&not_a_shard], &earlier);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("not a shard's folder"), "{}", stderr(&o));
+    assert_eq!(snapshot(&earlier), kept, "the earlier report is untouched");
+
+    let file = dir.path().join("cache.txt");
+    std::fs::write(&file, "not a folder").expect("writes");
+    for cache in [file.clone(), file.join("inside")] {
+        let o = shadowbench(&[
+            "report",
+            "--suite",
+            &suite,
+            "--out",
+            path(&earlier),
+            "--cache",
+            path(&cache),
+        ]);
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert!(
+            stderr(&o).contains("--cache") && stderr(&o).contains("is a file"),
+            "{}",
+            stderr(&o)
+        );
+        assert_eq!(snapshot(&earlier), kept, "the earlier report is untouched");
+    }
 }
