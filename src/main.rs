@@ -620,8 +620,8 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
     };
     let cache_dir = a.cache.clone().unwrap_or_else(|| out.join(reports::write::CACHE_DIR));
     // Every path is checked before the output folder's earlier report is removed.
-    check_folder_path(&cache_dir, "--cache")?;
     prepare_out(&out, flag)?;
+    check_folder_path(&cache_dir, "--cache")?;
     reports::write::prepare_out_dir(&out)
         .map_err(|e| input(anyhow::anyhow!("{flag} {}: {e}", out.display())))?;
     let mut cache = reports::cache::ReferenceCache::open(&cache_dir).map_err(|e| {
