@@ -265,13 +265,16 @@ struct State<T, E> {
     capacity_s: f64,
 }
 
-/// One timed call of `subject`: its output, record and figures, and the machine's busy and
-/// stolen core-seconds and capacity over it.
+/// What one timed call gave: its output, record and figures, the machine's busy and stolen
+/// core-seconds and capacity over it, and the load average before and after.
+type Once<T> = (T, Recorder, Sample, (f64, f64, f64), Option<f64>, Option<f64>);
+
+/// One timed call of `subject` ([`Once`]).
 fn timed_once<T, E>(
     subject: &mut impl FnMut(&mut Recorder) -> Result<T, E>,
     min_share: f64,
     cores: usize,
-) -> Result<(T, Recorder, Sample, (f64, f64, f64), Option<f64>, Option<f64>), E> {
+) -> Result<Once<T>, E> {
     let load0 = Load::now();
     let sched0 = Schedule::now();
     let cpu0 = clock::cpu_now();
@@ -565,7 +568,8 @@ mod tests {
     #[test]
     fn noisy_subjects_run_until_the_maximum_and_failures_leave_the_rounds() {
         let mut calls = [0u32; 2];
-        let mut subjects: Vec<Box<dyn FnMut(&mut Recorder) -> Result<(), String>>> = Vec::new();
+        type Subject<'a> = Box<dyn FnMut(&mut Recorder) -> Result<(), String> + 'a>;
+        let mut subjects: Vec<Subject<'_>> = Vec::new();
         let (first, second) = calls.split_at_mut(1);
         subjects.push(Box::new(|rec: &mut Recorder| {
             first[0] += 1;

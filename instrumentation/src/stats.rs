@@ -165,7 +165,7 @@ mod tests {
         assert_eq!(rank(100), Some((40, 0.965)));
         for n in 6..600 {
             let (k, c) = median_interval_rank(n).expect("an interval");
-            assert!(c >= CONFIDENCE && c <= 1.0, "n = {n}: {c}");
+            assert!((CONFIDENCE..=1.0).contains(&c), "n = {n}: {c}");
             assert!(2 * k <= n, "n = {n}: rank {k}");
         }
     }
@@ -177,7 +177,7 @@ mod tests {
         // Sorted, the values are 10..=29; rank 6 from each end.
         assert_eq!((s.ci_low, s.ci_high), (Some(15.0), Some(24.0)));
         assert!(s.ci_high.expect("high") - s.ci_low.expect("low") < s.max - s.min);
-        assert_eq!(s.bounds().1, true);
+        assert!(s.bounds().1, "an interval, not the range");
         let half = s.relative_half_width().expect("a width");
         assert!((half - 4.5 / 19.5).abs() < 1e-12, "{half}");
         let same = Summary::of(&[3.0; 9]).expect("values");

@@ -323,9 +323,7 @@ fn scenes_of(spec: &TableSpec) -> Vec<String> {
 
 /// The scenes of a table at its frames, each with the runs the table makes there: what a
 /// suite's plan turns into work items, one per scene and frame.
-pub fn table_items(
-    spec: &TableSpec,
-) -> Vec<(String, (u32, u32), Vec<(&'static str, MethodOptions)>)> {
+pub fn table_items(spec: &TableSpec) -> Vec<TableItem> {
     let frames = frames_of(spec);
     scenes_of(spec)
         .into_iter()
@@ -335,6 +333,10 @@ pub fn table_items(
         })
         .collect()
 }
+
+/// A scene of a table, at one of its frames, with the runs the table makes there (method and
+/// options).
+pub type TableItem = (String, (u32, u32), Vec<(&'static str, MethodOptions)>);
 
 /// One run a table measured: a method on a scene at a frame, its times and counters. A
 /// report keeps them (`runs.json`'s `table_runs`) and builds its tables from them
@@ -684,7 +686,7 @@ fn pan1(measured: &[SceneRuns], notes: &mut Vec<String>) -> (Vec<String>, Vec<Ve
             let paper_total =
                 paper.map(|p| p[6..9].iter().filter_map(|v| paper_number(v)).sum::<f64>());
             let ours = [
-                Cell::Int(s.triangles as u64),
+                Cell::Int(s.triangles),
                 c("silhouette_texels"),
                 c("silhouette_pixels"),
                 c("visibility_evaluations"),
