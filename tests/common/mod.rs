@@ -10,6 +10,21 @@ use scenes::{
 use std::path::Path;
 use std::process::{Command, Output};
 
+/// The machine, as the tests of one binary share it: a test that measures times holds it
+/// alone ([`machine_alone`]), every test that runs reports holds it with the others
+/// ([`machine_shared`]), so that a timing test's quiet run is not loaded by its neighbours.
+static MACHINE: std::sync::RwLock<()> = std::sync::RwLock::new(());
+
+/// Holds the machine with the other tests that share it (see [`MACHINE`]).
+pub fn machine_shared() -> std::sync::RwLockReadGuard<'static, ()> {
+    MACHINE.read().unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+/// Holds the machine alone (see [`MACHINE`]).
+pub fn machine_alone() -> std::sync::RwLockWriteGuard<'static, ()> {
+    MACHINE.write().unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
 /// Runs the `shadowbench` binary with `args`.
 pub fn shadowbench(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_shadowbench"))

@@ -43,6 +43,7 @@ height = 48
 
 #[test]
 fn a_suite_file_writes_tables_that_parse_back() {
+    let _machine = crate::common::machine_shared();
     let dir = tempfile::tempdir().expect("tempdir");
     let suite = write(dir.path(), "tiny.toml", SUITE);
     let out = dir.path().join("out");
@@ -302,6 +303,7 @@ fn a_suite_file_writes_tables_that_parse_back() {
 
 #[test]
 fn bad_suites_are_named() {
+    let _machine = crate::common::machine_shared();
     let dir = tempfile::tempdir().expect("tempdir");
     let bad = write(dir.path(), "bad.toml", "name = \"x\"\nscenes = [\"cage\"]\nrepeat = 2\n");
     for (suite, needle) in [(bad.as_str(), "repeat"), ("no-such-suite", "no-such-suite")] {
@@ -316,6 +318,7 @@ fn bad_suites_are_named() {
 /// message with the file, the line, the key and the allowed values, and no output written.
 #[test]
 fn suites_with_unknown_names_or_bad_values_are_refused_before_running() {
+    let _machine = crate::common::machine_shared();
     let dir = tempfile::tempdir().expect("tempdir");
     let base = "name = \"x\"\nwidth = 32\nheight = 24\nrepeats = 1\nscenes = [\"cage\"]\n\
                 [[run]]\nmethod = \"sm\"\n";
@@ -354,6 +357,7 @@ fn suites_with_unknown_names_or_bad_values_are_refused_before_running() {
 
 #[test]
 fn index_html_shows_only_files_the_report_wrote() {
+    let _machine = crate::common::machine_shared();
     let dir = tempfile::tempdir().expect("tempdir");
     let suite = write(dir.path(), "tiny.toml", SUITE);
     let out = dir.path().join("out");
@@ -377,6 +381,7 @@ fn index_html_shows_only_files_the_report_wrote() {
 /// baseline folder without a report, or an output folder holding a foreign file, is bad input.
 #[test]
 fn a_report_is_set_against_its_baseline_and_foreign_folders_are_refused() {
+    let _machine = crate::common::machine_shared();
     let dir = tempfile::tempdir().expect("tempdir");
     let suite = write(
         dir.path(),

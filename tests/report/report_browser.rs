@@ -111,6 +111,7 @@ fn images_and_links(page: &Path, lines: &[String]) {
 
 #[test]
 fn index_and_run_pages_work_in_headless_chromium() {
+    let _machine = crate::common::machine_shared();
     let dir = tempfile::tempdir().expect("tempdir");
     let suite = Suite::parse(SUITE, Path::new("browser.toml")).expect("suite");
     let (report, images) = run_suite(&suite, |_| {});

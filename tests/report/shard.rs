@@ -66,6 +66,7 @@ fn merge(dirs: &[&Path], out: &Path) -> std::process::Output {
 
 #[test]
 fn shards_merged_equal_the_unsharded_report_and_share_the_cache() {
+    let _machine = crate::common::machine_shared();
     let dir = tempfile::tempdir().expect("tempdir");
     let suite = write(dir.path(), "tiny.toml", SUITE);
 
@@ -145,6 +146,7 @@ fn shards_merged_equal_the_unsharded_report_and_share_the_cache() {
 
 #[test]
 fn a_missing_or_unfinished_shard_is_named_and_nothing_is_merged() {
+    let _machine = crate::common::machine_shared();
     let dir = tempfile::tempdir().expect("tempdir");
     let suite = write(dir.path(), "tiny.toml", SUITE);
     for k in [0, 2] {
@@ -202,6 +204,7 @@ fn a_missing_or_unfinished_shard_is_named_and_nothing_is_merged() {
 
 #[test]
 fn a_damaged_cache_entry_is_recomputed_and_replaced() {
+    let _machine = crate::common::machine_shared();
     let dir = tempfile::tempdir().expect("tempdir");
     let one = SUITE.replace(r#", "cage""#, "");
     let one = one.split("[[grid]]").next().expect("the suite before its grid");
@@ -257,6 +260,7 @@ fn snapshot(dir: &Path) -> Vec<(std::path::PathBuf, u64)> {
 /// are refused (exit 2) before the output folder's earlier report is removed.
 #[test]
 fn refused_merges_and_reports_change_no_file() {
+    let _machine = crate::common::machine_shared();
     let dir = tempfile::tempdir().expect("tempdir");
     let suite = write(dir.path(), "tiny.toml", SUITE);
     for k in 0..3 {

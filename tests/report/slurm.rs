@@ -96,6 +96,7 @@ fn wait(ids: &[&str]) -> (bool, String) {
 
 #[test]
 fn a_suite_runs_as_a_slurm_array_and_merges_into_the_unsharded_report() {
+    let _machine = crate::common::machine_shared();
     let dir = tempfile::tempdir().expect("tempdir");
     let suite = write(dir.path(), "cluster.toml", SUITE);
     let whole = dir.path().join("whole");
