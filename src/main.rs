@@ -410,27 +410,19 @@ fn check_folder_path(path: &Path, flag: &str) -> Result<(), Failure> {
 /// Whether folders `a` and `b` are the same or one holds the other, by their absolute paths
 /// with symbolic links resolved (as far as they exist).
 fn overlaps(a: &Path, b: &Path) -> bool {
-    let real = |p: &Path| -> PathBuf {
-        // The deepest existing ancestor resolved, the rest appended as given.
-        let mut tail = Vec::new();
-        let mut at = p.to_path_buf();
-        loop {
-            if let Ok(r) = at.canonicalize() {
-                return tail.iter().rev().fold(r, |acc: PathBuf, c| acc.join(c));
-            }
-            match (at.file_name().map(ToOwned::to_owned), at.parent()) {
-                (Some(name), Some(parent)) => {
-                    tail.push(name);
-                    at = if parent.as_os_str().is_empty() {
-                        PathBuf::from(".")
-                    } else {
-                        parent.to_path_buf()
-                    };
-                }
-                _ => return p.to_path_buf(),
-            }
+    /// `p` resolved: itself where it exists, else its parent's resolution and its name.
+    fn real(p: &Path) -> PathBuf {
+        if let Ok(r) = p.canonicalize() {
+            return r;
         }
-    };
+        match (p.parent(), p.file_name()) {
+            (Some(parent), Some(name)) if parent.as_os_str().is_empty() => {
+                real(Path::new(".")).join(name)
+            }
+            (Some(parent), Some(name)) => real(parent).join(name),
+            _ => p.to_path_buf(),
+        }
+    }
     let (a, b) = (real(a), real(b));
     a.starts_with(&b) || b.starts_with(&a)
 }

@@ -142,6 +142,16 @@ pub struct Sample {
     pub retried: bool,
 }
 
+impl Sample {
+    /// The run's time on `clock`, milliseconds (wall time where CPU time is unavailable).
+    pub fn on(&self, clock: Clock) -> f64 {
+        match clock {
+            Clock::Cpu => self.cpu_ms.unwrap_or(self.wall_ms),
+            Clock::Wall => self.wall_ms,
+        }
+    }
+}
+
 /// The machine's condition over a subject's timed runs.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct Conditions {
@@ -238,14 +248,6 @@ impl<T> Measured<T> {
     /// Whether a kept run was contended (see [`Sample::contended`]).
     pub fn contended(&self) -> bool {
         self.samples.iter().any(|s| s.contended)
-    }
-
-    /// The summary on `clock` (wall time where CPU time is unavailable).
-    pub fn time(&self, clock: Clock) -> &Summary {
-        match (clock, &self.cpu_ms) {
-            (Clock::Cpu, Some(cpu)) => cpu,
-            _ => &self.wall_ms,
-        }
     }
 }
 
@@ -425,14 +427,7 @@ where
                 continue;
             }
             let n = state.samples.len();
-            let on_clock: Vec<f64> = state
-                .samples
-                .iter()
-                .map(|s| match protocol.clock {
-                    Clock::Cpu => s.cpu_ms.unwrap_or(s.wall_ms),
-                    Clock::Wall => s.wall_ms,
-                })
-                .collect();
+            let on_clock: Vec<f64> = state.samples.iter().map(|s| s.on(protocol.clock)).collect();
             let narrow = Summary::of(&on_clock)
                 .and_then(|s| s.relative_half_width())
                 .is_some_and(|w| w <= protocol.target_half_width);
@@ -453,16 +448,15 @@ fn finish<T, E>(state: State<T, E>, clock: Clock, cores: usize) -> Result<Measur
     let State { samples, mut records, output, .. } = state;
     let wall: Vec<f64> = samples.iter().map(|s| s.wall_ms).collect();
     let cpu: Option<Vec<f64>> = samples.iter().map(|s| s.cpu_ms).collect();
-    let (Some(output), Some(wall_ms)) = (output, Summary::of(&wall)) else { unreachable_state() };
+    let (Some(output), Some(wall_ms)) = (output, Summary::of(&wall)) else {
+        // Every subject runs at least one round unless it failed.
+        unreachable!("a measured subject has at least one timed run")
+    };
     let cpu_ms = cpu.as_deref().and_then(Summary::of);
     let stages = stage_times(&records);
     // The run of median time on the protocol's clock: its record is the one kept.
     let mut order: Vec<usize> = (0..samples.len()).collect();
-    let key = |k: usize| match clock {
-        Clock::Cpu => samples[k].cpu_ms.unwrap_or(samples[k].wall_ms),
-        Clock::Wall => samples[k].wall_ms,
-    };
-    order.sort_by(|&a, &b| key(a).total_cmp(&key(b)));
+    order.sort_by(|&a, &b| samples[a].on(clock).total_cmp(&samples[b].on(clock)));
     let chosen = order[(order.len() - 1) / 2];
     let record = records.swap_remove(chosen);
     let capacity = state.capacity_s;
@@ -475,12 +469,6 @@ fn finish<T, E>(state: State<T, E>, clock: Clock, cores: usize) -> Result<Measur
         cores,
     };
     Ok(Measured { output, record, wall_ms, cpu_ms, stages, samples, conditions, clock, chosen })
-}
-
-/// A subject that neither failed nor ran: impossible, since every subject runs at least one
-/// round unless it failed.
-fn unreachable_state() -> ! {
-    unreachable!("a measured subject has at least one timed run")
 }
 
 /// Measures one subject under `protocol`.
