@@ -7,8 +7,9 @@
 //! Every input is checked before any computation, in this order: the flags and the scene
 //! ([`job`]: method options, frame size), the GPU environment for `--device gpu` (the adapter
 //! is opened, so `SHADOWBENCH_GPU_*` errors come first), then the output folder
-//! ([`prepare_out`]: created, and written once with a probe file). A method error is bad
-//! input, except a GPU device failure, which is internal ([`method_failure`]).
+//! ([`begin_out`]: opened as a transaction of `reports::publish`, locked, its contents checked;
+//! the outputs are written into its staging folder and published whole at the end). A method
+//! error is bad input, except a GPU device failure, which is internal ([`method_failure`]).
 
 use analysis::{compare::Truth, exact::ExactCoverage, pixel_class::PixelClass, Reference};
 use anyhow::Context;
@@ -22,6 +23,7 @@ use methods::{
     pan09::VisibilityMode, pattern::PatternKind, registry::Device, Frame, MethodError,
     MethodOptions, ShadowMethod, Visibility,
 };
+use reports::publish::{Kind, PublishError, Transaction};
 use reports::suite::{check_frame, MAX_FRAME_SIDE};
 use reports::write::summary_text;
 use std::path::{Path, PathBuf};
@@ -76,7 +78,8 @@ struct ReportArgs {
     #[arg(long, default_value = "quick", value_name = "SUITE")]
     suite: String,
     /// Output folder; default `shadowbench-out/report-SUITE`. It must be empty or hold an
-    /// earlier report (whose files are removed first); a folder holding other files is refused.
+    /// earlier report, which the new one replaces once it is whole; a folder holding other
+    /// files, or being written by another command, is refused.
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
     /// An earlier report's folder: every run present in both is compared (error change, time
@@ -111,6 +114,11 @@ struct ReportArgs {
     /// read, safe for several writers); default `cache/` in the output folder.
     #[arg(long, value_name = "DIR")]
     cache: Option<PathBuf>,
+    /// The most memory one run of the suite may use with its reference, such as 8G (units of
+    /// 1024 bytes); default: the memory available now. Every item's heaviest run is estimated
+    /// before anything runs, and a suite with one above the limit is refused, naming it.
+    #[arg(long, value_name = "SIZE", value_parser = size_arg)]
+    max_memory: Option<u64>,
     /// The clock of the report's cost axis (charts, Pareto fronts, budgets, --baseline):
     /// `cpu`, the CPU time of the process's threads, which other work on the machine moves
     /// little, or `wall`, the wall-clock time a user waits; the other is given beside. Default:
@@ -152,6 +160,10 @@ struct MergeArgs {
     /// Output folder (the same rules as `report --out`).
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
+    /// Merge shards written by different versions or commits of shadowbench (refused
+    /// otherwise); the merged report's provenance lists each shard's build.
+    #[arg(long)]
+    allow_mixed: bool,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -312,11 +324,19 @@ struct RenderArgs {
     /// adapter and how stage times were taken).
     #[arg(long, value_enum, default_value_t = DeviceArg::Cpu)]
     device: DeviceArg,
-    /// Image width in pixels; default: the scene's.
-    #[arg(long, value_name = "W", allow_negative_numbers = true)]
+    /// The most memory the run may use, such as 8G or 512M (units of 1024 bytes); default:
+    /// the memory available now. The run's need is estimated from the scene's triangles, the
+    /// frame, the method and the reference before anything is built, and a run that would
+    /// need more is refused, naming the estimate.
+    #[arg(long, value_name = "SIZE", value_parser = size_arg)]
+    max_memory: Option<u64>,
+    /// Image width in pixels, 1 to 16384; default: the scene's.
+    #[arg(long, value_name = "W", allow_negative_numbers = true,
+          value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_FRAME_SIDE)))]
     width: Option<u32>,
-    /// Image height in pixels; default: the scene's.
-    #[arg(long, value_name = "H", allow_negative_numbers = true)]
+    /// Image height in pixels, 1 to 16384; default: the scene's.
+    #[arg(long, value_name = "H", allow_negative_numbers = true,
+          value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_FRAME_SIDE)))]
     height: Option<u32>,
     /// Timed runs of the method (1 to 1000): with N > 1 it runs N + 1 times, G-buffer
     /// included, the first as an untimed warm-up; run.json (and metrics.json's method_ms) then
@@ -375,21 +395,24 @@ fn method_failure(e: MethodError) -> Failure {
     }
 }
 
-/// Makes sure the output folder `out` can take the files, before any computation: a file in
-/// the way, a folder that cannot be created and one that cannot be written (tried with a
-/// probe file, created and removed: permission bits say nothing to root) are bad input that
-/// names `flag` and the path.
-fn prepare_out(out: &Path, flag: &str) -> Result<(), Failure> {
-    let bad = |why: String| input(anyhow::anyhow!("{flag} {}: {why}", out.display()));
-    if out.exists() && !out.is_dir() {
-        return Err(bad("a file is in the way (the output must be a folder)".into()));
+/// Opens the output folder `out` as a transaction for an output of `kind`, after every other
+/// input has been checked and before any computation: a folder that cannot be used (a file or
+/// a dangling link in the way, another command writing it, files no command of ours wrote, or
+/// another kind of output) is bad input naming `flag` and the path.
+fn begin_out(out: &Path, flag: &str, kind: Kind) -> Result<Transaction, Failure> {
+    Transaction::begin(out, kind)
+        .map_err(|e| publish_failure(e, &format!("{flag} {}", out.display())))
+}
+
+/// A failure of an output folder's transaction, named by `what` (the flag and the path).
+fn publish_failure(e: PublishError, what: &str) -> Failure {
+    let input_error = e.is_input();
+    let e = anyhow::anyhow!("{what}: {e}");
+    if input_error {
+        Failure::Input(e)
+    } else {
+        Failure::Internal(e)
     }
-    std::fs::create_dir_all(out).map_err(|e| bad(format!("cannot create the folder: {e}")))?;
-    let probe = out.join(format!(".shadowbench-probe-{}", std::process::id()));
-    std::fs::write(&probe, b"").map_err(|e| bad(format!("the folder is not writable: {e}")))?;
-    std::fs::remove_file(&probe)
-        .map_err(|e| bad(format!("cannot remove the probe file {}: {e}", probe.display())))?;
-    Ok(())
 }
 
 /// Checks, without creating anything, that `path` can be a folder: it is one, or it does not
@@ -499,7 +522,39 @@ struct Job {
     height: u32,
 }
 
-fn job(a: &RenderArgs) -> Result<Job, Failure> {
+/// `--max-memory`'s value.
+fn size_arg(text: &str) -> Result<u64, String> {
+    analysis::budget::parse_size(text).map_err(|e| e.to_string())
+}
+
+/// Refuses a run whose estimated memory ([`analysis::budget`]) exceeds `--max-memory` or what
+/// the machine has available.
+fn check_budget(
+    a: &RenderArgs,
+    triangles: u64,
+    (width, height): (u32, u32),
+    options: &MethodOptions,
+    params: &serde_json::Map<String, serde_json::Value>,
+    reference: Option<(&str, u32)>,
+) -> Result<(), Failure> {
+    let Some(limit) = analysis::budget::Limit::new(a.max_memory) else { return Ok(()) };
+    let int = |key: &str, default: u32| {
+        params.get(key).and_then(serde_json::Value::as_u64).map_or(default, |v| v as u32)
+    };
+    let work = analysis::budget::Work {
+        triangles,
+        width,
+        height,
+        method: &a.method,
+        rate: methods::registry::stored_samples(&a.method, options).max(int("rate", 1)),
+        map_res: int("map_res", 1024),
+        reference,
+    };
+    let what = format!("{} on {} at {width}x{height}", a.method, a.scene);
+    analysis::budget::check(&work, &limit, &what).map(|_| ()).map_err(input)
+}
+
+fn job(a: &RenderArgs, compared_with: Option<(&str, u32)>) -> Result<Job, Failure> {
     let scene = scenes::load(&a.scene).map_err(|e| input(anyhow::anyhow!("--scene: {e}")))?;
     let options = MethodOptions {
         map_res: a.map_res,
@@ -550,6 +605,14 @@ fn job(a: &RenderArgs) -> Result<Job, Failure> {
     let samples = methods::registry::stored_samples(&a.method, &options);
     let flags = if samples > 1 { "--width, --height and --rate" } else { "--width and --height" };
     check_frame(width, height, samples).map_err(|m| input(anyhow::anyhow!("{flags}: {m}")))?;
+    check_budget(
+        a,
+        scene.triangle_count() as u64,
+        (width, height),
+        &options,
+        &params,
+        compared_with,
+    )?;
     #[cfg(feature = "gpu")]
     if a.device == DeviceArg::Gpu {
         methods::gpu::GpuContext::shared().map_err(gpu_failure)?;
@@ -611,26 +674,46 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
         None => None,
     };
     let cache_dir = a.cache.clone().unwrap_or_else(|| out.join(reports::write::CACHE_DIR));
-    // Every path is checked before the output folder's earlier report is removed.
-    prepare_out(&out, flag)?;
-    check_folder_path(&cache_dir, "--cache")?;
-    reports::write::prepare_out_dir(&out)
-        .map_err(|e| input(anyhow::anyhow!("{flag} {}: {e}", out.display())))?;
-    let mut cache = reports::cache::ReferenceCache::open(&cache_dir).map_err(|e| {
-        input(anyhow::anyhow!("--cache {}: cannot create the folder: {e}", cache_dir.display()))
-    })?;
     let plan = reports::plan::plan(&suite);
     let items = match a.shard {
         Some(s) => s.items(&plan),
         None => (0..plan.len()).collect(),
     };
+    if let (Some(limit), Some(heaviest)) = (
+        analysis::budget::Limit::new(a.max_memory),
+        items.iter().map(|&k| &plan[k]).max_by_key(|i| i.memory),
+    ) {
+        if heaviest.memory > limit.bytes {
+            return Err(input(anyhow::anyhow!(
+                "--suite {}: item {} ({} at {}x{}) needs about {}, more than the {} of {}; lower \
+                 its frame, rate, map size or the scene's triangles, or raise --max-memory if \
+                 the machine has more",
+                suite.name,
+                heaviest.item,
+                heaviest.scene.as_deref().unwrap_or("a table's scene"),
+                heaviest.width,
+                heaviest.height,
+                analysis::budget::bytes_text(heaviest.memory),
+                analysis::budget::bytes_text(limit.bytes),
+                limit.source
+            )));
+        }
+    }
+    // Every path is checked before the output folder is opened; its earlier report stays
+    // until the new one replaces it whole.
+    check_folder_path(&cache_dir, "--cache")?;
+    let kind = if a.shard.is_some() { Kind::Shard } else { Kind::Report };
+    let tx = begin_out(&out, flag, kind)?;
+    let mut cache = reports::cache::ReferenceCache::open(&cache_dir).map_err(|e| {
+        input(anyhow::anyhow!("--cache {}: cannot create the folder: {e}", cache_dir.display()))
+    })?;
     if let Some(shard) = a.shard {
         let start = reports::merge::ShardStart {
             suite: suite.name.clone(),
             shard,
             started: instrumentation::Provenance::capture(String::new(), None).timestamp,
         };
-        let path = out.join(reports::merge::SHARD_START);
+        let path = tx.staging().join(reports::merge::SHARD_START);
         std::fs::write(&path, serde_json::to_string_pretty(&start)? + "\n")
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
@@ -671,10 +754,11 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
     };
     if a.shard.is_some() {
         // The merge writes the report's pages and charts; a shard leaves what it measured.
-        reports::write::write_shard(&out, &report, &images)?;
+        reports::write::write_shard(tx.staging(), &report, &images)?;
     } else {
-        reports::write_report(&out, &report, &images, comparison.as_ref())?;
+        reports::write_report(tx.staging(), &report, &images, comparison.as_ref())?;
     }
+    tx.commit().map_err(|e| publish_failure(e, &format!("{flag} {}", out.display())))?;
     if let Some(c) = &comparison {
         println!("{}", reports::baseline::summary_line(c));
         if let Some(ratios) = reports::baseline::ratio_summary(c) {
@@ -757,7 +841,7 @@ fn report_merge(m: MergeArgs) -> Result<(), Failure> {
     let out = m.out;
     // The shards are read and checked, and the output folder is none of them, before the
     // output folder's earlier report is removed.
-    let (report, dirs) = reports::merge::merge(&m.dirs).map_err(input)?;
+    let (report, dirs) = reports::merge::merge(&m.dirs, m.allow_mixed).map_err(input)?;
     for dir in &dirs {
         if overlaps(dir, &out) {
             return Err(input(anyhow::anyhow!(
@@ -767,12 +851,11 @@ fn report_merge(m: MergeArgs) -> Result<(), Failure> {
             )));
         }
     }
-    prepare_out(&out, "--out")?;
-    reports::write::prepare_out_dir(&out)
-        .map_err(|e| input(anyhow::anyhow!("--out {}: {e}", out.display())))?;
-    reports::merge::copy_shard_files(&dirs, &out)
+    let tx = begin_out(&out, "--out", Kind::Report)?;
+    reports::merge::copy_shard_files(&dirs, tx.staging())
         .with_context(|| format!("cannot copy the shards' files into {}", out.display()))?;
-    reports::write::write_summary(&out, &report, None)?;
+    reports::write::write_summary(tx.staging(), &report, None)?;
+    tx.commit().map_err(|e| publish_failure(e, &format!("--out {}", out.display())))?;
     for skipped in &report.skipped {
         eprintln!("note: not run: {skipped}");
     }
@@ -908,9 +991,9 @@ fn run_repeated(job: &Job, repeat: u32) -> Result<(Frame<'_>, Ran, Option<Spread
     Ok((frame, ran, spread))
 }
 
-/// The output folder (`--out`, or `shadowbench-out/SCENE-METHOD{suffix}`), made ready by
-/// [`prepare_out`].
-fn out_dir(a: &RenderArgs, job: &Job, suffix: &str) -> Result<PathBuf, Failure> {
+/// The output folder (`--out`, or `shadowbench-out/SCENE-METHOD{suffix}`), opened as a run's
+/// transaction ([`begin_out`]).
+fn out_dir(a: &RenderArgs, job: &Job, suffix: &str) -> Result<Transaction, Failure> {
     let (out, flag) = match &a.out {
         Some(out) => (out.clone(), "--out"),
         None => {
@@ -918,8 +1001,7 @@ fn out_dir(a: &RenderArgs, job: &Job, suffix: &str) -> Result<PathBuf, Failure> 
             (Path::new("shadowbench-out").join(name), "--out (default)")
         }
     };
-    prepare_out(&out, flag)?;
-    Ok(out)
+    begin_out(&out, flag, Kind::Run)
 }
 
 /// Writes a run's files: visibility.exr, shadow.png, run.json, and classes.png and
@@ -936,10 +1018,12 @@ fn write_run(out: &Path, frame: &Frame<'_>, ran: &Ran) -> Result<(), Failure> {
 }
 
 fn render(a: RenderArgs) -> Result<(), Failure> {
-    let job = job(&a)?;
-    let out = out_dir(&a, &job, "")?;
+    let job = job(&a, None)?;
+    let tx = out_dir(&a, &job, "")?;
     let (frame, ran, spread) = run_repeated(&job, a.repeat)?;
-    write_run(&out, &frame, &ran)?;
+    write_run(tx.staging(), &frame, &ran)?;
+    let out = tx.dir().to_owned();
+    tx.commit().map_err(|e| publish_failure(e, &out.display().to_string()))?;
     let record = &ran.record;
     if a.json {
         println!("{}", serde_json::to_string_pretty(&record)?);
@@ -958,13 +1042,17 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
 
 fn compare(c: CompareArgs) -> Result<(), Failure> {
     let a = &c.render;
-    let job = job(a)?;
+    let rate = c.ref_rate.unwrap_or(analysis::registry::DEFAULT_REF_RATE);
+    let edge_reference = c.edge_reference.unwrap_or(EdgeReference::Raytrace);
+    let budget_reference = match c.reference {
+        ReferenceName::Exact => ("exact", rate),
+        ReferenceName::Raytrace => ("raytrace", rate),
+    };
+    let job = job(a, Some(budget_reference))?;
     let error_scale = c.error_scale.unwrap_or(analysis::error_map::DEFAULT_MAX_ERROR);
     analysis::error_map::check_scale(error_scale)
         .map_err(|e| input(anyhow::anyhow!("--error-scale: {e}")))?;
     let pattern = a.pattern.map(PatternKind::from).unwrap_or_default();
-    let rate = c.ref_rate.unwrap_or(analysis::registry::DEFAULT_REF_RATE);
-    let edge_reference = c.edge_reference.unwrap_or(EdgeReference::Raytrace);
     let (reference, ref_rate, edge_name): (Box<dyn Reference>, _, _) =
         match (c.reference, edge_reference) {
             (ReferenceName::Exact, EdgeReference::Raytrace) => (
@@ -992,7 +1080,8 @@ fn compare(c: CompareArgs) -> Result<(), Failure> {
             }
         };
     let ref_name = reference.name();
-    let out = out_dir(a, &job, &format!("-vs-{ref_name}"))?;
+    let tx = out_dir(a, &job, &format!("-vs-{ref_name}"))?;
+    let out = tx.staging().to_owned();
 
     let (frame, ran, spread) = run_repeated(&job, a.repeat)?;
     let mut ref_rec = Recorder::default();
@@ -1029,6 +1118,8 @@ fn compare(c: CompareArgs) -> Result<(), Failure> {
     let path = out.join("metrics.json");
     std::fs::write(&path, format!("{text}\n"))
         .with_context(|| format!("cannot write {}", path.display()))?;
+    let out = tx.dir().to_owned();
+    tx.commit().map_err(|e| publish_failure(e, &out.display().to_string()))?;
     if a.json {
         println!("{text}");
     } else {

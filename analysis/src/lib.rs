@@ -1,6 +1,7 @@
 //! Accuracy against ground truth: references (the [`reference::Reference`] seam), the metrics
 //! of DESIGN.md (`metrics.json`) and error images (the false-colour [`error_map`]).
 
+pub mod budget;
 pub mod compare;
 pub mod crosscheck;
 pub mod error_map;

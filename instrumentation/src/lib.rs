@@ -336,6 +336,11 @@ pub struct Provenance {
     /// GPU adapter, when a method ran on the GPU.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub adapter: Option<String>,
+    /// A report merged from shards of different versions or commits (`report merge
+    /// --allow-mixed`): each shard's version and commit, as `shard 1: 0.1.0 abc123`; empty
+    /// otherwise.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub mixed: Vec<String>,
 }
 
 impl Provenance {
@@ -354,6 +359,7 @@ impl Provenance {
             cpu: cpu_model(),
             threads: rayon::current_num_threads(),
             adapter,
+            mixed: Vec::new(),
         }
     }
 

@@ -22,6 +22,7 @@ pub mod output;
 pub mod plan;
 pub mod plots;
 pub mod progress;
+pub mod publish;
 pub mod run_pages;
 pub mod suite;
 pub mod summary;

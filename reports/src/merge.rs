@@ -5,10 +5,18 @@
 //! and records and its `runs.json`, naming the shard and its items
 //! ([`crate::model::ShardInfo`]); the pages and charts are left to the merge. The merge:
 //!
+//! - verifies every folder against its manifest (`crate::publish::verify`: each file the shard
+//!   wrote present, with its size and SHA-256), so that a missing, truncated or edited file
+//!   (a row deleted from `runs.json`, an EXR cut short) is refused naming it;
 //! - reads every folder's `runs.json`, and refuses when a shard of `0..N` is missing or did
 //!   not finish (naming each one and how to run only those again), when two folders hold the
 //!   same shard, or when the shards are of different suites, shard counts or plans;
-//! - checks that each shard ran exactly its share of the plan ([`crate::plan::Shard::items`]);
+//! - refuses shards of different versions or commits of the workbench, naming both, unless
+//!   `--allow-mixed` is given; the merged report's provenance then lists each shard's
+//!   (`Provenance::mixed`);
+//! - checks that each shard ran exactly its share of the plan ([`crate::plan::Shard::items`]),
+//!   and each of its runs once: a run of another item or method than the plan's, a run twice,
+//!   or more runs than the item plans are refused naming the run;
 //! - puts the scenes, runs, grids and the tables' runs in the order an unsharded report has
 //!   them (the plan's order), each run marked with its shard, and builds the papers' tables
 //!   from every shard's table runs (`crate::tables::build`); skipped runs are listed once;
@@ -75,6 +83,38 @@ pub enum MergeError {
     /// No folder was given.
     #[error("no shard folder given")]
     Empty,
+    /// A shard's files do not match its manifest.
+    #[error("{dir}: {source}")]
+    Corrupt {
+        /// The shard's folder.
+        dir: PathBuf,
+        /// Which file differs, how.
+        source: crate::publish::PublishError,
+    },
+    /// Shards of different versions or commits.
+    #[error(
+        "{dir}: written by shadowbench {theirs}, but {first} by {ours}; shards of one report \
+         come from one build (run them again with one build, or merge anyway with \
+         --allow-mixed, which the report's provenance records)"
+    )]
+    Mixed {
+        /// The shard that differs from the first.
+        dir: PathBuf,
+        /// Its version and commit.
+        theirs: String,
+        /// The first shard's folder.
+        first: PathBuf,
+        /// The first shard's version and commit.
+        ours: String,
+    },
+    /// A shard's runs are not those its items plan.
+    #[error("{dir}: {message}")]
+    Unplanned {
+        /// The shard's folder.
+        dir: PathBuf,
+        /// The run and why.
+        message: String,
+    },
 }
 
 /// The message of [`MergeError::Missing`]: the shards, the unfinished ones' folders, and how
@@ -102,9 +142,85 @@ struct Finished {
     info: ShardInfo,
 }
 
-/// Reads the shard folders and builds the merged report (see the module documentation).
-/// Returns it with the folders it came from, in shard order.
-pub fn merge(dirs: &[PathBuf]) -> Result<(Report, Vec<PathBuf>), MergeError> {
+/// A shard's build, as `0.1.0 abc123` (with `dirty` when its checkout had changes).
+fn build_of(p: &Provenance) -> String {
+    format!("{} {}{}", p.version, p.commit, if p.dirty { " dirty" } else { "" })
+}
+
+/// Reads `dir`'s `shard.json`: in the folder (a finished shard), or in its staging folder (a
+/// shard that is running or was killed).
+fn shard_start(dir: &Path) -> Result<ShardStart, String> {
+    let staged = dir.join(crate::publish::STAGING).join(SHARD_START);
+    let path = if staged.is_file() { staged } else { dir.join(SHARD_START) };
+    std::fs::read_to_string(&path)
+        .map_err(|e| e.to_string())
+        .and_then(|t| serde_json::from_str::<ShardStart>(&t).map_err(|e| e.to_string()))
+}
+
+/// Checks that `f`'s runs are each a planned run of its items, once.
+fn check_runs(f: &Finished, plan: &[crate::plan::WorkItem]) -> Result<(), MergeError> {
+    use crate::plan::Work;
+    let fail = |message: String| MergeError::Unplanned { dir: f.dir.clone(), message };
+    let mut per_item: BTreeMap<usize, usize> = BTreeMap::new();
+    let mut seen = std::collections::HashSet::new();
+    for r in &f.report.rows {
+        let name = crate::model::row_stem(r);
+        let Some(Work::Runs { method, runs, .. }) =
+            f.info.items.contains(&r.item).then(|| plan.get(r.item).map(|i| &i.work)).flatten()
+        else {
+            return Err(fail(format!(
+                "run {name} is of item {}, which the shard does not plan",
+                r.item
+            )));
+        };
+        if *method != r.method {
+            return Err(fail(format!(
+                "run {name} is of {}, but item {} plans {method}",
+                r.method, r.item
+            )));
+        }
+        if !seen.insert(name.clone()) {
+            return Err(fail(format!("run {name} is in runs.json twice")));
+        }
+        let n = per_item.entry(r.item).or_default();
+        *n += 1;
+        if *n > runs.len() {
+            return Err(fail(format!(
+                "item {} plans {} runs, runs.json has more",
+                r.item,
+                runs.len()
+            )));
+        }
+    }
+    let mut tables = std::collections::HashSet::new();
+    for t in &f.report.table_runs {
+        let planned = match plan.get(t.item).map(|i| &i.work) {
+            Some(Work::Table { table, runs, .. })
+                if *table == t.table && f.info.items.contains(&t.item) =>
+            {
+                runs.len()
+            }
+            _ => {
+                return Err(fail(format!(
+                    "a run of table {} is of item {}, which the shard does not plan",
+                    t.table, t.item
+                )))
+            }
+        };
+        if t.run >= planned || !tables.insert((t.item, t.run)) {
+            return Err(fail(format!(
+                "table run {} of item {} is not planned once",
+                t.run, t.item
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Reads the shard folders and builds the merged report (see the module documentation);
+/// shards of different builds are merged only with `allow_mixed`. Returns it with the
+/// folders it came from, in shard order.
+pub fn merge(dirs: &[PathBuf], allow_mixed: bool) -> Result<(Report, Vec<PathBuf>), MergeError> {
     if dirs.is_empty() {
         return Err(MergeError::Empty);
     }
@@ -113,6 +229,8 @@ pub fn merge(dirs: &[PathBuf]) -> Result<(Report, Vec<PathBuf>), MergeError> {
     for dir in dirs {
         let runs = dir.join("runs.json");
         if runs.is_file() {
+            crate::publish::verify(dir)
+                .map_err(|source| MergeError::Corrupt { dir: dir.clone(), source })?;
             let report = crate::baseline::load(dir)
                 .map_err(|e| MergeError::NotAShard { dir: dir.clone(), message: e.to_string() })?;
             let [info] = report.shards.as_slice() else {
@@ -126,10 +244,7 @@ pub fn merge(dirs: &[PathBuf]) -> Result<(Report, Vec<PathBuf>), MergeError> {
             finished.push(Finished { dir: dir.clone(), report, info });
             continue;
         }
-        let start = std::fs::read_to_string(dir.join(SHARD_START))
-            .map_err(|e| e.to_string())
-            .and_then(|t| serde_json::from_str::<ShardStart>(&t).map_err(|e| e.to_string()));
-        match start {
+        match shard_start(dir) {
             Ok(s) => started.push((s, dir.clone())),
             Err(message) => {
                 return Err(MergeError::NotAShard {
@@ -181,6 +296,23 @@ pub fn merge(dirs: &[PathBuf]) -> Result<(Report, Vec<PathBuf>), MergeError> {
             .collect();
         return Err(MergeError::Missing { missing, unfinished, count });
     }
+    let first = &finished[0];
+    let ours = build_of(&first.info.provenance);
+    let mut mixed = Vec::new();
+    if let Some(other) = finished.iter().find(|f| build_of(&f.info.provenance) != ours) {
+        if !allow_mixed {
+            return Err(MergeError::Mixed {
+                dir: other.dir.clone(),
+                theirs: build_of(&other.info.provenance),
+                first: first.dir.clone(),
+                ours,
+            });
+        }
+        mixed = finished
+            .iter()
+            .map(|f| format!("shard {}: {}", f.info.shard, build_of(&f.info.provenance)))
+            .collect();
+    }
     let suite = finished[0].report.suite.clone();
     let plan = crate::plan::plan(&suite);
     for f in &finished {
@@ -196,8 +328,11 @@ pub fn merge(dirs: &[PathBuf]) -> Result<(Report, Vec<PathBuf>), MergeError> {
                 ),
             });
         }
+        check_runs(f, &plan)?;
     }
-    Ok((assemble(&suite, finished.iter().collect()), finished.into_iter().map(|f| f.dir).collect()))
+    let mut report = assemble(&suite, finished.iter().collect());
+    report.provenance.mixed = mixed;
+    Ok((report, finished.into_iter().map(|f| f.dir).collect()))
 }
 
 /// The merged report of finished shards that cover the plan.
@@ -252,23 +387,25 @@ fn assemble(suite: &crate::suite::Suite, shards: Vec<&Finished>) -> Report {
     }
 }
 
-/// Copies the per-run and per-scene files of the shard folders `from` into `out`
-/// (`visibility/`, `runs/` but the pages, `scenes/`, `grids/`).
+/// Copies the per-run and per-scene files of the shard folders `from` into `out`: the files
+/// their manifests list under `visibility/`, `runs/` (but the pages), `scenes/` and `grids/`.
 pub fn copy_shard_files(from: &[PathBuf], out: &Path) -> std::io::Result<()> {
     for dir in from {
-        for sub in ["visibility", "runs", "scenes", "grids"] {
-            let src = dir.join(sub);
-            let Ok(entries) = std::fs::read_dir(&src) else { continue };
-            let dst = out.join(sub);
-            std::fs::create_dir_all(&dst)?;
-            for e in entries {
-                let e = e?;
-                let name = e.file_name();
-                let page = Path::new(&name).extension().is_some_and(|x| x == "html");
-                if e.file_type()?.is_file() && !page {
-                    std::fs::copy(e.path(), dst.join(&name))?;
-                }
+        let manifest = crate::publish::read_manifest(dir)
+            .map_err(|e| std::io::Error::other(e.to_string()))?
+            .map(|m| m.files)
+            .unwrap_or_default();
+        for e in manifest {
+            let Some((sub, _)) = e.path.split_once('/') else { continue };
+            let page = Path::new(&e.path).extension().is_some_and(|x| x == "html");
+            if !["visibility", "runs", "scenes", "grids"].contains(&sub) || page {
+                continue;
             }
+            let dst = out.join(&e.path);
+            if let Some(parent) = dst.parent() {
+                std::fs::create_dir_all(parent)?;
+            }
+            std::fs::copy(dir.join(&e.path), dst)?;
         }
     }
     Ok(())

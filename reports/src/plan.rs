@@ -79,6 +79,35 @@ pub struct WorkItem {
     pub work: Work,
     /// The estimated cost (see the module documentation).
     pub cost: f64,
+    /// The estimated peak memory of its heaviest run with its reference, bytes
+    /// (`analysis::budget`; 0 for a grid, whose runs are the suite's, and for a scene that
+    /// cannot be loaded).
+    #[serde(default)]
+    pub memory: u64,
+}
+
+/// The estimated peak memory of the runs `runs` (method and options) on `triangles` at
+/// `width x height`, against `reference` at `ref_rate`: the heaviest's.
+fn peak_memory<'m>(
+    runs: impl Iterator<Item = (&'m str, &'m methods::MethodOptions)>,
+    triangles: f64,
+    (width, height): (u32, u32),
+    reference: Option<(&str, u32)>,
+) -> u64 {
+    runs.map(|(method, o)| {
+        analysis::budget::estimate(&analysis::budget::Work {
+            triangles: triangles as u64,
+            width,
+            height,
+            method,
+            rate: o.rate.unwrap_or(1),
+            map_res: o.map_res.unwrap_or(1024),
+            reference,
+        })
+        .bytes
+    })
+    .max()
+    .unwrap_or(0)
 }
 
 /// What the plan knows of a scene without running anything.
@@ -133,7 +162,9 @@ pub fn plan(suite: &Suite) -> Vec<WorkItem> {
                 }
             }
         };
-        let item = |work: Work, cost: f64, items: &Vec<WorkItem>| WorkItem {
+        let budget_reference =
+            reference.as_deref().map(|r| (r, ref_rate.unwrap_or(suite.ref_rate)));
+        let item = |work: Work, cost: f64, memory: u64, items: &Vec<WorkItem>| WorkItem {
             item: items.len(),
             scene: Some(name.clone()),
             scene_index: Some(scene_index),
@@ -143,6 +174,7 @@ pub fn plan(suite: &Suite) -> Vec<WorkItem> {
             ref_rate,
             work,
             cost,
+            memory,
         };
         for (k, spec) in suite.runs.iter().enumerate() {
             let combos = spec.expand();
@@ -150,15 +182,21 @@ pub fn plan(suite: &Suite) -> Vec<WorkItem> {
                 .iter()
                 .map(|o| runs_per * run_cost(pixels, triangles, o.rate, o.map_res))
                 .sum();
+            let memory = if f.is_some() {
+                let runs = combos.iter().map(|o| (spec.method.as_str(), o));
+                peak_memory(runs, triangles, (width, height), budget_reference)
+            } else {
+                0
+            };
             let runs = combos.iter().map(combo_label).collect();
             let work = Work::Runs { spec: k, method: spec.method.clone(), runs };
-            let it = item(work, cost, &items);
+            let it = item(work, cost, memory, &items);
             items.push(it);
         }
         for (k, grid) in suite.grids.iter().enumerate().filter(|(_, g)| g.scene == *name) {
             let cost =
                 grid.panels.iter().map(|p| run_cost(pixels, triangles, p.rate, p.map_res)).sum();
-            let it = item(Work::Grid { grid: k, title: grid.title.clone() }, cost, &items);
+            let it = item(Work::Grid { grid: k, title: grid.title.clone() }, cost, 0, &items);
             items.push(it);
         }
     }
@@ -178,6 +216,7 @@ pub fn plan(suite: &Suite) -> Vec<WorkItem> {
                 .iter()
                 .map(|(m, o)| [*m, &combo_label(o)].join(" ").trim().to_owned())
                 .collect();
+            let memory = peak_memory(runs.iter().map(|(m, o)| (*m, o)), triangles, (w, h), None);
             let work = Work::Table { table: k, paper: spec.paper.name().to_owned(), runs: labels };
             let shared = items.iter().rposition(|i: &WorkItem| {
                 i.scene.as_deref() == Some(name.as_str()) && (i.width, i.height) == (w, h)
@@ -198,6 +237,7 @@ pub fn plan(suite: &Suite) -> Vec<WorkItem> {
                 ref_rate,
                 work,
                 cost,
+                memory,
             };
             match shared {
                 Some(at) => items.insert(at + 1, item),
@@ -307,6 +347,7 @@ mod tests {
             ref_rate: None,
             work: Work::Table { table: k, paper: String::new(), runs: Vec::new() },
             cost,
+            memory: 0,
         }
     }
 

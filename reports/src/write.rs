@@ -5,12 +5,9 @@
 //! GPU side by side, the papers' tables), the pages (`index.html`, `runs/ID.html`), the
 //! charts (`plots/`), and `visibility/*.exr` (every visibility buffer).
 //!
-//! A report folder holds its own files only. [`write_report`] lists every file it leaves in
-//! the folder in a manifest, [`MANIFEST`]; before anything is computed, [`prepare_out_dir`]
-//! refuses a folder that holds a file no manifest lists (naming the first, in path order), and
-//! removes an earlier report's files so that none of them outlives the report that wrote it.
-//! The one exception is the default reference cache, [`CACHE_DIR`], kept from report to report
-//! (its entries are verified on read, `crate::cache`).
+//! Every function here writes into the folder it is given, which is the staging folder of
+//! the output's transaction (`crate::publish`): the report appears under its final names, with
+//! its manifest, only when it is whole.
 
 use crate::figures::{clock_name, write_plots, PlotFile};
 use crate::grids::write_grid;
@@ -20,7 +17,7 @@ use crate::summary::{budget_table, error_text, fronts, measured, ms_text, time_t
 use analysis::metrics::EXCEEDANCE_THRESHOLDS;
 use instrumentation::Counters;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Columns of `runs.csv` before the stage times and the counters: parameters, frame size,
 /// reference, metrics (over the reference's shadow-only pixels), total time and provenance.
@@ -379,139 +376,12 @@ pub fn markdown(report: &Report, plots: &[PlotFile]) -> String {
     s
 }
 
-/// The manifest of a report folder: the files the report wrote, one path a line, relative to
-/// the folder with `/` between names, after a comment line.
-pub const MANIFEST: &str = ".shadowbench-report";
-
-/// The default reference cache's folder in a report folder (`report --cache`): neither listed
-/// in the manifest nor removed with an earlier report's files, nor foreign.
-pub const CACHE_DIR: &str = "cache";
-
-/// A report folder cannot be used.
-#[derive(Debug, thiserror::Error)]
-pub enum OutDirError {
-    /// The folder holds a file that no report wrote.
-    #[error(
-        "holds {file}, which no report wrote; a report folder holds only its report's files \
-         (remove them, or choose another folder)"
-    )]
-    Foreign {
-        /// The first such file, in path order.
-        file: PathBuf,
-    },
-    /// The folder could not be listed or cleaned.
-    #[error("{path}: {message}")]
-    Io {
-        /// The file or folder.
-        path: PathBuf,
-        /// Why.
-        message: String,
-    },
-}
-
-fn io_err(path: &Path, e: &std::io::Error) -> OutDirError {
-    OutDirError::Io { path: path.to_owned(), message: e.to_string() }
-}
-
-/// Every file under `dir` (links count as files and are not followed), as paths relative to
-/// `dir`, sorted; empty when `dir` does not exist.
-fn files_under(dir: &Path) -> Result<Vec<PathBuf>, OutDirError> {
-    let mut files = Vec::new();
-    let mut folders = vec![PathBuf::new()];
-    while let Some(rel) = folders.pop() {
-        let here = dir.join(&rel);
-        let entries = match std::fs::read_dir(&here) {
-            Ok(e) => e,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound && rel.as_os_str().is_empty() => {
-                return Ok(files)
-            }
-            Err(e) => return Err(io_err(&here, &e)),
-        };
-        for entry in entries {
-            let entry = entry.map_err(|e| io_err(&here, &e))?;
-            let kind = entry.file_type().map_err(|e| io_err(&entry.path(), &e))?;
-            let name = rel.join(entry.file_name());
-            if kind.is_dir() && rel.as_os_str().is_empty() && entry.file_name() == CACHE_DIR {
-                // The default reference cache is the report's and outlives it.
-                continue;
-            }
-            if kind.is_dir() {
-                folders.push(name);
-            } else {
-                files.push(name);
-            }
-        }
-    }
-    files.sort();
-    Ok(files)
-}
-
-/// The files `dir`'s manifest lists (empty without a manifest).
-fn manifest_files(dir: &Path) -> Result<Vec<PathBuf>, OutDirError> {
-    let path = dir.join(MANIFEST);
-    match std::fs::read_to_string(&path) {
-        Ok(text) => Ok(text
-            .lines()
-            .filter(|l| !l.is_empty() && !l.starts_with('#'))
-            .map(|l| l.split('/').collect())
-            .collect()),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(Vec::new()),
-        Err(e) => Err(io_err(&path, &e)),
-    }
-}
-
-/// Makes `dir` ready for a report, before anything is computed: refuses it when it holds a
-/// file that its manifest ([`MANIFEST`]) does not list, else removes the files the manifest
-/// lists (an earlier report's), the manifest, and the folders they leave empty. A folder that
-/// does not exist or is empty is ready as it is.
-pub fn prepare_out_dir(dir: &Path) -> Result<(), OutDirError> {
-    let ours = manifest_files(dir)?;
-    let manifest = PathBuf::from(MANIFEST);
-    if let Some(file) = files_under(dir)?.into_iter().find(|f| *f != manifest && !ours.contains(f))
-    {
-        return Err(OutDirError::Foreign { file: dir.join(file) });
-    }
-    for f in ours.iter().chain([&manifest]) {
-        let path = dir.join(f);
-        match std::fs::remove_file(&path) {
-            Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(io_err(&path, &e)),
-            _ => {}
-        }
-    }
-    // The folders the files were in, deepest first; one that still holds something stays.
-    let mut folders: Vec<&Path> = ours
-        .iter()
-        .flat_map(|f| f.ancestors().skip(1))
-        .filter(|a| !a.as_os_str().is_empty())
-        .collect();
-    folders.sort_by(|a, b| b.components().count().cmp(&a.components().count()).then(a.cmp(b)));
-    folders.dedup();
-    for f in folders {
-        let _ = std::fs::remove_dir(dir.join(f));
-    }
-    Ok(())
-}
-
-/// Writes the manifest of `dir`: every file in it (the folder having been made ready by
-/// [`prepare_out_dir`], each is the report's).
-fn write_manifest(dir: &Path) -> Result<(), OutputError> {
-    let path = dir.join(MANIFEST);
-    let files = files_under(dir)
-        .map_err(|e| OutputError::Write { path: path.clone(), message: e.to_string() })?;
-    let mut text = String::from("# shadowbench report: the files it wrote (see reports::write)\n");
-    for f in files.iter().filter(|f| **f != Path::new(MANIFEST)) {
-        let names: Vec<String> =
-            f.components().map(|c| c.as_os_str().to_string_lossy().into_owned()).collect();
-        text.push_str(&names.join("/"));
-        text.push('\n');
-    }
-    std::fs::write(&path, text).map_err(|e| OutputError::Write { path, message: e.to_string() })
-}
+/// The default reference cache's folder in a report folder (`report --cache`).
+pub use crate::publish::CACHE_DIR;
 
 /// Writes `index.html`, `report.md`, `runs.csv`, `runs.json`, `plots/*.png|svg`,
 /// `tables/*.csv` (the papers' tables), `visibility/*.exr`, the grids, the scenes' and runs'
-/// images and records, and every run's page into `dir`, then the manifest listing them
-/// ([`MANIFEST`]); `dir` is to have been made ready by [`prepare_out_dir`].
+/// images and records, and every run's page into `dir`.
 pub fn write_report(
     dir: &Path,
     report: &Report,
@@ -522,7 +392,7 @@ pub fn write_report(
     write_summary(dir, report, baseline)
 }
 
-/// A shard's folder: what [`write_run_files`] writes, `runs.json`, and the manifest; the
+/// A shard's folder: what [`write_run_files`] writes and `runs.json`; the
 /// pages, charts and tables are the merge's (`report merge`).
 pub fn write_shard(dir: &Path, report: &Report, images: &Images) -> Result<(), OutputError> {
     write_run_files(dir, report, images)?;
@@ -530,8 +400,7 @@ pub fn write_shard(dir: &Path, report: &Report, images: &Images) -> Result<(), O
     let json = serde_json::to_string_pretty(report)
         .map_err(|e| OutputError::Write { path: path.clone(), message: e.to_string() })?;
     std::fs::write(&path, json)
-        .map_err(|e| OutputError::Write { path: path.clone(), message: e.to_string() })?;
-    write_manifest(dir)
+        .map_err(|e| OutputError::Write { path: path.clone(), message: e.to_string() })
 }
 
 /// The files made from a sweep's images: `visibility/ID.exr`, `grids/*.png`, `scenes/*` and
@@ -558,7 +427,7 @@ pub fn write_run_files(dir: &Path, report: &Report, images: &Images) -> Result<(
 }
 
 /// The files made from the report alone: `runs.json`, `runs.csv`, `report.md`, `index.html`,
-/// `plots/*`, `tables/*.csv`, `baseline.md`, every run's page, and the manifest.
+/// `plots/*`, `tables/*.csv`, `baseline.md`, and every run's page.
 pub fn write_summary(
     dir: &Path,
     report: &Report,
@@ -602,49 +471,5 @@ pub fn write_summary(
             std::fs::write(&path, text).map_err(|e| err(&path, &e))?;
         }
     }
-    crate::run_pages::write_run_pages(dir, report)?;
-    write_manifest(dir)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn put(dir: &Path, rel: &str) {
-        let path = dir.join(rel);
-        std::fs::create_dir_all(path.parent().expect("a parent")).expect("folder");
-        std::fs::write(path, b"x").expect("file");
-    }
-
-    #[test]
-    fn an_earlier_report_is_removed_and_a_foreign_file_refused() {
-        let tmp = tempfile::tempdir().expect("tempdir");
-        let dir = tmp.path().join("out");
-        prepare_out_dir(&dir).expect("a folder that does not exist is ready");
-        for f in ["runs.json", "visibility/a.exr", "runs/r1/run.json"] {
-            put(&dir, f);
-        }
-        write_manifest(&dir).expect("manifest");
-        let listed = std::fs::read_to_string(dir.join(MANIFEST)).expect("manifest");
-        assert!(listed.lines().any(|l| l == "runs/r1/run.json"), "{listed}");
-        prepare_out_dir(&dir).expect("an earlier report is cleaned");
-        assert_eq!(files_under(&dir).expect("files"), Vec::<PathBuf>::new());
-        assert!(!dir.join("visibility").exists() && !dir.join("runs").exists());
-
-        // A file of the user's beside a report: refused, named, nothing removed.
-        put(&dir, "runs.json");
-        write_manifest(&dir).expect("manifest");
-        put(&dir, "notes/mine.txt");
-        match prepare_out_dir(&dir) {
-            Err(OutDirError::Foreign { file }) => assert_eq!(file, dir.join("notes/mine.txt")),
-            other => panic!("not refused: {other:?}"),
-        }
-        assert!(dir.join("runs.json").is_file() && dir.join(MANIFEST).is_file());
-        // A folder without a manifest holding anything is refused too.
-        let other = tmp.path().join("other");
-        put(&other, "b.txt");
-        put(&other, "a.txt");
-        let e = prepare_out_dir(&other).expect_err("refused");
-        assert!(e.to_string().contains("a.txt"), "the first in path order: {e}");
-    }
+    crate::run_pages::write_run_pages(dir, report).map(|_| ())
 }

@@ -9,3 +9,4 @@ mod report_browser;
 mod shard;
 mod slurm;
 mod timing;
+mod transactions;

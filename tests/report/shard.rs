@@ -116,11 +116,15 @@ fn shards_merged_equal_the_unsharded_report_and_share_the_cache() {
     // The merged folder is a whole report: the same files as the unsharded one, each run
     // marked with its shard, every shard's provenance kept.
     let files = |d: &Path| {
-        let mut f: Vec<String> = std::fs::read_to_string(d.join(".shadowbench-report"))
-            .expect("manifest")
-            .lines()
-            .skip(1)
-            .map(str::to_owned)
+        let manifest: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(d.join(".shadowbench-manifest")).expect("manifest"),
+        )
+        .expect("parses");
+        let mut f: Vec<String> = manifest["files"]
+            .as_array()
+            .expect("files")
+            .iter()
+            .map(|e| e["path"].as_str().expect("path").to_owned())
             .collect();
         f.sort();
         f
