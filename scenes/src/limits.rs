@@ -1,4 +1,5 @@
-//! The range of scene sizes and positions the workbench supports, in world units.
+//! The range of scene sizes and positions the workbench supports, in world units, and the
+//! largest scene it builds.
 //!
 //! Every pipeline computes in `f64`, and products of up to a few coordinates (areas, plane
 //! equations, homogeneous projections, squared lengths) must neither overflow nor underflow;
@@ -12,3 +13,21 @@ pub const MAX_COORDINATE: f64 = 1e15;
 
 /// Smallest bounding-box diagonal of a scene's geometry.
 pub const MIN_EXTENT: f64 = 1e-9;
+
+/// The most triangles a whole scene may have (40 M), summed over its objects; a scene whose
+/// triangle count may exceed it (by the upper bound of `registry::Described::triangles`,
+/// computed from generator parameters and mesh file headers) is refused before any mesh is
+/// built, naming the estimate and this limit.
+///
+/// Why 40 M: a triangle costs memory several times over before any method runs. The scene
+/// holds it in its object's mesh (a triangle soup such as `random_triangles` has three `f64`
+/// vertices of its own: 3 x 24 + 12 = 84 bytes), the frame copies every object into one
+/// [`Geometry`](crate::Geometry) (84 + 4 bytes for the object index), and the references add
+/// their own structures: `raytrace`'s BVH (an `f32` copy of the triangle, its node share and
+/// its index, about 100 bytes). That is about 270 bytes a triangle at least, 11 GB at 40 M:
+/// within the project's 24 GB machines with room left for the frame's buffers, the method's
+/// maps and the operating system, whereas the 190 M of ten 19 M-triangle objects (51 GB) could
+/// only end in an allocation failure long after the run began. A single generator stops at
+/// `generators::MAX_TRIANGLES` (20 M), so two objects at that limit still fit; the memory a
+/// particular method and frame need on top is the command's to check.
+pub const MAX_SCENE_TRIANGLES: u64 = 40_000_000;
