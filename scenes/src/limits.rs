@@ -19,15 +19,17 @@ pub const MIN_EXTENT: f64 = 1e-9;
 /// computed from generator parameters and mesh file headers) is refused before any mesh is
 /// built, naming the estimate and this limit.
 ///
-/// Why 40 M: a triangle costs memory several times over before any method runs. The scene
-/// holds it in its object's mesh (a triangle soup such as `random_triangles` has three `f64`
-/// vertices of its own: 3 x 24 + 12 = 84 bytes), the frame copies every object into one
-/// [`Geometry`](crate::Geometry) (84 + 4 bytes for the object index), and the references add
-/// their own structures: `raytrace`'s BVH (an `f32` copy of the triangle, its node share and
-/// its index, about 100 bytes). That is about 270 bytes a triangle at least, 11 GB at 40 M:
-/// within the project's 24 GB machines with room left for the frame's buffers, the method's
-/// maps and the operating system, whereas the 190 M of ten 19 M-triangle objects (51 GB) could
-/// only end in an allocation failure long after the run began. A single generator stops at
-/// `generators::MAX_TRIANGLES` (20 M), so two objects at that limit still fit; the memory a
-/// particular method and frame need on top is the command's to check.
+/// Why 40 M: a triangle costs memory several times over before and while a method runs. The
+/// scene holds it in its object's mesh (a triangle soup such as `random_triangles` has three
+/// `f64` vertices of its own: 3 x 24 + 12 = 84 bytes), the frame copies every object into one
+/// [`Geometry`](crate::Geometry) (88 bytes), and the methods and references add their own
+/// structures. Measured as the growth of the peak resident memory of `render` at 64 x 48 from
+/// 1 M to 4 M random triangles: 254 bytes a triangle with `sm`, 434 with `raytrace` (its BVH).
+/// At 40 M that is 10 GB and 17 GB: within the project's 24 GB machines, with room for the
+/// frame's buffers and the system, whereas the 190 M of ten 19 M-triangle objects (48 to
+/// 82 GB) could only end in an allocation failure long after the run began. A single
+/// generator stops at `generators::MAX_TRIANGLES` (20 M), so two objects at that limit still
+/// fit. `exact` needs more (1.8 GB at 1 M random triangles, its shadow polygons); what a
+/// particular method and frame need beyond the scene is for the command to check before it
+/// builds anything.
 pub const MAX_SCENE_TRIANGLES: u64 = 40_000_000;

@@ -270,8 +270,8 @@ pub enum SceneError {
     /// is built.
     #[error(
         "{path}: the scene has up to {triangles} triangles, more than the limit of {limit} \
-         (its largest object, `{largest}`, up to {largest_triangles}); lower the generators' \
-         counts or use smaller meshes"
+         (its largest object, `{largest}`, up to {largest_triangles}); {}",
+        if *.from_file { FILE_BOUND } else { "lower the generators' counts" }
     )]
     TooManyTriangles {
         /// The scene file, mesh file or `builtin:NAME`.
@@ -284,6 +284,8 @@ pub enum SceneError {
         largest: String,
         /// Its upper bound.
         largest_triangles: u64,
+        /// Whether that object is a mesh file, whose count is bounded from its header and size.
+        from_file: bool,
     },
     /// No built-in scene has this name and no file has this path.
     #[error("unknown scene `{name}`: not a built-in scene (known: {known}) nor a .toml, .obj, .off or .ply file")]
@@ -437,6 +439,7 @@ impl SceneDesc {
                 limit: MAX_SCENE_TRIANGLES,
                 largest: format!("object[{largest}]"),
                 largest_triangles,
+                from_file: matches!(self.objects[largest].shape, Shape::File(_)),
             });
         }
         let mut objects = Vec::with_capacity(self.objects.len());
@@ -493,6 +496,11 @@ impl SceneDesc {
         Ok(scene)
     }
 }
+
+/// What [`SceneError::TooManyTriangles`] says when its largest object is a mesh file.
+const FILE_BOUND: &str = "a mesh file's count is bounded from its header and size, exactly only \
+                          for a binary PLY of triangles (a text file's bound is about 12 to 17 \
+                          times its count): use a smaller mesh or convert it to binary PLY";
 
 /// What [`SceneError::ModelMissing`] adds when the model was looked for in the models folder.
 const FETCH_HINT: &str = "; if it is one of CGAL's sample meshes, run `scripts/fetch-models` to \
@@ -825,10 +833,25 @@ mod tests {
         assert!(
             err.to_string().starts_with(&format!(
                 "ten.toml: the scene has up to {triangles} triangles, more than the limit of \
-                 40000000 (its largest object, `object[1]`, up to 19000000)"
+                 40000000 (its largest object, `object[1]`, up to 19000000); lower the \
+                 generators' counts"
             )),
             "{err}"
         );
+        // A mesh file is bounded by its size, unread: a sparse 100 MB OBJ may hold 50 M.
+        let huge = std::fs::File::create(dir.path().join("huge.obj")).expect("creates");
+        huge.set_len(100_000_000).expect("a sparse file");
+        let err = scene("[[object]]\nshape.file = { path = \"huge.obj\" }\n")
+            .resolve_in("huge", Path::new("huge.toml"), &folders)
+            .expect_err("too many");
+        assert!(
+            matches!(
+                &err,
+                SceneError::TooManyTriangles { triangles: 50_000_000, from_file: true, .. }
+            ),
+            "{err}"
+        );
+        assert!(err.to_string().ends_with("convert it to binary PLY"), "{err}");
         // Within the limit, the broken body is what stops it.
         let err = scene(&format!("[[object]]\nshape.file = {{ path = \"broken.off\" }}\n{big}"))
             .resolve_in("one", Path::new("one.toml"), &folders)

@@ -160,8 +160,8 @@ pub fn load_mesh(path: &Path) -> Result<Mesh, LoadError> {
 }
 
 /// An upper bound of the number of triangles [`load_mesh`] makes of `path`, read from the
-/// file's size and, for OFF and PLY, its header (the first [`PREFIX`] bytes, or the whole file
-/// when its header is longer); nothing else of the file is read. A malformed header is the
+/// file's size and, for OFF and PLY, its header (the first 64 KiB, or the whole file when its
+/// header is longer); nothing else of the file is read. A malformed header is the
 /// error loading would give. The bound is exact for a binary PLY of triangles; for text files
 /// it is loose, as the size of their numbers is not known.
 pub fn triangle_bound(path: &Path) -> Result<u64, LoadError> {

@@ -34,7 +34,8 @@
 //! the message says that the header declares so many of those but more follow, rather than
 //! blaming the line as a malformed record of the next element.
 //!
-//! [`triangle_bound`] bounds the triangles from the header and the file's size alone.
+//! [`super::triangle_bound`] bounds the triangles from the header and the file's size alone
+//! (exactly for a binary file of triangles).
 
 use super::{fan, last_line, lines, strip_bom, Syntax};
 use crate::mesh::Mesh;
@@ -86,7 +87,8 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<Mesh, Syntax> {
 /// its other properties' least size, its count and `n` items of the item's size, so the bound
 /// is exact for a file of triangles with fixed-size records. ASCII: every value takes at least
 /// 2 bytes (a digit and a separator or line end; the file's last value may lack it), so the
-/// bound is loose (about 5 to 10 times the count for common files).
+/// bound is loose (12 times the count of a grid of 80 000 triangles with 6-decimal
+/// coordinates).
 pub(crate) fn triangle_bound(header: &[u8], size: u64) -> Result<u64, Syntax> {
     let header = Header::parse(header)?;
     let plan = Plan::new(&header)?;
