@@ -291,11 +291,23 @@ impl Described {
             .map_err(|e| self.own(e))
     }
 
-    /// `e` as the user should read it: a mesh-file scene's loading error names the file and
-    /// line alone.
+    /// `e` as the user should read it: a mesh-file scene's errors name the file (and line)
+    /// alone, not the object the scene made of it.
     fn own(&self, e: SceneError) -> SceneError {
         match e {
             SceneError::Mesh { source, .. } if self.mesh_file => SceneError::MeshFile { source },
+            SceneError::TooManyTriangles { path, triangles, limit, largest_triangles, .. }
+                if self.mesh_file =>
+            {
+                SceneError::TooManyTriangles {
+                    largest: path.display().to_string(),
+                    path,
+                    triangles,
+                    limit,
+                    largest_triangles,
+                    from_file: true,
+                }
+            }
             e => e,
         }
     }
@@ -428,6 +440,20 @@ mod tests {
         std::fs::create_dir(&folder).expect("mkdir");
         let err = describe(folder.to_str().expect("utf-8")).expect_err("a folder");
         assert_eq!(err.to_string(), format!("{}: is a folder, not a mesh file", folder.display()));
+        // A mesh file too large for the limit: bounded by its size (sparse, never read).
+        let huge = dir.path().join("huge.obj");
+        let file = std::fs::File::create(&huge).expect("creates");
+        file.set_len(100_000_000).expect("a sparse file");
+        let err = describe(huge.to_str().expect("utf-8")).expect("described").resolve();
+        let err = err.expect_err("too many");
+        assert!(
+            err.to_string().starts_with(&format!(
+                "{0}: the scene has up to 50000002 triangles, more than the limit of 40000000 \
+                 (the largest object, {0}, up to 50000000)",
+                huge.display()
+            )) && !err.to_string().contains("object["),
+            "{err}"
+        );
         let missing = dir.path().join("missing.ply");
         let err = describe(missing.to_str().expect("utf-8")).expect_err("missing");
         assert!(matches!(err, SceneError::Io { .. }), "{err}");

@@ -270,7 +270,7 @@ pub enum SceneError {
     /// is built.
     #[error(
         "{path}: the scene has up to {triangles} triangles, more than the limit of {limit} \
-         (its largest object, `{largest}`, up to {largest_triangles}); {}",
+         (the largest object, {largest}, up to {largest_triangles}); {}",
         if *.from_file { FILE_BOUND } else { "lower the generators' counts" }
     )]
     TooManyTriangles {
@@ -280,7 +280,8 @@ pub enum SceneError {
         triangles: u64,
         /// The limit.
         limit: u64,
-        /// The key of the object with the most triangles, e.g. `object[3]`.
+        /// The object with the most triangles: its key, and its mesh file if it has one, e.g.
+        /// `` `object[3]` (bunny.obj) ``; for a mesh file given as the scene, the file.
         largest: String,
         /// Its upper bound.
         largest_triangles: u64,
@@ -437,7 +438,10 @@ impl SceneDesc {
                 path: origin.to_owned(),
                 triangles: total,
                 limit: MAX_SCENE_TRIANGLES,
-                largest: format!("object[{largest}]"),
+                largest: match &self.objects[largest].shape {
+                    Shape::File(f) => format!("`object[{largest}]` ({})", f.path.display()),
+                    _ => format!("`object[{largest}]`"),
+                },
                 largest_triangles,
                 from_file: matches!(self.objects[largest].shape, Shape::File(_)),
             });
@@ -826,14 +830,14 @@ mod tests {
             matches!(
                 &err,
                 SceneError::TooManyTriangles { triangles: t, limit: MAX_SCENE_TRIANGLES, largest, .. }
-                    if *t == triangles && largest == "object[1]"
+                    if *t == triangles && largest == "`object[1]`"
             ),
             "{err}"
         );
         assert!(
             err.to_string().starts_with(&format!(
                 "ten.toml: the scene has up to {triangles} triangles, more than the limit of \
-                 40000000 (its largest object, `object[1]`, up to 19000000); lower the \
+                 40000000 (the largest object, `object[1]`, up to 19000000); lower the \
                  generators' counts"
             )),
             "{err}"
