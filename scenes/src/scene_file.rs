@@ -15,7 +15,7 @@
 //! name = "ground"
 //! shape.plane = { size = 20.0 }     # a generator and its parameters
 //! [[object]]
-//! shape.file = { path = "models/bunny00.off" }   # relative to this file
+//! shape.file = { path = "bunny00.off" }   # beside this file, else in the models folder
 //! transform = { fit_size = 4.0, on_ground = true, rotate_deg = [0.0, 30.0, 0.0] }
 //! material = { color = [0.9, 0.6, 0.3], opacity = 1.0 }
 //! ```
