@@ -184,13 +184,16 @@ pub fn triangle_bound(path: &Path) -> Result<u64, LoadError> {
         prefix.len() as u64 == size
     };
     if !whole {
-        // Whole lines only, so that no count is cut short; a header that does not fit is read
-        // again from the whole file.
+        // Whole lines only, so that no count is cut short; a header that does not fit (an
+        // error without a line or on the last line read) is read again from the whole file.
         let end = prefix.iter().rposition(|&b| b == b'\n' || b == b'\r').map_or(0, |n| n + 1);
-        if let Ok(bound) = bound(&prefix[..end]) {
-            return Ok(bound);
+        match bound(&prefix[..end]) {
+            Ok(bound) => return Ok(bound),
+            Err(e) if e.line.is_some_and(|line| line < last_line(&text(&prefix[..end]))) => {
+                return Err(e.into_error(path));
+            }
+            Err(_) => prefix = std::fs::read(path).map_err(io)?,
         }
-        prefix = std::fs::read(path).map_err(io)?;
     }
     bound(&prefix).map_err(|e| e.into_error(path))
 }
@@ -415,6 +418,19 @@ mod tests {
         std::fs::write(&bad, "OFF\n3 many\n").expect("writes");
         let e = triangle_bound(&bad).expect_err("bad counts");
         assert_eq!((e.path(), e.line()), (bad.as_path(), Some(2)), "{e}");
+        // In a large file, a header error is named from the first read when lines follow it,
+        // from the whole file when none does.
+        let lines = dir.path().join("lines.off");
+        std::fs::write(&lines, format!("OFF\n3 many\n{}", "0 0 0\n".repeat(20_000)))
+            .expect("writes");
+        let sparse = dir.path().join("sparse.off");
+        let file = std::fs::File::create(&sparse).expect("creates");
+        std::io::Write::write_all(&mut &file, b"OFF\n3 many\n").expect("writes");
+        file.set_len(1_000_000).expect("a sparse file");
+        for large in [lines, sparse] {
+            let e = triangle_bound(&large).expect_err("bad counts");
+            assert_eq!((e.path(), e.line()), (large.as_path(), Some(2)), "{e}");
+        }
         let folder = dir.path().join("folder.obj");
         std::fs::create_dir(&folder).expect("mkdir");
         for e in
