@@ -21,5 +21,5 @@ pub use scene::{Effects, Geometry, Material, Object, Scene};
 pub mod registry;
 pub mod scene_file;
 
-pub use registry::{load, BUILTINS};
+pub use registry::{describe, load, Described, BUILTINS};
 pub use scene_file::{SceneDesc, SceneError};

@@ -3,6 +3,14 @@
 //! Every built-in is a [`SceneDesc`], so it can be written out as a scene file and edited
 //! (`shadowbench scenes --toml NAME`). Models (`bunny-plane`) are read from the models folder
 //! ([`crate::models`]).
+//!
+//! Loading is two steps, so that a scene can be measured before it is built: [`describe`]
+//! finds the built-in, reads and parses the scene file, or makes the scene around a mesh file,
+//! and builds nothing; [`Described::triangles`] bounds its triangles from generator parameters
+//! and mesh file headers; [`Described::resolve`] builds it (refusing first a scene beyond
+//! [`crate::limits::MAX_SCENE_TRIANGLES`]). [`load`] is the two in one. A mesh file given as
+//! the scene is the user's file: its errors name that file and line only, not the key of the
+//! object the scene made of it.
 
 use crate::{
     camera::Camera,
@@ -10,6 +18,7 @@ use crate::{
         CageParams, CityParams, HairballParams, HeightfieldParams, PlaneParams, PlantParams,
         RandomTrianglesParams, SpheresParams,
     },
+    io::LoadError,
     light::Light,
     models::models_dir,
     scene::{Material, Scene},
@@ -238,11 +247,86 @@ pub fn builtin(name: &str) -> Option<SceneDesc> {
     })
 }
 
+/// A scene found and read, but not built: see [`describe`].
+#[derive(Debug, Clone)]
+pub struct Described {
+    desc: SceneDesc,
+    /// The name when the description has none: the built-in's name or the file stem.
+    default_name: String,
+    /// What messages name: `builtin:NAME`, the scene file or the mesh file.
+    origin: PathBuf,
+    /// Where mesh paths are looked for, in order.
+    folders: Vec<PathBuf>,
+    /// Whether the scene is made around a mesh file given as the scene.
+    mesh_file: bool,
+}
+
+impl Described {
+    /// The scene's name.
+    pub fn name(&self) -> &str {
+        self.desc.name.as_deref().unwrap_or(&self.default_name)
+    }
+
+    /// The scene's default image size `[width, height]`.
+    pub fn resolution(&self) -> [u32; 2] {
+        self.desc.resolution
+    }
+
+    /// An upper bound of the scene's triangle count, computed without generating or loading
+    /// any mesh: generators count theirs from their parameters (exactly), mesh files are
+    /// bounded from their headers and sizes ([`crate::io::triangle_bound`]: exact for binary
+    /// PLY of triangles, loose for text files). Generator parameters are checked and mesh
+    /// files found, with the errors [`Self::resolve`] would give.
+    pub fn triangles(&self) -> Result<u64, SceneError> {
+        self.desc
+            .triangles(&self.default_name, &self.origin, &self.folders)
+            .map_err(|e| self.own(e))
+    }
+
+    /// Builds the scene; one whose [`Self::triangles`] exceed
+    /// [`crate::limits::MAX_SCENE_TRIANGLES`] is refused before any mesh is built.
+    pub fn resolve(&self) -> Result<Scene, SceneError> {
+        self.desc
+            .resolve_in(&self.default_name, &self.origin, &self.folders)
+            .map_err(|e| self.own(e))
+    }
+
+    /// `e` as the user should read it: a mesh-file scene's errors name the file (and line)
+    /// alone, not the object the scene made of it.
+    fn own(&self, e: SceneError) -> SceneError {
+        match e {
+            SceneError::Mesh { source, .. } if self.mesh_file => SceneError::MeshFile { source },
+            SceneError::TooManyTriangles { path, triangles, limit, largest_triangles, .. }
+                if self.mesh_file =>
+            {
+                SceneError::TooManyTriangles {
+                    largest: path.display().to_string(),
+                    path,
+                    triangles,
+                    limit,
+                    largest_triangles,
+                    from_file: true,
+                }
+            }
+            e => e,
+        }
+    }
+}
+
+/// The built-in scene `name`, described.
+fn describe_builtin(name: &str) -> Option<Described> {
+    Some(Described {
+        desc: builtin(name)?,
+        default_name: name.to_owned(),
+        origin: PathBuf::from(format!("builtin:{name}")),
+        folders: vec![models_dir()],
+        mesh_file: false,
+    })
+}
+
 /// Resolves a built-in scene.
 pub fn load_builtin(name: &str) -> Option<Result<Scene, SceneError>> {
-    let d = builtin(name)?;
-    let origin = PathBuf::from(format!("builtin:{name}"));
-    Some(d.resolve(name, &origin, &models_dir()))
+    describe_builtin(name).map(|d| d.resolve())
 }
 
 /// A scene around one mesh file: the model fitted to 4 units, standing on a ground plane,
@@ -263,24 +347,115 @@ pub fn mesh_scene(path: &Path) -> SceneDesc {
     )
 }
 
-/// Loads a scene by built-in name, or from a path: a scene file (`.toml`) or a mesh file
-/// (`.obj`, `.off`, `.ply`) placed over a ground plane.
-pub fn load(arg: &str) -> Result<Scene, SceneError> {
-    if let Some(scene) = load_builtin(arg) {
-        return scene;
+/// Finds a scene by built-in name, or from a path: a scene file (`.toml`, read and parsed; its
+/// mesh paths looked for beside it, then in the models folder) or a mesh file (`.obj`, `.off`,
+/// `.ply`, which must exist and not be a folder) placed over a ground plane. Builds nothing.
+pub fn describe(arg: &str) -> Result<Described, SceneError> {
+    if let Some(described) = describe_builtin(arg) {
+        return Ok(described);
     }
     let path = Path::new(arg);
+    let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned());
     let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
     match ext.as_deref() {
-        Some("toml") => SceneDesc::load(path),
+        Some("toml") => Ok(Described {
+            desc: SceneDesc::read(path)?,
+            default_name: stem.unwrap_or_else(|| "scene".into()),
+            origin: path.to_owned(),
+            folders: SceneDesc::mesh_folders(path),
+            mesh_file: false,
+        }),
         Some("obj" | "off" | "ply") => {
-            let d = mesh_scene(path);
-            let name = d.name.clone().unwrap_or_default();
-            d.resolve(&name, path, Path::new(""))
+            let metadata = std::fs::metadata(path)
+                .map_err(|source| SceneError::Io { path: path.to_owned(), source })?;
+            if metadata.is_dir() {
+                let source = LoadError::Folder { path: path.to_owned() };
+                return Err(SceneError::MeshFile { source });
+            }
+            let desc = mesh_scene(path);
+            Ok(Described {
+                default_name: desc.name.clone().unwrap_or_default(),
+                desc,
+                origin: path.to_owned(),
+                // The path as given, relative to the working folder.
+                folders: vec![PathBuf::new()],
+                mesh_file: true,
+            })
         }
         _ => Err(SceneError::Unknown {
             name: arg.to_owned(),
             known: BUILTINS.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", "),
         }),
+    }
+}
+
+/// Loads a scene by built-in name, or from a path: [`describe`], then [`Described::resolve`].
+pub fn load(arg: &str) -> Result<Scene, SceneError> {
+    describe(arg)?.resolve()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_builtin_is_described_with_a_bound_of_its_triangles() {
+        for (name, _) in BUILTINS {
+            let described = describe(name).expect("a built-in");
+            assert_eq!(described.name(), *name);
+            let triangles = described.triangles();
+            match described.resolve() {
+                Ok(scene) => {
+                    assert_eq!(described.resolution(), [scene.width, scene.height], "{name}");
+                    let triangles = triangles.unwrap_or_else(|e| panic!("{name}: {e}"));
+                    assert_eq!(triangles, scene.triangle_count() as u64, "{name}");
+                }
+                // The models folder may not be fetched: then both say so.
+                Err(e @ SceneError::ModelMissing { .. }) => {
+                    assert!(matches!(triangles, Err(SceneError::ModelMissing { .. })), "{e}");
+                }
+                Err(e) => panic!("{name}: {e}"),
+            }
+        }
+    }
+
+    #[test]
+    fn a_mesh_file_scene_names_the_users_file_and_line_only() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let bad = dir.path().join("bad.obj");
+        std::fs::write(&bad, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n").expect("writes");
+        let described = describe(bad.to_str().expect("utf-8")).expect("described");
+        assert_eq!(described.name(), "bad");
+        assert!(described.triangles().is_ok_and(|t| t >= 3));
+        let err = described.resolve().expect_err("bad index");
+        assert!(matches!(err, SceneError::MeshFile { .. }), "{err}");
+        assert_eq!(
+            err.to_string(),
+            format!(
+                "{}: line 4: vertex index 4 out of range: the file has 3 vertices",
+                bad.display()
+            )
+        );
+        let folder = dir.path().join("folder.obj");
+        std::fs::create_dir(&folder).expect("mkdir");
+        let err = describe(folder.to_str().expect("utf-8")).expect_err("a folder");
+        assert_eq!(err.to_string(), format!("{}: is a folder, not a mesh file", folder.display()));
+        // A mesh file too large for the limit: bounded by its size (sparse, never read).
+        let huge = dir.path().join("huge.obj");
+        let file = std::fs::File::create(&huge).expect("creates");
+        file.set_len(100_000_000).expect("a sparse file");
+        let err = describe(huge.to_str().expect("utf-8")).expect("described").resolve();
+        let err = err.expect_err("too many");
+        assert!(
+            err.to_string().starts_with(&format!(
+                "{0}: the scene has up to 50000002 triangles, more than the limit of 40000000 \
+                 (the largest object, {0}, up to 50000000)",
+                huge.display()
+            )) && !err.to_string().contains("object["),
+            "{err}"
+        );
+        let missing = dir.path().join("missing.ply");
+        let err = describe(missing.to_str().expect("utf-8")).expect_err("missing");
+        assert!(matches!(err, SceneError::Io { .. }), "{err}");
     }
 }

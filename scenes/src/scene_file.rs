@@ -15,7 +15,7 @@
 //! name = "ground"
 //! shape.plane = { size = 20.0 }     # a generator and its parameters
 //! [[object]]
-//! shape.file = { path = "models/bunny00.off" }   # relative to this file
+//! shape.file = { path = "bunny00.off" }   # beside this file, else in the models folder
 //! transform = { fit_size = 4.0, on_ground = true, rotate_deg = [0.0, 30.0, 0.0] }
 //! material = { color = [0.9, 0.6, 0.3], opacity = 1.0 }
 //! ```
@@ -32,7 +32,21 @@
 //! Resolution refuses, as [`SceneError::OutOfRange`], a scene beyond the range every method
 //! supports ([`crate::limits`]): a camera eye or target, a spot light's position or target, or
 //! a resolved vertex with a coordinate beyond `MAX_COORDINATE`, or geometry whose bounding box
-//! has a diagonal under `MIN_EXTENT`. A resolved scene's directional light has a unit direction.
+//! has a diagonal under `MIN_EXTENT`; the message gives the value with as many digits as it
+//! takes to differ from the bound. A resolved scene's directional light has a unit direction.
+//!
+//! Before any mesh is built, resolution checks every object's parameters and mesh file and
+//! bounds the scene's triangles ([`SceneDesc::triangles`]: generators count theirs from their
+//! parameters, mesh files are bounded from their headers and sizes by
+//! [`crate::io::triangle_bound`]); a scene that may exceed
+//! [`MAX_SCENE_TRIANGLES`] is refused as [`SceneError::TooManyTriangles`], naming the bound,
+//! the limit and its largest object.
+//!
+//! Mesh paths are looked for in a list of folders, in order; the first that holds the path is
+//! used (a folder there is refused as a folder, not skipped). A scene file's list is its own
+//! folder, then the models folder ([`crate::models`]; [`SceneDesc::mesh_folders`]), so that a
+//! scene file naming `bunny00.off` works wherever it is copied; a missing file is named with
+//! every place looked in. An empty path is refused as such.
 
 use crate::{
     camera::Camera,
@@ -40,10 +54,11 @@ use crate::{
         CageParams, CityParams, Generator, HairballParams, HeightfieldParams, ParamError,
         PlaneParams, PlantParams, RandomTrianglesParams, SpheresParams,
     },
-    io::{load_mesh, LoadError},
+    io::{load_mesh, triangle_bound, LoadError},
     light::Light,
-    limits::{MAX_COORDINATE, MIN_EXTENT},
+    limits::{MAX_COORDINATE, MAX_SCENE_TRIANGLES, MIN_EXTENT},
     mesh::Mesh,
+    models::models_dir,
     scene::{EffectSwitches, Material, Object, Scene},
 };
 use glam::{DMat4, DVec3, EulerRot};
@@ -78,8 +93,8 @@ pub enum Shape {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FileShape {
-    /// Path of the mesh file, relative to the scene file (or to the models folder for
-    /// built-in scenes).
+    /// Path of the mesh file, relative to the scene file, else to the models folder (only the
+    /// models folder for built-in scenes).
     pub path: PathBuf,
 }
 
@@ -217,8 +232,25 @@ pub enum SceneError {
         /// The loader's error (names the mesh file and line).
         source: LoadError,
     },
+    /// The mesh file given as the scene could not be loaded: the loader's error alone, which
+    /// names the file and line (the scene made around it is no concern of the user's).
+    #[error("{source}")]
+    MeshFile {
+        /// The loader's error.
+        source: LoadError,
+    },
+    /// The scene file named is a folder.
+    #[error("{path}: is a folder, not a scene file")]
+    Folder {
+        /// The folder.
+        path: PathBuf,
+    },
     /// A model the scene needs is not present.
-    #[error("{path}: `{key}`: scene `{scene}` needs {model}, which is missing{hint}")]
+    #[error(
+        "{path}: `{key}`: scene `{scene}` needs {model}, which is missing (looked for {}){}",
+        Places(.looked),
+        if *.fetch { FETCH_HINT } else { "" }
+    )]
     ModelMissing {
         /// The scene file (or `builtin:NAME`).
         path: PathBuf,
@@ -226,10 +258,35 @@ pub enum SceneError {
         key: String,
         /// The scene.
         scene: String,
-        /// The missing file.
+        /// The missing file, as the scene names it.
         model: PathBuf,
-        /// How to get it, when it is one of the models `scripts/fetch-models` fetches.
-        hint: String,
+        /// Every path it was looked for at, in order.
+        looked: Box<[PathBuf]>,
+        /// Whether it was looked for in the models folder, which `scripts/fetch-models` fills:
+        /// the message then says so.
+        fetch: bool,
+    },
+    /// The scene may have more triangles than [`MAX_SCENE_TRIANGLES`]: refused before any mesh
+    /// is built.
+    #[error(
+        "{path}: the scene has up to {triangles} triangles, more than the limit of {limit} \
+         (the largest object, {largest}, up to {largest_triangles}); {}",
+        if *.from_file { FILE_BOUND } else { "lower the generators' counts" }
+    )]
+    TooManyTriangles {
+        /// The scene file, mesh file or `builtin:NAME`.
+        path: PathBuf,
+        /// The upper bound of the scene's triangles.
+        triangles: u64,
+        /// The limit.
+        limit: u64,
+        /// The object with the most triangles: its key, and its mesh file if it has one, e.g.
+        /// `` `object[3]` (bunny.obj) ``; for a mesh file given as the scene, the file.
+        largest: String,
+        /// Its upper bound.
+        largest_triangles: u64,
+        /// Whether that object is a mesh file, whose count is bounded from its header and size.
+        from_file: bool,
     },
     /// No built-in scene has this name and no file has this path.
     #[error("unknown scene `{name}`: not a built-in scene (known: {known}) nor a .toml, .obj, .off or .ply file")]
@@ -254,14 +311,27 @@ impl SceneDesc {
         toml::to_string_pretty(self).unwrap_or_else(|e| format!("# cannot serialize: {e}\n"))
     }
 
-    /// Reads and resolves a scene file.
-    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+    /// Reads and parses a scene file; a folder is refused as such.
+    pub fn read(path: &Path) -> Result<Self, SceneError> {
+        if path.is_dir() {
+            return Err(SceneError::Folder { path: path.to_owned() });
+        }
         let text = std::fs::read_to_string(path)
             .map_err(|source| SceneError::Io { path: path.to_owned(), source })?;
-        let desc = Self::from_toml(&text, path)?;
+        Self::from_toml(&text, path)
+    }
+
+    /// Where the mesh paths of the scene file `path` are looked for: its folder, then the
+    /// models folder.
+    pub fn mesh_folders(path: &Path) -> Vec<PathBuf> {
+        vec![path.parent().unwrap_or(Path::new(".")).to_owned(), models_dir()]
+    }
+
+    /// Reads and resolves a scene file, its mesh paths looked for in [`Self::mesh_folders`].
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let desc = Self::read(path)?;
         let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned());
-        let base = path.parent().unwrap_or(Path::new("."));
-        desc.resolve(stem.as_deref().unwrap_or("scene"), path, base)
+        desc.resolve_in(stem.as_deref().unwrap_or("scene"), path, &Self::mesh_folders(path))
     }
 
     /// Builds the scene: generates or loads every mesh and places it. `origin` names the file
@@ -271,6 +341,47 @@ impl SceneDesc {
         default_name: &str,
         origin: &Path,
         base: &Path,
+    ) -> Result<Scene, SceneError> {
+        self.resolve_in(default_name, origin, &[base.to_owned()])
+    }
+
+    /// An upper bound of the scene's triangles, with nothing built: each generator's count
+    /// from its parameters (which are checked), each mesh file's bound from its header and
+    /// size ([`crate::io::triangle_bound`]), mesh paths looked for in `folders`.
+    /// `default_name` and `origin` are as for [`Self::resolve_in`].
+    pub fn triangles(
+        &self,
+        default_name: &str,
+        origin: &Path,
+        folders: &[PathBuf],
+    ) -> Result<u64, SceneError> {
+        let counts = self.object_triangles(default_name, origin, folders)?;
+        Ok(counts.iter().fold(0, |n, &t| n.saturating_add(t)))
+    }
+
+    /// [`Self::triangles`] of each object.
+    fn object_triangles(
+        &self,
+        default_name: &str,
+        origin: &Path,
+        folders: &[PathBuf],
+    ) -> Result<Vec<u64>, SceneError> {
+        let scene = self.name.as_deref().unwrap_or(default_name);
+        self.objects
+            .iter()
+            .enumerate()
+            .map(|(i, o)| o.shape.triangles(folders).map_err(|e| e.at(i, origin, scene)))
+            .collect()
+    }
+
+    /// Builds the scene: checks it, bounds its triangles against [`MAX_SCENE_TRIANGLES`], then
+    /// generates or loads every mesh and places it. `origin` names the file in messages; mesh
+    /// paths are looked for in `folders`, in order.
+    pub fn resolve_in(
+        &self,
+        default_name: &str,
+        origin: &Path,
+        folders: &[PathBuf],
     ) -> Result<Scene, SceneError> {
         let invalid = |key: String, message: String| SceneError::Invalid {
             path: origin.to_owned(),
@@ -301,42 +412,44 @@ impl SceneDesc {
         if self.objects.is_empty() {
             return Err(invalid("object".into(), "a scene needs at least one [[object]]".into()));
         }
-        let name = self.name.clone().unwrap_or_else(|| default_name.to_owned());
-        let mut objects = Vec::with_capacity(self.objects.len());
         for (i, o) in self.objects.iter().enumerate() {
-            let key = |k: &str| format!("object[{i}].{k}");
             let m = &o.material;
             if !m.color.iter().all(|c| (0.0..=1.0).contains(c)) {
-                return Err(invalid(key("material.color"), "components must be in [0, 1]".into()));
+                return Err(invalid(
+                    format!("object[{i}].material.color"),
+                    "components must be in [0, 1]".into(),
+                ));
             }
             if !(0.0..=1.0).contains(&m.opacity) {
                 return Err(invalid(
-                    key("material.opacity"),
+                    format!("object[{i}].material.opacity"),
                     format!("must be in [0, 1], got {}", m.opacity),
                 ));
             }
-            let mut mesh = o.shape.build(base).map_err(|e| match e {
-                ShapeError::Param(p) => invalid(key(&format!("shape.{}", p.key)), p.message),
-                ShapeError::Missing(model) => {
-                    let hint = if model.starts_with(crate::models::models_dir()) {
-                        ": run `scripts/fetch-models` to fetch it".to_owned()
-                    } else {
-                        String::new()
-                    };
-                    SceneError::ModelMissing {
-                        path: origin.to_owned(),
-                        key: key("shape.file.path"),
-                        scene: name.clone(),
-                        model,
-                        hint,
-                    }
-                }
-                ShapeError::Load(source) => SceneError::Mesh {
-                    path: origin.to_owned(),
-                    key: key("shape.file.path"),
-                    source,
+        }
+        let name = self.name.clone().unwrap_or_else(|| default_name.to_owned());
+        let counts = self.object_triangles(&name, origin, folders)?;
+        let total = counts.iter().fold(0u64, |n, &t| n.saturating_add(t));
+        if total > MAX_SCENE_TRIANGLES {
+            // The first of the largest (`max_by_key` keeps the last).
+            let (largest, &largest_triangles) =
+                counts.iter().enumerate().rev().max_by_key(|&(_, t)| *t).unwrap_or((0, &0));
+            return Err(SceneError::TooManyTriangles {
+                path: origin.to_owned(),
+                triangles: total,
+                limit: MAX_SCENE_TRIANGLES,
+                largest: match &self.objects[largest].shape {
+                    Shape::File(f) => format!("`object[{largest}]` ({})", f.path.display()),
+                    _ => format!("`object[{largest}]`"),
                 },
-            })?;
+                largest_triangles,
+                from_file: matches!(self.objects[largest].shape, Shape::File(_)),
+            });
+        }
+        let mut objects = Vec::with_capacity(self.objects.len());
+        for (i, o) in self.objects.iter().enumerate() {
+            let key = |k: &str| format!("object[{i}].{k}");
+            let mut mesh = o.shape.build(folders).map_err(|e| e.at(i, origin, &name))?;
             o.transform
                 .apply(&mut mesh)
                 .map_err(|(k, msg)| invalid(key(&format!("transform.{k}")), msg))?;
@@ -359,7 +472,7 @@ impl SceneDesc {
             objects.push(Object {
                 name: object_name,
                 mesh,
-                material: *m,
+                material: o.material,
                 casts_shadows: o.casts_shadows,
             });
         }
@@ -380,7 +493,7 @@ impl SceneDesc {
                 format!(
                     "the geometry's bounding box has a diagonal of {}, below the supported \
                      minimum {MIN_EXTENT:e}",
-                    short(diagonal)
+                    apart(diagonal, MIN_EXTENT)
                 ),
             ));
         }
@@ -388,15 +501,49 @@ impl SceneDesc {
     }
 }
 
-/// `x` in scientific notation with at most 3 significant digits, for messages.
-fn short(x: f64) -> String {
+/// What [`SceneError::TooManyTriangles`] says when its largest object is a mesh file.
+const FILE_BOUND: &str = "a mesh file's count is bounded from its header and size, exactly only \
+                          for a binary PLY of triangles (a text file's bound is about 12 to 17 \
+                          times its count): use a smaller mesh or convert it to binary PLY";
+
+/// What [`SceneError::ModelMissing`] adds when the model was looked for in the models folder.
+const FETCH_HINT: &str = "; if it is one of CGAL's sample meshes, run `scripts/fetch-models` to \
+                          fetch them into the models folder";
+
+/// Paths joined by commas and a final `and`, for messages.
+struct Places<'a>(&'a [PathBuf]);
+
+impl std::fmt::Display for Places<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        for (i, path) in self.0.iter().enumerate() {
+            let sep = match i {
+                0 => "",
+                _ if i + 1 == self.0.len() => " and ",
+                _ => ", ",
+            };
+            write!(f, "{sep}{}", path.display())?;
+        }
+        Ok(())
+    }
+}
+
+/// `x` for a message that sets it against `bound`: in scientific notation with at most 3
+/// significant digits when those differ from the bound (`3.2e20`), else with every digit it
+/// takes (`1.0000000000000001e15`), so that a value just beyond a bound never reads as the
+/// bound itself.
+fn apart(x: f64, bound: f64) -> String {
     let text = format!("{x:.2e}");
-    match text.split_once('e') {
+    let short = match text.split_once('e') {
         Some((mantissa, exponent)) => {
             let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
             format!("{mantissa}e{exponent}")
         }
         None => text,
+    };
+    if short.parse::<f64>().is_ok_and(|s| (s > bound) == (x > bound) && s != bound) {
+        short
+    } else {
+        format!("{x:e}")
     }
 }
 
@@ -404,16 +551,54 @@ fn short(x: f64) -> String {
 fn beyond_range(m: f64) -> Option<String> {
     let beyond = format!("beyond the supported range |x| <= {MAX_COORDINATE:e}");
     if m.is_finite() {
-        (m > MAX_COORDINATE).then(|| format!("coordinates reach {}, {beyond}", short(m)))
+        (m > MAX_COORDINATE)
+            .then(|| format!("coordinates reach {}, {beyond}", apart(m, MAX_COORDINATE)))
     } else {
         Some(format!("coordinates overflow, {beyond}"))
     }
 }
 
+/// Why an object's shape cannot be counted or built.
 enum ShapeError {
     Param(ParamError),
-    Missing(PathBuf),
+    EmptyPath,
+    Missing { model: PathBuf, looked: Vec<PathBuf> },
     Load(LoadError),
+}
+
+impl ShapeError {
+    /// The scene's error for object `i` of scene `scene` in `origin`.
+    fn at(self, i: usize, origin: &Path, scene: &str) -> SceneError {
+        let path = origin.to_owned();
+        let key = |k: &str| format!("object[{i}].{k}");
+        match self {
+            ShapeError::Param(p) => SceneError::Invalid {
+                path,
+                key: key(&format!("shape.{}", p.key)),
+                message: p.message,
+            },
+            ShapeError::EmptyPath => SceneError::Invalid {
+                path,
+                key: key("shape.file.path"),
+                message: "the path is empty: name a .obj, .off or .ply file".into(),
+            },
+            ShapeError::Missing { model, looked } => {
+                let models = models_dir();
+                let fetch = looked.iter().any(|p| p.starts_with(&models));
+                SceneError::ModelMissing {
+                    path,
+                    key: key("shape.file.path"),
+                    scene: scene.to_owned(),
+                    model,
+                    looked: looked.into(),
+                    fetch,
+                }
+            }
+            ShapeError::Load(source) => {
+                SceneError::Mesh { path, key: key("shape.file.path"), source }
+            }
+        }
+    }
 }
 
 impl Shape {
@@ -432,8 +617,9 @@ impl Shape {
         }
     }
 
-    fn build(&self, base: &Path) -> Result<Mesh, ShapeError> {
-        let generator: &dyn Generator = match self {
+    /// The generator, or the mesh file's path as written.
+    fn source(&self) -> Result<&dyn Generator, &Path> {
+        Ok(match self {
             Shape::Plane(p) => p,
             Shape::RandomTriangles(p) => p,
             Shape::Cage(p) => p,
@@ -442,17 +628,50 @@ impl Shape {
             Shape::Plant(p) => p,
             Shape::Heightfield(p) => p,
             Shape::Hairball(p) => p,
-            Shape::File(f) => {
-                let path = base.join(&f.path);
-                if !path.exists() {
-                    return Err(ShapeError::Missing(path));
-                }
-                return load_mesh(&path).map_err(ShapeError::Load);
-            }
-        };
-        generator.validate().map_err(ShapeError::Param)?;
-        Ok(generator.generate())
+            Shape::File(f) => return Err(&f.path),
+        })
     }
+
+    /// An upper bound of the triangles [`Self::build`] makes, with the generator's parameters
+    /// checked and the mesh file found, but nothing built.
+    fn triangles(&self, folders: &[PathBuf]) -> Result<u64, ShapeError> {
+        match self.source() {
+            Ok(generator) => {
+                generator.validate().map_err(ShapeError::Param)?;
+                Ok(generator.triangle_count())
+            }
+            Err(path) => triangle_bound(&find(path, folders)?).map_err(ShapeError::Load),
+        }
+    }
+
+    fn build(&self, folders: &[PathBuf]) -> Result<Mesh, ShapeError> {
+        match self.source() {
+            Ok(generator) => {
+                generator.validate().map_err(ShapeError::Param)?;
+                Ok(generator.generate())
+            }
+            Err(path) => load_mesh(&find(path, folders)?).map_err(ShapeError::Load),
+        }
+    }
+}
+
+/// The mesh file `path` (as a scene names it): the first of `folders` that holds it (a folder
+/// found there is the loader's to refuse), or every place it was looked for.
+fn find(path: &Path, folders: &[PathBuf]) -> Result<PathBuf, ShapeError> {
+    if path.as_os_str().is_empty() {
+        return Err(ShapeError::EmptyPath);
+    }
+    let mut looked: Vec<PathBuf> = Vec::with_capacity(folders.len());
+    for folder in folders {
+        let candidate = folder.join(path);
+        if candidate.exists() {
+            return Ok(candidate);
+        }
+        if !looked.contains(&candidate) {
+            looked.push(candidate);
+        }
+    }
+    Err(ShapeError::Missing { model: path.to_owned(), looked })
 }
 
 impl Transform {
@@ -560,4 +779,148 @@ fn times_power_of_two(mut v: DVec3, mut k: i32) -> DVec3 {
         k -= step;
     }
     v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A scene file's text: a camera, a light and `objects` (`[[object]]` tables).
+    fn scene(objects: &str) -> SceneDesc {
+        let text = format!(
+            "[camera.perspective]\neye = [0.0, 6.0, 8.0]\ntarget = [0.0, 0.0, 0.0]\n\
+             fov_y_deg = 45.0\n[light.directional]\ndirection = [-0.3, -1.0, -0.2]\n{objects}"
+        );
+        SceneDesc::from_toml(&text, Path::new("test.toml")).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    #[test]
+    fn a_value_beside_its_bound_is_printed_apart_from_it() {
+        assert_eq!(apart(3.2e20, MAX_COORDINATE), "3.2e20");
+        assert_eq!(apart(1.5e15, MAX_COORDINATE), "1.5e15");
+        assert_eq!(apart(1e15 + 1.0, MAX_COORDINATE), "1.000000000000001e15");
+        assert_eq!(apart(MAX_COORDINATE.next_up(), MAX_COORDINATE), "1.0000000000000001e15");
+        assert_eq!(apart(MIN_EXTENT.next_down(), MIN_EXTENT), "9.999999999999999e-10");
+        assert_eq!(apart(4e-10, MIN_EXTENT), "4e-10");
+        let message = beyond_range(MAX_COORDINATE.next_up()).expect("beyond");
+        assert_eq!(
+            message,
+            "coordinates reach 1.0000000000000001e15, beyond the supported range |x| <= 1e15"
+        );
+    }
+
+    #[test]
+    fn ten_objects_of_19m_triangles_are_refused_before_anything_is_built() {
+        // The first object's mesh file has a sound header and a broken body: building anything
+        // would fail on it before the limit is checked.
+        let dir = tempfile::tempdir().expect("tempdir");
+        let broken = "OFF\n3 1 0\n0 0 0\n1 x 0\n0 1 0\n3 0 1 2\n";
+        std::fs::write(dir.path().join("broken.off"), broken).expect("writes");
+        let big = "[[object]]\nshape.random_triangles = { count = 19000000 }\n";
+        let desc = scene(&format!(
+            "[[object]]\nshape.file = {{ path = \"broken.off\" }}\n{}",
+            big.repeat(10)
+        ));
+        let folders = [dir.path().to_owned()];
+        let bound = triangle_bound(&dir.path().join("broken.off")).expect("a sound header");
+        let triangles = desc.triangles("ten", Path::new("ten.toml"), &folders).expect("counts");
+        assert_eq!(triangles, 190_000_000 + bound);
+        let err = desc.resolve_in("ten", Path::new("ten.toml"), &folders).expect_err("too many");
+        assert!(
+            matches!(
+                &err,
+                SceneError::TooManyTriangles { triangles: t, limit: MAX_SCENE_TRIANGLES, largest, .. }
+                    if *t == triangles && largest == "`object[1]`"
+            ),
+            "{err}"
+        );
+        assert!(
+            err.to_string().starts_with(&format!(
+                "ten.toml: the scene has up to {triangles} triangles, more than the limit of \
+                 40000000 (the largest object, `object[1]`, up to 19000000); lower the \
+                 generators' counts"
+            )),
+            "{err}"
+        );
+        // A mesh file is bounded by its size, unread: a sparse 100 MB OBJ may hold 50 M.
+        let huge = std::fs::File::create(dir.path().join("huge.obj")).expect("creates");
+        huge.set_len(100_000_000).expect("a sparse file");
+        let err = scene("[[object]]\nshape.file = { path = \"huge.obj\" }\n")
+            .resolve_in("huge", Path::new("huge.toml"), &folders)
+            .expect_err("too many");
+        assert!(
+            matches!(
+                &err,
+                SceneError::TooManyTriangles { triangles: 50_000_000, from_file: true, .. }
+            ),
+            "{err}"
+        );
+        assert!(err.to_string().ends_with("convert it to binary PLY"), "{err}");
+        // Within the limit, the broken body is what stops it.
+        let err = scene(&format!("[[object]]\nshape.file = {{ path = \"broken.off\" }}\n{big}"))
+            .resolve_in("one", Path::new("one.toml"), &folders)
+            .expect_err("broken");
+        assert!(matches!(err, SceneError::Mesh { .. }), "{err}");
+    }
+
+    #[test]
+    fn an_empty_mesh_path_is_named_as_such() {
+        let desc = scene("[[object]]\nshape.file = { path = \"\" }\n");
+        let folders = [PathBuf::from(".")];
+        for err in [
+            desc.triangles("e", Path::new("e.toml"), &folders).expect_err("empty"),
+            desc.resolve_in("e", Path::new("e.toml"), &folders).expect_err("empty"),
+        ] {
+            assert_eq!(
+                err.to_string(),
+                "e.toml: `object[0].shape.file.path`: the path is empty: name a .obj, .off or \
+                 .ply file"
+            );
+        }
+    }
+
+    #[test]
+    fn mesh_paths_are_looked_for_in_each_folder_in_turn() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let (near, far) = (dir.path().join("near"), dir.path().join("far"));
+        for folder in [&near, &far] {
+            std::fs::create_dir(folder).expect("mkdir");
+        }
+        let off = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+        std::fs::write(far.join("m.off"), off).expect("writes");
+        std::fs::create_dir(near.join("dir.off")).expect("mkdir");
+        std::fs::write(far.join("dir.off"), off).expect("writes");
+        let folders = [near.clone(), far.clone()];
+        let with =
+            |path: &str| scene(&format!("[[object]]\nshape.file = {{ path = \"{path}\" }}\n"));
+        let found = with("m.off").resolve_in("s", Path::new("s.toml"), &folders).expect("in far");
+        assert_eq!(found.triangle_count(), 1);
+        let err = with("n.off").resolve_in("s", Path::new("s.toml"), &folders).expect_err("none");
+        let looked = vec![near.join("n.off"), far.join("n.off")];
+        assert!(
+            matches!(&err, SceneError::ModelMissing { looked: l, .. } if **l == *looked),
+            "{err}"
+        );
+        assert!(
+            err.to_string().contains(&format!(
+                "needs n.off, which is missing (looked for {} and {})",
+                looked[0].display(),
+                looked[1].display()
+            )),
+            "{err}"
+        );
+        // The first place that holds the path is used: a folder there is refused as such.
+        let err = with("dir.off").resolve_in("s", Path::new("s.toml"), &folders).expect_err("dir");
+        assert!(err.to_string().ends_with("dir.off: is a folder, not a mesh file"), "{err}");
+    }
+
+    #[test]
+    fn a_folder_named_as_a_scene_file_is_named_as_such() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let folder = dir.path().join("scene.toml");
+        std::fs::create_dir(&folder).expect("mkdir");
+        let err = SceneDesc::read(&folder).expect_err("a folder");
+        assert!(matches!(err, SceneError::Folder { .. }), "{err}");
+        assert!(err.to_string().ends_with("scene.toml: is a folder, not a scene file"), "{err}");
+    }
 }

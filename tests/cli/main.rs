@@ -9,3 +9,4 @@ mod bad_input;
 mod cli;
 mod compare;
 mod fuzz_regressions;
+mod scene_messages;

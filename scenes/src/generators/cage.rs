@@ -49,14 +49,14 @@ impl CageParams {
     pub fn bar_count(&self) -> u64 {
         12 * u64::from(self.bars_per_side.saturating_sub(1))
     }
-
-    /// The number of triangles [`Generator::generate`] builds: 12 per bar.
-    pub fn triangle_count(&self) -> u64 {
-        12 * self.bar_count()
-    }
 }
 
 impl Generator for CageParams {
+    /// The number of triangles [`Generator::generate`] builds: 12 per bar.
+    fn triangle_count(&self) -> u64 {
+        12 * self.bar_count()
+    }
+
     fn validate(&self) -> Result<(), ParamError> {
         for s in self.size {
             positive("size", s)?;

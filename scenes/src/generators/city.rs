@@ -41,14 +41,12 @@ impl Default for CityParams {
     }
 }
 
-impl CityParams {
+impl Generator for CityParams {
     /// The number of triangles [`Generator::generate`] builds: `12 * blocks²` (saturating).
-    pub fn triangle_count(&self) -> u64 {
+    fn triangle_count(&self) -> u64 {
         (u64::from(self.blocks) * u64::from(self.blocks)).saturating_mul(12)
     }
-}
 
-impl Generator for CityParams {
     fn validate(&self) -> Result<(), ParamError> {
         count_at_least("blocks", self.blocks, 1)?;
         triangle_budget("blocks", self.triangle_count())?;

@@ -79,14 +79,14 @@ impl HairballParams {
         let around = if self.sides == 2 { 1 } else { u64::from(self.sides) };
         2 * u64::from(self.segments) * around
     }
-
-    /// The number of triangles [`Generator::generate`] builds.
-    pub fn triangle_count(&self) -> u64 {
-        u64::from(self.strands).saturating_mul(self.triangles_per_strand())
-    }
 }
 
 impl Generator for HairballParams {
+    /// The number of triangles [`Generator::generate`] builds.
+    fn triangle_count(&self) -> u64 {
+        u64::from(self.strands).saturating_mul(self.triangles_per_strand())
+    }
+
     fn validate(&self) -> Result<(), ParamError> {
         count_at_least("strands", self.strands, 1)?;
         count_at_least("segments", self.segments, 1)?;

@@ -44,14 +44,12 @@ impl Default for HeightfieldParams {
     }
 }
 
-impl HeightfieldParams {
+impl Generator for HeightfieldParams {
     /// The number of triangles [`Generator::generate`] builds: `2 * resolution²` (saturating).
-    pub fn triangle_count(&self) -> u64 {
+    fn triangle_count(&self) -> u64 {
         (u64::from(self.resolution) * u64::from(self.resolution)).saturating_mul(2)
     }
-}
 
-impl Generator for HeightfieldParams {
     fn validate(&self) -> Result<(), ParamError> {
         positive("size", self.size)?;
         count_at_least("resolution", self.resolution, 1)?;

@@ -28,7 +28,8 @@
 //!   loops run in a fixed order.
 //! - [`Generator::validate`] names the bad key; [`Generator::generate`] on invalid parameters
 //!   returns an empty mesh (it never panics, and never tries to allocate an absurd mesh).
-//!   No generator builds more than [`MAX_TRIANGLES`] triangles.
+//!   No generator builds more than [`MAX_TRIANGLES`] triangles, and each knows how many it
+//!   builds before building them ([`Generator::triangle_count`], exact on valid parameters).
 
 use crate::mesh::Mesh;
 use glam::DVec3;
@@ -67,8 +68,14 @@ pub const MIN_LENGTH: f64 = 1e-9;
 /// defaults (`spheres` and `city` fill exactly this square).
 pub const FOOTPRINT: f64 = 10.0;
 
-/// A procedural mesh generator: a parameter struct that can check itself and build its mesh.
+/// A procedural mesh generator: a parameter struct that can check itself, say how many
+/// triangles it builds, and build its mesh.
 pub trait Generator {
+    /// The number of triangles [`Generator::generate`] builds on valid parameters, computed
+    /// from the parameters alone (nothing is generated; saturating, so that absurd parameters
+    /// give a huge count rather than an overflow). Scenes sum these to refuse, before building
+    /// anything, a scene beyond [`crate::limits::MAX_SCENE_TRIANGLES`].
+    fn triangle_count(&self) -> u64;
     /// Checks the parameters; the error names the bad key.
     fn validate(&self) -> Result<(), ParamError>;
     /// Builds the mesh (call validate first; generate on invalid params may return a degenerate
@@ -345,6 +352,75 @@ mod tests {
         for (t, (n, b)) in tangents.iter().zip(transported_frames(&tangents)) {
             assert!((t.length() - 1.0).abs() < 1e-12 && (n.length() - 1.0).abs() < 1e-12);
             assert!(t.dot(n).abs() < 1e-12 && (b.length() - 1.0).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn every_generator_counts_its_triangles_before_building_them() {
+        type Pair = (Box<dyn Generator>, Box<dyn Generator>);
+        let generators: [(&str, Pair); 8] = [
+            (
+                "plane",
+                (
+                    Box::new(PlaneParams::default()),
+                    Box::new(PlaneParams { subdivisions: 9, ..Default::default() }),
+                ),
+            ),
+            (
+                "random_triangles",
+                (
+                    Box::new(RandomTrianglesParams::default()),
+                    Box::new(RandomTrianglesParams { count: 17, ..Default::default() }),
+                ),
+            ),
+            (
+                "cage",
+                (
+                    Box::new(CageParams::default()),
+                    Box::new(CageParams { bars_per_side: 3, ..Default::default() }),
+                ),
+            ),
+            (
+                "spheres",
+                (
+                    Box::new(SpheresParams::default()),
+                    Box::new(SpheresParams { count: 3, subdivisions: 1, ..Default::default() }),
+                ),
+            ),
+            (
+                "city",
+                (
+                    Box::new(CityParams::default()),
+                    Box::new(CityParams { blocks: 3, ..Default::default() }),
+                ),
+            ),
+            (
+                "plant",
+                (
+                    Box::new(PlantParams::default()),
+                    Box::new(PlantParams { leaves: 7, stems: 2, ..Default::default() }),
+                ),
+            ),
+            (
+                "heightfield",
+                (
+                    Box::new(HeightfieldParams::default()),
+                    Box::new(HeightfieldParams { resolution: 5, ..Default::default() }),
+                ),
+            ),
+            (
+                "hairball",
+                (
+                    Box::new(HairballParams::default()),
+                    Box::new(HairballParams { strands: 4, sides: 2, ..Default::default() }),
+                ),
+            ),
+        ];
+        for (name, (default, other)) in &generators {
+            for g in [default, other] {
+                assert!(g.validate().is_ok(), "{name}");
+                assert_eq!(g.triangle_count(), g.generate().triangle_count() as u64, "{name}");
+            }
         }
     }
 

@@ -25,14 +25,12 @@ impl Default for PlaneParams {
     }
 }
 
-impl PlaneParams {
+impl Generator for PlaneParams {
     /// The number of triangles [`Generator::generate`] builds: `2 * subdivisions²` (saturating).
-    pub fn triangle_count(&self) -> u64 {
+    fn triangle_count(&self) -> u64 {
         (u64::from(self.subdivisions) * u64::from(self.subdivisions)).saturating_mul(2)
     }
-}
 
-impl Generator for PlaneParams {
     fn validate(&self) -> Result<(), ParamError> {
         positive("size", self.size)?;
         count_at_least("subdivisions", self.subdivisions, 1)?;

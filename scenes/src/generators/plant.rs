@@ -66,13 +66,6 @@ impl Default for PlantParams {
     }
 }
 
-impl PlantParams {
-    /// The number of triangles [`Generator::generate`] builds: `72 * stems + 4 * leaves`.
-    pub fn triangle_count(&self) -> u64 {
-        TRIANGLES_PER_STEM * u64::from(self.stems) + TRIANGLES_PER_LEAF * u64::from(self.leaves)
-    }
-}
-
 /// A stem: `point(t) = base + height * (t * up + t² * lean)` for t in [0, 1].
 struct Stem {
     base: DVec3,
@@ -91,6 +84,11 @@ impl Stem {
 }
 
 impl Generator for PlantParams {
+    /// The number of triangles [`Generator::generate`] builds: `72 * stems + 4 * leaves`.
+    fn triangle_count(&self) -> u64 {
+        TRIANGLES_PER_STEM * u64::from(self.stems) + TRIANGLES_PER_LEAF * u64::from(self.leaves)
+    }
+
     fn validate(&self) -> Result<(), ParamError> {
         count_at_least("leaves", self.leaves, 1)?;
         triangle_budget("leaves", self.triangle_count())?;

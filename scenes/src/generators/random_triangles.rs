@@ -48,14 +48,12 @@ impl Default for RandomTrianglesParams {
     }
 }
 
-impl RandomTrianglesParams {
+impl Generator for RandomTrianglesParams {
     /// The number of triangles [`Generator::generate`] builds: `count`.
-    pub fn triangle_count(&self) -> u64 {
+    fn triangle_count(&self) -> u64 {
         u64::from(self.count)
     }
-}
 
-impl Generator for RandomTrianglesParams {
     fn validate(&self) -> Result<(), ParamError> {
         count_at_least("count", self.count, 1)?;
         triangle_budget("count", self.triangle_count())?;

@@ -71,14 +71,14 @@ impl SpheresParams {
     pub fn triangles_per_sphere(&self) -> u64 {
         4u64.checked_pow(self.subdivisions).map_or(u64::MAX, |p| p.saturating_mul(20))
     }
-
-    /// The number of triangles [`Generator::generate`] builds.
-    pub fn triangle_count(&self) -> u64 {
-        u64::from(self.count).saturating_mul(self.triangles_per_sphere())
-    }
 }
 
 impl Generator for SpheresParams {
+    /// The number of triangles [`Generator::generate`] builds.
+    fn triangle_count(&self) -> u64 {
+        u64::from(self.count).saturating_mul(self.triangles_per_sphere())
+    }
+
     fn validate(&self) -> Result<(), ParamError> {
         count_at_least("count", self.count, 1)?;
         if self.subdivisions > MAX_SUBDIVISIONS {

@@ -15,6 +15,8 @@
 //! with fewer than 3 values, a face with fewer than 3 vertices or fewer indices than it
 //! announces, an index out of range, a file that ends early. `4OFF`, `nOFF` (other dimensions)
 //! and `OFF BINARY` are not supported and say so.
+//!
+//! [`super::triangle_bound`] bounds the triangles from the counts and the file's size alone.
 
 use super::{coordinate, fan, last_line, lines, text, Syntax};
 use crate::mesh::Mesh;
@@ -24,52 +26,9 @@ use glam::DVec3;
 pub(crate) fn parse(bytes: &[u8]) -> Result<Mesh, Syntax> {
     let text = text(bytes);
     let end = last_line(&text);
-    // Content lines: 1-based number and the tokens before any comment.
-    let mut lines = lines(&text).enumerate().filter_map(|(i, line)| {
-        let content = line.split('#').next().unwrap_or("");
-        let mut tokens = content.split_whitespace().peekable();
-        tokens.peek()?;
-        Some((i + 1, tokens))
-    });
+    let mut lines = content_lines(&text);
     let eof = |what: String| Syntax::at(end.max(1), format!("unexpected end of file: {what}"));
-
-    let Some((header_line, mut tokens)) = lines.next() else {
-        let what = if text.trim().is_empty() { "empty file" } else { "only comments" };
-        return Err(Syntax::whole(format!("{what}: no OFF header or counts")));
-    };
-    // A header keyword is any first word that is not a number.
-    let mut counts_line = header_line;
-    let first = tokens.peek().copied().unwrap_or("");
-    if first.parse::<f64>().is_err() {
-        header(first, header_line)?;
-        tokens.next();
-        if tokens.peek() == Some(&"BINARY") {
-            return Err(Syntax::at(header_line, "binary OFF is not supported"));
-        }
-        if tokens.peek().is_none() {
-            (counts_line, tokens) =
-                lines.next().ok_or_else(|| eof("no counts line after the header".into()))?;
-        }
-    }
-    let counts: Vec<&str> = tokens.collect();
-    if !(2..=3).contains(&counts.len()) {
-        return Err(Syntax::at(
-            counts_line,
-            format!("expected the counts `vertices faces edges`, found {} values", counts.len()),
-        ));
-    }
-    let count = |token: &str| {
-        token.parse::<usize>().map_err(|_| {
-            Syntax::at(counts_line, format!("malformed count `{token}` (expected an integer ≥ 0)"))
-        })
-    };
-    let (nv, nf) = (count(counts[0])?, count(counts[1])?);
-    if let Some(ne) = counts.get(2) {
-        count(ne)?;
-    }
-    if u32::try_from(nv).is_err() {
-        return Err(Syntax::at(counts_line, format!("{nv} vertices are more than 2^32")));
-    }
+    let Counts { vertices: nv, faces: nf } = counts(&text, &mut lines)?;
 
     // Capacities are bounded by the input size so that a lying count cannot exhaust memory.
     let mut positions = Vec::with_capacity(nv.min(bytes.len() / 6));
@@ -126,6 +85,91 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<Mesh, Syntax> {
         fan(&polygon, &mut triangles);
     }
     Ok(Mesh { positions, triangles })
+}
+
+/// An upper bound of the triangles [`parse`] makes of a file of `size` bytes that starts with
+/// `header` (whole lines holding at least the counts).
+///
+/// The counts give `nv` vertices and `nf` faces, but not how many vertices each face has (a
+/// face of `n` is `n - 2` triangles), so the size bounds it: a vertex line holds 3 numbers,
+/// at least 5 bytes with their separators, and a line end; a face line of `n` vertices holds
+/// `n + 1` numbers, at least `2n + 1` bytes, and a line end (the file's last line may lack
+/// its end). So `6 nv + Σ (2 n + 2) - 1 <= size`, and the triangles, `Σ n - 2 nf`, are at most
+/// `(size + 1 - 6 nv - 6 nf) / 2`: 12 times the count of a common file (a grid of 80 000
+/// triangles with 6-decimal coordinates).
+pub(crate) fn triangle_bound(header: &[u8], size: u64) -> Result<u64, Syntax> {
+    let text = text(header);
+    let Counts { vertices, faces } = counts(&text, &mut content_lines(&text))?;
+    let least = 6u128 * (vertices as u128 + faces as u128);
+    let room = (u128::from(size) + 1).saturating_sub(least);
+    Ok(u64::try_from(room / 2).unwrap_or(u64::MAX))
+}
+
+/// The numbers of vertices and faces an OFF file declares.
+struct Counts {
+    vertices: usize,
+    faces: usize,
+}
+
+/// The lines of `text` that hold more than a comment: their 1-based numbers and tokens.
+fn content_lines<'a>(
+    text: &'a str,
+) -> impl Iterator<Item = (usize, std::iter::Peekable<std::str::SplitWhitespace<'a>>)> {
+    lines(text).enumerate().filter_map(|(i, line)| {
+        let content = line.split('#').next().unwrap_or("");
+        let mut tokens = content.split_whitespace().peekable();
+        tokens.peek()?;
+        Some((i + 1, tokens))
+    })
+}
+
+/// Reads the header keyword, if any, and the counts from the first content `lines` of `text`.
+fn counts<'a>(
+    text: &str,
+    lines: &mut impl Iterator<Item = (usize, std::iter::Peekable<std::str::SplitWhitespace<'a>>)>,
+) -> Result<Counts, Syntax> {
+    let Some((header_line, mut tokens)) = lines.next() else {
+        let what = if text.trim().is_empty() { "empty file" } else { "only comments" };
+        return Err(Syntax::whole(format!("{what}: no OFF header or counts")));
+    };
+    // A header keyword is any first word that is not a number.
+    let mut counts_line = header_line;
+    let first = tokens.peek().copied().unwrap_or("");
+    if first.parse::<f64>().is_err() {
+        header(first, header_line)?;
+        tokens.next();
+        if tokens.peek() == Some(&"BINARY") {
+            return Err(Syntax::at(header_line, "binary OFF is not supported"));
+        }
+        if tokens.peek().is_none() {
+            (counts_line, tokens) = lines.next().ok_or_else(|| {
+                Syntax::at(
+                    last_line(text).max(1),
+                    "unexpected end of file: no counts line after the header",
+                )
+            })?;
+        }
+    }
+    let counts: Vec<&str> = tokens.collect();
+    if !(2..=3).contains(&counts.len()) {
+        return Err(Syntax::at(
+            counts_line,
+            format!("expected the counts `vertices faces edges`, found {} values", counts.len()),
+        ));
+    }
+    let count = |token: &str| {
+        token.parse::<usize>().map_err(|_| {
+            Syntax::at(counts_line, format!("malformed count `{token}` (expected an integer ≥ 0)"))
+        })
+    };
+    let (vertices, faces) = (count(counts[0])?, count(counts[1])?);
+    if let Some(ne) = counts.get(2) {
+        count(ne)?;
+    }
+    if u32::try_from(vertices).is_err() {
+        return Err(Syntax::at(counts_line, format!("{vertices} vertices are more than 2^32")));
+    }
+    Ok(Counts { vertices, faces })
 }
 
 /// Checks the header keyword: `OFF` with optional prefixes `ST`, `C`, `N` in that order.

@@ -28,6 +28,14 @@
 //! allows (lists empty, faces with 3 indices), naming the first element that cannot fit, its
 //! byte offset and how many of its records fit; a declared count of billions is refused there,
 //! with nothing allocated for it.
+//!
+//! A header that declares fewer records than the body holds shows where the next element's
+//! first record fails to read (ASCII): when that line reads as a record of the element before,
+//! the message says that the header declares so many of those but more follow, rather than
+//! blaming the line as a malformed record of the next element.
+//!
+//! [`super::triangle_bound`] bounds the triangles from the header and the file's size alone
+//! (exactly for a binary file of triangles).
 
 use super::{fan, last_line, lines, strip_bom, Syntax};
 use crate::mesh::Mesh;
@@ -46,8 +54,9 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<Mesh, Syntax> {
                 lines: lines(&body).enumerate(),
                 first: header.lines + 1,
                 end: header.lines + last_line(&body),
-                short: (data < records).then_some((data, records)),
+                data: (data, records),
                 line: 0,
+                text: "",
                 tokens: "".split_whitespace(),
                 record: Record::default(),
             };
@@ -66,6 +75,64 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<Mesh, Syntax> {
             read_body(&mut reader, &header, &plan, bytes.len())
         }
     }
+}
+
+/// An upper bound of the triangles [`parse`] makes of a file of `size` bytes that starts with
+/// `header` (whole lines holding at least the header).
+///
+/// A face of `n` indices is `n - 2` triangles, and a binary file's header bounds `n` by its
+/// list's count type (255 for `uchar`; an ASCII count is read as written). The size bounds the
+/// sum of the `n`: every other element's records
+/// take their least size (lists empty), and what is left holds the faces. Binary: a face takes
+/// its other properties' least size, its count and `n` items of the item's size, so the bound
+/// is exact for a file of triangles with fixed-size records. ASCII: every value takes at least
+/// 2 bytes (a digit and a separator or line end; the file's last value may lack it), so the
+/// bound is loose (12 times the count of a grid of 80 000 triangles with 6-decimal
+/// coordinates).
+pub(crate) fn triangle_bound(header: &[u8], size: u64) -> Result<u64, Syntax> {
+    let header = Header::parse(header)?;
+    let plan = Plan::new(&header)?;
+    let faces = &header.elements[plan.face];
+    let (count, item) = plan.index_types;
+    let nf = faces.count as u128;
+    let longest: u128 = match count {
+        Scalar::I8 => i8::MAX as u128,
+        Scalar::U8 => u8::MAX.into(),
+        Scalar::I16 => i16::MAX as u128,
+        Scalar::U16 => u16::MAX.into(),
+        Scalar::I32 => i32::MAX as u128,
+        // A list's count is of an integer type (the header is refused otherwise).
+        Scalar::U32 | Scalar::F32 | Scalar::F64 => u32::MAX.into(),
+    };
+    // The least size of a record of `element`, in bytes, besides the face's indices; and the
+    // size of an index.
+    let binary = matches!(header.encoding, Encoding::Binary { .. });
+    let least = |element: &Element| -> u128 {
+        let value = |ty: Scalar| if binary { ty.size() as u128 } else { 2 };
+        element
+            .properties
+            .iter()
+            .map(|p| match p.kind {
+                Kind::Scalar(ty) | Kind::List(ty, _) => value(ty),
+            })
+            .sum()
+    };
+    let index = if binary { item.size() as u128 } else { 2 };
+    let others: u128 = header
+        .elements
+        .iter()
+        .enumerate()
+        .filter(|&(e, _)| e != plan.face)
+        .map(|(_, element)| element.count as u128 * least(element))
+        .sum();
+    let room = (u128::from(size) + u128::from(!binary))
+        .saturating_sub(header.body as u128)
+        .saturating_sub(others)
+        .saturating_sub(nf * least(faces));
+    let by_size = (room / index).saturating_sub(2 * nf);
+    // An ASCII count is read as written, whatever its type's range.
+    let by_header = if binary { nf * longest.saturating_sub(2) } else { u128::MAX };
+    Ok(u64::try_from(by_size.min(by_header)).unwrap_or(u64::MAX))
 }
 
 /// A scalar property type.
@@ -269,6 +336,8 @@ struct Plan {
     face: usize,
     /// Index of the vertex index list in the face element.
     indices: usize,
+    /// The count and item types of that list.
+    index_types: (Scalar, Scalar),
     vertex_count: usize,
 }
 
@@ -313,16 +382,16 @@ impl Plan {
             .ok_or_else(|| {
                 Syntax::at(faces.line, "element `face` has no property `vertex_indices`")
             })?;
-        match property.kind {
-            Kind::List(_, item) if item.is_integer() => {}
+        let index_types = match property.kind {
+            Kind::List(count, item) if item.is_integer() => (count, item),
             _ => {
                 return Err(Syntax::at(
                     property.line,
                     format!("`{}` must be a list of integers", property.name),
                 ))
             }
-        }
-        Ok(Self { vertex, xyz, face, indices, vertex_count: vertices.count })
+        };
+        Ok(Self { vertex, xyz, face, indices, index_types, vertex_count: vertices.count })
     }
 }
 
@@ -354,9 +423,9 @@ trait Body {
     fn end(&mut self) -> Result<(), Syntax>;
     /// A complaint about the current record.
     fn error(&self, message: &str) -> Syntax;
-    /// What to report when record `index` of `element` fails with `error`: the error itself,
-    /// unless the body shows that the element ends early.
-    fn ends_early(&self, _element: &Element, _index: usize, error: Syntax) -> Syntax {
+    /// What to report when record `index` of element `e` fails with `error`: the error itself,
+    /// unless the body shows that the header's counts are wrong.
+    fn explain(&self, _header: &Header, _e: usize, _index: usize, error: Syntax) -> Syntax {
         error
     }
 }
@@ -436,7 +505,7 @@ fn read_body(
         for i in 0..element.count {
             body.begin(element, i)?;
             read_record(body, e, element, plan, &mut mesh)
-                .map_err(|error| body.ends_early(element, i, error))?;
+                .map_err(|error| body.explain(header, e, i, error))?;
         }
     }
     Ok(Mesh { positions: mesh.positions, triangles: mesh.triangles })
@@ -508,10 +577,11 @@ struct Ascii<'a> {
     first: usize,
     /// Line number of the file's last line.
     end: usize,
-    /// When the body has fewer non-blank lines than the header declares records: how many it
-    /// has, and how many are declared.
-    short: Option<(usize, usize)>,
+    /// How many non-blank lines the body has, and how many records the header declares.
+    data: (usize, usize),
     line: usize,
+    /// The current line.
+    text: &'a str,
     tokens: std::str::SplitWhitespace<'a>,
     record: Record,
 }
@@ -523,6 +593,7 @@ impl Body for Ascii<'_> {
             let tokens = text.split_whitespace();
             if tokens.clone().next().is_some() {
                 self.line = self.first + i;
+                self.text = text;
                 self.tokens = tokens;
                 return Ok(());
             }
@@ -542,12 +613,7 @@ impl Body for Ascii<'_> {
             .tokens
             .next()
             .ok_or_else(|| self.error("fewer values than the header declares"))?;
-        let value = if ty.is_integer() {
-            token.parse::<i64>().map(|v| v as f64).ok()
-        } else {
-            token.parse::<f64>().ok()
-        };
-        value.ok_or_else(|| self.error(&format!("malformed number `{token}`")))
+        ascii_value(token, ty).ok_or_else(|| self.error(&format!("malformed number `{token}`")))
     }
 
     fn skip(&mut self, ty: Scalar, n: usize) -> Result<(), Syntax> {
@@ -571,19 +637,59 @@ impl Body for Ascii<'_> {
     }
 
     /// In a body with fewer lines than records, the first line that is not a record of the
-    /// element being read is where that element ends early.
-    fn ends_early(&self, element: &Element, index: usize, error: Syntax) -> Syntax {
-        let Some((data, records)) = self.short else { return error };
+    /// element being read is where that element ends early. In a body with more, a line that
+    /// fails as the first record of an element but reads as a record of the element before is
+    /// one of that element's records beyond its declared count.
+    fn explain(&self, header: &Header, e: usize, index: usize, error: Syntax) -> Syntax {
+        let element = &header.elements[e];
+        let (data, records) = self.data;
+        let previous = header.elements[..e].iter().rev().find(|p| !p.properties.is_empty());
+        let message = match previous {
+            _ if data < records => format!(
+                "element `{}` ends early, after {index} of the {} records that line {} \
+                 declares: this line is not one ({})",
+                element.name, element.count, element.line, error.message
+            ),
+            Some(previous) if data > records && index == 0 && fits(self.text, previous) => {
+                format!(
+                    "line {} declares {} `{}` records, but more follow: this line reads as one, \
+                     not as `{}` 0 ({})",
+                    previous.line, previous.count, previous.name, element.name, error.message
+                )
+            }
+            _ => return error,
+        };
         Syntax::at(
             self.line,
             format!(
-                "element `{}` ends early, after {index} of the {} records that line {} \
-                 declares: this line is not one ({}); the file has {data} lines of data for \
-                 the header's {records} records",
-                element.name, element.count, element.line, error.message
+                "{message}; the file has {data} lines of data for the header's {records} records"
             ),
         )
     }
+}
+
+/// The value of an ASCII `token` of type `ty`: an integer type must be written as an integer.
+fn ascii_value(token: &str, ty: Scalar) -> Option<f64> {
+    if ty.is_integer() {
+        token.parse::<i64>().map(|v| v as f64).ok()
+    } else {
+        token.parse::<f64>().ok()
+    }
+}
+
+/// Whether the ASCII line `text` is a record of `element`: a value of each scalar property, and
+/// of each list a count followed by as many items, each of its type, and nothing more.
+fn fits(text: &str, element: &Element) -> bool {
+    let mut tokens = text.split_whitespace();
+    let mut value = |ty: Scalar| tokens.next().and_then(|t| ascii_value(t, ty));
+    let values = element.properties.iter().all(|property| match property.kind {
+        Kind::Scalar(ty) => value(ty).is_some(),
+        Kind::List(count, item) => match value(count) {
+            Some(n) if n >= 0.0 => (0..n as usize).all(|_| value(item).is_some()),
+            _ => false,
+        },
+    });
+    values && tokens.next().is_none()
 }
 
 /// A binary body.
@@ -740,6 +846,23 @@ mod tests {
                 "{e:?}"
             );
         }
+    }
+
+    #[test]
+    fn more_vertices_than_declared_are_named_as_such() {
+        // 3 vertices declared, 4 present: the fourth is where the face should be.
+        let text = format!("{HEAD}0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n");
+        let e = err(&text);
+        assert_eq!(e.line, Some(14), "{e:?}");
+        assert_eq!(
+            e.message,
+            "line 4 declares 3 `vertex` records, but more follow: this line reads as one, not as \
+             `face` 0 (face 0: 1 vertices; a face needs at least 3); the file has 5 lines of \
+             data for the header's 4 records"
+        );
+        // A face line that is no vertex either is blamed as a face.
+        let e = err(&format!("{HEAD}0 0 0\n1 0 0\n0 1 0\n3 0 1 x\n3 0 1 2\n"));
+        assert_eq!(e.message, "face 0: malformed number `x`");
     }
 
     #[test]
