@@ -555,7 +555,8 @@ fn check_budget(
 }
 
 fn job(a: &RenderArgs, compared_with: Option<(&str, u32)>) -> Result<Job, Failure> {
-    let scene = scenes::load(&a.scene).map_err(|e| input(anyhow::anyhow!("--scene: {e}")))?;
+    let scene_error = |e| input(anyhow::anyhow!("--scene: {e}"));
+    let described = scenes::describe(&a.scene).map_err(scene_error)?;
     let options = MethodOptions {
         map_res: a.map_res,
         constant_bias: a.constant_bias,
@@ -592,8 +593,9 @@ fn job(a: &RenderArgs, compared_with: Option<(&str, u32)>) -> Result<Job, Failur
             eprintln!("note: {} does not use {flag}; ignored", technique.name());
         }
     }
-    let width = a.width.unwrap_or(scene.width);
-    let height = a.height.unwrap_or(scene.height);
+    let [scene_width, scene_height] = described.resolution();
+    let width = a.width.unwrap_or(scene_width);
+    let height = a.height.unwrap_or(scene_height);
     for (flag, v) in [("--width", width), ("--height", height)] {
         if !(1..=MAX_FRAME_SIDE).contains(&v) {
             return Err(input(anyhow::anyhow!(
@@ -605,14 +607,21 @@ fn job(a: &RenderArgs, compared_with: Option<(&str, u32)>) -> Result<Job, Failur
     let samples = methods::registry::stored_samples(&a.method, &options);
     let flags = if samples > 1 { "--width, --height and --rate" } else { "--width and --height" };
     check_frame(width, height, samples).map_err(|m| input(anyhow::anyhow!("{flags}: {m}")))?;
-    check_budget(
-        a,
-        scene.triangle_count() as u64,
-        (width, height),
-        &options,
-        &params,
-        compared_with,
-    )?;
+    // The memory budget, before anything is built: from the scene's triangle bound, exact for
+    // generated objects; a mesh file's bound can be loose, so a scene with one that the bound
+    // refuses is loaded and checked again by its real count before the frame is built.
+    let budget = |triangles: u64| {
+        check_budget(a, triangles, (width, height), &options, &params, compared_with)
+    };
+    let scene = match budget(described.triangles().map_err(scene_error)?) {
+        Ok(()) => described.resolve().map_err(scene_error)?,
+        Err(refused) if described.triangles_exact() => return Err(refused),
+        Err(_) => {
+            let scene = described.resolve().map_err(scene_error)?;
+            budget(scene.triangle_count() as u64)?;
+            scene
+        }
+    };
     #[cfg(feature = "gpu")]
     if a.device == DeviceArg::Gpu {
         methods::gpu::GpuContext::shared().map_err(gpu_failure)?;

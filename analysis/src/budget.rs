@@ -237,11 +237,12 @@ pub fn check(w: &Work<'_>, limit: &Limit, what: &str) -> Result<Estimate, OverBu
     if estimate.bytes <= limit.bytes {
         return Ok(estimate);
     }
-    let lower = match estimate.parts.first().map(|p| p.0) {
-        Some("reference") => {
+    let lower = match (estimate.parts.first().map(|p| p.0), w.method) {
+        (Some("reference"), _) => {
             "the frame size (--width, --height), the scene's triangles or --ref-rate"
         }
-        Some("method") => {
+        (Some("method"), "exact") => "the frame size (--width, --height) or the scene's triangles",
+        (Some("method"), _) => {
             "the frame size (--width, --height), --rate, --map-res or the scene's triangles"
         }
         _ => {

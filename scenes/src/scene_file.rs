@@ -38,9 +38,11 @@
 //! Before any mesh is built, resolution checks every object's parameters and mesh file and
 //! bounds the scene's triangles ([`SceneDesc::triangles`]: generators count theirs from their
 //! parameters, mesh files are bounded from their headers and sizes by
-//! [`crate::io::triangle_bound`]); a scene that may exceed
-//! [`MAX_SCENE_TRIANGLES`] is refused as [`SceneError::TooManyTriangles`], naming the bound,
-//! the limit and its largest object.
+//! [`crate::io::triangle_bound`]). A scene whose generated objects exceed
+//! [`MAX_SCENE_TRIANGLES`] is refused as [`SceneError::TooManyTriangles`] before anything is
+//! built, naming the count, the limit and its largest object; mesh files, whose bounds from
+//! text files are loose (up to 17 times the count), are held to the limit by their real counts
+//! once loaded, so that no mesh that fits is refused.
 //!
 //! Mesh paths are looked for in a list of folders, in order; the first that holds the path is
 //! used (a folder there is refused as a folder, not skipped). A scene file's list is its own
@@ -269,23 +271,24 @@ pub enum SceneError {
     /// The scene may have more triangles than [`MAX_SCENE_TRIANGLES`]: refused before any mesh
     /// is built.
     #[error(
-        "{path}: the scene has up to {triangles} triangles, more than the limit of {limit} \
-         (the largest object, {largest}, up to {largest_triangles}); {}",
-        if *.from_file { FILE_BOUND } else { "lower the generators' counts" }
+        "{path}: the scene has {triangles} triangles, more than the limit of {limit} (the \
+         largest object, {largest}, has {largest_triangles}); {}",
+        if *.from_file { "use a smaller mesh" } else { "lower the generators' counts" }
     )]
     TooManyTriangles {
         /// The scene file, mesh file or `builtin:NAME`.
         path: PathBuf,
-        /// The upper bound of the scene's triangles.
+        /// The scene's triangles (its generated objects' before anything is built, all of
+        /// them once its mesh files are loaded).
         triangles: u64,
         /// The limit.
         limit: u64,
         /// The object with the most triangles: its key, and its mesh file if it has one, e.g.
         /// `` `object[3]` (bunny.obj) ``; for a mesh file given as the scene, the file.
         largest: String,
-        /// Its upper bound.
+        /// Its triangles.
         largest_triangles: u64,
-        /// Whether that object is a mesh file, whose count is bounded from its header and size.
+        /// Whether that object is a mesh file.
         from_file: bool,
     },
     /// No built-in scene has this name and no file has this path.
@@ -374,8 +377,32 @@ impl SceneDesc {
             .collect()
     }
 
-    /// Builds the scene: checks it, bounds its triangles against [`MAX_SCENE_TRIANGLES`], then
-    /// generates or loads every mesh and places it. `origin` names the file in messages; mesh
+    /// Refuses the scene when `counts` (its objects' triangles) add up to more than
+    /// [`MAX_SCENE_TRIANGLES`], naming the largest object.
+    fn check_triangles(&self, origin: &Path, counts: &[u64]) -> Result<(), SceneError> {
+        let total = counts.iter().fold(0u64, |n, &t| n.saturating_add(t));
+        if total <= MAX_SCENE_TRIANGLES {
+            return Ok(());
+        }
+        // The first of the largest (`max_by_key` keeps the last).
+        let (largest, &largest_triangles) =
+            counts.iter().enumerate().rev().max_by_key(|&(_, t)| *t).unwrap_or((0, &0));
+        Err(SceneError::TooManyTriangles {
+            path: origin.to_owned(),
+            triangles: total,
+            limit: MAX_SCENE_TRIANGLES,
+            largest: match &self.objects[largest].shape {
+                Shape::File(f) => format!("`object[{largest}]` ({})", f.path.display()),
+                _ => format!("`object[{largest}]`"),
+            },
+            largest_triangles,
+            from_file: matches!(self.objects[largest].shape, Shape::File(_)),
+        })
+    }
+
+    /// Builds the scene: checks it, bounds its generated objects' triangles against
+    /// [`MAX_SCENE_TRIANGLES`] before anything is built (mesh files' real counts after they
+    /// are loaded), then generates or loads every mesh and places it. `origin` names the file in messages; mesh
     /// paths are looked for in `folders`, in order.
     pub fn resolve_in(
         &self,
@@ -429,23 +456,15 @@ impl SceneDesc {
         }
         let name = self.name.clone().unwrap_or_else(|| default_name.to_owned());
         let counts = self.object_triangles(&name, origin, folders)?;
-        let total = counts.iter().fold(0u64, |n, &t| n.saturating_add(t));
-        if total > MAX_SCENE_TRIANGLES {
-            // The first of the largest (`max_by_key` keeps the last).
-            let (largest, &largest_triangles) =
-                counts.iter().enumerate().rev().max_by_key(|&(_, t)| *t).unwrap_or((0, &0));
-            return Err(SceneError::TooManyTriangles {
-                path: origin.to_owned(),
-                triangles: total,
-                limit: MAX_SCENE_TRIANGLES,
-                largest: match &self.objects[largest].shape {
-                    Shape::File(f) => format!("`object[{largest}]` ({})", f.path.display()),
-                    _ => format!("`object[{largest}]`"),
-                },
-                largest_triangles,
-                from_file: matches!(self.objects[largest].shape, Shape::File(_)),
-            });
-        }
+        // Generators' counts are exact and refuse the scene before anything is built; mesh
+        // files' bounds can be loose (text files: up to 17 times the count), so their real
+        // counts are checked once they are loaded, and no mesh that fits is refused.
+        let generated: Vec<u64> = counts
+            .iter()
+            .zip(&self.objects)
+            .map(|(&t, o)| if matches!(o.shape, Shape::File(_)) { 0 } else { t })
+            .collect();
+        self.check_triangles(origin, &generated)?;
         let mut objects = Vec::with_capacity(self.objects.len());
         for (i, o) in self.objects.iter().enumerate() {
             let key = |k: &str| format!("object[{i}].{k}");
@@ -476,6 +495,8 @@ impl SceneDesc {
                 casts_shadows: o.casts_shadows,
             });
         }
+        let built: Vec<u64> = objects.iter().map(|o| o.mesh.triangle_count() as u64).collect();
+        self.check_triangles(origin, &built)?;
         let scene = Scene {
             name,
             width,
@@ -500,11 +521,6 @@ impl SceneDesc {
         Ok(scene)
     }
 }
-
-/// What [`SceneError::TooManyTriangles`] says when its largest object is a mesh file.
-const FILE_BOUND: &str = "a mesh file's count is bounded from its header and size, exactly only \
-                          for a binary PLY of triangles (a text file's bound is about 12 to 17 \
-                          times its count): use a smaller mesh or convert it to binary PLY";
 
 /// What [`SceneError::ModelMissing`] adds when the model was looked for in the models folder.
 const FETCH_HINT: &str = "; if it is one of CGAL's sample meshes, run `scripts/fetch-models` to \
@@ -830,32 +846,26 @@ mod tests {
             matches!(
                 &err,
                 SceneError::TooManyTriangles { triangles: t, limit: MAX_SCENE_TRIANGLES, largest, .. }
-                    if *t == triangles && largest == "`object[1]`"
+                    if *t == 190_000_000 && largest == "`object[1]`"
             ),
             "{err}"
         );
         assert!(
             err.to_string().starts_with(&format!(
-                "ten.toml: the scene has up to {triangles} triangles, more than the limit of \
-                 40000000 (the largest object, `object[1]`, up to 19000000); lower the \
+                "ten.toml: the scene has 190000000 triangles, more than the limit of \
+                 40000000 (the largest object, `object[1]`, has 19000000); lower the \
                  generators' counts"
             )),
             "{err}"
         );
-        // A mesh file is bounded by its size, unread: a sparse 100 MB OBJ may hold 50 M.
+        // A mesh file's bound from its size is loose (a sparse 100 MB OBJ may hold 50 M by
+        // size alone): it refuses nothing; the file is read, and its content is what fails.
         let huge = std::fs::File::create(dir.path().join("huge.obj")).expect("creates");
         huge.set_len(100_000_000).expect("a sparse file");
-        let err = scene("[[object]]\nshape.file = { path = \"huge.obj\" }\n")
-            .resolve_in("huge", Path::new("huge.toml"), &folders)
-            .expect_err("too many");
-        assert!(
-            matches!(
-                &err,
-                SceneError::TooManyTriangles { triangles: 50_000_000, from_file: true, .. }
-            ),
-            "{err}"
-        );
-        assert!(err.to_string().ends_with("convert it to binary PLY"), "{err}");
+        let desc = scene("[[object]]\nshape.file = { path = \"huge.obj\" }\n");
+        assert_eq!(desc.triangles("huge", Path::new("huge.toml"), &folders).ok(), Some(50_000_000));
+        let err = desc.resolve_in("huge", Path::new("huge.toml"), &folders).expect_err("no faces");
+        assert!(!matches!(&err, SceneError::TooManyTriangles { .. }), "{err}");
         // Within the limit, the broken body is what stops it.
         let err = scene(&format!("[[object]]\nshape.file = {{ path = \"broken.off\" }}\n{big}"))
             .resolve_in("one", Path::new("one.toml"), &folders)

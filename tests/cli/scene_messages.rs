@@ -169,9 +169,9 @@ fn ten_objects_of_19m_triangles_are_refused_before_anything_is_built() {
     let text = format!("{}{big}", with_mesh("broken.off"));
     let err = refused(dir.path(), &write(dir.path(), "ten.toml", &text), None);
     assert!(
-        err.contains("ten.toml: the scene has up to 19000")
+        err.contains("ten.toml: the scene has 19000")
             && err.contains("triangles, more than the limit of 40000000")
-            && err.contains("`object[1]`, up to 19000000"),
+            && err.contains("`object[1]`, has 19000000"),
         "{err}"
     );
 }
