@@ -18,6 +18,7 @@
 use crate::{
     depth_map::LightDepthMap,
     depth_test::{filter_pixels, texel_at, DepthTester, MapOptions, PixelResult, Receiver},
+    footprint::Sampling,
     frame::Frame,
     method::{MethodError, ShadowMethod, Visibility},
 };
@@ -68,7 +69,7 @@ impl ShadowMethod for StandardShadowMap {
         let map = frame.light_depth_map(self.options.map_res, rec);
         let tester =
             DepthTester::new(&self.options, map.projector, frame.light_depth_range(&map.projector));
-        rec.warnings.extend(tester.range_warning(self.name(), frame));
+        rec.warnings.extend(tester.warnings(self.name(), frame, Sampling::PixelCentre));
         let (lit, counters) = rec.stages.time(STAGE_DEPTH_TEST, || {
             filter_pixels(frame, &tester, |_, _, r| depth_test(&map, &tester, r))
         });
