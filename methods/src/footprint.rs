@@ -32,8 +32,9 @@
 //!   share under the limit (texel widths scale as `1 / R`), if one up to 16384 does. The cause
 //!   is the first of:
 //!   1. *a far object*: a directional light's frustum is fitted to the scene's bounds, so one
-//!      object far from the rest stretches it; named when the frustum fitted without it would
-//!      have texels narrow enough (its removal alone brings the share under the limit);
+//!      object far from the rest stretches it; named when it lies apart from what the frame
+//!      sees (its bounds miss the visible samples' bounds) and the frustum fitted without it
+//!      would have texels narrow enough (its removal alone brings the share under the limit);
 //!   2. *a degenerate camera*: the median texel is wider than the whole frame (the camera sees
 //!      less than one texel of the scene), as with a field of view of 1e-12 degrees; the fix is
 //!      the field of view (or orthographic height) that brings the share under the limit;
@@ -337,7 +338,8 @@ impl Footprint {
         let (w, h) = (frame.width(), frame.height());
         let mut fixes = Vec::new();
         let cause = if let Some((name, narrower)) =
-            stretching_object(frame, self.map_res).filter(|(_, f)| *f >= factor)
+            stretching_object(frame, self.map_res, self.visible_bounds)
+                .filter(|(_, f)| *f >= factor)
         {
             fixes.push(format!("move object '{name}' nearer the rest or remove it"));
             let (lo, hi) = frame.scene.bounds();
@@ -525,10 +527,16 @@ fn v3(p: DVec3) -> String {
     format!("[{:.3e}, {:.3e}, {:.3e}]", p.x, p.y, p.z)
 }
 
-/// The object whose removal from the scene's bounds narrows a directional light's texels the
-/// most, with that factor (texel width, geometric mean of its axes); `None` for a spot light
-/// (its texels do not depend on the bounds) or a scene of one object.
-fn stretching_object(frame: &Frame<'_>, map_res: u32) -> Option<(String, f64)> {
+/// Among the objects apart from what the frame sees (bounds disjoint from `visible`, the
+/// visible samples' bounds), the one whose removal from the scene's bounds narrows a
+/// directional light's texels the most, with that factor (texel width, geometric mean of its
+/// axes); `None` for a spot light (its texels do not depend on the bounds) or where no such
+/// object is left out with another remaining.
+fn stretching_object(
+    frame: &Frame<'_>,
+    map_res: u32,
+    visible: (DVec3, DVec3),
+) -> Option<(String, f64)> {
     let light = &frame.scene.light;
     if !matches!(light, Light::Directional { .. }) {
         return None;
@@ -551,7 +559,9 @@ fn stretching_object(frame: &Frame<'_>, map_res: u32) -> Option<(String, f64)> {
     for i in (0..bounds.len()).rev() {
         let others = join(before[i], after);
         after = join(after, bounds[i]);
-        if !(others.0.cmple(others.1).all()) {
+        let (lo, hi) = bounds[i];
+        let apart = lo.cmpgt(visible.1).any() || hi.cmplt(visible.0).any();
+        if !(apart && others.0.cmple(others.1).all()) {
             continue;
         }
         let narrower = (full / area(&light.projector(others, map_res))).sqrt();
