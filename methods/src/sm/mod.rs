@@ -14,6 +14,9 @@
 //!
 //! Choices where the classic method is vague: surfaces outside the map are lit; casters with
 //! opacity < 1 are treated as opaque (the run record says so when the scene has transparency).
+//! A run says when its map makes it wrong ([`crate::footprint`]): texels wider than 16 pixels on
+//! the visible receivers, visible surfaces outside a spot's frustum that a caster may shadow,
+//! or pixels so wide that one centre decides many texels' worth of receiver.
 
 use crate::{
     depth_map::LightDepthMap,
