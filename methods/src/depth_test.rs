@@ -54,7 +54,11 @@
 //! valid range also needs `constant_bias >= 2^(1 - bits)` (two codes' worth of margin against
 //! the one code rounding can take).
 
-use crate::{frame::Frame, method::MethodError};
+use crate::{
+    footprint::{Footprint, Sampling},
+    frame::Frame,
+    method::MethodError,
+};
 use glam::{DVec2, DVec3};
 use instrumentation::Counters;
 use rayon::prelude::*;
@@ -229,6 +233,17 @@ impl DepthTester {
             })
             .reduce(|| (0, 0, 0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1, a.2.max(b.2), a.3.max(b.3)));
         BiasRange { covered, beyond, max_angle_deg: max_angle, max_ratio }
+    }
+
+    /// Every warning a run of `method`, which decides pixels as `sampling` says, records about
+    /// its map on `frame`: the bias rule's range ([`Self::range_warning`]) and whether the map
+    /// resolves the frame ([`Footprint`]). One parallel pass over the G-buffer each, run
+    /// outside the method's timed stages.
+    pub fn warnings(&self, method: &str, frame: &Frame<'_>, sampling: Sampling) -> Vec<String> {
+        let mut w: Vec<String> = self.range_warning(method, frame).into_iter().collect();
+        let res = self.projector.width.round() as u32;
+        w.extend(Footprint::measure(&self.projector, res, frame).warnings(method, frame, sampling));
+        w
     }
 
     /// The warning a run of `method` records when more than [`WARNING_SHARE`] of the frame's

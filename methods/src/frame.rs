@@ -55,7 +55,13 @@ impl<'s> Frame<'s> {
     /// Whether triangle `t` casts shadows.
     #[inline]
     pub fn is_caster(&self, t: usize) -> bool {
-        self.casters[self.geometry.object[t] as usize]
+        self.object_casts_shadows(self.geometry.object[t] as usize)
+    }
+
+    /// Whether object `o` casts shadows.
+    #[inline]
+    pub fn object_casts_shadows(&self, o: usize) -> bool {
+        self.casters[o]
     }
 
     /// The light's projector onto a `res x res` map fitted to the scene.

@@ -1,8 +1,9 @@
 //! Shadow techniques and the shared kernels they use.
 //!
 //! Kernels: [`raster`] (exact CPU rasterizer), [`gbuffer`] (camera G-buffer), [`depth_map`]
-//! (light depth map), [`depth_test`] (map lookups, bias, depth quantization), [`pattern`]
-//! (sub-pixel sample patterns), [`frame`] (a scene at one resolution). Techniques, one module
+//! (light depth map), [`depth_test`] (map lookups, bias, depth quantization), [`footprint`]
+//! (whether a light map resolves the frame, and its warnings), [`pattern`] (sub-pixel sample
+//! patterns), [`frame`] (a scene at one resolution). Techniques, one module
 //! each: [`sm`] (standard shadow map), [`pcf_reeves`] (Reeves et al.'s stochastic PCF),
 //! [`pcf_bs`] (Brabec and Seidel's packed PCF), [`pcf_gems`] (GPU Gems' 4x4-region PCF),
 //! [`afsm`] (alias-free shadow maps, `afsm` and `afsm-ss`), [`pan09`] (Pan et al.'s fast
@@ -13,6 +14,7 @@
 pub mod afsm;
 pub mod depth_map;
 pub mod depth_test;
+pub mod footprint;
 pub mod frame;
 pub mod gbuffer;
 #[cfg(feature = "gpu")]

@@ -15,3 +15,4 @@ mod pan09;
 mod pcf;
 mod shadow_maps;
 mod spsm;
+mod warnings;

@@ -34,6 +34,7 @@ use super::{
 };
 use crate::{
     depth_test::{DepthCode, DepthTester, MapOptions},
+    footprint::Sampling,
     frame::{Frame, STAGE_LIGHT_DEPTH_MAP},
     method::{MethodError, ShadowMethod, Visibility},
     pattern::grid_dims,
@@ -389,6 +390,15 @@ impl GpuPcf {
         }
     }
 
+    /// How the method decides a pixel: Reeves et al.'s filter samples its footprint, the
+    /// others a fixed region of texels around its centre.
+    fn sampling(&self) -> Sampling {
+        match self {
+            GpuPcf::Reeves { .. } => Sampling::PixelArea,
+            GpuPcf::BrabecSeidel { .. } | GpuPcf::Gems { .. } => Sampling::PixelCentre,
+        }
+    }
+
     /// The map options.
     fn map_options(&self) -> &MapOptions {
         match self {
@@ -426,7 +436,7 @@ impl ShadowMethod for GpuPcf {
         };
         let projector = frame.light_projector(o.map_res);
         let tester = DepthTester::new(&o, projector, frame.light_depth_range(&projector));
-        rec.warnings.extend(tester.range_warning(self.name(), frame));
+        rec.warnings.extend(tester.warnings(self.name(), frame, self.sampling()));
         let (lit, counters) = match *self {
             GpuPcf::Reeves { options } => {
                 let map = plain_map(rec)?;

@@ -22,6 +22,7 @@ use super::{
 };
 use crate::{
     depth_test::{DepthTester, MapOptions},
+    footprint::Sampling,
     frame::{Frame, STAGE_LIGHT_DEPTH_MAP},
     method::{MethodError, ShadowMethod, Visibility},
     sm::{StandardShadowMap, NEAREST_REACH, STAGE_DEPTH_TEST},
@@ -220,7 +221,7 @@ impl ShadowMethod for GpuShadowMap {
         )?;
         let tester =
             DepthTester::new(&self.options, map.projector, frame.light_depth_range(&map.projector));
-        rec.warnings.extend(tester.range_warning(self.name(), frame));
+        rec.warnings.extend(tester.warnings(self.name(), frame, Sampling::PixelCentre));
         let (lit, counters) = depth_test(ctx, &gframe, &map, &tester, rec)?;
         rec.counters.merge(&counters);
         Ok(Visibility { width: frame.width(), height: frame.height(), lit, transmittance: None })

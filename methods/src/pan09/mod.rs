@@ -136,6 +136,7 @@ pub use crate::sm::STAGE_DEPTH_TEST;
 
 use crate::{
     depth_test::{DepthTester, MapOptions},
+    footprint::Sampling,
     frame::Frame,
     method::{MethodError, ShadowMethod, Visibility},
     pattern::{PatternKind, SamplePattern},
@@ -468,7 +469,7 @@ impl Pan09 {
         let map = frame.light_depth_map(res, rec);
         let light = map.projector;
         let tester = DepthTester::new(&self.options.map, light, frame.light_depth_range(&light));
-        rec.warnings.extend(tester.range_warning("pan09", frame));
+        rec.warnings.extend(tester.warnings("pan09", frame, Sampling::PixelArea));
         let geometry = &frame.geometry;
         let adjacency = rec
             .stages

@@ -48,6 +48,7 @@
 use crate::{
     depth_map::LightDepthMap,
     depth_test::{DepthCode, DepthTester, MapOptions, Receiver},
+    footprint::Sampling,
     frame::Frame,
     method::{MethodError, ShadowMethod, Visibility},
 };
@@ -294,7 +295,7 @@ impl ShadowMethod for BrabecSeidelPcf {
         let (near, far) = frame.light_depth_bounds(&projector);
         let code = DepthCode::new(o.depth_bits, near, far - near)?;
         let tester = DepthTester::new(&o.map, projector, frame.light_depth_range(&projector));
-        rec.warnings.extend(tester.range_warning(self.name(), frame));
+        rec.warnings.extend(tester.warnings(self.name(), frame, Sampling::PixelCentre));
         let mut counts = vec![0u8; frame.gbuffer.triangle.len()];
         let mut compares = 0;
         match self.variant {

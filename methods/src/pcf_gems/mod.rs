@@ -39,6 +39,7 @@
 use crate::{
     depth_map::LightDepthMap,
     depth_test::{filter_pixels, DepthTester, MapOptions, PixelResult, Receiver},
+    footprint::Sampling,
     frame::Frame,
     method::{MethodError, ShadowMethod, Visibility},
 };
@@ -168,7 +169,7 @@ impl ShadowMethod for GemsPcf {
         let map = frame.light_depth_map(self.options.map_res, rec);
         let tester =
             DepthTester::new(&self.options, map.projector, frame.light_depth_range(&map.projector));
-        rec.warnings.extend(tester.range_warning(self.name(), frame));
+        rec.warnings.extend(tester.warnings(self.name(), frame, Sampling::PixelCentre));
         let per_pixel = match self.samples {
             GemsSamples::Sixteen => 16,
             GemsSamples::FourDithered => 4,

@@ -38,6 +38,7 @@
 use crate::{
     depth_map::LightDepthMap,
     depth_test::{filter_pixels, texel_at, DepthTester, MapOptions, PixelResult, Receiver},
+    footprint::Sampling,
     frame::Frame,
     method::{MethodError, ShadowMethod, Visibility},
     pattern::{grid_dims, RATES},
@@ -198,7 +199,7 @@ impl ShadowMethod for ReevesPcf {
         let map = frame.light_depth_map(o.map.map_res, rec);
         let tester =
             DepthTester::new(&o.map, map.projector, frame.light_depth_range(&map.projector));
-        rec.warnings.extend(tester.range_warning(self.name(), frame));
+        rec.warnings.extend(tester.warnings(self.name(), frame, Sampling::PixelArea));
         let g = &frame.gbuffer;
         let (lit, counters) = rec.stages.time(STAGE_FILTERING, || {
             filter_pixels(frame, &tester, |pixel, k, r| {

@@ -14,10 +14,14 @@
 //!
 //! Choices where the classic method is vague: surfaces outside the map are lit; casters with
 //! opacity < 1 are treated as opaque (the run record says so when the scene has transparency).
+//! A run says when its map makes it wrong ([`crate::footprint`]): texels wider than 16 pixels on
+//! the visible receivers, visible surfaces outside a spot's frustum that a caster may shadow,
+//! or pixels so wide that one centre decides many texels' worth of receiver.
 
 use crate::{
     depth_map::LightDepthMap,
     depth_test::{filter_pixels, texel_at, DepthTester, MapOptions, PixelResult, Receiver},
+    footprint::Sampling,
     frame::Frame,
     method::{MethodError, ShadowMethod, Visibility},
 };
@@ -68,7 +72,7 @@ impl ShadowMethod for StandardShadowMap {
         let map = frame.light_depth_map(self.options.map_res, rec);
         let tester =
             DepthTester::new(&self.options, map.projector, frame.light_depth_range(&map.projector));
-        rec.warnings.extend(tester.range_warning(self.name(), frame));
+        rec.warnings.extend(tester.warnings(self.name(), frame, Sampling::PixelCentre));
         let (lit, counters) = rec.stages.time(STAGE_DEPTH_TEST, || {
             filter_pixels(frame, &tester, |_, _, r| depth_test(&map, &tester, r))
         });

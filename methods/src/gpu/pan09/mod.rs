@@ -297,7 +297,7 @@ impl GpuPan09 {
             map.projector,
             frame.light_depth_range(&map.projector),
         );
-        rec.warnings.extend(tester.range_warning("pan09", frame));
+        rec.warnings.extend(tester.warnings("pan09", frame, crate::footprint::Sampling::PixelArea));
         let run = Run {
             ctx,
             frame: gframe,
