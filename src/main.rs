@@ -708,11 +708,12 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
             )));
         }
     }
-    // Every path is checked before the output folder is opened; its earlier report stays
-    // until the new one replaces it whole.
-    check_folder_path(&cache_dir, "--cache")?;
+    // The output folder is opened (its earlier report stays until the new one replaces it
+    // whole), then the cache's path checked: a refusal drops the transaction, which leaves
+    // the folder as it was.
     let kind = if a.shard.is_some() { Kind::Shard } else { Kind::Report };
     let tx = begin_out(&out, flag, kind)?;
+    check_folder_path(&cache_dir, "--cache")?;
     let mut cache = reports::cache::ReferenceCache::open(&cache_dir).map_err(|e| {
         input(anyhow::anyhow!("--cache {}: cannot create the folder: {e}", cache_dir.display()))
     })?;

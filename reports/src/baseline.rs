@@ -60,6 +60,14 @@ pub enum BaselineError {
         /// What is wrong.
         source: BaselineInvalid,
     },
+    /// A file of the folder differs from what its manifest says was written.
+    #[error("--baseline {dir}: {source}")]
+    Changed {
+        /// The baseline folder.
+        dir: PathBuf,
+        /// Which file, how.
+        source: crate::publish::PublishError,
+    },
     /// The folder has no readable `runs.json`.
     #[error("--baseline {dir}: cannot read {file}: {message}")]
     Read {
@@ -208,8 +216,14 @@ pub fn load(dir: &Path) -> Result<Report, BaselineError> {
     serde_json::from_str(&text).map_err(|e| fail(format!("not a report's runs.json ({e})")))
 }
 
-/// Reads the report in `dir` as a baseline: [`load`], then [`validate`].
+/// Reads the report in `dir` as a baseline: verified against its manifest where it has one
+/// (`crate::publish::verify`), then [`load`] and [`validate`].
 pub fn load_baseline(dir: &Path) -> Result<Report, BaselineError> {
+    // A report written with a manifest is read only as it was written.
+    if dir.join(crate::publish::MANIFEST).is_file() {
+        crate::publish::verify(dir)
+            .map_err(|source| BaselineError::Changed { dir: dir.to_owned(), source })?;
+    }
     let report = load(dir)?;
     validate(&report).map_err(|source| BaselineError::Invalid {
         dir: dir.to_owned(),

@@ -2,7 +2,8 @@
 //! and one clear refusal, never a mixed folder; a report killed at any moment (SIGKILL or
 //! SIGINT) and run again finishes equal to one that was never interrupted; a merge refuses a
 //! shard with a file, a row or a build missing or changed, naming it; a full disk leaves no
-//! truncated file under its final name; `render` refuses a folder of someone else's files.
+//! truncated file under its final name; `render` refuses a folder of someone else's files, and
+//! `report --baseline` a report changed since it was written.
 
 use crate::common::{assert_same_report, shadowbench, stderr, write};
 use std::path::{Path, PathBuf};
@@ -384,6 +385,24 @@ fn render_refuses_a_folder_of_foreign_files_and_a_report_folder() {
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("holds a report"), "{}", stderr(&o));
     assert_eq!(walk(&report), before);
+
+    // A report changed after it was written is refused as a baseline, naming the file.
+    let runs = report.join("runs.json");
+    let text = std::fs::read_to_string(&runs).expect("runs.json");
+    std::fs::write(&runs, text.replacen("\"sm\"", "\"xx\"", 1)).expect("writes");
+    let later = dir.path().join("later");
+    let o = shadowbench(&[
+        "report",
+        "--suite",
+        &suite,
+        "--out",
+        path(&later),
+        "--baseline",
+        path(&report),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("runs.json") && stderr(&o).contains("changed"), "{}", stderr(&o));
+    assert!(!later.exists(), "refused before anything is written");
 
     // A render replaces its own earlier run.
     let mine = dir.path().join("mine");
