@@ -219,7 +219,9 @@ impl Cluster {
             }
         }
         let Some(bvh) = &self.bvh else { return Route::All };
-        if !(err * f.scale <= 0.5 * f64::from(f32::EPSILON) * f.reach) {
+        // Also false for NaN (an overflowing `err`).
+        let start_is_precise = err * f.scale <= 0.5 * f64::from(f32::EPSILON) * f.reach;
+        if !start_is_precise {
             return Route::All;
         }
         let p = f.to_frame(o + t0 * d);
@@ -227,7 +229,8 @@ impl Cluster {
         let dn = d * (1.0 / len);
         let shift = BvhFrame::start_shift(p);
         let start = p - shift * dn;
-        if !(start.abs().max_element() <= f.reach) {
+        let start_is_covered = start.abs().max_element() <= f.reach;
+        if !start_is_covered {
             return Route::All;
         }
         // `+ 0.0` turns -0.0 into +0.0: obvhs inverts -0.0 to -1/EPSILON but sorts it into the
@@ -330,10 +333,12 @@ impl Accel {
             let bvh = if frame.traversable() {
                 let mut boxes = alloc.vec(main.len(), "the BVH's boxes")?;
                 boxes.extend(
-                    main.iter().map(|&t| frame.padded_box(corners_box(geometry.corners(t as usize)))),
+                    main.iter()
+                        .map(|&t| frame.padded_box(corners_box(geometry.corners(t as usize)))),
                 );
                 alloc.probe_bvh_build(main.len())?;
-                let bvh = build_cwbvh(&boxes, BvhBuildParams::medium_build(), &mut Default::default());
+                let bvh =
+                    build_cwbvh(&boxes, BvhBuildParams::medium_build(), &mut Default::default());
                 for &p in &bvh.primitive_indices {
                     push(&mut accel, main[p as usize]);
                 }
@@ -424,13 +429,16 @@ impl Accel {
             };
             match c.route(ray, tmax) {
                 Route::Bvh(bvh, fr) => {
-                    bvh.ray_traverse_miss(fr.ray, |_, slot| {
-                        if visit(slot) {
-                            0.0
-                        } else {
-                            f32::INFINITY
-                        }
-                    });
+                    bvh.ray_traverse_miss(
+                        fr.ray,
+                        |_, slot| {
+                            if visit(slot) {
+                                0.0
+                            } else {
+                                f32::INFINITY
+                            }
+                        },
+                    );
                 }
                 Route::Skip => {}
                 Route::All => {
@@ -536,9 +544,10 @@ mod tests {
         let params = SpheresParams { count: 1, subdivisions: 4, ..Default::default() };
         let mesh = params.generate();
         let g = geometry(mesh.positions.clone(), mesh.triangles.clone());
-        let (lo, hi) = g.positions.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |b, &p| {
-            (b.0.min(p), b.1.max(p))
-        });
+        let (lo, hi) = g
+            .positions
+            .iter()
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |b, &p| (b.0.min(p), b.1.max(p)));
         let centre = 0.5 * (lo + hi);
         let r_in = (0..g.len())
             .map(|t| {
@@ -568,7 +577,10 @@ mod tests {
                 let off_axis = (centre - eye).cross(dir).length() / dir.length();
                 if off_axis < r_in * (1.0 - 1e-9) {
                     tested += 1;
-                    assert!(closest(&accel, &ray, 0.0, f64::INFINITY).is_some(), "{eye} -> {target}");
+                    assert!(
+                        closest(&accel, &ray, 0.0, f64::INFINITY).is_some(),
+                        "{eye} -> {target}"
+                    );
                 }
             }
         }

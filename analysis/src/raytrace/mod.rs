@@ -140,7 +140,6 @@ pub struct RayTrace {
     pub pattern: SamplePattern,
 }
 
-
 /// Bounds `(lo, hi)` of the finite positions of `geometry`, or `None` when there are none.
 fn bounds(geometry: &Geometry) -> Option<(DVec3, DVec3)> {
     geometry.positions.iter().filter(|p| p.is_finite()).fold(None, |acc, &p| match acc {
