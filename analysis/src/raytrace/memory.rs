@@ -1,0 +1,127 @@
+//! The ray tracer's memory: its own large buffers allocated fallibly (`Vec::try_reserve_exact`),
+//! a typed error naming what could not be had and what the whole run needs, and the estimate of
+//! that need ([`memory_estimate`]).
+//!
+//! obvhs allocates inside its BVH build (bytemuck's `zeroed_vec`, which panics when the
+//! allocation fails, and plain `Vec`s, which abort), where it cannot be made fallible. Before
+//! each build the tracer therefore reserves, and releases at once, a block of the size obvhs
+//! will need ([`OBVHS_BYTES_PER_TRIANGLE`] per triangle, measured): an allocator or an address
+//! space limit that cannot give that much is refused with the typed error. Memory taken by
+//! something else between that probe and the build can still make obvhs fail.
+
+/// Bytes per triangle obvhs 0.4 allocates at the peak of its build, from its arrays' sizes: PLOC
+/// holds two node arrays, the Morton codes (32 bytes each) and the binary BVH (two 32-byte
+/// nodes per triangle), 164 bytes; the conversion to the compressed wide BVH then holds the
+/// binary BVH, 7 decisions of 8 bytes per binary node and the wide nodes, about 200.
+pub(crate) const OBVHS_BYTES_PER_TRIANGLE: u64 = 200;
+
+/// Bytes per triangle of the tracer's own arrays kept beside the BVH: the `f64` corners (72),
+/// the triangle id (4) and the light it lets through (8) per slot, plus the build's temporary
+/// triangle list, radii and `f32` boxes (4 + 8 + 8 + 32).
+const OWN_BYTES_PER_TRIANGLE: u64 = 136;
+
+/// Bytes per sub-sample of the per-sample buffers: [`super::RayTrace::sample_image`] keeps a
+/// triangle id and a light value (12 bytes) per sub-sample twice (the rows and the image);
+/// `evaluate` keeps at most 42 bytes per pixel (lit value, evaluated flag, RGB transmittance,
+/// rows and image), less than this at any rate.
+const BYTES_PER_SAMPLE: u64 = 48;
+
+/// The ray tracer's peak memory beyond the frame, in bytes, for `triangles` triangles in its
+/// BVHs (the scene's, plus its casters again when some triangle casts no shadow, which gets a
+/// BVH of its own) and `samples` sub-samples (pixels times rate): the BVH build and the tracer's
+/// copies of the triangles, then the per-sample buffers. It counts what is allocated, an upper
+/// bound of what is touched: against peak RSS (release build, `render --method raytrace` minus
+/// `render --method sm` on the same scene at 320 x 240), random-1m took 248 MB at rate 1 and
+/// 16 (estimate 340 and 395 MB), random-100k 15 MB (estimate 37 and 93 MB: the per-sample
+/// term is what `sample_image` keeps; `evaluate` keeps per-pixel values only).
+pub fn memory_estimate(triangles: u64, samples: u64) -> u64 {
+    triangles
+        .saturating_mul(OBVHS_BYTES_PER_TRIANGLE + OWN_BYTES_PER_TRIANGLE)
+        .saturating_add(samples.saturating_mul(BYTES_PER_SAMPLE))
+}
+
+/// Memory the ray tracer could not allocate.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "raytrace: could not allocate {bytes} bytes for {what}; the ray tracer needs about \
+     {estimate} bytes for this frame's triangles and sub-samples: lower the triangle count, \
+     the frame size or the rate"
+)]
+pub struct AllocationError {
+    /// The buffer that could not be allocated.
+    pub what: &'static str,
+    /// Its size in bytes.
+    pub bytes: u64,
+    /// What the whole run needs ([`memory_estimate`]).
+    pub estimate: u64,
+}
+
+/// Allocates the tracer's buffers fallibly, naming the run's estimate when one fails.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Allocator {
+    /// The run's [`memory_estimate`].
+    pub(crate) estimate: u64,
+}
+
+impl Allocator {
+    /// The error for `count` items of `T` named `what`.
+    fn error<T>(&self, what: &'static str, count: usize) -> AllocationError {
+        let bytes = (count as u64).saturating_mul(std::mem::size_of::<T>() as u64);
+        AllocationError { what, bytes, estimate: self.estimate }
+    }
+
+    /// An empty vector with room for `count` items, or the error naming `what`.
+    pub(crate) fn vec<T>(
+        &self,
+        count: usize,
+        what: &'static str,
+    ) -> Result<Vec<T>, AllocationError> {
+        let mut v = Vec::new();
+        v.try_reserve_exact(count).map_err(|_| self.error::<T>(what, count))?;
+        Ok(v)
+    }
+
+    /// Whether a block of obvhs' build size for `triangles` triangles can be had: reserves it
+    /// and releases it at once (see the module's doc).
+    pub(crate) fn probe_bvh_build(&self, triangles: usize) -> Result<(), AllocationError> {
+        let bytes = (triangles as u64).saturating_mul(OBVHS_BYTES_PER_TRIANGLE);
+        let count = usize::try_from(bytes).unwrap_or(usize::MAX);
+        self.vec::<u8>(count, "the BVH build").map(drop)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_estimate_grows_with_triangles_and_samples_and_saturates() {
+        let base = memory_estimate(100_000, 76_800);
+        assert!(memory_estimate(1_000_000, 76_800) > base);
+        assert!(memory_estimate(100_000, 16 * 76_800) > base);
+        assert_eq!(memory_estimate(u64::MAX, u64::MAX), u64::MAX);
+        // Measured: random-1m (1,000,002 triangles) at 320 x 240, rate 16, peaked 242,088 KiB
+        // above the same frame's `sm` run (release build); the estimate covers it.
+        let measured = 242_088 * 1024;
+        let estimate = memory_estimate(1_000_002, 16 * 320 * 240);
+        assert!(estimate >= measured && estimate < 2 * measured, "{estimate}");
+    }
+
+    #[test]
+    fn a_buffer_that_cannot_be_had_is_an_error_naming_its_size_and_the_estimate() {
+        let alloc = Allocator { estimate: memory_estimate(1 << 40, 0) };
+        let e = alloc
+            .vec::<[f64; 9]>(usize::MAX / 8, "the triangles' corners")
+            .expect_err("more than the address space");
+        assert_eq!(e.what, "the triangles' corners");
+        assert_eq!(e.bytes, u64::MAX);
+        assert_eq!(e.estimate, memory_estimate(1 << 40, 0));
+        let message = e.to_string();
+        assert!(
+            message.contains("the triangles' corners") && message.contains("rate"),
+            "{message}"
+        );
+        assert!(alloc.probe_bvh_build(usize::MAX).is_err());
+        assert!(alloc.probe_bvh_build(1000).is_ok());
+    }
+}
