@@ -414,7 +414,14 @@ mod tests {
                 Ok(scene) => {
                     assert_eq!(described.resolution(), [scene.width, scene.height], "{name}");
                     let triangles = triangles.unwrap_or_else(|e| panic!("{name}: {e}"));
-                    assert_eq!(triangles, scene.triangle_count() as u64, "{name}");
+                    let real = scene.triangle_count() as u64;
+                    // Exact for generated scenes; a bound for one with a mesh file (the
+                    // bunny's text OFF: 967,196 for 75,410).
+                    if described.triangles_exact() {
+                        assert_eq!(triangles, real, "{name}");
+                    } else {
+                        assert!(triangles >= real, "{name}: {triangles} below {real}");
+                    }
                 }
                 // The models folder may not be fetched: then both say so.
                 Err(e @ SceneError::ModelMissing { .. }) => {
