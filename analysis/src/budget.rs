@@ -153,7 +153,7 @@ pub fn estimate(w: &Work<'_>) -> Estimate {
         }
         parts.push(("reference", b));
     }
-    parts.sort_by(|a, b| b.1.cmp(&a.1));
+    parts.sort_by_key(|p| std::cmp::Reverse(p.1));
     let bytes = parts.iter().fold(0u64, |s, p| s.saturating_add(p.1));
     Estimate { bytes, parts }
 }
@@ -347,7 +347,7 @@ mod tests {
     fn ten_objects_of_19_million_triangles_are_over_any_machine_of_ours() {
         let w = work(190_000_000, "sm", 1);
         let limit = Limit { bytes: 24 << 30, source: "test".into() };
-        let e = check(&w, &limit, "scene x").err().expect("refused");
+        let e = check(&w, &limit, "scene x").expect_err("refused");
         let text = e.to_string();
         assert!(text.contains("scene x needs about") && text.contains("24.0 GB of test"), "{text}");
         assert!(text.contains("scene's triangles"), "{text}");

@@ -852,15 +852,15 @@ mod tests {
         put(t.staging(), "visibility/a.exr", "exr");
         t.commit().expect("commit");
         std::fs::write(dir.join("runs.json"), "[1, 3]").expect("w");
-        let e = verify(&dir).err().expect("changed");
+        let e = verify(&dir).expect_err("changed");
         assert!(e.to_string().contains("runs.json") && e.to_string().contains("SHA-256"), "{e}");
         std::fs::write(dir.join("runs.json"), "[1]").expect("w");
-        assert!(verify(&dir).err().expect("size").to_string().contains("bytes"));
+        assert!(verify(&dir).expect_err("size").to_string().contains("bytes"));
         std::fs::write(dir.join("runs.json"), "[1, 2]").expect("w");
         std::fs::remove_file(dir.join("visibility/a.exr")).expect("rm");
-        let e = verify(&dir).err().expect("missing").to_string();
+        let e = verify(&dir).expect_err("missing").to_string();
         assert!(e.contains("a.exr") && e.contains("missing"), "{e}");
-        assert!(matches!(verify(tmp.path()).err().expect("none"), PublishError::NoManifest { .. }));
+        assert!(matches!(verify(tmp.path()).expect_err("none"), PublishError::NoManifest { .. }));
     }
 
     #[test]

@@ -851,11 +851,11 @@ mod tests {
             "{err}"
         );
         assert!(
-            err.to_string().starts_with(&format!(
+            err.to_string().starts_with(
                 "ten.toml: the scene has 190000000 triangles, more than the limit of \
                  40000000 (the largest object, `object[1]`, has 19000000); lower the \
                  generators' counts"
-            )),
+            ),
             "{err}"
         );
         // A mesh file's bound from its size is loose (a sparse 100 MB OBJ may hold 50 M by

@@ -257,7 +257,7 @@ mod tests {
         let (l, r) = (bsp.nodes[g + 1], bsp.nodes[g + node.right as usize]);
         assert_eq!((l.start, l.end, r.start, r.end), (node.start, r.start, l.end, node.end));
         assert_eq!(l.len(), node.len() / 2, "median split");
-        let coord = |s: &Sample| if depth % 2 == 0 { s.x } else { s.y };
+        let coord = |s: &Sample| if depth.is_multiple_of(2) { s.x } else { s.y };
         let left_max = bsp.samples_of(&l).iter().map(coord).fold(f64::NEG_INFINITY, f64::max);
         let right_min = bsp.samples_of(&r).iter().map(coord).fold(f64::INFINITY, f64::min);
         assert!(left_max <= right_min, "depth {depth}: {left_max} > {right_min}");
