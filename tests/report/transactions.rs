@@ -69,6 +69,12 @@ fn assert_whole(dir: &Path) -> serde_json::Value {
     m
 }
 
+/// `render --scene cage --method sm` at `size x size` into `out`.
+fn render_cage(size: &str, out: &Path) -> std::process::Output {
+    let args = ["render", "--scene", "cage", "--method", "sm", "--width", size, "--height", size];
+    shadowbench(&[&args[..], &["--out", path(out)]].concat())
+}
+
 #[test]
 fn two_renders_into_one_folder_give_one_output_and_one_refusal() {
     let _machine = crate::common::machine_shared();
@@ -355,21 +361,7 @@ fn render_refuses_a_folder_of_foreign_files_and_a_report_folder() {
     let foreign = dir.path().join("foreign");
     std::fs::create_dir_all(&foreign).expect("mkdir");
     std::fs::write(foreign.join("run.json"), "mine").expect("writes");
-    let render = |out: &Path| {
-        shadowbench(&[
-            "render",
-            "--scene",
-            "cage",
-            "--method",
-            "sm",
-            "--width",
-            "32",
-            "--height",
-            "24",
-            "--out",
-            path(out),
-        ])
-    };
+    let render = |out: &Path| render_cage("32", out);
     let o = render(&foreign);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("run.json, which shadowbench did not write"), "{}", stderr(&o));
@@ -444,21 +436,7 @@ fn a_full_disk_leaves_no_truncated_file_under_its_final_name() {
         return;
     };
     let out = disk.0.join("out");
-    let render = |size: &str| {
-        shadowbench(&[
-            "render",
-            "--scene",
-            "cage",
-            "--method",
-            "sm",
-            "--width",
-            size,
-            "--height",
-            size,
-            "--out",
-            path(&out),
-        ])
-    };
+    let render = |size: &str| render_cage(size, &out);
     let o = render("16");
     assert_eq!(o.status.code(), Some(0), "a small run fits: {}", stderr(&o));
     let before: Vec<(PathBuf, Vec<u8>)> =
