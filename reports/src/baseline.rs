@@ -60,8 +60,9 @@ pub enum BaselineError {
         /// What is wrong.
         source: BaselineInvalid,
     },
-    /// A file of the folder differs from what its manifest says was written.
-    #[error("--baseline {dir}: {source}")]
+    /// A file of the folder differs from what its manifest says was written (the source
+    /// says which and how).
+    #[error("--baseline {dir}")]
     Changed {
         /// The baseline folder.
         dir: PathBuf,

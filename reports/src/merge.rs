@@ -83,8 +83,8 @@ pub enum MergeError {
     /// No folder was given.
     #[error("no shard folder given")]
     Empty,
-    /// A shard's files do not match its manifest.
-    #[error("{dir}: {source}")]
+    /// A shard's files do not match its manifest (the source says which and how).
+    #[error("{dir}")]
     Corrupt {
         /// The shard's folder.
         dir: PathBuf,
