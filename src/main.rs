@@ -677,9 +677,7 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
         &mut options.min_change_ms,
     )?;
     let before = match &a.baseline {
-        Some(dir) => {
-            Some(reports::baseline::load_baseline(dir).map_err(|e| input(anyhow::anyhow!("{e}")))?)
-        }
+        Some(dir) => Some(reports::baseline::load_baseline(dir).map_err(input)?),
         None => None,
     };
     let cache_dir = a.cache.clone().unwrap_or_else(|| out.join(reports::write::CACHE_DIR));
