@@ -478,3 +478,46 @@ fn a_map_beyond_the_gpu_limits_is_bad_input_naming_the_flag() {
         assert!(err.contains("GPU adapter's limits") && err.contains("--map-res"), "{err}");
     }
 }
+
+/// A run whose estimated memory (`analysis::budget`) exceeds `--max-memory` is refused (exit
+/// 2) before anything is built or written, naming the estimate, the limit and what to lower;
+/// `report` refuses a suite by its heaviest item the same way; a size that is not one is named.
+#[test]
+fn runs_over_the_memory_budget_are_refused_before_anything_is_built() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("out");
+    for (method, extra) in [("sm", &[][..]), ("raytrace", &["--rate", "16"][..])] {
+        let args = [&["--max-memory", "16M"][..], extra].concat();
+        let o = render_into(&out, "cage", method, &args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{method}: {err}");
+        assert!(
+            err.contains(&format!("{method} on cage at 32x24 needs about"))
+                && err.contains("more than the 16 MB of --max-memory")
+                && err.contains("lower"),
+            "{err}"
+        );
+        assert!(!out.exists(), "nothing written");
+    }
+    let o = render_into(&out, "cage", "sm", &["--max-memory", "1G"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let o = shadowbench(&["compare", "--scene", "cage", "--method", "sm", "--max-memory", "16M"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("needs about"), "{}", stderr(&o));
+    let report = dir.path().join("report");
+    let o = shadowbench(&[
+        "report",
+        "--suite",
+        "quick",
+        "--max-memory",
+        "16M",
+        "--out",
+        report.to_str().expect("utf-8"),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--suite quick: item") && stderr(&o).contains("needs about"));
+    assert!(!report.exists(), "nothing written");
+    let (code, err) = render("cage", &["--max-memory", "lots"]);
+    assert_eq!(code, Some(2));
+    assert!(err.contains("--max-memory") && err.contains("`lots` is not a size"), "{err}");
+}
