@@ -456,19 +456,10 @@ fn publish(dir: &Path) -> Result<(), PublishError> {
 }
 
 /// Step 4 of the module documentation: refuses `dir` when its manifest is of an output that
-/// `kind` does not replace, or when it holds a file its manifest does not list (the first in
-/// path order, found without listing the rest).
+/// `kind` does not replace ([`check_kind`]), or when it holds a file its manifest does not
+/// list (the first in path order, found without listing the rest).
 fn check_contents(dir: &Path, kind: Kind) -> Result<(), PublishError> {
-    let earlier = read_manifest(dir)?;
-    if let Some(m) = &earlier {
-        if !kind.replaces(m.kind) {
-            return Err(PublishError::OtherKind {
-                dir: dir.to_owned(),
-                found: m.kind,
-                wanted: kind,
-            });
-        }
-    }
+    let earlier = check_kind(dir, kind)?;
     let listed: std::collections::HashSet<String> =
         earlier.iter().flat_map(|m| m.files.iter().map(|e| e.path.clone())).collect();
     let mut foreign = None;
@@ -483,6 +474,18 @@ fn check_contents(dir: &Path, kind: Kind) -> Result<(), PublishError> {
     match foreign {
         Some(file) => Err(PublishError::Foreign { file }),
         None => Ok(()),
+    }
+}
+
+/// Refuses `dir` when its manifest is of an output that `kind` does not replace; returns the
+/// manifest.
+fn check_kind(dir: &Path, kind: Kind) -> Result<Option<Manifest>, PublishError> {
+    let earlier = read_manifest(dir)?;
+    match &earlier {
+        Some(m) if !kind.replaces(m.kind) => {
+            Err(PublishError::OtherKind { dir: dir.to_owned(), found: m.kind, wanted: kind })
+        }
+        _ => Ok(earlier),
     }
 }
 
@@ -615,8 +618,11 @@ impl Transaction {
             .map(Path::to_path_buf);
         // A folder no command is writing (no lock file, no staging) is checked before it is
         // touched at all; one that is being written or was left mid-way is checked under
-        // its lock, after recovery.
-        if !dir.join(LOCK).exists() && !dir.join(STAGING).exists() {
+        // its lock, after recovery. Without a recovery the folder's files are as the first
+        // check saw them or another writer's whole output, all listed: it is walked once, and
+        // only its manifest's kind is read again.
+        let checked = !dir.join(LOCK).exists() && !dir.join(STAGING).exists();
+        if checked {
             check_contents(dir, kind)?;
         }
         std::fs::create_dir_all(dir)
@@ -636,12 +642,17 @@ impl Transaction {
             }
             Err(e) => return Err(e),
         });
+        let recovered = t.staging.exists();
         if t.staging.join(MANIFEST).is_file() {
             publish(dir)?;
-        } else if t.staging.exists() {
+        } else if recovered {
             std::fs::remove_dir_all(&t.staging).map_err(|e| io_err(&t.staging, &e))?;
         }
-        check_contents(dir, kind)?;
+        if !checked || recovered {
+            check_contents(dir, kind)?;
+        } else {
+            check_kind(dir, kind)?;
+        }
         std::fs::create_dir(&t.staging).map_err(|e| io_err(&t.staging, &e))?;
         Ok(t)
     }
