@@ -404,6 +404,14 @@ fn begin_out(out: &Path, flag: &str, kind: Kind) -> Result<Transaction, Failure>
         .map_err(|e| publish_failure(e, &format!("{flag} {}", out.display())))
 }
 
+/// Publishes the transaction's staged output (`reports::publish`); a failure names `flag` and
+/// the folder. Returns the folder.
+fn commit_out(tx: Transaction, flag: &str) -> Result<PathBuf, Failure> {
+    let out = tx.dir().to_owned();
+    tx.commit().map_err(|e| publish_failure(e, &format!("{flag} {}", out.display())))?;
+    Ok(out)
+}
+
 /// A failure of an output folder's transaction, named by `what` (the flag and the path).
 fn publish_failure(e: PublishError, what: &str) -> Failure {
     let input_error = e.is_input();
@@ -691,19 +699,19 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
         items.iter().map(|&k| &plan[k]).max_by_key(|i| i.memory),
     ) {
         if heaviest.memory > limit.bytes {
-            return Err(input(anyhow::anyhow!(
-                "--suite {}: item {} ({} at {}x{}) needs about {}, more than the {} of {}; lower \
-                 its frame, rate, map size or the scene's triangles, or raise --max-memory if \
-                 the machine has more",
-                suite.name,
-                heaviest.item,
-                heaviest.scene.as_deref().unwrap_or("a table's scene"),
-                heaviest.width,
-                heaviest.height,
-                analysis::budget::bytes_text(heaviest.memory),
-                analysis::budget::bytes_text(limit.bytes),
-                limit.source
-            )));
+            return Err(input(analysis::budget::OverBudget {
+                what: format!(
+                    "--suite {}: item {} ({} at {}x{})",
+                    suite.name,
+                    heaviest.item,
+                    heaviest.scene.as_deref().unwrap_or("a table's scene"),
+                    heaviest.width,
+                    heaviest.height
+                ),
+                estimate: analysis::budget::Estimate { bytes: heaviest.memory, parts: Vec::new() },
+                limit,
+                lower: "its frame, rate, map size or the scene's triangles".into(),
+            }));
         }
     }
     // The output folder is opened (its earlier report stays until the new one replaces it
@@ -766,7 +774,7 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
     } else {
         reports::write_report(tx.staging(), &report, &images, comparison.as_ref())?;
     }
-    tx.commit().map_err(|e| publish_failure(e, &format!("{flag} {}", out.display())))?;
+    commit_out(tx, flag)?;
     if let Some(c) = &comparison {
         println!("{}", reports::baseline::summary_line(c));
         if let Some(ratios) = reports::baseline::ratio_summary(c) {
@@ -863,7 +871,7 @@ fn report_merge(m: MergeArgs) -> Result<(), Failure> {
     reports::merge::copy_shard_files(&dirs, tx.staging())
         .with_context(|| format!("cannot copy the shards' files into {}", out.display()))?;
     reports::write::write_summary(tx.staging(), &report, None)?;
-    tx.commit().map_err(|e| publish_failure(e, &format!("--out {}", out.display())))?;
+    commit_out(tx, "--out")?;
     for skipped in &report.skipped {
         eprintln!("note: not run: {skipped}");
     }
@@ -1030,8 +1038,7 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
     let tx = out_dir(&a, &job, "")?;
     let (frame, ran, spread) = run_repeated(&job, a.repeat)?;
     write_run(tx.staging(), &frame, &ran)?;
-    let out = tx.dir().to_owned();
-    tx.commit().map_err(|e| publish_failure(e, &out.display().to_string()))?;
+    let out = commit_out(tx, "--out")?;
     let record = &ran.record;
     if a.json {
         println!("{}", serde_json::to_string_pretty(&record)?);
@@ -1089,7 +1096,7 @@ fn compare(c: CompareArgs) -> Result<(), Failure> {
         };
     let ref_name = reference.name();
     let tx = out_dir(a, &job, &format!("-vs-{ref_name}"))?;
-    let out = tx.staging().to_owned();
+    let staging = tx.staging().to_owned();
 
     let (frame, ran, spread) = run_repeated(&job, a.repeat)?;
     let mut ref_rec = Recorder::default();
@@ -1100,10 +1107,10 @@ fn compare(c: CompareArgs) -> Result<(), Failure> {
     let v = &ran.visibility;
     let comparison = truth.compare(&frame, v).map_err(input)?;
 
-    write_run(&out, &frame, &ran)?;
+    write_run(&staging, &frame, &ran)?;
     for (name, mask) in [("error.png", &truth.headline), ("error_boundary.png", &truth.boundary())]
     {
-        let path = out.join(name);
+        let path = staging.join(name);
         analysis::error_map::error_map(v, &truth.reference.lit, mask, error_scale)?
             .save(&path)
             .with_context(|| format!("cannot write {}", path.display()))?;
@@ -1123,11 +1130,10 @@ fn compare(c: CompareArgs) -> Result<(), Failure> {
         reference_ms: ref_rec.stages.total_ms(),
     };
     let text = serde_json::to_string_pretty(&metrics)?;
-    let path = out.join("metrics.json");
+    let path = staging.join("metrics.json");
     std::fs::write(&path, format!("{text}\n"))
         .with_context(|| format!("cannot write {}", path.display()))?;
-    let out = tx.dir().to_owned();
-    tx.commit().map_err(|e| publish_failure(e, &out.display().to_string()))?;
+    let out = commit_out(tx, "--out")?;
     if a.json {
         println!("{text}");
     } else {

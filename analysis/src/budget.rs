@@ -99,7 +99,8 @@ pub struct Work<'a> {
 pub struct Estimate {
     /// Bytes in all.
     pub bytes: u64,
-    /// The parts, largest first: what they are and their bytes.
+    /// The parts, largest first: what they are and their bytes (none where only the total is
+    /// known, as a report's plan keeps it).
     pub parts: Vec<(&'static str, u64)>,
 }
 
@@ -117,7 +118,11 @@ impl fmt::Display for Estimate {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let parts: Vec<String> =
             self.parts.iter().map(|(what, b)| format!("{what} {}", bytes_text(*b))).collect();
-        write!(f, "about {} ({})", bytes_text(self.bytes), parts.join(", "))
+        write!(f, "about {}", bytes_text(self.bytes))?;
+        if parts.is_empty() {
+            return Ok(());
+        }
+        write!(f, " ({})", parts.join(", "))
     }
 }
 
