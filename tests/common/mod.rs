@@ -25,6 +25,18 @@ pub fn machine_alone() -> std::sync::RwLockWriteGuard<'static, ()> {
     MACHINE.write().unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
+/// Every method that looks up a light depth map.
+pub const MAP_METHODS: &[&str] = &[
+    "sm",
+    "pcf-reeves",
+    "pcf-bs-2x2",
+    "pcf-bs-fast-2x2",
+    "pcf-bs-fast-4x4",
+    "pcf-gems16",
+    "pcf-gems4",
+    "pan09",
+];
+
 /// Runs the `shadowbench` binary with `args`.
 pub fn shadowbench(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_shadowbench"))

@@ -1,24 +1,12 @@
 //! Every shadow-map method (`sm` and the PCF variants) end to end: no acne on lit planes at the
 //! documented valid biases, finite results in [0, 1] on hard cases; `sm`'s binary output.
 
-use crate::common;
+use crate::common::{self, MAP_METHODS};
 
 use glam::DVec3;
 use instrumentation::Recorder;
 use methods::{method, Frame, MethodOptions};
 use scenes::{Light, Scene};
-
-/// Every method that looks up a light depth map.
-const MAP_METHODS: &[&str] = &[
-    "sm",
-    "pcf-reeves",
-    "pcf-bs-2x2",
-    "pcf-bs-fast-2x2",
-    "pcf-bs-fast-4x4",
-    "pcf-gems16",
-    "pcf-gems4",
-    "pan09",
-];
 
 fn run_method<'s>(
     name: &str,

@@ -4,25 +4,13 @@
 //! method a warning naming the cause and what to change; the built-in scenes at their defaults
 //! give none.
 
-use crate::common;
+use crate::common::{self, MAP_METHODS};
 
 use analysis::registry::technique;
 use glam::DVec3;
 use instrumentation::Recorder;
 use methods::{Frame, MethodOptions, Visibility};
 use scenes::{Camera, Light, Material, Mesh, Object, Scene};
-
-/// Every method that looks up a light depth map.
-const MAP_METHODS: &[&str] = &[
-    "sm",
-    "pcf-reeves",
-    "pcf-bs-2x2",
-    "pcf-bs-fast-2x2",
-    "pcf-bs-fast-4x4",
-    "pcf-gems16",
-    "pcf-gems4",
-    "pan09",
-];
 
 const WIDTH: u32 = 32;
 const HEIGHT: u32 = 24;
