@@ -143,9 +143,14 @@ impl Setup {
         }
         let recs = match self.light {
             LightSetup::Directional { dir, nl } => [0, 1, 2].map(|k| {
+                // q = p + ((d - n·p) / nl) dir, as the homogeneous point
+                // (|nl| p + sign(nl) (d - n·p) dir, |nl|): near grazing incidence (`nl` a few
+                // roundings from 0) q runs off to 1e16 and more, and the clips below would
+                // interpolate between such coordinates and lose every digit of the points
+                // on the plane; homogeneous, nothing grows as `nl` falls.
                 let p = tri[k];
-                let q = p + ((self.d - self.n.dot(p)) / nl) * dir;
-                let [x, y, w, near] = self.screen.camera_h(q, 1.0);
+                let along = nl.signum() * (self.d - self.n.dot(p));
+                let [x, y, w, near] = self.screen.camera_h(nl.abs() * p + along * dir, nl.abs());
                 [x, y, w, h[k], 1.0, near]
             }),
             LightSetup::Spot { pos, big_h } => [0, 1, 2].map(|k| {
