@@ -1,14 +1,15 @@
 //! An independent cross-check of `exact`: tiny-skia rasterizes the same screen-space shadow
-//! union ([`crate::exact::shadow_union`]) with anti-aliasing at `k` times the frame's
-//! resolution, the coverage is box-filtered down to the frame, and the result is compared with
-//! `exact` over the `planar` pixels of that receiver.
+//! polygons ([`crate::exact::shadow_polygons`], all of one orientation) with the non-zero
+//! fill rule, which fills their union, with anti-aliasing at `k` times the frame's resolution;
+//! the coverage is box-filtered down to the frame, and the result is compared with `exact`
+//! over the `planar` pixels of that receiver.
 //!
 //! tiny-skia works in `f32` and its anti-aliasing takes 4 x 4 sub-samples per pixel (coverage
 //! quantised to 8 bits), so the difference is expected near 0.02 per partially covered pixel
 //! at `k = 1` and to fall as `k` grows; it measures tiny-skia's error, not `exact`'s, and
-//! checks that both read the polygons the same way (orientation, holes, frame).
+//! checks that both read the polygons the same way (orientation, overlaps, holes, frame).
 
-use crate::exact::{shadow_union, ExactCoverage, ScreenPolygons};
+use crate::exact::{shadow_polygons, ExactCoverage, ScreenPolygons};
 use crate::pixel_class::PixelClass;
 use crate::reference::{Reference, ReferenceError};
 use instrumentation::Recorder;
@@ -32,7 +33,7 @@ pub struct CrossCheck {
 }
 
 /// Shadowed fraction of every pixel of a `width x height` frame covered by `polygons`
-/// (even-odd fill), rasterized by tiny-skia with anti-aliasing at `k x k` mask pixels per
+/// (non-zero fill: their union when all have one orientation), rasterized by tiny-skia with anti-aliasing at `k x k` mask pixels per
 /// frame pixel and box-filtered down.
 pub fn tiny_skia_coverage(
     polygons: &ScreenPolygons,
@@ -71,7 +72,7 @@ pub fn tiny_skia_coverage(
         pb.close();
     }
     if let Some(path) = pb.finish() {
-        mask.fill_path(&path, FillRule::EvenOdd, true, Transform::identity());
+        mask.fill_path(&path, FillRule::Winding, true, Transform::identity());
     }
     let data = mask.data();
     let (k, kw) = (k as usize, kw as usize);
@@ -88,13 +89,13 @@ pub fn tiny_skia_coverage(
     Ok(out)
 }
 
-/// Rasterizes the frame's shadow union with tiny-skia at `k` times the resolution and
+/// Rasterizes the frame's shadow polygons with tiny-skia at `k` times the resolution and
 /// compares the lit fraction with `exact` over the `planar` pixels of the scene's main planar
 /// receiver (`Scene::receiver_plane`) that `exact` evaluates.
 pub fn tiny_skia_crosscheck(frame: &Frame<'_>, k: u32) -> Result<CrossCheck, ReferenceError> {
     let exact = ExactCoverage::default().evaluate(frame, &mut Recorder::default())?;
-    let union = shadow_union(frame)?;
-    let shadowed = tiny_skia_coverage(&union, frame.width(), frame.height(), k)?;
+    let polygons = shadow_polygons(frame)?;
+    let shadowed = tiny_skia_coverage(&polygons, frame.width(), frame.height(), k)?;
     let receiver = frame.scene.receiver_plane().map(|(o, _, _)| o as u32);
     let classes = exact.classes.as_deref().unwrap_or_default();
     let on_receiver = |p: usize| {

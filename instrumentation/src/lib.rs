@@ -103,6 +103,12 @@ counters! {
     caster_pairs,
     /// Non-empty shadow polygons projected onto a receiver (`exact`).
     shadow_polygons,
+    /// Pixels (or a receiver's part of one) found wholly inside one shadow polygon, shadowed
+    /// without a cut (`exact`).
+    covered_pixels,
+    /// Pixel-shadow polygon overlaps resolved by cutting the pixel's uncovered pieces
+    /// (`exact`).
+    pixel_polygon_pairs,
 }
 
 impl std::ops::AddAssign<&Counters> for Counters {

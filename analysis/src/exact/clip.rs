@@ -1,5 +1,5 @@
 //! Exact clipping of convex polygons against axis-aligned lines in `f64`: the per-pixel area
-//! of polygons on the pixel grid; and clipping of convex polygons against each other.
+//! of polygons on the pixel grid; and clipping of convex polygons against lines and each other.
 //!
 //! A convex polygon is split at a line `x = c` (or `y = c`) into the part on each side; the
 //! crossing points are computed once, with the split coordinate set to `c` exactly, so the two
@@ -7,14 +7,12 @@
 //! shoelace sums. Areas are taken relative to the pixel's corner, where coordinates are small
 //! and exact (`x - i` is exact for `x` in `[i, i + 1]`).
 
-use rayon::prelude::*;
-
 /// A point in screen space (pixels, y down).
 pub(crate) type Pt = [f64; 2];
 
 /// Vertex capacity of [`Poly`]: a triangle clipped by the homogeneous planes (7) and the four
 /// frame sides stays below 16 vertices; the pixel clipper needs at most 7.
-const CAP: usize = 24;
+pub(crate) const CAP: usize = 24;
 
 /// Rows per band of the parallel pixel clipper.
 pub(crate) const BAND: usize = 8;
@@ -168,46 +166,6 @@ pub(crate) fn overlapped_rows(lo: f64, hi: f64, height: usize) -> Option<(usize,
     (a <= b).then_some((a, b))
 }
 
-/// Area of every pixel covered by the triangles (`width x height` image, row-major), each
-/// triangle clipped exactly against the pixel grid, triangle `t`'s area added to pixel `k` only
-/// where `accept(t, k)`. Triangles must lie in the frame `[0, width] x [0, height]` (parts
-/// outside are dropped); overlapping triangles add up.
-pub(crate) fn accumulate_area_where(
-    tris: &[[Pt; 3]],
-    width: usize,
-    height: usize,
-    accept: impl Fn(usize, usize) -> bool + Sync,
-) -> Vec<f64> {
-    let mut acc = vec![0.0; width * height];
-    if width == 0 || height == 0 {
-        return acc;
-    }
-    let (offsets, items) = bin_by_band(tris.len(), height, |t| {
-        let (lo, hi) = tris[t]
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p[1]), b.max(p[1])));
-        overlapped_rows(lo, hi, height)
-    });
-    acc.par_chunks_mut(BAND * width).enumerate().for_each(|(band, chunk)| {
-        let r0 = band * BAND;
-        let r1 = (r0 + BAND).min(height);
-        for &t in &items[offsets[band]..offsets[band + 1]] {
-            let t = t as usize;
-            let mut poly = Poly::from_slice(&tris[t]);
-            if poly.area2_rel(0.0, 0.0) < 0.0 {
-                poly.reverse();
-            }
-            for_each_pixel(&poly, r0, r1, width, |i, j, area| {
-                let k = j * width + i;
-                if accept(t, k) {
-                    chunk[k - r0 * width] += area;
-                }
-            });
-        }
-    });
-    acc
-}
-
 /// Calls `f(i, j, area)` for every pixel `(i, j)` of rows `r0..r1` (and columns
 /// `0..width`) that the convex polygon `poly` (positive [`Poly::area2_rel`]) overlaps, with
 /// the area of the overlap, clipping it exactly against the pixel grid: row strips, then
@@ -287,10 +245,21 @@ fn sweep_row(row: &Poly, j: usize, width: usize, f: &mut impl FnMut(usize, usize
 
 /// The part of the convex polygon `poly` on the left of the directed line `a -> b` (the
 /// inside of a counter-clockwise polygon, in a y-up frame, of which `a -> b` is an edge).
-/// Crossing points are interpolated along `poly`'s edges.
 #[inline]
 pub(crate) fn keep_left(poly: &Poly, a: Pt, b: Pt) -> Poly {
-    let mut out = Poly::new();
+    let (mut left, mut right) = (Poly::new(), Poly::new());
+    split_left(poly, a, b, &mut left, &mut right);
+    left
+}
+
+/// Splits the convex polygon `poly` at the directed line `a -> b` into the part on its left
+/// (`left`, see [`keep_left`]) and the part on its right (`right`). Vertices on the line go to
+/// both; crossing points are interpolated along `poly`'s edges once and shared by both parts,
+/// so the parts tile `poly` up to the rounding of their area sums.
+#[inline]
+pub(crate) fn split_left(poly: &Poly, a: Pt, b: Pt, left: &mut Poly, right: &mut Poly) {
+    left.n = 0;
+    right.n = 0;
     let n = poly.n;
     let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
     let side = |p: Pt| ex * (p[1] - a[1]) - ey * (p[0] - a[0]);
@@ -299,14 +268,18 @@ pub(crate) fn keep_left(poly: &Poly, a: Pt, b: Pt) -> Poly {
         let q = poly.v[if k + 1 == n { 0 } else { k + 1 }];
         let (dp, dq) = (side(p), side(q));
         if dp >= 0.0 {
-            out.push(p);
+            left.push(p);
+        }
+        if dp <= 0.0 {
+            right.push(p);
         }
         if (dp < 0.0 && dq > 0.0) || (dp > 0.0 && dq < 0.0) {
             let t = dp / (dp - dq);
-            out.push([p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])]);
+            let x = [p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])];
+            left.push(x);
+            right.push(x);
         }
     }
-    out
 }
 
 /// Whether the edge `s -> e` has a direction: a clip can leave two vertices a few roundings
@@ -314,7 +287,7 @@ pub(crate) fn keep_left(poly: &Poly, a: Pt, b: Pt) -> Poly {
 /// coordinates' magnitude (and of a pixel) are skipped as clip lines and separating axes;
 /// the neighbouring edges of the convex polygon bound it there.
 #[inline]
-fn has_direction(s: Pt, e: Pt) -> bool {
+pub(crate) fn has_direction(s: Pt, e: Pt) -> bool {
     let magnitude = s[0].abs().max(s[1].abs()).max(1.0);
     (e[0] - s[0]).abs().max((e[1] - s[1]).abs()) > 1e-9 * magnitude
 }
@@ -362,11 +335,24 @@ pub(crate) fn clip_to_pixel(poly: &Poly, i: usize, j: usize) -> Poly {
 mod tests {
     use super::*;
 
+    /// Per-pixel areas of convex polygons added up over a `width x height` frame.
+    fn accumulate(polys: &[&[Pt]], width: usize, height: usize) -> Vec<f64> {
+        let mut acc = vec![0.0; width * height];
+        for p in polys {
+            let mut poly = Poly::from_slice(p);
+            if poly.area2_rel(0.0, 0.0) < 0.0 {
+                poly.reverse();
+            }
+            for_each_pixel(&poly, 0, height, width, |i, j, a| acc[j * width + i] += a);
+        }
+        acc
+    }
+
     #[test]
     fn a_square_on_the_grid_covers_its_pixels_exactly() {
-        let tris =
-            [[[1.25, 0.5], [3.75, 0.5], [3.75, 2.0]], [[1.25, 0.5], [3.75, 2.0], [1.25, 2.0]]];
-        let acc = accumulate_area_where(&tris, 5, 3, |_, _| true);
+        let tris: [&[Pt]; 2] =
+            [&[[1.25, 0.5], [3.75, 0.5], [3.75, 2.0]], &[[1.25, 0.5], [3.75, 2.0], [1.25, 2.0]]];
+        let acc = accumulate(&tris, 5, 3);
         let expect = [
             0.0, 0.375, 0.5, 0.375, 0.0, //
             0.0, 0.75, 1.0, 0.75, 0.0, //
@@ -380,7 +366,7 @@ mod tests {
     #[test]
     fn areas_sum_to_the_triangle_area() {
         let tri = [[0.3, 0.7], [17.9, 3.2], [5.5, 11.6]];
-        let acc = accumulate_area_where(&[tri], 20, 20, |_, _| true);
+        let acc = accumulate(&[&tri], 20, 20);
         let area = 0.5 * Poly::from_slice(&tri).area2_rel(0.0, 0.0).abs();
         let sum: f64 = acc.iter().sum();
         assert!((sum - area).abs() < 1e-12, "{sum} vs {area}");

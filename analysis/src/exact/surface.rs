@@ -5,14 +5,13 @@
 //! light-space grid ([`CasterGrid`]) returns for `T` (any caster triangle but `T` itself, its
 //! own mesh included: self-shadowing) are cut to their part between the plane and the light
 //! and projected along light rays onto the plane and through the camera ([`Setup::caster`],
-//! the machinery of the planar receiver); each shadow polygon is intersected with `T`'s own
-//! screen polygon (both convex), and the pieces are unioned on the exact grid and
-//! triangulated (see [`union`](super::union)). Three cases need no union: no piece (`T` is
-//! lit), one piece (it is convex: fanned), and a shadow polygon containing `T`'s whole
-//! screen polygon (`T` is in shadow: fanned). The triangles are then clipped exactly against
-//! the pixel grid, and each pixel takes the areas of the receivers that tile it (and of no
-//! other: a triangle hidden behind the surface in one pixel is that pixel's business only
-//! where it is visible).
+//! the machinery of the planar receiver); each shadow polygon is cut to the bounding box of
+//! `T`'s own screen polygon and kept if it meets that polygon (both convex), and the area
+//! their union covers within `T`'s screen polygon is computed in each pixel `T` tiles
+//! ([`coverage`]), so a
+//! pixel takes the areas of the receivers that tile it (and of no other: a triangle hidden
+//! behind the surface in one pixel is that pixel's business only where it is visible). A
+//! shadow polygon containing the receiver's whole screen polygon shadows it without a cut.
 //!
 //! A receiver whose plane holds the light (a directional light parallel to it, a spot light in
 //! it) receives light only at grazing incidence and has no projection: its pixels are not
@@ -22,57 +21,63 @@
 //! depend on the thread count.
 
 use super::casters::CasterGrid;
-use super::clip::{self, Poly, Pt};
+use super::clip::{self, Poly};
+use super::coverage::{self, Work};
 use super::shadow::{Screen, Setup};
-use super::{union, ScreenPolygons};
+use super::ScreenPolygons;
 use methods::Frame;
 use rayon::prelude::*;
 
-/// The shadows on a set of receiver triangles, in screen space.
+/// The shadows on a set of receiver triangles, as shadowed areas of the pixels they tile.
 #[derive(Debug, Default)]
 pub(crate) struct SurfaceShadows {
-    /// Shadow triangles; `tag[k]` is the receiver triangle `tris[k]` lies on.
-    pub tris: Vec<[Pt; 3]>,
-    /// The receiver of each shadow triangle.
-    pub tag: Vec<u32>,
+    /// `(pixel, shadowed area)` of every wanted pixel a receiver's shadow reaches, receiver
+    /// by receiver.
+    pub areas: Vec<(u32, f64)>,
     /// Receivers whose plane holds the light (sorted).
     pub grazing: Vec<u32>,
     /// Receiver-caster pairs looked at.
     pub pairs: u64,
     /// Non-empty shadow polygons projected.
     pub polygons: u64,
-    /// Constraint edges spade skipped (0 for valid unions).
-    pub conflicts: usize,
+    /// Work of the per-pixel unions.
+    pub work: Work,
 }
 
 /// One receiver's result.
 #[derive(Default)]
 struct Receiver {
-    tris: Vec<[Pt; 3]>,
+    areas: Vec<(u32, f64)>,
     grazing: bool,
     pairs: u64,
     polygons: u64,
-    conflicts: usize,
+    work: Work,
 }
 
-/// The shadows on the receiver triangles `receivers` (sorted triangle ids).
-pub(crate) fn shadows(frame: &Frame<'_>, grid: &CasterGrid, receivers: &[u32]) -> SurfaceShadows {
+/// The shadows on the receiver triangles `receivers` (sorted triangle ids), over the pixels
+/// `k` each receiver `r` is wanted at (`wanted(r, k)`).
+pub(crate) fn shadows(
+    frame: &Frame<'_>,
+    grid: &CasterGrid,
+    receivers: &[u32],
+    wanted: impl Fn(u32, usize) -> bool + Sync,
+) -> SurfaceShadows {
     let screen = Screen::new(frame);
-    let step = union::grid_step(screen.width, screen.height);
     let per: Vec<Receiver> = receivers
         .par_iter()
-        .map_init(Scratch::default, |scratch, &r| receiver(frame, &screen, grid, step, r, scratch))
+        .map_init(Scratch::default, |scratch, &r| {
+            receiver(frame, &screen, grid, r, |k| wanted(r, k), scratch)
+        })
         .collect();
     let mut out = SurfaceShadows::default();
     for (&r, res) in receivers.iter().zip(per) {
         if res.grazing {
             out.grazing.push(r);
         }
-        out.tag.extend(std::iter::repeat_n(r, res.tris.len()));
-        out.tris.extend(res.tris);
+        out.areas.extend(res.areas);
         out.pairs += res.pairs;
         out.polygons += res.polygons;
-        out.conflicts += res.conflicts;
+        out.work += res.work;
     }
     out
 }
@@ -82,18 +87,19 @@ pub(crate) fn shadows(frame: &Frame<'_>, grid: &CasterGrid, receivers: &[u32]) -
 struct Scratch {
     candidates: Vec<u32>,
     pieces: ScreenPolygons,
+    coverage: coverage::Scratch,
 }
 
-/// The shadow on receiver triangle `r`.
+/// The shadow on receiver triangle `r`, over the pixels `k` with `wanted(k)`.
 fn receiver(
     frame: &Frame<'_>,
     screen: &Screen,
     grid: &CasterGrid,
-    step: f64,
     r: u32,
+    wanted: impl Fn(usize) -> bool,
     scratch: &mut Scratch,
 ) -> Receiver {
-    let Scratch { candidates, pieces } = scratch;
+    let Scratch { candidates, pieces, coverage } = scratch;
     let g = &frame.geometry;
     let corners = g.corners(r as usize);
     let mut out = Receiver::default();
@@ -123,23 +129,37 @@ fn receiver(
             full = true;
             break;
         }
-        // The part over the receiver's box (axis-parallel cuts, so pieces share the box's
-        // sides exactly), kept only if it meets the receiver.
+        // The part over the receiver's box (axis-parallel cuts), kept only if it meets the
+        // receiver.
         let piece = clip::keep(&clip::keep(&shadow, 0, x0, true), 0, x1, false);
         let piece = clip::keep(&clip::keep(&piece, 1, y0, true), 1, y1, false);
         if piece.n >= 3 && !clip::separated(&piece, &own) && clip::intersect(&piece, &own).n >= 3 {
             pieces.push(piece.points());
         }
     }
+    let width = screen.width as usize;
+    let Some((r0, r1)) = clip::overlapped_rows(y0, y1, screen.height as usize) else { return out };
     if full {
-        fan(&own, &mut out.tris);
-    } else if pieces.len() == 1 {
-        fan(&clip::intersect(&Poly::from_slice(&pieces.points), &own), &mut out.tris);
-    } else if pieces.len() > 1 {
-        let (tris, conflicts) =
-            union::triangulate(&union::union_within(pieces, own.points(), step));
-        out.tris = tris;
-        out.conflicts = conflicts;
+        clip::for_each_pixel(&own, r0, r1 + 1, width, |i, j, a| {
+            let k = j * width + i;
+            if wanted(k) {
+                out.areas.push((k as u32, a));
+            }
+        });
+        out.work.covered_pixels += out.areas.len() as u64;
+    } else if !pieces.is_empty() {
+        let cols = (x0.floor().max(0.0) as usize)..(x1.ceil().max(0.0) as usize).min(width);
+        for j in r0..=r1 {
+            out.work += coverage::row_areas(
+                pieces.contours(),
+                j,
+                cols.clone(),
+                Some(&own),
+                |i| wanted(j * width + i),
+                coverage,
+                |i, a| out.areas.push(((j * width + i) as u32, a)),
+            );
+        }
     }
     out
 }
@@ -152,11 +172,4 @@ fn contains(outer: &Poly, inner: &Poly) -> bool {
         let (ex, ey) = (e[0] - s[0], e[1] - s[1]);
         inner.points().iter().all(|v| ex * (v[1] - s[1]) - ey * (v[0] - s[0]) >= 0.0)
     })
-}
-
-/// Appends the fan triangulation of the convex polygon `poly`.
-fn fan(poly: &Poly, out: &mut Vec<[Pt; 3]>) {
-    for k in 1..poly.n.saturating_sub(1) {
-        out.push([poly.v[0], poly.v[k], poly.v[k + 1]]);
-    }
 }
