@@ -2,5 +2,6 @@
 //! pixel classes beyond planar receivers, and `raytrace` end to end. One test binary.
 
 mod exact;
+mod grazing;
 mod raytrace;
 mod surfaces;
