@@ -6,8 +6,9 @@
 //! it; spot light: central projection from the light onto the plane one unit along its aim,
 //! and distance from the light) that segment is one point of the image with depths up to
 //! `p`'s. So a caster matters to a receiver triangle only if the boxes of their light-space
-//! images overlap and the caster's nearest depth is not beyond the receiver's farthest. The
-//! boxes of the casters are binned into a uniform grid over the receivers' region, about one
+//! images overlap (compared with a margin of a few roundings of their coordinates) and the
+//! caster's nearest depth is not beyond the receiver's farthest; [`CasterGrid::query`] checks
+//! both for every caster it returns. The boxes of the casters are binned into a uniform grid over the receivers' region, about one
 //! cell per caster; a caster spanning many cells (a ground plane) and, under a spot light, a
 //! caster reaching behind the light's plane are kept in a list every receiver scans.
 //! Receivers reaching behind the spot's plane scan every caster. The test is conservative: it
@@ -99,6 +100,8 @@ pub(crate) struct CasterGrid {
     global: Vec<u32>,
     /// Nearest light-space depth of every caster (`-inf` for those in `global`).
     near: Vec<f64>,
+    /// Light-space box of every caster (unbounded for those without a bounded image).
+    boxes: Vec<[f64; 4]>,
     /// Every caster, for receivers without bounded light-space image.
     all: Vec<u32>,
 }
@@ -158,8 +161,11 @@ impl CasterGrid {
             items: Vec::new(),
             global: Vec::new(),
             near: Vec::new(),
+            boxes: Vec::new(),
             all: Vec::new(),
         };
+        let unbounded = [f64::NEG_INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::INFINITY];
+        let mut caster_boxes = vec![unbounded; g.len()];
         let max_span = MAX_SPAN.max(nx * ny / 16);
         let mut spans = Vec::with_capacity(all.len());
         for (&t, b) in all.iter().zip(&boxes) {
@@ -167,6 +173,7 @@ impl CasterGrid {
                 None => Some(None),
                 Some((b, z)) => {
                     near[t as usize] = z[0];
+                    caster_boxes[t as usize] = *b;
                     if !valid {
                         Some(None)
                     } else {
@@ -208,6 +215,7 @@ impl CasterGrid {
             }
         }
         grid.near = near;
+        grid.boxes = caster_boxes;
         grid.all = all;
         grid
     }
@@ -235,14 +243,26 @@ impl CasterGrid {
             return;
         };
         let far = z[1];
-        out.extend(self.global.iter().copied().filter(|&c| self.near[c as usize] <= far));
+        // The boxes must overlap; both are within a few roundings of the true boxes, so they
+        // are compared with a margin of that size.
+        let reach = |c: u32| {
+            let cb = &self.boxes[c as usize];
+            let magnitude = b.iter().chain(cb).map(|v| v.abs()).filter(|v| v.is_finite());
+            let m = 8.0 * f64::EPSILON * magnitude.fold(1.0, f64::max);
+            self.near[c as usize] <= far
+                && cb[0] <= b[2] + m
+                && b[0] <= cb[2] + m
+                && cb[1] <= b[3] + m
+                && b[1] <= cb[3] + m
+        };
+        out.extend(self.global.iter().copied().filter(|&c| reach(c)));
         if let Some(r) = self.cell_range(&b) {
             let nx = self.cells[0];
             for y in r[1]..=r[3] {
                 for x in r[0]..=r[2] {
                     let c = y * nx + x;
                     let cell = &self.items[self.offsets[c] as usize..self.offsets[c + 1] as usize];
-                    out.extend(cell.iter().copied().filter(|&c| self.near[c as usize] <= far));
+                    out.extend(cell.iter().copied().filter(|&c| reach(c)));
                 }
             }
         }

@@ -112,14 +112,28 @@ pub(crate) fn split(poly: &Poly, axis: usize, c: f64, lo: &mut Poly, hi: &mut Po
 }
 
 /// Keeps the part of `poly` with `coordinate[axis] >= c` (when `keep_above`) or `<= c`.
+#[inline]
 pub(crate) fn keep(poly: &Poly, axis: usize, c: f64, keep_above: bool) -> Poly {
-    let (mut lo, mut hi) = (Poly::new(), Poly::new());
-    split(poly, axis, c, &mut lo, &mut hi);
-    if keep_above {
-        hi
-    } else {
-        lo
+    // The same vertices and crossing points as the matching side of `split`, built alone.
+    let sign = if keep_above { 1.0 } else { -1.0 };
+    let mut out = Poly::new();
+    let n = poly.n;
+    for k in 0..n {
+        let p = poly.v[k];
+        let q = poly.v[if k + 1 == n { 0 } else { k + 1 }];
+        let dp = p[axis] - c;
+        let dq = q[axis] - c;
+        if sign * dp >= 0.0 {
+            out.push(p);
+        }
+        if (dp < 0.0 && dq > 0.0) || (dp > 0.0 && dq < 0.0) {
+            let t = dp / (dp - dq);
+            let mut x = [p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])];
+            x[axis] = c;
+            out.push(x);
+        }
     }
+    out
 }
 
 /// Bins items into bands of [`BAND`] rows: `rows(item)` gives the inclusive row range an item
