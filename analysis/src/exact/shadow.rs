@@ -261,12 +261,19 @@ impl Screen {
             }
             inside_all &= v.iter().all(|&x| x >= 0.0);
         }
-        let mut a = [[0.0; 6]; HCAP];
+        let mut bufs = [[[0.0; 6]; HCAP]; 2];
         let mut na = 3;
-        a[..3].copy_from_slice(&recs);
+        bufs[0][..3].copy_from_slice(&recs);
+        // The polygon is in `bufs[cur]`; each plane clips it into the other buffer.
+        let mut cur = 0;
         if !inside_all {
-            let mut b = [[0.0; 6]; HCAP];
             for pl in &planes {
+                let (first, second) = bufs.split_at_mut(1);
+                let (a, b) = if cur == 0 {
+                    (&first[0], &mut second[0])
+                } else {
+                    (&second[0], &mut first[0])
+                };
                 let mut nb = 0;
                 for k in 0..na {
                     let p = a[k];
@@ -286,13 +293,14 @@ impl Screen {
                         nb += 1;
                     }
                 }
-                std::mem::swap(&mut a, &mut b);
+                cur = 1 - cur;
                 na = nb;
                 if na < 3 {
                     return None;
                 }
             }
         }
+        let a = &bufs[cur];
         let mut pts = [[0.0; 2]; HCAP];
         for (k, r) in a[..na].iter().enumerate() {
             let (x, y) = (r[0] / r[2], r[1] / r[2]);
