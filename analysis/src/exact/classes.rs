@@ -91,11 +91,13 @@ impl Classes {
 }
 
 /// The screen polygons of every triangle: `polys` contour `k` belongs to triangle
-/// `tri[k]` and has winding `winding[k]`.
+/// `tri[k]`, has winding `winding[k]`, and its triangle's corners span the camera depths
+/// `depth[k]` (smallest, largest).
 struct Projected {
     polys: ScreenPolygons,
     tri: Vec<u32>,
     winding: Vec<f64>,
+    depth: Vec<[f64; 2]>,
 }
 
 impl Projected {
@@ -105,25 +107,38 @@ impl Projected {
         let parts: Vec<Projected> = (0..g.len().div_ceil(CHUNK))
             .into_par_iter()
             .map(|c| {
-                let mut part =
-                    Projected { polys: ScreenPolygons::default(), tri: vec![], winding: vec![] };
+                let mut part = Projected {
+                    polys: ScreenPolygons::default(),
+                    tri: vec![],
+                    winding: vec![],
+                    depth: vec![],
+                };
                 for t in c * CHUNK..((c + 1) * CHUNK).min(g.len()) {
-                    if let Some((poly, sign)) = screen.triangle(g.corners(t)) {
+                    let corners = g.corners(t);
+                    if let Some((poly, sign)) = screen.triangle(corners) {
                         part.polys.push(poly.points());
                         part.tri.push(t as u32);
                         part.winding.push(sign);
+                        let d = corners.map(|p| screen.depth(p));
+                        part.depth.push([d[0].min(d[1]).min(d[2]), d[0].max(d[1]).max(d[2])]);
                     }
                 }
                 part
             })
             .collect();
-        let mut all = Projected { polys: ScreenPolygons::default(), tri: vec![], winding: vec![] };
+        let mut all = Projected {
+            polys: ScreenPolygons::default(),
+            tri: vec![],
+            winding: vec![],
+            depth: vec![],
+        };
         for p in parts {
             for c in p.polys.contours() {
                 all.polys.push(c);
             }
             all.tri.extend(p.tri);
             all.winding.extend(p.winding);
+            all.depth.extend(p.depth);
         }
         all
     }
@@ -307,9 +322,16 @@ impl Context<'_> {
                 }
             }
         }
-        // Rule 5: nothing else in front of C.
+        // Rule 5: nothing else in front of C. A triangle whose nearest corner is no nearer
+        // than the farthest corner of `t` is behind `t` wherever both are seen (a point's
+        // depth along a camera ray is its camera depth, and a triangle's points lie between
+        // its corners' depths), so it needs no overlap.
+        let depth = |f: usize| p.depth[group[f].contour as usize];
         for u in (0..group.len()).filter(|&f| !in_c[f]) {
             for &t in members.iter() {
+                if depth(u)[0] >= depth(t)[1] {
+                    continue;
+                }
                 let Some(r) = overlap(u, t) else { continue };
                 if 0.5 * r.area2_rel(i as f64, j as f64) <= MIN_OVERLAP {
                     continue;

@@ -194,6 +194,13 @@ impl Screen {
         self.camera.ray(glam::DVec2::new(xy[0], xy[1]))
     }
 
+    /// The camera depth of `p` (along the viewing direction from the origin): the parameter
+    /// of `p` on the camera ray through it.
+    #[inline]
+    pub fn depth(&self, p: DVec3) -> f64 {
+        (p - self.camera.origin).dot(self.camera.forward)
+    }
+
     /// The camera's origin (eye or image-plane centre).
     #[inline]
     pub fn origin(&self) -> DVec3 {
