@@ -101,7 +101,8 @@ counters! {
     receiver_triangles,
     /// Receiver-caster pairs looked at after the light-space caster grid (`exact`).
     caster_pairs,
-    /// Non-empty shadow polygons projected onto a receiver (`exact`).
+    /// Non-empty shadow polygons projected onto a receiver, within the frame (a planar
+    /// object) or the receiver triangle's screen box (a surface triangle) (`exact`).
     shadow_polygons,
     /// Pixels (or a receiver's part of one) found wholly inside one shadow polygon, shadowed
     /// without a cut (`exact`).

@@ -23,8 +23,8 @@ type Rec = [f64; 6];
 /// Largest vertex count of a polygon in clip space (3 + one per plane, 7 planes).
 const HCAP: usize = 16;
 
-/// Margin, in pixels, of the homogeneous frame clip that bounds coordinates before the
-/// division; the exact frame clip follows in screen space.
+/// Margin, in pixels, of the homogeneous clip to the frame (or a rectangle in it) that bounds
+/// coordinates before the division; the exact clip follows in screen space.
 const FRAME_MARGIN: f64 = 1.0;
 
 /// The light as the projection onto the receiver plane needs it.
@@ -129,6 +129,12 @@ impl Setup {
 
     /// The shadow of caster triangle `tri` on the receiver plane, in screen space, clipped to
     /// the frame; `None` when empty or degenerate.
+    pub fn caster(&self, tri: [DVec3; 3]) -> Option<Poly> {
+        self.caster_in(tri, self.screen.frame())
+    }
+
+    /// [`Self::caster`] clipped to the screen rectangle `rect` (`[x0, x1, y0, y1]`, inside
+    /// the frame) instead of the frame: a shadow that misses it is rejected before any clip.
     ///
     /// Kept part: `h >= 0` (the light's side of the plane), for spot lights also `h <= H` (not
     /// beyond the plane through the light parallel to the receiver), and, for perspective
@@ -136,7 +142,7 @@ impl Setup {
     /// light's height maps to the receiver's horizon (a point at infinity of the plane), which
     /// the frame clip removes or keeps as a finite screen point: nothing is projected to
     /// infinity.
-    pub fn caster(&self, tri: [DVec3; 3]) -> Option<Poly> {
+    pub fn caster_in(&self, tri: [DVec3; 3], rect: [f64; 4]) -> Option<Poly> {
         let h = tri.map(|p| self.light_height(p));
         if h.iter().all(|&x| x <= 0.0) {
             return None;
@@ -161,7 +167,7 @@ impl Setup {
                 [x, y, wt, h[k], w, near]
             }),
         };
-        self.screen.finish(recs).map(|(poly, _)| poly)
+        self.screen.finish(recs, rect).map(|(poly, _)| poly)
     }
 
     /// Shadow polygons of every caster triangle of `frame` of an object other than
@@ -241,22 +247,28 @@ impl Screen {
             let [x, y, w, near] = self.camera_h(p, 1.0);
             [x, y, w, 1.0, 1.0, near]
         });
-        self.finish(recs)
+        self.finish(recs, self.frame())
     }
 
-    /// Clips the three clip-space vertices, divides, and clips exactly to the frame; drops
-    /// empty or degenerate results, orients the rest with positive [`Poly::area2_rel`] and
-    /// returns the sign the winding had.
-    fn finish(&self, recs: [Rec; 3]) -> Option<(Poly, f64)> {
-        let (wd, ht, m) = (self.width, self.height, FRAME_MARGIN);
+    /// The frame as a rectangle `[x0, x1, y0, y1]`.
+    pub fn frame(&self) -> [f64; 4] {
+        [0.0, self.width, 0.0, self.height]
+    }
+
+    /// Clips the three clip-space vertices, divides, and clips exactly to the rectangle `rect`
+    /// (`[x0, x1, y0, y1]`); drops empty or degenerate results, orients the rest with positive
+    /// [`Poly::area2_rel`] and returns the sign the winding had.
+    fn finish(&self, recs: [Rec; 3], rect: [f64; 4]) -> Option<(Poly, f64)> {
+        let [x0, x1, y0, y1] = rect;
+        let m = FRAME_MARGIN;
         let planes: [Rec; 7] = [
             [0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
             [0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
             [0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
-            [1.0, 0.0, m, 0.0, 0.0, 0.0],
-            [-1.0, 0.0, wd + m, 0.0, 0.0, 0.0],
-            [0.0, 1.0, m, 0.0, 0.0, 0.0],
-            [0.0, -1.0, ht + m, 0.0, 0.0, 0.0],
+            [1.0, 0.0, m - x0, 0.0, 0.0, 0.0],
+            [-1.0, 0.0, x1 + m, 0.0, 0.0, 0.0],
+            [0.0, 1.0, m - y0, 0.0, 0.0, 0.0],
+            [0.0, -1.0, y1 + m, 0.0, 0.0, 0.0],
         ];
         let eval = |pl: &Rec, r: &Rec| -> f64 { pl.iter().zip(r).map(|(a, b)| a * b).sum() };
         // Trivial reject (culls everything whose shadow misses the frame) and accept.
@@ -317,14 +329,14 @@ impl Screen {
             pts[k] = [x, y];
         }
         let mut poly = Poly::from_slice(&pts[..na]);
-        poly = keep(&poly, 0, 0.0, true);
-        poly = keep(&poly, 0, wd, false);
-        poly = keep(&poly, 1, 0.0, true);
-        poly = keep(&poly, 1, ht, false);
+        poly = keep(&poly, 0, x0, true);
+        poly = keep(&poly, 0, x1, false);
+        poly = keep(&poly, 1, y0, true);
+        poly = keep(&poly, 1, y1, false);
         if poly.n < 3 {
             return None;
         }
-        let area2 = poly.area2_rel(0.5 * wd, 0.5 * ht);
+        let area2 = poly.area2_rel(0.5 * (x0 + x1), 0.5 * (y0 + y1));
         if !(area2 != 0.0 && area2.is_finite()) {
             return None;
         }

@@ -38,7 +38,7 @@ pub(crate) struct SurfaceShadows {
     pub grazing: Vec<u32>,
     /// Receiver-caster pairs looked at.
     pub pairs: u64,
-    /// Non-empty shadow polygons projected.
+    /// Non-empty shadow polygons projected (over their receiver's screen box).
     pub polygons: u64,
     /// Work of the per-pixel unions.
     pub work: Work,
@@ -123,17 +123,16 @@ fn receiver(
             continue;
         }
         out.pairs += 1;
-        let Some(shadow) = setup.caster(g.corners(c as usize)) else { continue };
+        // The part over the receiver's box, kept only if it meets the receiver.
+        let Some(piece) = setup.caster_in(g.corners(c as usize), [x0, x1, y0, y1]) else {
+            continue;
+        };
         out.polygons += 1;
-        if contains(&shadow, &own) {
+        if contains(&piece, &own) {
             full = true;
             break;
         }
-        // The part over the receiver's box (axis-parallel cuts), kept only if it meets the
-        // receiver.
-        let piece = clip::keep(&clip::keep(&shadow, 0, x0, true), 0, x1, false);
-        let piece = clip::keep(&clip::keep(&piece, 1, y0, true), 1, y1, false);
-        if piece.n >= 3 && !clip::separated(&piece, &own) && clip::intersect(&piece, &own).n >= 3 {
+        if !clip::separated(&piece, &own) && clip::intersect(&piece, &own).n >= 3 {
             pieces.push(piece.points());
         }
     }
