@@ -280,12 +280,16 @@ impl Screen {
             }
             inside_all &= v.iter().all(|&x| x >= 0.0);
         }
-        let mut bufs = [[[0.0; 6]; HCAP]; 2];
+        // Clipped only when some plane cuts the triangle; the polygon is then in `bufs[cur]`
+        // and each plane clips it into the other buffer.
+        let mut bufs;
         let mut na = 3;
-        bufs[0][..3].copy_from_slice(&recs);
-        // The polygon is in `bufs[cur]`; each plane clips it into the other buffer.
-        let mut cur = 0;
-        if !inside_all {
+        let a: &[Rec] = if inside_all {
+            &recs
+        } else {
+            bufs = [[[0.0; 6]; HCAP]; 2];
+            bufs[0][..3].copy_from_slice(&recs);
+            let mut cur = 0;
             for pl in &planes {
                 let (first, second) = bufs.split_at_mut(1);
                 let (a, b) = if cur == 0 {
@@ -318,8 +322,8 @@ impl Screen {
                     return None;
                 }
             }
-        }
-        let a = &bufs[cur];
+            &bufs[cur]
+        };
         let mut pts = [[0.0; 2]; HCAP];
         for (k, r) in a[..na].iter().enumerate() {
             let (x, y) = (r[0] / r[2], r[1] / r[2]);
