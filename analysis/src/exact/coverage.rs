@@ -268,16 +268,23 @@ fn pixel_area<'a>(
             continue;
         }
         let ((px0, px1), (py0, py1)) = (p.range(0), p.range(1));
+        // Pieces `p` misses stay where they are (compacted over the ones it cuts); the parts
+        // of the cut ones outside `p` are appended.
         next.clear();
-        for piece in pieces.iter() {
-            let ((qx0, qx1), (qy0, qy1)) = (piece.range(0), piece.range(1));
+        let mut kept = 0;
+        for r in 0..pieces.len() {
+            let ((qx0, qx1), (qy0, qy1)) = (pieces[r].range(0), pieces[r].range(1));
             if qx1 <= px0 || qx0 >= px1 || qy1 <= py0 || qy0 >= py1 {
-                next.push(*piece);
+                if kept != r {
+                    pieces[kept] = pieces[r];
+                }
+                kept += 1;
             } else {
-                subtract(piece, &p, 0, next);
+                subtract(&pieces[r], &p, 0, next);
             }
         }
-        std::mem::swap(pieces, next);
+        pieces.truncate(kept);
+        pieces.append(next);
         if pieces.is_empty() {
             break;
         }
