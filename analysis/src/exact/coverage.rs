@@ -194,7 +194,7 @@ pub(crate) fn row_areas<'a>(
         if full[i - c0] {
             if accept(i) {
                 work.covered_pixels += 1;
-                emit(i, region(within, i, j).map_or(0.0, |(r, ox, oy)| 0.5 * r.area2_rel(ox, oy)));
+                emit(i, region(within, i, j).map_or(0.0, |r| 0.5 * r.area2_rel(0.0, 0.0)));
             }
             continue;
         }
@@ -222,14 +222,13 @@ fn section(strip: &Poly, c: f64) -> Option<(f64, f64)> {
 }
 
 /// The part of `within` (or the whole square) in pixel `(i, j)`, in coordinates relative to
-/// the pixel's corner, with that corner (`(0, 0)`: the polygon is already relative); `None`
-/// when empty.
-fn region(within: Option<&Poly>, i: usize, j: usize) -> Option<(Poly, f64, f64)> {
+/// the pixel's corner; `None` when empty.
+fn region(within: Option<&Poly>, i: usize, j: usize) -> Option<Poly> {
     let r = match within {
         None => Poly::from_slice(&[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]),
         Some(w) => to_local(&clip::clip_to_pixel(w, i, j), i, j),
     };
-    (r.n >= 3).then_some((r, 0.0, 0.0))
+    (r.n >= 3).then_some(r)
 }
 
 /// `poly` with coordinates relative to the corner of pixel `(i, j)`: exact for points in
@@ -253,7 +252,7 @@ fn pixel_area<'a>(
     pieces: &mut Vec<Poly>,
     next: &mut Vec<Poly>,
 ) -> f64 {
-    let Some((start, _, _)) = region(within, i, j) else { return 0.0 };
+    let Some(start) = region(within, i, j) else { return 0.0 };
     let total2 = start.area2_rel(0.0, 0.0);
     if total2 <= 0.0 {
         return 0.0;
