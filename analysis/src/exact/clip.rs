@@ -89,6 +89,32 @@ impl Poly {
 pub(crate) fn split(poly: &Poly, axis: usize, c: f64, lo: &mut Poly, hi: &mut Poly) {
     lo.n = 0;
     hi.n = 0;
+    split_into(poly, axis, c, Some(lo), Some(hi));
+}
+
+/// Keeps the part of `poly` with `coordinate[axis] >= c` (when `keep_above`) or `<= c`: the
+/// same vertices and crossing points as that side of [`split`], built alone.
+#[inline]
+pub(crate) fn keep(poly: &Poly, axis: usize, c: f64, keep_above: bool) -> Poly {
+    let mut out = Poly::new();
+    if keep_above {
+        split_into(poly, axis, c, None, Some(&mut out));
+    } else {
+        split_into(poly, axis, c, Some(&mut out), None);
+    }
+    out
+}
+
+/// Appends the parts of [`split`] to the sides given (inlined, so a side not asked for costs
+/// nothing).
+#[inline(always)]
+fn split_into(
+    poly: &Poly,
+    axis: usize,
+    c: f64,
+    mut lo: Option<&mut Poly>,
+    mut hi: Option<&mut Poly>,
+) {
     let n = poly.n;
     for k in 0..n {
         let p = poly.v[k];
@@ -96,44 +122,27 @@ pub(crate) fn split(poly: &Poly, axis: usize, c: f64, lo: &mut Poly, hi: &mut Po
         let dp = p[axis] - c;
         let dq = q[axis] - c;
         if dp <= 0.0 {
-            lo.push(p);
+            if let Some(lo) = lo.as_deref_mut() {
+                lo.push(p);
+            }
         }
         if dp >= 0.0 {
-            hi.push(p);
+            if let Some(hi) = hi.as_deref_mut() {
+                hi.push(p);
+            }
         }
         if (dp < 0.0 && dq > 0.0) || (dp > 0.0 && dq < 0.0) {
             let t = dp / (dp - dq);
             let mut x = [p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])];
             x[axis] = c;
-            lo.push(x);
-            hi.push(x);
+            if let Some(lo) = lo.as_deref_mut() {
+                lo.push(x);
+            }
+            if let Some(hi) = hi.as_deref_mut() {
+                hi.push(x);
+            }
         }
     }
-}
-
-/// Keeps the part of `poly` with `coordinate[axis] >= c` (when `keep_above`) or `<= c`.
-#[inline]
-pub(crate) fn keep(poly: &Poly, axis: usize, c: f64, keep_above: bool) -> Poly {
-    // The same vertices and crossing points as the matching side of `split`, built alone.
-    let sign = if keep_above { 1.0 } else { -1.0 };
-    let mut out = Poly::new();
-    let n = poly.n;
-    for k in 0..n {
-        let p = poly.v[k];
-        let q = poly.v[if k + 1 == n { 0 } else { k + 1 }];
-        let dp = p[axis] - c;
-        let dq = q[axis] - c;
-        if sign * dp >= 0.0 {
-            out.push(p);
-        }
-        if (dp < 0.0 && dq > 0.0) || (dp > 0.0 && dq < 0.0) {
-            let t = dp / (dp - dq);
-            let mut x = [p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])];
-            x[axis] = c;
-            out.push(x);
-        }
-    }
-    out
 }
 
 /// Bins items into bands of [`BAND`] rows: `rows(item)` gives the inclusive row range an item
