@@ -8,8 +8,8 @@
 //! `p`'s. So a caster matters to a receiver triangle only if the boxes of their light-space
 //! images overlap (compared with a margin of a few roundings of their coordinates) and the
 //! caster's nearest depth is not beyond the receiver's farthest; [`CasterGrid::query`] checks
-//! both for every caster it returns. The boxes of the casters are binned into a uniform grid over the receivers' region, about one
-//! cell per caster; a caster spanning many cells (a ground plane) and, under a spot light, a
+//! both for every caster it returns. The boxes of the casters are binned into a uniform grid
+//! over the receivers' region, about one cell per caster; a caster spanning many cells (a ground plane) and, under a spot light, a
 //! caster reaching behind the light's plane are kept in a list every receiver scans.
 //! Receivers reaching behind the spot's plane scan every caster. The test is conservative: it
 //! only skips casters whose shadow cannot fall on the receiver.

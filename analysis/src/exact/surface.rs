@@ -8,10 +8,10 @@
 //! the machinery of the planar receiver); each shadow polygon is cut to the bounding box of
 //! `T`'s own screen polygon and kept if it meets that polygon (both convex), and the area
 //! their union covers within `T`'s screen polygon is computed in each pixel `T` tiles
-//! ([`coverage`]), so a
-//! pixel takes the areas of the receivers that tile it (and of no other: a triangle hidden
-//! behind the surface in one pixel is that pixel's business only where it is visible). A
-//! shadow polygon containing the receiver's whole screen polygon shadows it without a cut.
+//! ([`coverage`]), so a pixel takes the areas of the receivers that tile it (and of no other:
+//! a triangle hidden behind the surface in one pixel is that pixel's business only where it is
+//! visible). A shadow polygon containing the receiver's whole screen polygon shadows it
+//! without a cut.
 //!
 //! A receiver whose plane holds the light (a directional light parallel to it, a spot light in
 //! it) receives light only at grazing incidence and has no projection: its pixels are not
