@@ -43,7 +43,7 @@
 //! overlaps found), then per pixel a few tests between the triangles overlapping it, in
 //! parallel over bands of rows.
 
-use super::clip::{self, Poly};
+use super::clip::{self, Poly, Pt};
 use super::shadow::Screen;
 use super::ScreenPolygons;
 use crate::pixel_class::PixelClass;
@@ -143,8 +143,12 @@ impl Projected {
         all
     }
 
+    fn points(&self, k: usize) -> &[Pt] {
+        &self.polys.points[self.polys.ranges[k].clone()]
+    }
+
     fn poly(&self, k: usize) -> Poly {
-        Poly::from_slice(&self.polys.points[self.polys.ranges[k].clone()])
+        Poly::from_slice(self.points(k))
     }
 }
 
@@ -230,7 +234,6 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
 #[derive(Default)]
 struct Scratch {
     corners: Vec<[DVec3; 3]>,
-    polys: Vec<Poly>,
     in_c: Vec<bool>,
     stack: Vec<usize>,
     members: Vec<usize>,
@@ -272,7 +275,7 @@ impl Context<'_> {
         };
         let winding = p.winding[group[seed].contour as usize];
         let object = g.object[seed_tri as usize];
-        let Scratch { corners, polys, in_c, stack, members } = scratch;
+        let Scratch { corners, in_c, stack, members } = scratch;
         corners.clear();
         corners.extend(group.iter().map(|o| g.corners(tri(o))));
         // Rule 3: the continuous surface through the seed.
@@ -301,13 +304,15 @@ impl Context<'_> {
         }
         members.clear();
         members.extend((0..group.len()).filter(|&f| in_c[f]));
-        polys.clear();
-        polys.extend(group.iter().map(|o| p.poly(o.contour as usize)));
+        let points = |f: usize| p.points(group[f].contour as usize);
         let overlap = |a: usize, b: usize| -> Option<Poly> {
-            if clip::separated(&polys[a], &polys[b]) {
+            if clip::separated(points(a), points(b)) {
                 return None;
             }
-            let r = clip::intersect(&clip::clip_to_pixel(&polys[a], i, j), &polys[b]);
+            let r = clip::intersect(
+                &clip::clip_to_pixel(&p.poly(group[a].contour as usize), i, j),
+                &p.poly(group[b].contour as usize),
+            );
             (r.n >= 3).then_some(r)
         };
         for (x, &a) in members.iter().enumerate() {
@@ -329,7 +334,9 @@ impl Context<'_> {
         let depth = |f: usize| p.depth[group[f].contour as usize];
         for u in (0..group.len()).filter(|&f| !in_c[f]) {
             for &t in members.iter() {
-                if depth(u)[0] >= depth(t)[1] {
+                if depth(u)[0] >= depth(t)[1]
+                    || self.behind_on_square(&corners[u], &corners[t], i, j)
+                {
                     continue;
                 }
                 let Some(r) = overlap(u, t) else { continue };
@@ -347,6 +354,25 @@ impl Context<'_> {
         } else {
             PixelClass::Surface
         }
+    }
+
+    /// Whether the plane of triangle `u` is nowhere nearer to the camera than that of `t` over
+    /// the square of pixel `(i, j)`, decided at its four corners without tolerance: where both
+    /// planes lie in front of the camera, the sign of `depth_u - depth_t` is that of
+    /// `1 / depth_t - 1 / depth_u`, an affine function of the screen point, so the corners of
+    /// the square decide for the whole square and for every overlap inside it. `u` then passes
+    /// rule 5 against `t` (a point where `u` is at least as far as `t` is not in front beyond
+    /// any tolerance) without the overlap being clipped. `false` means the overlap decides.
+    fn behind_on_square(&self, u: &[DVec3; 3], t: &[DVec3; 3], i: usize, j: usize) -> bool {
+        let normal = |c: &[DVec3; 3]| (c[1] - c[0]).cross(c[2] - c[0]);
+        let (nu, nt) = (normal(u), normal(t));
+        let (x, y) = (i as f64, j as f64);
+        [[x, y], [x + 1.0, y], [x, y + 1.0], [x + 1.0, y + 1.0]].iter().all(|&corner| {
+            let ray = self.screen.ray(corner);
+            let du = nu.dot(u[0] - ray.origin) / nu.dot(ray.direction);
+            let dt = nt.dot(t[0] - ray.origin) / nt.dot(ray.direction);
+            dt > 0.0 && dt.is_finite() && du.is_finite() && du >= dt
+        })
     }
 
     /// Whether the plane of triangle `u` is nearer to the camera than that of `t` along the

@@ -332,16 +332,16 @@ pub(crate) fn intersect(a: &Poly, b: &Poly) -> Poly {
     cur
 }
 
-/// Whether the convex polygons `a` and `b` (positive [`Poly::area2_rel`]) have disjoint
+/// Whether the convex polygons `a` and `b` (vertex lists with positive [`Poly::area2_rel`]) have disjoint
 /// interiors by a separating line through an edge of one of them (the separating axis test;
 /// touching counts as disjoint). `false` means they may overlap.
-pub(crate) fn separated(a: &Poly, b: &Poly) -> bool {
-    let outside = |p: &Poly, q: &Poly| {
-        (0..p.n).any(|k| {
-            let (s, e) = (p.v[k], p.v[if k + 1 == p.n { 0 } else { k + 1 }]);
+pub(crate) fn separated(a: &[Pt], b: &[Pt]) -> bool {
+    let outside = |p: &[Pt], q: &[Pt]| {
+        (0..p.len()).any(|k| {
+            let (s, e) = (p[k], p[if k + 1 == p.len() { 0 } else { k + 1 }]);
             let (ex, ey) = (e[0] - s[0], e[1] - s[1]);
             has_direction(s, e)
-                && q.points().iter().all(|v| ex * (v[1] - s[1]) - ey * (v[0] - s[0]) <= 0.0)
+                && q.iter().all(|v| ex * (v[1] - s[1]) - ey * (v[0] - s[0]) <= 0.0)
         })
     };
     outside(a, b) || outside(b, a)
@@ -409,10 +409,10 @@ mod tests {
         let a = oriented(&[[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0, 2.0]]);
         let b = oriented(&[[1.0, 1.0], [3.0, 1.0], [3.0, 3.0]]);
         let c = oriented(&[[2.0, 0.0], [4.0, 0.0], [2.0, 2.0]]);
-        assert!(!separated(&a, &b));
+        assert!(!separated(a.points(), b.points()));
         assert_eq!(0.5 * intersect(&a, &b).area2_rel(0.0, 0.0), 0.5);
         // Sharing the edge x = 2: touching counts as separated.
-        assert!(separated(&a, &c));
+        assert!(separated(a.points(), c.points()));
         assert!(intersect(&a, &c).area2_rel(0.0, 0.0).abs() < 1e-15);
         let px = clip_to_pixel(&b, 1, 1);
         assert_eq!(0.5 * px.area2_rel(0.0, 0.0), 0.5);
@@ -434,7 +434,7 @@ mod tests {
             [104.59985017771305, 28.68371925796729],
             [104.55764574761162, 30.452236836286936],
         ]);
-        assert!(!separated(&shadow, &own));
+        assert!(!separated(shadow.points(), own.points()));
         let overlap = 0.5 * intersect(&own, &shadow).area2_rel(100.0, 30.0);
         assert!(overlap > 0.1, "{overlap}");
         assert!(!has_direction(shadow.v[0], [shadow.v[0][0], shadow.v[0][1] + 1e-14]));

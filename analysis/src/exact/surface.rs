@@ -132,7 +132,7 @@ fn receiver(
             full = true;
             break;
         }
-        if !clip::separated(&piece, &own) && clip::intersect(&piece, &own).n >= 3 {
+        if !clip::separated(piece.points(), own.points()) && clip::intersect(&piece, &own).n >= 3 {
             pieces.push(piece.points());
         }
     }
