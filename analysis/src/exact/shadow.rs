@@ -271,15 +271,18 @@ impl Screen {
             [0.0, -1.0, y1 + m, 0.0, 0.0, 0.0],
         ];
         let eval = |pl: &Rec, r: &Rec| -> f64 { pl.iter().zip(r).map(|(a, b)| a * b).sum() };
-        // Trivial reject (culls everything whose shadow misses the frame) and accept.
-        let mut inside_all = true;
-        for pl in &planes {
+        // Trivial reject (culls everything whose shadow misses the frame) and accept; only the
+        // planes that cut the triangle clip it (a plane every vertex is inside of leaves a
+        // polygon as it is).
+        let mut cutting = [false; 7];
+        for (pl, cuts) in planes.iter().zip(&mut cutting) {
             let v = recs.map(|r| eval(pl, &r));
             if v.iter().all(|&x| x < 0.0) {
                 return None;
             }
-            inside_all &= v.iter().all(|&x| x >= 0.0);
+            *cuts = !v.iter().all(|&x| x >= 0.0);
         }
+        let inside_all = !cutting.contains(&true);
         // Clipped only when some plane cuts the triangle; the polygon is then in `bufs[cur]`
         // and each plane clips it into the other buffer.
         let mut bufs;
@@ -290,7 +293,7 @@ impl Screen {
             bufs = [[[0.0; 6]; HCAP]; 2];
             bufs[0][..3].copy_from_slice(&recs);
             let mut cur = 0;
-            for pl in &planes {
+            for pl in planes.iter().zip(cutting).filter(|(_, cuts)| *cuts).map(|(pl, _)| pl) {
                 let (first, second) = bufs.split_at_mut(1);
                 let (a, b) = if cur == 0 {
                     (&first[0], &mut second[0])
@@ -333,10 +336,20 @@ impl Screen {
             pts[k] = [x, y];
         }
         let mut poly = Poly::from_slice(&pts[..na]);
-        poly = keep(&poly, 0, x0, true);
-        poly = keep(&poly, 0, x1, false);
-        poly = keep(&poly, 1, y0, true);
-        poly = keep(&poly, 1, y1, false);
+        // A side every vertex is inside of leaves the polygon as it is.
+        let ((lx, hx), (ly, hy)) = (poly.range(0), poly.range(1));
+        if lx < x0 {
+            poly = keep(&poly, 0, x0, true);
+        }
+        if hx > x1 {
+            poly = keep(&poly, 0, x1, false);
+        }
+        if ly < y0 {
+            poly = keep(&poly, 1, y0, true);
+        }
+        if hy > y1 {
+            poly = keep(&poly, 1, y1, false);
+        }
         if poly.n < 3 {
             return None;
         }
