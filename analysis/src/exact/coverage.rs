@@ -48,6 +48,8 @@ pub(crate) const MIN_AREA2: f64 = 2e-24;
 /// Buffers a worker reuses from row to row and pixel to pixel.
 #[derive(Default)]
 pub(crate) struct Scratch {
+    /// Every polygon's part below the rows swept so far, with its `y` range.
+    rests: Vec<(Poly, f64, f64)>,
     /// Polygons clipped to the current row strip, with their column range.
     strips: Vec<(Poly, usize, usize)>,
     /// Columns of the current row wholly covered by one polygon.
@@ -99,18 +101,16 @@ pub(crate) fn union_area(
             let ids = &items[offsets[band]..offsets[band + 1]];
             let band_polys =
                 ids.iter().map(|&p| &polygons.points[polygons.ranges[p as usize].clone()]);
-            for (dj, row) in chunk.chunks_mut(width).enumerate() {
-                let j = r0 + dj;
-                work += row_areas(
-                    band_polys.clone(),
-                    j,
-                    0..width,
-                    None,
-                    |i| accept(j * width + i),
-                    scratch,
-                    |i, a| row[i] = a,
-                );
-            }
+            let rows = r0..r0 + chunk.len() / width;
+            work += rows_areas(
+                band_polys,
+                rows,
+                0..width,
+                None,
+                |i, j| accept(j * width + i),
+                scratch,
+                |i, j, a| chunk[(j - r0) * width + i] = a,
+            );
             work
         })
         .reduce(Work::default, |mut a, b| {
@@ -127,10 +127,67 @@ fn y_range(points: &[Pt]) -> (f64, f64) {
 
 /// The area the union of `polygons` (convex, positive [`Poly::area2_rel`]) covers inside the
 /// region `within` (convex, positive [`Poly::area2_rel`]; `None`: the whole pixel) in every
-/// pixel of row `j` and columns `cols` with `accept(i)`: calls `emit(i, area)` for each such
-/// pixel the union reaches, in column order.
-pub(crate) fn row_areas<'a>(
+/// pixel of rows `rows` and columns `cols` with `accept(i, j)`: calls `emit(i, j, area)` for
+/// each such pixel the union reaches, row by row in column order.
+///
+/// The rows are swept downwards: each polygon is split once at every row line it crosses,
+/// the part above being that row's strip and the part below kept for the next rows (as the
+/// pixel classes' clipper does), rather than clipped from scratch to every row.
+pub(crate) fn rows_areas<'a>(
     polygons: impl Iterator<Item = &'a [Pt]>,
+    rows: std::ops::Range<usize>,
+    cols: std::ops::Range<usize>,
+    within: Option<&Poly>,
+    accept: impl Fn(usize, usize) -> bool,
+    scratch: &mut Scratch,
+    mut emit: impl FnMut(usize, usize, f64),
+) -> Work {
+    let mut work = Work::default();
+    if cols.end <= cols.start || rows.end <= rows.start {
+        return work;
+    }
+    let (top, bottom) = (rows.start as f64, rows.end as f64);
+    let mut rests = std::mem::take(&mut scratch.rests);
+    rests.clear();
+    for points in polygons {
+        let (lo, hi) = y_range(points);
+        if !(hi > top && lo < bottom) {
+            continue;
+        }
+        let mut poly = Poly::from_slice(points);
+        if lo < top {
+            poly = clip::keep(&poly, 1, top, true);
+        }
+        rests.push((poly, lo.max(top), hi));
+    }
+    let (mut above, mut below) = (Poly::new(), Poly::new());
+    for j in rows {
+        let y1 = j as f64 + 1.0;
+        scratch.strips.clear();
+        for (rest, lo, hi) in rests.iter_mut() {
+            if rest.n < 3 || *lo >= y1 {
+                continue;
+            }
+            let strip = if *hi > y1 {
+                clip::split(rest, 1, y1, &mut above, &mut below);
+                *rest = below;
+                *lo = y1;
+                above
+            } else {
+                let strip = *rest;
+                rest.n = 0;
+                strip
+            };
+            scratch.strips.push((strip, 0, 0));
+        }
+        work += row_areas(j, cols.clone(), within, |i| accept(i, j), scratch, |i, a| emit(i, j, a));
+    }
+    scratch.rests = rests;
+    work
+}
+
+/// One row of [`rows_areas`]: the polygons' strips in the row are in `scratch.strips`.
+fn row_areas(
     j: usize,
     cols: std::ops::Range<usize>,
     within: Option<&Poly>,
@@ -139,36 +196,26 @@ pub(crate) fn row_areas<'a>(
     mut emit: impl FnMut(usize, f64),
 ) -> Work {
     let mut work = Work::default();
-    let Scratch { strips, full, pairs, pieces, next } = scratch;
+    let Scratch { rests: _, strips, full, pairs, pieces, next } = scratch;
     let (y0, y1) = (j as f64, j as f64 + 1.0);
     let (c0, c1) = (cols.start, cols.end);
-    if c1 <= c0 {
-        return work;
-    }
-    strips.clear();
     full.clear();
     full.resize(c1 - c0, false);
-    for points in polygons {
-        let (lo, hi) = y_range(points);
-        if !(hi > y0 && lo < y1) {
-            continue;
-        }
-        let poly = Poly::from_slice(points);
-        let strip = clip::keep(&clip::keep(&poly, 1, y0, true), 1, y1, false);
+    strips.retain_mut(|(strip, first_col, last_col)| {
         if strip.n < 3 {
-            continue;
+            return false;
         }
         let (xa, xb) = strip.range(0);
         if !(xb > c0 as f64 && xa < c1 as f64) {
-            continue;
+            return false;
         }
         let first = (xa.floor().max(c0 as f64)) as usize;
         let last = ((xb.ceil() as usize).max(1) - 1).min(c1 - 1);
         if first > last {
-            continue;
+            return false;
         }
         // Columns wholly inside: both cross-sections span them.
-        if let (Some(top), Some(bottom)) = (section(&strip, y0), section(&strip, y1)) {
+        if let (Some(top), Some(bottom)) = (section(strip, y0), section(strip, y1)) {
             let (a, b) = (top.0.max(bottom.0), top.1.min(bottom.1));
             if b - a >= 1.0 {
                 let from = (a.ceil().max(c0 as f64)) as usize;
@@ -178,8 +225,9 @@ pub(crate) fn row_areas<'a>(
                 }
             }
         }
-        strips.push((strip, first, last));
-    }
+        (*first_col, *last_col) = (first, last);
+        true
+    });
     pairs.clear();
     for (s, &(_, first, last)) in strips.iter().enumerate() {
         for i in first..=last {
@@ -439,14 +487,14 @@ mod tests {
         }
         let area_in_region = |poly: &[Pt]| {
             let mut got = Vec::new();
-            row_areas(
+            rows_areas(
                 polys(&[poly]).contours(),
-                0,
+                0..1,
                 0..1,
                 Some(&within),
-                |_| true,
+                |_, _| true,
                 &mut Scratch::default(),
-                |i, a| got.push((i, a)),
+                |i, _, a| got.push((i, a)),
             );
             assert_eq!(got.len(), 1, "{got:?}");
             got[0].1

@@ -148,17 +148,15 @@ fn receiver(
         out.work.covered_pixels += out.areas.len() as u64;
     } else if !pieces.is_empty() {
         let cols = (x0.floor().max(0.0) as usize)..(x1.ceil().max(0.0) as usize).min(width);
-        for j in r0..=r1 {
-            out.work += coverage::row_areas(
-                pieces.contours(),
-                j,
-                cols.clone(),
-                Some(&own),
-                |i| wanted(j * width + i),
-                coverage,
-                |i, a| out.areas.push(((j * width + i) as u32, a)),
-            );
-        }
+        out.work += coverage::rows_areas(
+            pieces.contours(),
+            r0..r1 + 1,
+            cols,
+            Some(&own),
+            |i, j| wanted(j * width + i),
+            coverage,
+            |i, j, a| out.areas.push(((j * width + i) as u32, a)),
+        );
     }
     out
 }
