@@ -23,6 +23,7 @@
 
 use glam::DVec3;
 use methods::Frame;
+use rayon::prelude::*;
 use scenes::{projection::look_basis, Light};
 
 /// Largest number of cells of the grid.
@@ -147,7 +148,7 @@ impl CasterGrid {
         }
         let all: Vec<u32> = (0..g.len() as u32).filter(|&t| frame.is_caster(t as usize)).collect();
         let boxes: Vec<Option<([f64; 4], [f64; 2])>> =
-            all.iter().map(|&t| space.bounds(&g.corners(t as usize))).collect();
+            all.par_iter().map(|&t| space.bounds(&g.corners(t as usize))).collect();
         let mut near = vec![f64::NEG_INFINITY; g.len()];
         let (ex, ey) = (region[2] - region[0], region[3] - region[1]);
         let valid = ex.is_finite() && ey.is_finite() && ex >= 0.0 && ey >= 0.0;
@@ -240,14 +241,17 @@ impl CasterGrid {
             }
         }
         grid.magnitude = caster_boxes
-            .iter()
+            .par_iter()
             .map(|b| b.iter().map(|v| v.abs()).filter(|v| v.is_finite()).fold(0.0, f64::max))
             .collect();
         if let Space::Directional { .. } = space {
-            grid.images = (0..g.len()).map(|t| space.image(&g.corners(t))).collect();
+            grid.images =
+                (0..g.len()).into_par_iter().map(|t| space.image(&g.corners(t))).collect();
         }
-        grid.lit_sides =
-            (0..g.len()).map(|t| LitSide::new(&g.corners(t), &frame.scene.light)).collect();
+        grid.lit_sides = (0..g.len())
+            .into_par_iter()
+            .map(|t| LitSide::new(&g.corners(t), &frame.scene.light))
+            .collect();
         grid.near = near;
         grid.boxes = caster_boxes;
         grid.all = all;

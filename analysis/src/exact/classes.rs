@@ -186,7 +186,8 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
                     }
                 });
             }
-            entries.sort_by_key(|e| (e.0, e.1.contour));
+            // The keys are unique (one entry per pixel and contour): an unstable sort gives the same order.
+            entries.sort_unstable_by_key(|e| (e.0, e.1.contour));
             let count = (r1 - r0) * width;
             let mut class = vec![PixelClass::Uncovered; count];
             let (mut counts, mut tiles) = (vec![0u32; count], Vec::new());

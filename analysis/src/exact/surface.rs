@@ -44,40 +44,35 @@ pub(crate) struct SurfaceShadows {
     pub work: Work,
 }
 
-/// One receiver's result.
-#[derive(Default)]
-struct Receiver {
-    areas: Vec<(u32, f64)>,
-    grazing: bool,
-    pairs: u64,
-    polygons: u64,
-    work: Work,
-}
-
-/// The shadows on the receiver triangles `receivers` (sorted triangle ids), over the pixels
-/// `k` each receiver `r` is wanted at (`wanted(r, k)`).
+/// The shadows on a set of receiver triangles (sorted triangle ids), over the pixels `k` each
+/// receiver `r` is wanted at (`wanted(r, k)`).
 pub(crate) fn shadows(
     frame: &Frame<'_>,
     grid: &CasterGrid,
     receivers: &[u32],
     wanted: impl Fn(u32, usize) -> bool + Sync,
 ) -> SurfaceShadows {
+    // Receivers in small runs: one result per run rather than per receiver, and runs small
+    // enough that a receiver with many pixels does not hold a thread while the other waits.
+    const RUN: usize = 16;
     let screen = Screen::new(frame);
-    let per: Vec<Receiver> = receivers
-        .par_iter()
-        .map_init(Scratch::default, |scratch, &r| {
-            receiver(frame, &screen, grid, r, |k| wanted(r, k), scratch)
+    let runs: Vec<SurfaceShadows> = receivers
+        .par_chunks(RUN)
+        .map_init(Scratch::default, |scratch, run| {
+            let mut out = SurfaceShadows::default();
+            for &r in run {
+                receiver(frame, &screen, grid, r, |k| wanted(r, k), scratch, &mut out);
+            }
+            out
         })
         .collect();
     let mut out = SurfaceShadows::default();
-    for (&r, res) in receivers.iter().zip(per) {
-        if res.grazing {
-            out.grazing.push(r);
-        }
-        out.areas.extend(res.areas);
-        out.pairs += res.pairs;
-        out.polygons += res.polygons;
-        out.work += res.work;
+    for run in runs {
+        out.grazing.extend(run.grazing);
+        out.areas.extend(run.areas);
+        out.pairs += run.pairs;
+        out.polygons += run.polygons;
+        out.work += run.work;
     }
     out
 }
@@ -90,7 +85,7 @@ struct Scratch {
     coverage: coverage::Scratch,
 }
 
-/// The shadow on receiver triangle `r`, over the pixels `k` with `wanted(k)`.
+/// The shadow on receiver triangle `r`, over the pixels `k` with `wanted(k)`, added to `out`.
 fn receiver(
     frame: &Frame<'_>,
     screen: &Screen,
@@ -98,19 +93,19 @@ fn receiver(
     r: u32,
     wanted: impl Fn(usize) -> bool,
     scratch: &mut Scratch,
-) -> Receiver {
+    out: &mut SurfaceShadows,
+) {
     let Scratch { candidates, pieces, coverage } = scratch;
     let g = &frame.geometry;
     let corners = g.corners(r as usize);
-    let mut out = Receiver::default();
-    let Some((own, _)) = screen.triangle(corners) else { return out };
+    let Some((own, _)) = screen.triangle(corners) else { return };
     let Some(n) = scenes::direction::unit((corners[1] - corners[0]).cross(corners[2] - corners[0]))
     else {
-        return out;
+        return;
     };
     let Some(setup) = Setup::for_plane(frame, n, n.dot(corners[0])) else {
-        out.grazing = true;
-        return out;
+        out.grazing.push(r);
+        return;
     };
     grid.query(&corners, candidates);
     let (x0, x1) = own.range(0);
@@ -137,15 +132,16 @@ fn receiver(
         }
     }
     let width = screen.width as usize;
-    let Some((r0, r1)) = clip::overlapped_rows(y0, y1, screen.height as usize) else { return out };
+    let Some((r0, r1)) = clip::overlapped_rows(y0, y1, screen.height as usize) else { return };
     if full {
+        let before = out.areas.len();
         clip::for_each_pixel(&own, r0, r1 + 1, width, |i, j, a| {
             let k = j * width + i;
             if wanted(k) {
                 out.areas.push((k as u32, a));
             }
         });
-        out.work.covered_pixels += out.areas.len() as u64;
+        out.work.covered_pixels += (out.areas.len() - before) as u64;
     } else if !pieces.is_empty() {
         let cols = (x0.floor().max(0.0) as usize)..(x1.ceil().max(0.0) as usize).min(width);
         out.work += coverage::rows_areas(
@@ -158,7 +154,6 @@ fn receiver(
             |i, j, a| out.areas.push(((j * width + i) as u32, a)),
         );
     }
-    out
 }
 
 /// Whether the convex polygon `outer` contains every vertex of `inner` (both with positive
