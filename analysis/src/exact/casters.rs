@@ -71,6 +71,11 @@ impl Space {
     /// when, under a spot light, the triangle reaches the light's plane or behind it (its
     /// image is unbounded).
     fn bounds(&self, tri: &[DVec3; 3]) -> Option<([f64; 4], [f64; 2])> {
+        self.bounds_of(tri)
+    }
+
+    /// [`Self::bounds`] of any set of points.
+    fn bounds_of(&self, tri: &[DVec3]) -> Option<([f64; 4], [f64; 2])> {
         let mut b = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
         let mut z = [f64::INFINITY, f64::NEG_INFINITY];
         for &p in tri {
@@ -275,12 +280,24 @@ impl CasterGrid {
     /// The casters that can shadow receiver triangle `tri`, sorted, without duplicates, into
     /// `out` (cleared first).
     pub fn query(&self, tri: &[DVec3; 3], out: &mut Vec<u32>) {
+        self.query_part(tri, None, out);
+    }
+
+    /// [`Self::query`] for the part of triangle `tri` inside the convex hull of `part`
+    /// (points of its plane, e.g. where a pixel's corner rays meet it): the casters that can
+    /// shadow a point of `tri` within `part`. The light-space box is that of both, the depths
+    /// the nearer of their farthest, and the lit-side test asks `part`'s points.
+    pub fn query_part(&self, tri: &[DVec3; 3], part: Option<&[DVec3; 4]>, out: &mut Vec<u32>) {
         out.clear();
-        let Some((b, z)) = self.space.bounds(tri) else {
+        let Some((mut b, z)) = self.space.bounds(tri) else {
             out.extend_from_slice(&self.all);
             return;
         };
-        let far = z[1];
+        let mut far = z[1];
+        if let Some((pb, pz)) = part.and_then(|p| self.space.bounds_of(p)) {
+            b = [b[0].max(pb[0]), b[1].max(pb[1]), b[2].min(pb[2]), b[3].min(pb[3])];
+            far = far.min(pz[1]);
+        }
         let own = b.iter().map(|v| v.abs()).fold(0.0, f64::max);
         // The boxes must overlap; both are within a few roundings of the true boxes, so they
         // are compared with a margin of that size.
@@ -311,13 +328,18 @@ impl CasterGrid {
         // `images_separated`), and the receiver must reach beyond the caster's lit side.
         let image = (!self.images.is_empty()).then(|| self.space.image(tri));
         let tri_magnitude = tri.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
+        let lit_points: &[DVec3] = part.map_or(tri, |p| p);
+        let lit_magnitude = match part {
+            Some(p) => p.iter().map(|p| p.abs().max_element()).fold(tri_magnitude, f64::max),
+            None => tri_magnitude,
+        };
         out.retain(|&c| {
             !image.is_some_and(|r| {
                 let cb = &self.boxes[c as usize];
                 let extent =
                     (cb[2].max(b[2]) - cb[0].min(b[0])).max(cb[3].max(b[3]) - cb[1].min(b[1]));
                 images_separated(&r, &self.images[c as usize], margin(c), extent)
-            }) && !self.lit_sides[c as usize].holds(tri, tri_magnitude)
+            }) && !self.lit_sides[c as usize].holds(lit_points, lit_magnitude)
         });
     }
 }
@@ -368,7 +390,7 @@ impl LitSide {
     /// a few roundings times [`Self::skew`] of the true unit normal, so a height
     /// `n·(p - corner)` is within `64 ε M skew` of the true one (`M` the larger magnitude of
     /// both triangles' coordinates, which bounds `|p - corner|` by `2 √3 M`).
-    fn holds(&self, tri: &[DVec3; 3], magnitude: f64) -> bool {
+    fn holds(&self, tri: &[DVec3], magnitude: f64) -> bool {
         let tol = 64.0 * f64::EPSILON * self.magnitude.max(magnitude) * self.skew;
         // NaN (no lit side, or an infinite skew) never holds.
         tri.iter().all(|&p| self.n.dot(p - self.corner) >= -tol)

@@ -81,6 +81,10 @@ pub struct Classes {
     pub tiles: Vec<u32>,
     /// Pixel-triangle overlaps measured.
     pub overlaps: u64,
+    /// `(pixel, triangle)` for every triangle whose screen polygon overlaps an `edge` pixel,
+    /// however little, pixel by pixel: the only triangles a camera ray through the pixel can
+    /// meet.
+    pub edge_overlaps: Vec<(u32, u32)>,
 }
 
 impl Classes {
@@ -179,11 +183,11 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
             let mut entries: Vec<(u32, Overlap)> = Vec::new();
             for &k in &items[offsets[band]..offsets[band + 1]] {
                 let poly = projected.poly(k as usize);
+                // Every overlap is kept, however small: the rule counts those above
+                // `MIN_OVERLAP`, the edge pixels' rays may meet any.
                 clip::for_each_pixel(&poly, r0, r1, width, |i, j, area| {
-                    if area > MIN_OVERLAP {
-                        let local = ((j - r0) * width + i) as u32;
-                        entries.push((local, Overlap { contour: k, area }));
-                    }
+                    let local = ((j - r0) * width + i) as u32;
+                    entries.push((local, Overlap { contour: k, area }));
                 });
             }
             // The keys are unique (one entry per pixel and contour): an unstable sort gives the same order.
@@ -193,20 +197,33 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
             let (mut counts, mut tiles) = (vec![0u32; count], Vec::new());
             let mut group: Vec<Overlap> = Vec::new();
             let mut scratch = Scratch::default();
-            let mut at = 0;
+            let (mut at, mut overlaps, mut edge_overlaps) = (0, 0, Vec::new());
             while at < entries.len() {
                 let local = entries[at].0 as usize;
+                let first = at;
                 group.clear();
                 while at < entries.len() && entries[at].0 as usize == local {
-                    group.push(entries[at].1);
+                    if entries[at].1.area > MIN_OVERLAP {
+                        group.push(entries[at].1);
+                    }
                     at += 1;
                 }
+                if group.is_empty() {
+                    continue;
+                }
+                overlaps += group.len() as u64;
                 let (i, j) = (local % width, r0 + local / width);
                 let before = tiles.len();
                 class[local] = ctx.classify_pixel(i, j, &group, &mut scratch, &mut tiles);
                 counts[local] = (tiles.len() - before) as u32;
+                if class[local] == PixelClass::Edge {
+                    let k = (j * width + i) as u32;
+                    let seen =
+                        entries[first..at].iter().map(|e| (k, projected.tri[e.1.contour as usize]));
+                    edge_overlaps.extend(seen);
+                }
             }
-            (class, counts, tiles, entries.len() as u64)
+            Band { class, counts, tiles, overlaps, edge_overlaps }
         })
         .collect();
     let mut out = Classes {
@@ -216,17 +233,19 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
         offsets: Vec::with_capacity(width * height + 1),
         tiles: Vec::new(),
         overlaps: 0,
+        edge_overlaps: Vec::new(),
     };
     out.offsets.push(0);
-    for (class, counts, tiles, overlaps) in results {
-        out.class.extend(class);
+    for band in results {
+        out.class.extend(band.class);
         let mut end = out.tiles.len() as u32;
-        for c in counts {
+        for c in band.counts {
             end += c;
             out.offsets.push(end);
         }
-        out.tiles.extend(tiles);
-        out.overlaps += overlaps;
+        out.tiles.extend(band.tiles);
+        out.overlaps += band.overlaps;
+        out.edge_overlaps.extend(band.edge_overlaps);
     }
     out
 }
@@ -240,9 +259,19 @@ struct Scratch {
     members: Vec<usize>,
 }
 
-/// One band of rows' result: each pixel's class and number of tiles, the tiles, and the
-/// pixel-triangle overlaps measured.
-type Band = (Vec<PixelClass>, Vec<u32>, Vec<u32>, u64);
+/// One band of rows' result.
+struct Band {
+    /// Each pixel's class.
+    class: Vec<PixelClass>,
+    /// Each pixel's number of tiles.
+    counts: Vec<u32>,
+    /// The tiles, pixel after pixel.
+    tiles: Vec<u32>,
+    /// Pixel-triangle overlaps measured (above [`MIN_OVERLAP`]).
+    overlaps: u64,
+    /// `(pixel, triangle)` for every triangle overlapping one of the band's `edge` pixels.
+    edge_overlaps: Vec<(u32, u32)>,
+}
 
 /// What the per-pixel rule reads.
 struct Context<'a> {

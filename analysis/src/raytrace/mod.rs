@@ -196,13 +196,16 @@ struct Tracer<'a> {
 
 impl<'a> Tracer<'a> {
     /// Builds the BVHs (stage [`STAGE_BVH_BUILD`]) and the ray set-up for `frame`, whose rays
-    /// will trace `samples` sub-samples.
+    /// will trace `samples` sub-samples, over the triangles `t` with `among[t]` (all with
+    /// `None`).
     fn new(
         frame: &'a Frame<'a>,
         pattern: &'a SamplePattern,
         samples: u64,
+        among: Option<&[bool]>,
         rec: &mut Recorder,
     ) -> Result<Self, ReferenceError> {
+        let among = |t: usize| among.is_none_or(|a| a[t]);
         let light = match frame.scene.light {
             Light::Directional { direction } => {
                 let Some(along) = scenes::direction::unit(direction) else {
@@ -255,9 +258,9 @@ impl<'a> Tracer<'a> {
         let in_bvhs = geometry.len() + if casters < geometry.len() { casters } else { 0 };
         let alloc = Allocator { estimate: memory_estimate(in_bvhs as u64, samples) };
         let (camera_accel, caster_accel) = rec.stages.time(STAGE_BVH_BUILD, || {
-            let all = Accel::build(geometry, |_| true, pass, &alloc)?;
+            let all = Accel::build(geometry, among, pass, &alloc)?;
             let casters = if casters < geometry.len() {
-                Some(Accel::build(geometry, |t| frame.is_caster(t), pass, &alloc)?)
+                Some(Accel::build(geometry, |t| among(t) && frame.is_caster(t), pass, &alloc)?)
             } else {
                 None
             };
@@ -352,7 +355,7 @@ impl RayTrace {
         let rate = self.pattern.rate() as usize;
         let per_row = w as usize * rate;
         let n = per_row * h as usize;
-        let tracer = Tracer::new(frame, &self.pattern, n as u64, rec)?;
+        let tracer = Tracer::new(frame, &self.pattern, n as u64, None, rec)?;
         let alloc = tracer.alloc;
         let rows = rec.stages.time(STAGE_RAY_TRACING, || {
             (0..h)
@@ -412,17 +415,31 @@ impl Reference for RayTrace {
 
 impl RayTrace {
     /// Traces the pixels where `mask` is true (every pixel with `None`); the others are lit
-    /// (1) and not evaluated, and cost no ray. `exact` uses it for its `edge` pixels.
+    /// (1) and not evaluated, and cost no ray.
     pub fn evaluate_pixels(
         &self,
         frame: &Frame<'_>,
         mask: Option<&[bool]>,
         rec: &mut Recorder,
     ) -> Result<ReferenceImage, ReferenceError> {
+        self.evaluate_pixels_among(frame, mask, None, rec)
+    }
+
+    /// [`Self::evaluate_pixels`] with the BVHs built over the triangles `t` with `among[t]`
+    /// only (all with `None`): the caller vouches that every triangle the camera rays of the
+    /// `mask` pixels and the shadow rays from their hits can meet is among them, so every
+    /// decision is the same as over all triangles. `exact` uses it for its `edge` pixels.
+    pub fn evaluate_pixels_among(
+        &self,
+        frame: &Frame<'_>,
+        mask: Option<&[bool]>,
+        among: Option<&[bool]>,
+        rec: &mut Recorder,
+    ) -> Result<ReferenceImage, ReferenceError> {
         let (w, h) = (frame.width(), frame.height());
         let rate = self.pattern.rate() as usize;
         let n = (w as usize) * (h as usize);
-        let tracer = Tracer::new(frame, &self.pattern, (n * rate) as u64, rec)?;
+        let tracer = Tracer::new(frame, &self.pattern, (n * rate) as u64, among, rec)?;
         let alloc = tracer.alloc;
         let wanted = |i: u32, j: u32| mask.is_none_or(|m| m[(j * w + i) as usize]);
         let rows = rec.stages.time(STAGE_RAY_TRACING, || {
