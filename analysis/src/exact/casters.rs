@@ -324,8 +324,8 @@ impl CasterGrid {
         }
         out.sort_unstable();
         out.dedup();
-        // Then, once per caster: under a directional light the images must overlap (see
-        // `images_separated`), and the receiver must reach beyond the caster's lit side.
+        // Then, once per caster: the receiver must reach beyond the caster's lit side, and under
+        // a directional light the images must overlap (see `images_separated`).
         let image = (!self.images.is_empty()).then(|| self.space.image(tri));
         let tri_magnitude = tri.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
         let lit_points: &[DVec3] = part.map_or(tri, |p| p);
@@ -334,12 +334,13 @@ impl CasterGrid {
             None => tri_magnitude,
         };
         out.retain(|&c| {
-            !image.is_some_and(|r| {
-                let cb = &self.boxes[c as usize];
-                let extent =
-                    (cb[2].max(b[2]) - cb[0].min(b[0])).max(cb[3].max(b[3]) - cb[1].min(b[1]));
-                images_separated(&r, &self.images[c as usize], margin(c), extent)
-            }) && !self.lit_sides[c as usize].holds(lit_points, lit_magnitude)
+            !self.lit_sides[c as usize].holds(lit_points, lit_magnitude)
+                && !image.is_some_and(|r| {
+                    let cb = &self.boxes[c as usize];
+                    let extent =
+                        (cb[2].max(b[2]) - cb[0].min(b[0])).max(cb[3].max(b[3]) - cb[1].min(b[1]));
+                    images_separated(&r, &self.images[c as usize], margin(c), extent)
+                })
         });
     }
 }

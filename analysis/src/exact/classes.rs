@@ -50,6 +50,7 @@ use crate::pixel_class::PixelClass;
 use glam::DVec3;
 use methods::{raster::NO_TRIANGLE, Frame};
 use rayon::prelude::*;
+use scenes::projection::Ray;
 
 /// Smallest area (pixels) of a triangle's overlap with a square, or of two triangles' overlap,
 /// that counts: below it the overlap is the rounding of a shared edge or corner.
@@ -254,6 +255,7 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
 #[derive(Default)]
 struct Scratch {
     corners: Vec<[DVec3; 3]>,
+    normals: Vec<DVec3>,
     in_c: Vec<bool>,
     stack: Vec<usize>,
     members: Vec<usize>,
@@ -305,9 +307,12 @@ impl Context<'_> {
         };
         let winding = p.winding[group[seed].contour as usize];
         let object = g.object[seed_tri as usize];
-        let Scratch { corners, in_c, stack, members } = scratch;
+        let Scratch { corners, normals, in_c, stack, members } = scratch;
         corners.clear();
         corners.extend(group.iter().map(|o| g.corners(tri(o))));
+        normals.clear();
+        normals.extend(corners.iter().map(|c| (c[1] - c[0]).cross(c[2] - c[0])));
+        let mut rays = None;
         // Rule 3: the continuous surface through the seed.
         in_c.clear();
         in_c.resize(group.len(), false);
@@ -365,7 +370,11 @@ impl Context<'_> {
         for u in (0..group.len()).filter(|&f| !in_c[f]) {
             for &t in members.iter() {
                 if depth(u)[0] >= depth(t)[1]
-                    || self.behind_on_square(&corners[u], &corners[t], i, j)
+                    || behind_on_square(
+                        (normals[u], corners[u][0]),
+                        (normals[t], corners[t][0]),
+                        rays.get_or_insert_with(|| self.corner_rays(i, j)),
+                    )
                 {
                     continue;
                 }
@@ -386,23 +395,10 @@ impl Context<'_> {
         }
     }
 
-    /// Whether the plane of triangle `u` is nowhere nearer to the camera than that of `t` over
-    /// the square of pixel `(i, j)`, decided at its four corners without tolerance: where both
-    /// planes lie in front of the camera, the sign of `depth_u - depth_t` is that of
-    /// `1 / depth_t - 1 / depth_u`, an affine function of the screen point, so the corners of
-    /// the square decide for the whole square and for every overlap inside it. `u` then passes
-    /// rule 5 against `t` (a point where `u` is at least as far as `t` is not in front beyond
-    /// any tolerance) without the overlap being clipped. `false` means the overlap decides.
-    fn behind_on_square(&self, u: &[DVec3; 3], t: &[DVec3; 3], i: usize, j: usize) -> bool {
-        let normal = |c: &[DVec3; 3]| (c[1] - c[0]).cross(c[2] - c[0]);
-        let (nu, nt) = (normal(u), normal(t));
+    /// The camera rays through the four corners of pixel `(i, j)`'s square.
+    fn corner_rays(&self, i: usize, j: usize) -> [Ray; 4] {
         let (x, y) = (i as f64, j as f64);
-        [[x, y], [x + 1.0, y], [x, y + 1.0], [x + 1.0, y + 1.0]].iter().all(|&corner| {
-            let ray = self.screen.ray(corner);
-            let du = nu.dot(u[0] - ray.origin) / nu.dot(ray.direction);
-            let dt = nt.dot(t[0] - ray.origin) / nt.dot(ray.direction);
-            dt > 0.0 && dt.is_finite() && du.is_finite() && du >= dt
-        })
+        [[x, y], [x + 1.0, y], [x, y + 1.0], [x + 1.0, y + 1.0]].map(|c| self.screen.ray(c))
     }
 
     /// Whether the plane of triangle `u` is nearer to the camera than that of `t` along the
@@ -421,6 +417,23 @@ impl Context<'_> {
         let magnitude = u.iter().chain(t).map(|&c| (c - o).abs().max_element()).fold(0.0, f64::max);
         du < dt - DEPTH_TOLERANCE * magnitude
     }
+}
+
+/// Whether the plane of triangle `u` (normal and a corner) is nowhere nearer to the camera
+/// than that of `t` over the square of a pixel, decided along the camera rays through its four
+/// corners (`rays`) without tolerance: where both planes lie in front of the camera, the sign
+/// of `depth_u - depth_t` is that of `1 / depth_t - 1 / depth_u`, an affine function of the
+/// screen point, so the corners of the square decide for the whole square and for every
+/// overlap inside it. `u` then passes rule 5 against `t` (a point where `u` is at least as far
+/// as `t` is not in front beyond any tolerance) without the overlap being clipped. `false`
+/// means the overlap decides.
+fn behind_on_square(u: (DVec3, DVec3), t: (DVec3, DVec3), rays: &[Ray; 4]) -> bool {
+    let ((nu, cu), (nt, ct)) = (u, t);
+    rays.iter().all(|ray| {
+        let du = nu.dot(cu - ray.origin) / nu.dot(ray.direction);
+        let dt = nt.dot(ct - ray.origin) / nt.dot(ray.direction);
+        dt > 0.0 && dt.is_finite() && du.is_finite() && du >= dt
+    })
 }
 
 /// Whether two triangles share an edge: two corners at equal positions.
