@@ -82,6 +82,10 @@ pub struct Classes {
     pub tiles: Vec<u32>,
     /// Pixel-triangle overlaps measured.
     pub overlaps: u64,
+    /// Every triangle's screen polygon ([`Screen::triangle`]), from which the classes were
+    /// decided: triangle `t`'s is contour `contour_of[t]` (`u32::MAX`: none).
+    pub(crate) screen: ScreenPolygons,
+    pub(crate) contour_of: Vec<u32>,
     /// `(pixel, triangle)` for every triangle whose screen polygon overlaps an `edge` pixel,
     /// however little, pixel by pixel: the only triangles a camera ray through the pixel can
     /// meet.
@@ -92,6 +96,14 @@ impl Classes {
     /// The triangles that tile pixel `k`'s square.
     pub fn tiles_of(&self, k: usize) -> &[u32] {
         &self.tiles[self.offsets[k] as usize..self.offsets[k + 1] as usize]
+    }
+
+    /// Triangle `t`'s screen polygon, as [`Screen::triangle`] gives it (without the winding);
+    /// `None` when it has none.
+    pub(crate) fn screen_polygon(&self, t: u32) -> Option<Poly> {
+        let k = *self.contour_of.get(t as usize)?;
+        (k != u32::MAX)
+            .then(|| Poly::from_slice(&self.screen.points[self.screen.ranges[k as usize].clone()]))
     }
 }
 
@@ -235,6 +247,8 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
         tiles: Vec::new(),
         overlaps: 0,
         edge_overlaps: Vec::new(),
+        screen: ScreenPolygons::default(),
+        contour_of: vec![u32::MAX; frame.geometry.len()],
     };
     out.offsets.push(0);
     for band in results {
@@ -248,6 +262,10 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
         out.overlaps += band.overlaps;
         out.edge_overlaps.extend(band.edge_overlaps);
     }
+    for (k, &t) in projected.tri.iter().enumerate() {
+        out.contour_of[t as usize] = k as u32;
+    }
+    out.screen = projected.polys;
     out
 }
 

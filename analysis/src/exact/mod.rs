@@ -314,7 +314,8 @@ fn evaluate(
         let wanted =
             |r: u32, k: usize| class[k] == PixelClass::Surface && classes.tiles_of(k).contains(&r);
         let s = rec.stages.time("surface shadows", || {
-            let s = surface::shadows(frame, grid, &receivers, wanted);
+            let polygon = |r: u32| classes.screen_polygon(r);
+            let s = surface::shadows(frame, grid, &receivers, polygon, wanted);
             for &(k, a) in &s.areas {
                 shadowed[k as usize] += a;
             }

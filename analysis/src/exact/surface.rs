@@ -44,12 +44,14 @@ pub(crate) struct SurfaceShadows {
     pub work: Work,
 }
 
-/// The shadows on a set of receiver triangles (sorted triangle ids), over the pixels `k` each
-/// receiver `r` is wanted at (`wanted(r, k)`).
+/// The shadows on a set of receiver triangles (sorted triangle ids, with their screen polygons
+/// `polygon(r)` as [`Screen::triangle`] gives them), over the pixels `k` each receiver `r` is
+/// wanted at (`wanted(r, k)`).
 pub(crate) fn shadows(
     frame: &Frame<'_>,
     grid: &CasterGrid,
     receivers: &[u32],
+    polygon: impl Fn(u32) -> Option<Poly> + Sync,
     wanted: impl Fn(u32, usize) -> bool + Sync,
 ) -> SurfaceShadows {
     // Receivers in small runs: one result per run rather than per receiver, and runs small
@@ -61,7 +63,8 @@ pub(crate) fn shadows(
         .map_init(Scratch::default, |scratch, run| {
             let mut out = SurfaceShadows::default();
             for &r in run {
-                receiver(frame, &screen, grid, r, |k| wanted(r, k), scratch, &mut out);
+                let own = polygon(r);
+                receiver(frame, &screen, grid, r, own, |k| wanted(r, k), scratch, &mut out);
             }
             out
         })
@@ -91,6 +94,7 @@ fn receiver(
     screen: &Screen,
     grid: &CasterGrid,
     r: u32,
+    own: Option<Poly>,
     wanted: impl Fn(usize) -> bool,
     scratch: &mut Scratch,
     out: &mut SurfaceShadows,
@@ -98,7 +102,7 @@ fn receiver(
     let Scratch { candidates, pieces, coverage } = scratch;
     let g = &frame.geometry;
     let corners = g.corners(r as usize);
-    let Some((own, _)) = screen.triangle(corners) else { return };
+    let Some(own) = own else { return };
     let Some(n) = scenes::direction::unit((corners[1] - corners[0]).cross(corners[2] - corners[0]))
     else {
         return;
