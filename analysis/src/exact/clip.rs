@@ -151,11 +151,12 @@ fn split_into(
 pub(crate) fn bin_by_band(
     count: usize,
     height: usize,
-    rows: impl Fn(usize) -> Option<(usize, usize)>,
+    rows: impl Fn(usize) -> Option<(usize, usize)> + Sync,
 ) -> (Vec<usize>, Vec<u32>) {
+    use rayon::prelude::*;
     let bands = height.div_ceil(BAND);
     let mut offsets = vec![0usize; bands + 1];
-    let ranges: Vec<Option<(usize, usize)>> = (0..count).map(&rows).collect();
+    let ranges: Vec<Option<(usize, usize)>> = (0..count).into_par_iter().map(&rows).collect();
     for &(a, b) in ranges.iter().flatten() {
         for band in a / BAND..=b / BAND {
             offsets[band + 1] += 1;
