@@ -42,8 +42,11 @@
 //!
 //! # Precision
 //!
-//! The only approximations are the `f64` rounding of the projections and clips, and the
-//! pieces of an uncovered part below `1e-24` px² that the cuts drop ([`coverage`]). Every cut
+//! The only approximations are the `f64` rounding of the projections and clips, the
+//! pieces of an uncovered part below `1e-24` px² that the cuts drop ([`coverage`]), and the
+//! casters the light-space grid rules out for a receiver lying on their lit side within the
+//! rounding of their plane ([`casters`]: shared corners lie in it exactly; a corner a
+//! rounding beyond it could be shadowed over a sliver of that width at most). Every cut
 //! is computed relative to its pixel's corner, on coordinates in `[0, 1]`; no union is snapped
 //! to a grid, and no topology is built that rounding could make inconsistent.
 //!
