@@ -19,6 +19,15 @@
 //! Neither culling changes a result: a depth-culled triangle's depth (clamped to its corners'
 //! range) is at or beyond every threshold in the node, and a dark sample stays dark.
 //!
+//! The per-sample test ([`Blocker::shadows_boxed`]) runs its cheap parts first: the sample's
+//! own triangle, the threshold against the nearest corner's depth, then coverage, then the
+//! plane's depth (a division) only where the threshold lies within the corners' depth range.
+//! Coverage evaluates each edge function in `f64` with a forward error bound
+//! ([`edge_sign`]) and calls Shewchuk's exact `orient2d` (with the top-left rule) only where
+//! the bound cannot decide the sign, so the answer is the exact predicate's: for a long thin
+//! caster most samples in its bounding box are far outside an edge and cost a few
+//! multiplications (the paper does not say how its leaves test points).
+//!
 //! Parallel scheme: the BSP's top [`TOP_LEVELS`] levels are walked per triangle first
 //! (binning, in parallel over fixed chunks of triangles), giving for each *frontier* node (at
 //! depth [`TOP_LEVELS`], or a shallower leaf) the triangles that reach it, in triangle order.
@@ -26,7 +35,8 @@
 //! rasterizes its triangles in triangle order. Samples are thus attenuated in the same order
 //! whatever the scheduling, and the result, the counters included, does not depend on the
 //! number of threads. Nodes above the frontier carry no occlusion state (they are only depth
-//! culled).
+//! culled). A chunk keeps each blocker that reaches the frontier once and its bins hold
+//! indices into that list, so a blocker reaching several subtrees is not copied.
 
 use super::{
     bsp::{Bsp, Node},
@@ -41,6 +51,10 @@ use scenes::{projection::ProjectionKind, Geometry, Projector};
 
 /// Depth of the frontier nodes, whose subtrees are the parallel tasks (up to 64).
 pub const TOP_LEVELS: usize = 6;
+
+/// A leaf's samples in a triangle's bounding box are tested one by one up to this many;
+/// beyond, the edge mask ([`Blocker::not_outside`]) first drops those certainly outside.
+const SCALAR_MAX: u32 = 6;
 
 /// Triangles per binning task.
 const BIN_CHUNK: usize = 1024;
@@ -133,6 +147,11 @@ pub struct Blocker {
     outline: [DVec2; 5],
     /// Corners of the outline (3, or 4 after near clipping).
     corners: usize,
+    /// Edge vectors `outline[e + 1] - outline[e]`, for the filter of [`Blocker::covers`].
+    edges: [DVec2; 4],
+    /// Per edge, a bound on the rounding error of its edge function anywhere in the bounding
+    /// box (see [`Blocker::not_outside`]).
+    edge_bounds: [f64; 4],
     /// Bounding box of the outline.
     lo: DVec2,
     hi: DVec2,
@@ -190,10 +209,19 @@ impl Blocker {
             outline[..count].reverse();
         }
         outline[count] = outline[0];
+        let mut edges = [DVec2::ZERO; 4];
+        for (e, d) in edges[..count].iter_mut().enumerate() {
+            *d = outline[e + 1] - outline[e];
+        }
         let (lo, hi) = outline[..count].iter().fold(
             (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
             |(lo, hi), &p| (lo.min(p), hi.max(p)),
         );
+        let size = hi - lo;
+        let mut edge_bounds = [0.0; 4];
+        for (bound, d) in edge_bounds[..count].iter_mut().zip(&edges) {
+            *bound = EDGE_FILTER_BOUND * (d.x.abs() * size.y + d.y.abs() * size.x) + f64::MIN_POSITIVE;
+        }
         // The plane n·p = offset met by the light's ray through (x, y), with the projector's
         // sx = 2x / W - 1 and sy = 1 - 2y / H (see `Projector::ray`).
         let offset = normal.dot(corners[0]);
@@ -217,6 +245,8 @@ impl Blocker {
         Some(Self {
             outline,
             corners: count,
+            edges,
+            edge_bounds,
             lo,
             hi,
             num,
@@ -262,9 +292,45 @@ impl Blocker {
     }
 
     /// Whether `p` lies inside the outline: exact orientation predicates, ties on an edge
-    /// decided by the rasterizer's top-left rule ([`crate::raster::inside_edge`]).
+    /// decided by the rasterizer's top-left rule ([`crate::raster::inside_edge`]). Each edge is
+    /// first decided by the floating-point filter [`edge_sign`]; the exact predicate runs only
+    /// where the filter cannot decide, so the answer is always the exact one.
     #[inline]
     pub fn covers(&self, p: DVec2) -> bool {
+        (0..self.corners).all(|e| {
+            let a = self.outline[e];
+            match edge_sign(a, self.edges[e], p) {
+                Some(inside) => inside,
+                None => inside_edge(a, self.outline[e + 1], p),
+            }
+        })
+    }
+
+    /// One bit per sample `i` (coordinates `xs[i]`, `ys[i]`, at most 64): cleared when the
+    /// sample lies certainly outside an edge, by the floating-point edge function against the
+    /// edge's bound for the whole bounding box (in `edge_bounds`: [`EDGE_FILTER_BOUND`] times
+    /// the largest `|d.x (p.y - a.y)| + |d.y (p.x - a.x)|` there, which bounds every term of
+    /// [`edge_sign`]'s analysis for a point of the box). Meaningful only for samples inside the
+    /// bounding box; a cleared bit means [`Blocker::covers`] is false. Branch-free, one edge at a
+    /// time over the samples, so that the compiler can vectorise it.
+    #[inline]
+    pub fn not_outside(&self, xs: &[f64], ys: &[f64]) -> u64 {
+        let mut keep = u64::MAX;
+        for e in 0..self.corners {
+            let (a, d, bound) = (self.outline[e], self.edges[e], self.edge_bounds[e]);
+            let mut bits = 0u64;
+            for (i, (&x, &y)) in xs.iter().zip(ys).enumerate() {
+                let det = d.x * (y - a.y) - d.y * (x - a.x);
+                bits |= u64::from(!(det < -bound)) << i;
+            }
+            keep &= bits;
+        }
+        keep
+    }
+
+    /// Whether `p` lies inside the outline by the exact predicates alone (no filter).
+    #[cfg(test)]
+    fn covers_exactly(&self, p: DVec2) -> bool {
         (0..self.corners).all(|e| inside_edge(self.outline[e], self.outline[e + 1], p))
     }
 
@@ -282,10 +348,15 @@ impl Blocker {
     }
 
     /// Whether the triangle shadows `s`, which lies in its bounding box: not the sample's own
-    /// triangle, in front of its threshold depth, and covering it.
-    #[inline(never)]
+    /// triangle, in front of its threshold depth, and covering it. The clamped depth lies in
+    /// `dmin..=dmax`, so a threshold at or in front of `dmin` rejects the sample, and one
+    /// beyond `dmax` accepts it, without the plane's division; the cheap tests run first.
+    #[inline]
     pub fn shadows_boxed(&self, s: &Sample) -> bool {
-        s.tri != self.id && self.depth_at(s.x, s.y) < s.zt && self.covers(DVec2::new(s.x, s.y))
+        s.tri != self.id
+            && self.dmin < s.zt
+            && self.covers(DVec2::new(s.x, s.y))
+            && (self.dmax < s.zt || self.depth_at(s.x, s.y) < s.zt)
     }
 
     /// Whether the triangle shadows `s` (the predicate the hierarchy evaluates in leaves).
@@ -295,11 +366,39 @@ impl Blocker {
     }
 }
 
+/// Relative error bound of the filter of [`edge_sign`]: `8u` (`u = 2^-53`, the unit roundoff),
+/// twice the bound `4u` of its rounded operations (see there).
+pub const EDGE_FILTER_BOUND: f64 = 4.0 * f64::EPSILON;
+
+/// The sign of `orient2d(a, a + d, p)` where a floating-point evaluation decides it: `Some(true)`
+/// when positive, `Some(false)` when negative, `None` when it may be zero or the rounding may
+/// hide its sign (the caller then runs the exact predicate). `d` is the edge vector as computed
+/// (`b - a` rounded), and the determinant `d.x (p.y - a.y) - d.y (p.x - a.x)` equals
+/// `orient2d(a, b, p)` in exact arithmetic. Evaluated in `f64`, each of the two products carries
+/// the rounding of one difference and of the product (relative error below `3u`, `u = 2^-53`),
+/// and the final difference one more, so the result lies within `4u (|u1| + |u2|)` of the exact
+/// value (plus underflow, at most `f64::MIN_POSITIVE`); the filter trusts a sign only beyond
+/// twice that ([`EDGE_FILTER_BOUND`]). Non-finite terms leave the sign undecided.
+#[inline(always)]
+pub fn edge_sign(a: DVec2, d: DVec2, p: DVec2) -> Option<bool> {
+    let (u, v) = (d.x * (p.y - a.y), d.y * (p.x - a.x));
+    let det = u - v;
+    let bound = EDGE_FILTER_BOUND * (u.abs() + v.abs()) + f64::MIN_POSITIVE;
+    if det > bound {
+        Some(true)
+    } else if det < -bound {
+        Some(false)
+    } else {
+        None
+    }
+}
+
 /// The triangles of one chunk that reach each frontier node, in triangle order.
 struct Chunk {
-    /// For each frontier slot, the blockers that reach it (copied, so that each subtree
-    /// task reads its own triangles sequentially).
-    bins: Vec<Vec<Blocker>>,
+    /// The chunk's blockers that reach at least one frontier node, in triangle order.
+    blockers: Vec<Blocker>,
+    /// For each frontier slot, the indices in `blockers` of those that reach it, increasing.
+    bins: Vec<Vec<u32>>,
     counters: Counters,
 }
 
@@ -312,42 +411,52 @@ struct Binner<'a> {
 }
 
 impl Binner<'_> {
-    /// Bins a blocker into every frontier node it reaches.
-    fn bin(&self, b: &Blocker, bins: &mut [Vec<Blocker>], c: &mut Counters) {
+    /// Bins a blocker into every frontier node it reaches, as index `index`; returns whether
+    /// it reached one.
+    fn bin(&self, b: &Blocker, index: u32, bins: &mut [Vec<u32>], c: &mut Counters) -> bool {
         let root = &self.nodes[0];
         if b.overlaps(root.lo, root.hi) {
             c.bsp_nodes_visited += 1;
-            self.descend(b, 0, 0, bins, c);
+            self.descend(b, index, 0, 0, bins, c)
+        } else {
+            false
         }
     }
 
-    /// `g` overlaps the blocker and was counted as visited.
+    /// `g` overlaps the blocker and was counted as visited; returns whether the blocker
+    /// reached a frontier node.
     fn descend(
         &self,
         b: &Blocker,
+        index: u32,
         g: usize,
         depth: usize,
-        bins: &mut [Vec<Blocker>],
+        bins: &mut [Vec<u32>],
         c: &mut Counters,
-    ) {
+    ) -> bool {
         let node = &self.nodes[g];
         if self.depth_culling && b.dmin >= node.max_zt {
             c.nodes_depth_culled += 1;
-            return;
+            return false;
         }
         if depth == TOP_LEVELS || node.is_leaf() {
-            if let Ok(slot) = self.frontier.binary_search(&g) {
-                bins[slot].push(*b);
-            }
-            return;
+            return match self.frontier.binary_search(&g) {
+                Ok(slot) => {
+                    bins[slot].push(index);
+                    true
+                }
+                Err(_) => false,
+            };
         }
+        let mut reached = false;
         for child in [g + 1, g + node.right as usize] {
             let n = &self.nodes[child];
             if b.overlaps(n.lo, n.hi) {
                 c.bsp_nodes_visited += 1;
-                self.descend(b, child, depth + 1, bins, c);
+                reached |= self.descend(b, index, child, depth + 1, bins, c);
             }
         }
+        reached
     }
 }
 
@@ -430,22 +539,45 @@ impl<S: Shade> Subtree<'_, S> {
         let (lo, hi) = (b.lo, b.hi);
         for first in (start..end).step_by(64) {
             let last = (first + 64).min(end);
+            let (xs, ys) = (&bsp.xs[first..last], &bsp.ys[first..last]);
             // Branch-free box test of up to 64 samples, one bit each.
-            let mut mask = 0u64;
-            for (i, (&x, &y)) in bsp.xs[first..last].iter().zip(&bsp.ys[first..last]).enumerate() {
+            let mut boxed = 0u64;
+            for (i, (&x, &y)) in xs.iter().zip(ys).enumerate() {
                 let inside = (x >= lo.x) & (x <= hi.x) & (y >= lo.y) & (y <= hi.y);
-                mask |= u64::from(inside) << i;
+                boxed |= u64::from(inside) << i;
             }
-            while mask != 0 {
-                let k = first + mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                let st = &mut self.state[k - self.sample_base];
-                if skip_dark && st.is_dark() {
-                    continue;
+            if boxed.count_ones() <= SCALAR_MAX {
+                // Few samples (a small triangle): test them one by one.
+                while boxed != 0 {
+                    let i = boxed.trailing_zeros() as usize;
+                    boxed &= boxed - 1;
+                    let st = &mut self.state[first + i - self.sample_base];
+                    if skip_dark && st.is_dark() {
+                        continue;
+                    }
+                    tested += 1;
+                    if b.shadows_boxed(&bsp.samples[first + i]) {
+                        darkened += u32::from(st.attenuate(pass));
+                    }
                 }
-                tested += 1;
-                if b.shadows_boxed(&bsp.samples[k]) {
-                    darkened += u32::from(st.attenuate(pass));
+                continue;
+            }
+            let states = &mut self.state[first - self.sample_base..last - self.sample_base];
+            let mut dark = 0u64;
+            if skip_dark {
+                for (i, st) in states.iter().enumerate() {
+                    dark |= u64::from(st.is_dark()) << i;
+                }
+            }
+            let live = boxed & !dark;
+            tested += u64::from(live.count_ones());
+            // Samples certainly outside an edge are not shadowed: skip them without a branch.
+            let mut mask = live & b.not_outside(xs, ys);
+            while mask != 0 {
+                let i = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                if b.shadows_boxed(&bsp.samples[first + i]) {
+                    darkened += u32::from(states[i].attenuate(pass));
                 }
             }
         }
@@ -501,10 +633,15 @@ pub fn rasterize_blockers<S: Shade>(
     // Batches of triangles, binned then rasterized, reusing the bins' memory.
     let n = geometry.len();
     let mut chunks: Vec<Chunk> = (0..n.div_ceil(BIN_CHUNK).min(BATCH_CHUNKS))
-        .map(|_| Chunk { bins: vec![Vec::new(); frontier.len()], counters: Counters::default() })
+        .map(|_| Chunk {
+            blockers: Vec::new(),
+            bins: vec![Vec::new(); frontier.len()],
+            counters: Counters::default(),
+        })
         .collect();
     for batch in (0..n).step_by(BIN_CHUNK * BATCH_CHUNKS) {
         chunks.par_iter_mut().enumerate().for_each(|(c, chunk)| {
+            chunk.blockers.clear();
             chunk.bins.iter_mut().for_each(Vec::clear);
             let first = batch + c * BIN_CHUNK;
             for t in first..(first + BIN_CHUNK).min(n) {
@@ -512,14 +649,17 @@ pub fn rasterize_blockers<S: Shade>(
                     continue;
                 }
                 if let Some(b) = Blocker::new(geometry, t, light) {
-                    binner.bin(&b, &mut chunk.bins, &mut chunk.counters);
+                    let index = chunk.blockers.len() as u32;
+                    if binner.bin(&b, index, &mut chunk.bins, &mut chunk.counters) {
+                        chunk.blockers.push(b);
+                    }
                 }
             }
         });
         tasks.par_iter_mut().enumerate().for_each(|(slot, task)| {
             for chunk in &chunks {
-                for b in &chunk.bins[slot] {
-                    task.rasterize(b);
+                for &b in &chunk.bins[slot] {
+                    task.rasterize(&chunk.blockers[b as usize]);
                 }
             }
         });
@@ -635,6 +775,85 @@ mod tests {
                     let (t, _) =
                         rasterize_blockers::<[f64; 3]>(&g, |_| true, &passes, &light, &bsp, culling);
                     prop_assert_eq!(&t, &rgb);
+                }
+            }
+        }
+
+        /// Where the floating-point edge filter decides, it gives the sign of the exact
+        /// `orient2d`; on points exactly on or a few ulps beside an edge it must abstain or agree.
+        #[test]
+        fn edge_filter_agrees_with_orient2d(
+            a in (-1e3f64..1e3, -1e3f64..1e3),
+            b in (-1e3f64..1e3, -1e3f64..1e3),
+            t in -0.5f64..1.5,
+            nudge in (-4i64..=4, -4i64..=4),
+            scale in prop_oneof![Just(1.0), Just(1e-7), Just(3.0e5), Just(1e-150), Just(1e150)],
+            random in (-1e3f64..1e3, -1e3f64..1e3),
+            on_line in any::<bool>(),
+        ) {
+            let (a, b) = (DVec2::new(a.0, a.1) * scale, DVec2::new(b.0, b.1) * scale);
+            // A point on the line through a and b (rounded), moved by a few ulps, or anywhere.
+            let p = if on_line {
+                let q = a + (b - a) * t;
+                let step = |v: f64, k: i64| {
+                    let bits = v.to_bits() as i64 + if v >= 0.0 { k } else { -k };
+                    f64::from_bits(bits as u64)
+                };
+                DVec2::new(step(q.x, nudge.0), step(q.y, nudge.1))
+            } else {
+                DVec2::new(random.0, random.1) * scale
+            };
+            let exact = orient2d(coord(a), coord(b), coord(p));
+            match edge_sign(a, b - a, p) {
+                Some(true) => prop_assert!(exact > 0.0, "{a} {b} {p}: filter +, exact {exact}"),
+                Some(false) => prop_assert!(exact < 0.0, "{a} {b} {p}: filter -, exact {exact}"),
+                None => {}
+            }
+        }
+
+        /// Coverage through the filter equals the exact predicates alone, on samples of a
+        /// quarter-unit grid (many exactly on edges and corners) and off it.
+        #[test]
+        fn filtered_coverage_equals_exact_coverage(
+            t in tri(),
+            points in proptest::collection::vec((0u32..=64, 0u32..=64, -1.0f64..1.0), 1..200),
+            perspective in any::<bool>(),
+        ) {
+            let g = geometry(&[t]);
+            let light = if perspective { spot() } else { pixel_projector(16, 16) };
+            let Some(b) = Blocker::new(&g, 0, &light) else { return Ok(()) };
+            for &(x, y, jitter) in &points {
+                let on_grid = DVec2::new(f64::from(x), f64::from(y)) / 4.0;
+                for p in [on_grid, on_grid + DVec2::splat(jitter * 1e-13)] {
+                    prop_assert_eq!(b.covers(p), b.covers_exactly(p), "{}", p);
+                }
+            }
+        }
+
+        /// The leaves' edge mask clears only samples the triangle does not cover.
+        #[test]
+        fn edge_mask_clears_only_uncovered_samples(
+            t in tri(),
+            points in proptest::collection::vec((0u32..=64, 0u32..=64, -1.0f64..1.0), 1..=64),
+            perspective in any::<bool>(),
+        ) {
+            let g = geometry(&[t]);
+            let light = if perspective { spot() } else { pixel_projector(16, 16) };
+            let Some(b) = Blocker::new(&g, 0, &light) else { return Ok(()) };
+            // Grid points (on edges and corners) and points 1e-13 beside them, in the box.
+            let ps: Vec<DVec2> = points
+                .iter()
+                .map(|&(x, y, j)| {
+                    let p = DVec2::new(f64::from(x), f64::from(y)) / 4.0 + DVec2::splat(j * 1e-13);
+                    p.clamp(b.lo, b.hi)
+                })
+                .collect();
+            let xs: Vec<f64> = ps.iter().map(|p| p.x).collect();
+            let ys: Vec<f64> = ps.iter().map(|p| p.y).collect();
+            let mask = b.not_outside(&xs, &ys);
+            for (i, &p) in ps.iter().enumerate() {
+                if mask & (1 << i) == 0 {
+                    prop_assert!(!b.covers_exactly(p), "{} cleared but covered", p);
                 }
             }
         }
