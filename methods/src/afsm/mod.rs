@@ -297,28 +297,43 @@ pub fn light_projector(frame: &Frame<'_>) -> Projector {
 }
 
 /// Per pixel, the mean over its `rate` sub-samples of their light (lit for sub-samples that
-/// have no sample), from the light of each sample in BSP order.
-fn resolve<S: Shade>(bsp: &Bsp, light: &[S], pixels: usize, rate: usize) -> Vec<[f64; 3]> {
+/// have no sample), from the light of each sample in BSP order: `lit`, the mean of the three
+/// channels, and with `rgb` also the RGB transmittance.
+fn resolve<S: Shade>(
+    bsp: &Bsp,
+    light: &[S],
+    pixels: usize,
+    rate: usize,
+    rgb: bool,
+) -> (Vec<f32>, Option<Vec<[f32; 3]>>) {
     let mut per_id = vec![S::LIT; pixels * rate];
     for (s, l) in bsp.samples.iter().zip(light) {
         per_id[s.id as usize] = *l;
     }
-    per_id
+    let mean = |subs: &[S]| {
+        let mut sum = [0.0f64; 3];
+        for sub in subs {
+            for (acc, c) in sum.iter_mut().zip(sub.rgb()) {
+                *acc += c;
+            }
+        }
+        sum.map(|c| (c / rate as f64).clamp(0.0, 1.0))
+    };
+    let lit = per_id
         .par_chunks(rate)
         .map(|subs| {
-            let mut sum = [0.0f64; 3];
-            for sub in subs {
-                for (acc, c) in sum.iter_mut().zip(sub.rgb()) {
-                    *acc += c;
-                }
-            }
-            sum.map(|c| (c / rate as f64).clamp(0.0, 1.0))
+            let c = mean(subs);
+            ((c[0] + c[1] + c[2]) / 3.0).clamp(0.0, 1.0) as f32
         })
-        .collect()
+        .collect();
+    let transmittance =
+        rgb.then(|| per_id.par_chunks(rate).map(|subs| mean(subs).map(|v| v as f32)).collect());
+    (lit, transmittance)
 }
 
 impl AliasFreeShadowMap {
-    /// The BSP and rasterization stages with per-sample light `S`; the RGB light per pixel.
+    /// The BSP and rasterization stages with per-sample light `S`; per pixel the light and,
+    /// with the scene's transparency, the RGB transmittance.
     fn shade<S: Shade>(
         &self,
         frame: &Frame<'_>,
@@ -326,7 +341,7 @@ impl AliasFreeShadowMap {
         light: &Projector,
         rate: usize,
         rec: &mut Recorder,
-    ) -> Vec<[f64; 3]> {
+    ) -> (Vec<f32>, Option<Vec<[f32; 3]>>) {
         let leaf_size = self.options.leaf_size as usize;
         let bsp = rec.stages.time(STAGE_BSP, || Bsp::build(samples, leaf_size));
         let transparency = frame.effects.transparency;
@@ -345,7 +360,7 @@ impl AliasFreeShadowMap {
             depth: self.options.depth_culling,
         };
         let pixels = frame.gbuffer.triangle.len();
-        let (rgb, counters) = rec.stages.time(STAGE_RASTERIZATION, || {
+        let (resolved, counters) = rec.stages.time(STAGE_RASTERIZATION, || {
             let (light_per_sample, counters) = rasterize_blockers::<S>(
                 &frame.geometry,
                 |t| frame.is_caster(t),
@@ -354,10 +369,10 @@ impl AliasFreeShadowMap {
                 &bsp,
                 culling,
             );
-            (resolve(&bsp, &light_per_sample, pixels, rate), counters)
+            (resolve(&bsp, &light_per_sample, pixels, rate, transparency), counters)
         });
         rec.counters.merge(&Counters { bsp_nodes: bsp.nodes.len() as u64, ..counters });
-        rgb
+        resolved
     }
 }
 
@@ -426,14 +441,11 @@ impl ShadowMethod for AliasFreeShadowMap {
         });
         drop(surfaces);
         drop(extra);
-        let rgb = if frame.effects.transparency {
+        let (lit, transmittance) = if frame.effects.transparency {
             self.shade::<[f64; 3]>(frame, samples, &light, rate, rec)
         } else {
             self.shade::<bool>(frame, samples, &light, rate, rec)
         };
-        let lit = rgb.iter().map(|c| ((c[0] + c[1] + c[2]) / 3.0).clamp(0.0, 1.0) as f32).collect();
-        let transmittance =
-            frame.effects.transparency.then(|| rgb.iter().map(|c| c.map(|v| v as f32)).collect());
         Ok(Visibility { width: frame.width(), height: frame.height(), lit, transmittance })
     }
 }
