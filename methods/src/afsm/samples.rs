@@ -55,6 +55,10 @@ pub fn threshold_depth(light: &Projector, xy: DVec2, z: f64, offset: f64) -> f64
 /// threshold depth takes the point's own [`shadow_offset`] from the camera ray's origin.
 /// Background sub-samples, and points a spot light cannot project (nearer than its `near`
 /// plane, or behind it), give no sample. Samples come out in id order.
+///
+/// Every id is transformed in parallel straight into its slot of one vector (ids without a
+/// sample get a NaN threshold), which is then compacted in place: no per-thread lists to
+/// concatenate, and the vector is written once.
 pub fn transform_samples(
     camera: &Projector,
     light: &Projector,
@@ -65,22 +69,30 @@ pub fn transform_samples(
     let rate = pattern.rate() as usize;
     let pixels = surfaces.first().map_or(0, |s| s.triangle.len());
     let w = width as usize;
+    let none = Sample { zt: f64::NAN, ..Sample::default() };
+    let mut samples = Vec::new();
     (0..pixels * rate)
         .into_par_iter()
         .with_min_len(4096)
-        .filter_map(|id| {
+        .map(|id| {
             let (pixel, s) = (id / rate, id % rate);
             let surface = &surfaces[s];
             let tri = surface.triangle[pixel];
             if tri == NO_TRIANGLE {
-                return None;
+                return none;
             }
             let point = pattern.point((pixel % w) as u32, (pixel / w) as u32, s);
             let ray = camera.ray(point);
             let position = ray.at(surface.depth[pixel]);
-            let (xy, z) = light.project(position)?;
+            let Some((xy, z)) = light.project(position) else { return none };
             let zt = threshold_depth(light, xy, z, shadow_offset(ray.origin, position));
-            zt.is_finite().then_some(Sample { x: xy.x, y: xy.y, zt, id: id as u32, tri })
+            if zt.is_finite() {
+                Sample { x: xy.x, y: xy.y, zt, id: id as u32, tri }
+            } else {
+                none
+            }
         })
-        .collect()
+        .collect_into_vec(&mut samples);
+    samples.retain(|s| s.zt.is_finite());
+    samples
 }
