@@ -35,8 +35,8 @@
 //! rasterizes its triangles in triangle order. Samples are thus attenuated in the same order
 //! whatever the scheduling, and the result, the counters included, does not depend on the
 //! number of threads. Nodes above the frontier carry no occlusion state (they are only depth
-//! culled). A chunk keeps each blocker that reaches the frontier once and its bins hold
-//! indices into that list, so a blocker reaching several subtrees is not copied.
+//! culled). Batches are small ([`BIN_CHUNK`] times [`BATCH_CHUNKS`] triangles) so that the
+//! binned copies are still in cache when the subtree tasks read them.
 
 use super::{
     bsp::{Bsp, Node},
@@ -57,11 +57,12 @@ pub const TOP_LEVELS: usize = 6;
 const SCALAR_MAX: u32 = 6;
 
 /// Triangles per binning task.
-const BIN_CHUNK: usize = 1024;
+const BIN_CHUNK: usize = 256;
 
 /// Binning tasks per batch: triangles are binned and rasterized in batches of
-/// `BIN_CHUNK * BATCH_CHUNKS`, so that the bins stay small and their memory is reused.
-const BATCH_CHUNKS: usize = 64;
+/// `BIN_CHUNK * BATCH_CHUNKS` (8192, some 3 MB of binned blockers on a scene of small
+/// triangles), so that the bins stay small, in cache, and their memory is reused.
+const BATCH_CHUNKS: usize = 32;
 
 /// Which culling tests run (both on by default; off only to measure them).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -395,10 +396,9 @@ pub fn edge_sign(a: DVec2, d: DVec2, p: DVec2) -> Option<bool> {
 
 /// The triangles of one chunk that reach each frontier node, in triangle order.
 struct Chunk {
-    /// The chunk's blockers that reach at least one frontier node, in triangle order.
-    blockers: Vec<Blocker>,
-    /// For each frontier slot, the indices in `blockers` of those that reach it, increasing.
-    bins: Vec<Vec<u32>>,
+    /// For each frontier slot, the blockers that reach it (copied while they are in cache, so
+    /// that each subtree task reads its own triangles sequentially).
+    bins: Vec<Vec<Blocker>>,
     counters: Counters,
 }
 
@@ -411,52 +411,42 @@ struct Binner<'a> {
 }
 
 impl Binner<'_> {
-    /// Bins a blocker into every frontier node it reaches, as index `index`; returns whether
-    /// it reached one.
-    fn bin(&self, b: &Blocker, index: u32, bins: &mut [Vec<u32>], c: &mut Counters) -> bool {
+    /// Bins a blocker into every frontier node it reaches.
+    fn bin(&self, b: &Blocker, bins: &mut [Vec<Blocker>], c: &mut Counters) {
         let root = &self.nodes[0];
         if b.overlaps(root.lo, root.hi) {
             c.bsp_nodes_visited += 1;
-            self.descend(b, index, 0, 0, bins, c)
-        } else {
-            false
+            self.descend(b, 0, 0, bins, c);
         }
     }
 
-    /// `g` overlaps the blocker and was counted as visited; returns whether the blocker
-    /// reached a frontier node.
+    /// `g` overlaps the blocker and was counted as visited.
     fn descend(
         &self,
         b: &Blocker,
-        index: u32,
         g: usize,
         depth: usize,
-        bins: &mut [Vec<u32>],
+        bins: &mut [Vec<Blocker>],
         c: &mut Counters,
-    ) -> bool {
+    ) {
         let node = &self.nodes[g];
         if self.depth_culling && b.dmin >= node.max_zt {
             c.nodes_depth_culled += 1;
-            return false;
+            return;
         }
         if depth == TOP_LEVELS || node.is_leaf() {
-            return match self.frontier.binary_search(&g) {
-                Ok(slot) => {
-                    bins[slot].push(index);
-                    true
-                }
-                Err(_) => false,
-            };
+            if let Ok(slot) = self.frontier.binary_search(&g) {
+                bins[slot].push(*b);
+            }
+            return;
         }
-        let mut reached = false;
         for child in [g + 1, g + node.right as usize] {
             let n = &self.nodes[child];
             if b.overlaps(n.lo, n.hi) {
                 c.bsp_nodes_visited += 1;
-                reached |= self.descend(b, index, child, depth + 1, bins, c);
+                self.descend(b, child, depth + 1, bins, c);
             }
         }
-        reached
     }
 }
 
@@ -633,15 +623,10 @@ pub fn rasterize_blockers<S: Shade>(
     // Batches of triangles, binned then rasterized, reusing the bins' memory.
     let n = geometry.len();
     let mut chunks: Vec<Chunk> = (0..n.div_ceil(BIN_CHUNK).min(BATCH_CHUNKS))
-        .map(|_| Chunk {
-            blockers: Vec::new(),
-            bins: vec![Vec::new(); frontier.len()],
-            counters: Counters::default(),
-        })
+        .map(|_| Chunk { bins: vec![Vec::new(); frontier.len()], counters: Counters::default() })
         .collect();
     for batch in (0..n).step_by(BIN_CHUNK * BATCH_CHUNKS) {
         chunks.par_iter_mut().enumerate().for_each(|(c, chunk)| {
-            chunk.blockers.clear();
             chunk.bins.iter_mut().for_each(Vec::clear);
             let first = batch + c * BIN_CHUNK;
             for t in first..(first + BIN_CHUNK).min(n) {
@@ -649,17 +634,14 @@ pub fn rasterize_blockers<S: Shade>(
                     continue;
                 }
                 if let Some(b) = Blocker::new(geometry, t, light) {
-                    let index = chunk.blockers.len() as u32;
-                    if binner.bin(&b, index, &mut chunk.bins, &mut chunk.counters) {
-                        chunk.blockers.push(b);
-                    }
+                    binner.bin(&b, &mut chunk.bins, &mut chunk.counters);
                 }
             }
         });
         tasks.par_iter_mut().enumerate().for_each(|(slot, task)| {
             for chunk in &chunks {
-                for &b in &chunk.bins[slot] {
-                    task.rasterize(&chunk.blockers[b as usize]);
+                for b in &chunk.bins[slot] {
+                    task.rasterize(b);
                 }
             }
         });

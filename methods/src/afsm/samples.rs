@@ -56,9 +56,9 @@ pub fn threshold_depth(light: &Projector, xy: DVec2, z: f64, offset: f64) -> f64
 /// Background sub-samples, and points a spot light cannot project (nearer than its `near`
 /// plane, or behind it), give no sample. Samples come out in id order.
 ///
-/// Every id is transformed in parallel straight into its slot of one vector (ids without a
-/// sample get a NaN threshold), which is then compacted in place: no per-thread lists to
-/// concatenate, and the vector is written once.
+/// Every id is transformed in parallel (by rows of pixels, so that no index is divided) straight
+/// into its slot of one vector (ids without a sample get a NaN threshold), which is then
+/// compacted in place: no per-thread lists to concatenate.
 pub fn transform_samples(
     camera: &Projector,
     light: &Projector,
@@ -70,29 +70,27 @@ pub fn transform_samples(
     let pixels = surfaces.first().map_or(0, |s| s.triangle.len());
     let w = width as usize;
     let none = Sample { zt: f64::NAN, ..Sample::default() };
-    let mut samples = Vec::new();
-    (0..pixels * rate)
-        .into_par_iter()
-        .with_min_len(4096)
-        .map(|id| {
-            let (pixel, s) = (id / rate, id % rate);
-            let surface = &surfaces[s];
-            let tri = surface.triangle[pixel];
-            if tri == NO_TRIANGLE {
-                return none;
+    let mut samples = vec![none; pixels * rate];
+    samples.par_chunks_mut((w * rate).max(1)).enumerate().for_each(|(row, slots)| {
+        let first = row * w;
+        for (x, pixel_slots) in slots.chunks_mut(rate).enumerate() {
+            let pixel = first + x;
+            for (s, (slot, surface)) in pixel_slots.iter_mut().zip(surfaces).enumerate() {
+                let tri = surface.triangle[pixel];
+                if tri == NO_TRIANGLE {
+                    continue;
+                }
+                let ray = camera.ray(pattern.point(x as u32, row as u32, s));
+                let position = ray.at(surface.depth[pixel]);
+                let Some((xy, z)) = light.project(position) else { continue };
+                let zt = threshold_depth(light, xy, z, shadow_offset(ray.origin, position));
+                if zt.is_finite() {
+                    let id = (pixel * rate + s) as u32;
+                    *slot = Sample { x: xy.x, y: xy.y, zt, id, tri };
+                }
             }
-            let point = pattern.point((pixel % w) as u32, (pixel / w) as u32, s);
-            let ray = camera.ray(point);
-            let position = ray.at(surface.depth[pixel]);
-            let Some((xy, z)) = light.project(position) else { return none };
-            let zt = threshold_depth(light, xy, z, shadow_offset(ray.origin, position));
-            if zt.is_finite() {
-                Sample { x: xy.x, y: xy.y, zt, id: id as u32, tri }
-            } else {
-                none
-            }
-        })
-        .collect_into_vec(&mut samples);
+        }
+    });
     samples.retain(|s| s.zt.is_finite());
     samples
 }
