@@ -53,7 +53,7 @@ use scenes::{projection::ProjectionKind, Geometry, Projector};
 pub const TOP_LEVELS: usize = 6;
 
 /// A leaf's samples in a triangle's bounding box are tested one by one up to this many;
-/// beyond, the edge mask ([`Blocker::not_outside`]) first drops those certainly outside.
+/// beyond, the edge masks ([`Blocker::edge_masks`]) first drop those certainly outside.
 const SCALAR_MAX: u32 = 6;
 
 /// Triangles per binning task.
@@ -151,7 +151,7 @@ pub struct Blocker {
     /// Edge vectors `outline[e + 1] - outline[e]`, for the filter of [`Blocker::covers`].
     edges: [DVec2; 4],
     /// Per edge, a bound on the rounding error of its edge function anywhere in the bounding
-    /// box (see [`Blocker::not_outside`]).
+    /// box (see [`Blocker::edge_masks`]).
     edge_bounds: [f64; 4],
     /// Bounding box of the outline.
     lo: DVec2,
@@ -307,26 +307,40 @@ impl Blocker {
         })
     }
 
-    /// One bit per sample `i` (coordinates `xs[i]`, `ys[i]`, at most 64): cleared when the
-    /// sample lies certainly outside an edge, by the floating-point edge function against the
-    /// edge's bound for the whole bounding box (in `edge_bounds`: [`EDGE_FILTER_BOUND`] times
-    /// the largest `|d.x (p.y - a.y)| + |d.y (p.x - a.x)|` there, which bounds every term of
-    /// [`edge_sign`]'s analysis for a point of the box). Meaningful only for samples inside the
-    /// bounding box; a cleared bit means [`Blocker::covers`] is false. Branch-free, one edge at a
-    /// time over the samples, so that the compiler can vectorise it.
+    /// Two masks over samples `i` (coordinates `xs[i]`, `ys[i]`, at most 64) inside the
+    /// bounding box and inside the box `lo..=hi` (a BSP node's): `maybe` clears the samples
+    /// that lie certainly outside an edge, `surely` sets those certainly inside every edge;
+    /// [`Blocker::covers`] is false where `maybe` is clear and true where `surely` is set.
+    ///
+    /// Per edge, the floating-point edge function is compared with the edge's bound for the
+    /// whole bounding box (in `edge_bounds`: [`EDGE_FILTER_BOUND`] times the largest
+    /// `|d.x (p.y - a.y)| + |d.y (p.x - a.x)|` there, which bounds every term of
+    /// [`edge_sign`]'s analysis for a point of the box). An edge whose inner side certainly
+    /// holds all of `lo..=hi` ([`edge_sign`] at the box corner where the edge function is
+    /// smallest) is skipped. Branch-free, one edge at a time over the samples, so that the
+    /// compiler can vectorise it.
     #[inline]
-    pub fn not_outside(&self, xs: &[f64], ys: &[f64]) -> u64 {
-        let mut keep = u64::MAX;
+    pub fn edge_masks(&self, xs: &[f64], ys: &[f64], lo: DVec2, hi: DVec2) -> (u64, u64) {
+        let (mut maybe, mut surely) = (u64::MAX, u64::MAX);
         for e in 0..self.corners {
             let (a, d, bound) = (self.outline[e], self.edges[e], self.edge_bounds[e]);
-            let mut bits = 0u64;
+            let corner = DVec2::new(
+                if d.y > 0.0 { hi.x } else { lo.x },
+                if d.x > 0.0 { lo.y } else { hi.y },
+            );
+            if edge_sign(a, d, corner) == Some(true) {
+                continue;
+            }
+            let (mut keep, mut inside) = (0u64, 0u64);
             for (i, (&x, &y)) in xs.iter().zip(ys).enumerate() {
                 let det = d.x * (y - a.y) - d.y * (x - a.x);
-                bits |= u64::from(!(det < -bound)) << i;
+                keep |= u64::from(!(det < -bound)) << i;
+                inside |= u64::from(det > bound) << i;
             }
-            keep &= bits;
+            maybe &= keep;
+            surely &= inside;
         }
-        keep
+        (maybe, surely)
     }
 
     /// Whether `p` lies inside the outline by the exact predicates alone (no filter).
@@ -358,6 +372,12 @@ impl Blocker {
             && self.dmin < s.zt
             && self.covers(DVec2::new(s.x, s.y))
             && (self.dmax < s.zt || self.depth_at(s.x, s.y) < s.zt)
+    }
+
+    /// [`Blocker::shadows_boxed`] for a sample the triangle is known to cover.
+    #[inline]
+    fn shadows_covered(&self, s: &Sample) -> bool {
+        s.tri != self.id && self.dmin < s.zt && (self.dmax < s.zt || self.depth_at(s.x, s.y) < s.zt)
     }
 
     /// Whether the triangle shadows `s` (the predicate the hierarchy evaluates in leaves).
@@ -527,14 +547,19 @@ impl<S: Shade> Subtree<'_, S> {
         let skip_dark = self.culling.occlusion;
         let (mut darkened, mut tested) = (0u32, 0u64);
         let (lo, hi) = (b.lo, b.hi);
+        // A leaf inside the triangle's box needs no box test.
+        let all_boxed = lo.x <= node.lo.x && node.hi.x <= hi.x && lo.y <= node.lo.y && node.hi.y <= hi.y;
         for first in (start..end).step_by(64) {
             let last = (first + 64).min(end);
             let (xs, ys) = (&bsp.xs[first..last], &bsp.ys[first..last]);
             // Branch-free box test of up to 64 samples, one bit each.
-            let mut boxed = 0u64;
-            for (i, (&x, &y)) in xs.iter().zip(ys).enumerate() {
-                let inside = (x >= lo.x) & (x <= hi.x) & (y >= lo.y) & (y <= hi.y);
-                boxed |= u64::from(inside) << i;
+            let mut boxed = u64::MAX >> (64 - (last - first));
+            if !all_boxed {
+                boxed = 0;
+                for (i, (&x, &y)) in xs.iter().zip(ys).enumerate() {
+                    let inside = (x >= lo.x) & (x <= hi.x) & (y >= lo.y) & (y <= hi.y);
+                    boxed |= u64::from(inside) << i;
+                }
             }
             if boxed.count_ones() <= SCALAR_MAX {
                 // Few samples (a small triangle): test them one by one.
@@ -561,12 +586,20 @@ impl<S: Shade> Subtree<'_, S> {
             }
             let live = boxed & !dark;
             tested += u64::from(live.count_ones());
-            // Samples certainly outside an edge are not shadowed: skip them without a branch.
-            let mut mask = live & b.not_outside(xs, ys);
+            // Samples certainly outside an edge are not shadowed: skip them without a branch;
+            // those certainly inside every edge need only the depth test.
+            let (maybe, surely) = b.edge_masks(xs, ys, node.lo, node.hi);
+            let mut mask = live & maybe;
             while mask != 0 {
                 let i = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
-                if b.shadows_boxed(&bsp.samples[first + i]) {
+                let s = &bsp.samples[first + i];
+                let shadowed = if surely & (1 << i) != 0 {
+                    b.shadows_covered(s)
+                } else {
+                    b.shadows_boxed(s)
+                };
+                if shadowed {
                     darkened += u32::from(states[i].attenuate(pass));
                 }
             }
@@ -812,11 +845,13 @@ mod tests {
             }
         }
 
-        /// The leaves' edge mask clears only samples the triangle does not cover.
+        /// The leaves' edge masks clear only samples the triangle does not cover and set only
+        /// samples it covers, whatever node box holds the samples.
         #[test]
-        fn edge_mask_clears_only_uncovered_samples(
+        fn edge_masks_agree_with_exact_coverage(
             t in tri(),
             points in proptest::collection::vec((0u32..=64, 0u32..=64, -1.0f64..1.0), 1..=64),
+            grow in 0.0f64..4.0,
             perspective in any::<bool>(),
         ) {
             let g = geometry(&[t]);
@@ -832,10 +867,15 @@ mod tests {
                 .collect();
             let xs: Vec<f64> = ps.iter().map(|p| p.x).collect();
             let ys: Vec<f64> = ps.iter().map(|p| p.y).collect();
-            let mask = b.not_outside(&xs, &ys);
+            let (lo, hi) = ps.iter().fold((ps[0], ps[0]), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+            let (maybe, surely) = b.edge_masks(&xs, &ys, lo - grow, hi + grow);
             for (i, &p) in ps.iter().enumerate() {
-                if mask & (1 << i) == 0 {
-                    prop_assert!(!b.covers_exactly(p), "{} cleared but covered", p);
+                let covered = b.covers_exactly(p);
+                if maybe & (1 << i) == 0 {
+                    prop_assert!(!covered, "{} cleared but covered", p);
+                }
+                if surely & (1 << i) != 0 {
+                    prop_assert!(covered, "{} set but not covered", p);
                 }
             }
         }
