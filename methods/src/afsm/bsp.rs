@@ -2,23 +2,11 @@
 //! the samples on the light's image plane.
 //!
 //! A node with at least `leaf_size` samples is split at the median of its samples along `x`
-//! at even depths and `y` at odd depths (the root splits along `x`): a selection puts the
-//! `n / 2` smallest first ([`split_at_median`]), so the left child holds `floor(n / 2)`
-//! samples and the right `ceil(n / 2)`, every left coordinate `<=` every right one. Nodes with
-//! fewer than `leaf_size` samples are leaves (between `leaf_size / 2` and `leaf_size - 1`
-//! samples, unless the whole set is smaller).
-//!
-//! Selection: the paper uses quickselect (Hoare 1961), expected linear time; quickselect
-//! partitions about two to three times the node's size in all. Large nodes (at least
-//! [`BRACKET_MIN`] samples) are instead split the way of Floyd and Rivest's SELECT (Floyd and
-//! Rivest 1975, "Expected time bounds for selection", Communications of the ACM 18(3)): the
-//! keys of [`BRACKET_KEYS`] samples at a fixed stride are sorted, two of them bracket the
-//! median's rank, one branch-free partition pass moves the samples below the bracket to the
-//! front and a second, over the rest, the samples inside it, and quickselect finishes inside
-//! the bracket, a few percent of the node. About one and a half times the node's size is
-//! partitioned. A bracket that misses the median (the stride sample is not random) costs
-//! only time: quickselect then runs on the side that holds it. The result has the same
-//! invariants either way, and depends on the samples and their order only, never on threads.
+//! at even depths and `y` at odd depths (the root splits along `x`): quickselect
+//! (`select_nth_unstable_by`) puts the `n / 2` smallest first, so the left child holds
+//! `floor(n / 2)` samples and the right `ceil(n / 2)`, every left coordinate `<=` every right
+//! one. Nodes with fewer than `leaf_size` samples are leaves (between `leaf_size / 2` and
+//! `leaf_size - 1` samples, unless the whole set is smaller).
 //!
 //! Layout: the samples are permuted in place so that every node owns the contiguous range
 //! `start..end`; nodes are stored in preorder (the left child follows its parent, the right
@@ -32,18 +20,6 @@ use rayon::prelude::*;
 
 /// Subtrees with more samples than this are built on two threads.
 const PARALLEL_SAMPLES: usize = 1 << 14;
-
-/// Nodes with at least this many samples are split with a sampled bracket
-/// ([`split_at_median`]); smaller ones by quickselect alone.
-pub const BRACKET_MIN: usize = 4096;
-
-/// Keys sampled to bracket the median (sorted on the stack).
-pub const BRACKET_KEYS: usize = 1024;
-
-/// Half the bracket's width in sampled keys: twice the standard deviation of the median's
-/// rank among `BRACKET_KEYS` random keys (`sqrt(BRACKET_KEYS) / 2`), so that the bracket holds
-/// the median with high probability and about an eighth of the node.
-const BRACKET_HALF: usize = 64;
 
 /// A node of the 2D BSP.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -204,9 +180,9 @@ fn fill(
     }
     let mid = n / 2;
     if axis == 0 {
-        split_at_median(samples, mid, |s| order_key(s.x));
+        samples.select_nth_unstable_by(mid, |a, b| a.x.total_cmp(&b.x));
     } else {
-        split_at_median(samples, mid, |s| order_key(s.y));
+        samples.select_nth_unstable_by(mid, |a, b| a.y.total_cmp(&b.y));
     }
     let (head, rest) = nodes.split_at_mut(1);
     let (left_nodes, right_nodes) = rest.split_at_mut(counts.get(mid));
@@ -229,61 +205,6 @@ fn fill(
         end,
         right: (1 + left_nodes.len()) as u32,
     };
-}
-
-/// An integer with the order of [`f64::total_cmp`].
-#[inline(always)]
-fn order_key(v: f64) -> i64 {
-    let bits = v.to_bits() as i64;
-    bits ^ (((bits >> 63) as u64) >> 1) as i64
-}
-
-/// Moves the `mid` samples of smallest `key` to the front of `samples` (ties in any order), so
-/// that every key before position `mid` is `<=` every key from it on (see the module doc).
-pub fn split_at_median(samples: &mut [Sample], mid: usize, key: impl Fn(&Sample) -> i64 + Copy) {
-    let n = samples.len();
-    if mid >= n {
-        return;
-    }
-    if n < BRACKET_MIN {
-        samples.select_nth_unstable_by_key(mid, key);
-        return;
-    }
-    let mut keys = [0i64; BRACKET_KEYS];
-    let stride = n / BRACKET_KEYS;
-    for (i, k) in keys.iter_mut().enumerate() {
-        *k = key(&samples[i * stride + stride / 2]);
-    }
-    keys.sort_unstable();
-    let rank = mid * BRACKET_KEYS / n;
-    let lo = keys[rank.saturating_sub(BRACKET_HALF)];
-    let hi = keys[(rank + BRACKET_HALF).min(BRACKET_KEYS - 1)];
-    let below = partition(samples, |s| key(s) < lo);
-    if mid < below {
-        samples[..below].select_nth_unstable_by_key(mid, key);
-        return;
-    }
-    let rest = &mut samples[below..];
-    let inside = partition(rest, |s| key(s) <= hi);
-    let (bracket, above) = rest.split_at_mut(inside);
-    if mid - below < inside {
-        bracket.select_nth_unstable_by_key(mid - below, key);
-    } else {
-        above.select_nth_unstable_by_key(mid - below - inside, key);
-    }
-}
-
-/// Moves the samples satisfying `pred` to the front, keeping neither order; returns their
-/// count. Branch-free (Lomuto's scheme with an unconditional swap), so that a predicate true
-/// for about half the samples in no pattern costs no mispredictions.
-fn partition(samples: &mut [Sample], pred: impl Fn(&Sample) -> bool) -> usize {
-    let mut front = 0;
-    for i in 0..samples.len() {
-        let p = pred(&samples[i]);
-        samples.swap(front, i);
-        front += usize::from(p);
-    }
-    front
 }
 
 #[cfg(test)]
@@ -381,45 +302,7 @@ mod tests {
         assert_eq!(leaves, 24 + 2 * 104);
     }
 
-    #[test]
-    fn order_key_orders_as_total_cmp() {
-        let v = [f64::NEG_INFINITY, -1e300, -1.0, -5e-324, -0.0, 0.0, 5e-324, 1.0, 1e300];
-        for a in v {
-            for b in v {
-                assert_eq!(order_key(a).cmp(&order_key(b)), a.total_cmp(&b), "{a} {b}");
-            }
-        }
-    }
-
     proptest! {
-        /// The bracketed split puts exactly the `mid` smallest keys first on large nodes, for
-        /// shuffled, sorted, reversed and tied inputs (the bracket may miss on the latter).
-        #[test]
-        fn split_at_median_selects_the_smallest(
-            n in BRACKET_MIN..3 * BRACKET_MIN,
-            order in 0u8..4,
-            levels in 1u64..5000,
-            seed in any::<u64>(),
-            at in 0.0f64..1.0,
-        ) {
-            let x = |i: u64| match order {
-                0 => ((i.wrapping_mul(seed | 1).wrapping_add(seed >> 7)) % levels) as f64,
-                1 => i as f64,
-                2 => -(i as f64),
-                _ => (i % 3) as f64,
-            };
-            let pts: Vec<(f64, f64)> = (0..n as u64).map(|i| (x(i), 0.0)).collect();
-            let mut s = samples(&pts);
-            let mid = ((n as f64 * at) as usize).min(n - 1);
-            split_at_median(&mut s, mid, |s| order_key(s.x));
-            let left_max = s[..mid].iter().map(|s| s.x).fold(f64::NEG_INFINITY, f64::max);
-            let right_min = s[mid..].iter().map(|s| s.x).fold(f64::INFINITY, f64::min);
-            prop_assert!(left_max <= right_min);
-            let mut ids: Vec<u32> = s.iter().map(|s| s.id).collect();
-            ids.sort_unstable();
-            prop_assert_eq!(ids, (0..n as u32).collect::<Vec<_>>());
-        }
-
         #[test]
         fn bsp_invariants_hold_for_any_points(
             pts in proptest::collection::vec((-1e3f64..1e3, -1e3f64..1e3), 0..3000),
