@@ -35,8 +35,9 @@
 //! rasterizes its triangles in triangle order. Samples are thus attenuated in the same order
 //! whatever the scheduling, and the result, the counters included, does not depend on the
 //! number of threads. Nodes above the frontier carry no occlusion state (they are only depth
-//! culled). Batches are small ([`BIN_CHUNK`] times [`BATCH_CHUNKS`] triangles) so that the
-//! binned copies are still in cache when the subtree tasks read them.
+//! culled). The bins hold copies of the blockers, so that each subtree task reads its
+//! triangles sequentially (indices into one list of blockers missed the cache on every
+//! blocker on bunny-plane).
 
 use super::{
     bsp::{Bsp, Node},
@@ -57,12 +58,13 @@ pub const TOP_LEVELS: usize = 6;
 const SCALAR_MAX: u32 = 6;
 
 /// Triangles per binning task.
-const BIN_CHUNK: usize = 256;
+const BIN_CHUNK: usize = 1024;
 
 /// Binning tasks per batch: triangles are binned and rasterized in batches of
-/// `BIN_CHUNK * BATCH_CHUNKS` (8192, some 3 MB of binned blockers on a scene of small
-/// triangles), so that the bins stay small, in cache, and their memory is reused.
-const BATCH_CHUNKS: usize = 32;
+/// `BIN_CHUNK * BATCH_CHUNKS`, so that the bins stay small and their memory is reused. Each
+/// batch walks every subtree again, so smaller batches cost more than they save (8192
+/// triangles per batch made bunny-plane's rasterization some 15% slower).
+const BATCH_CHUNKS: usize = 64;
 
 /// Which culling tests run (both on by default; off only to measure them).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -148,8 +150,6 @@ pub struct Blocker {
     outline: [DVec2; 5],
     /// Corners of the outline (3, or 4 after near clipping).
     corners: usize,
-    /// Edge vectors `outline[e + 1] - outline[e]`, for the filter of [`Blocker::covers`].
-    edges: [DVec2; 4],
     /// Per edge, a bound on the rounding error of its edge function anywhere in the bounding
     /// box (see [`Blocker::edge_masks`]).
     edge_bounds: [f64; 4],
@@ -210,17 +210,14 @@ impl Blocker {
             outline[..count].reverse();
         }
         outline[count] = outline[0];
-        let mut edges = [DVec2::ZERO; 4];
-        for (e, d) in edges[..count].iter_mut().enumerate() {
-            *d = outline[e + 1] - outline[e];
-        }
         let (lo, hi) = outline[..count].iter().fold(
             (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
             |(lo, hi), &p| (lo.min(p), hi.max(p)),
         );
         let size = hi - lo;
         let mut edge_bounds = [0.0; 4];
-        for (bound, d) in edge_bounds[..count].iter_mut().zip(&edges) {
+        for (e, bound) in edge_bounds[..count].iter_mut().enumerate() {
+            let d = outline[e + 1] - outline[e];
             *bound = EDGE_FILTER_BOUND * (d.x.abs() * size.y + d.y.abs() * size.x) + f64::MIN_POSITIVE;
         }
         // The plane n·p = offset met by the light's ray through (x, y), with the projector's
@@ -246,7 +243,6 @@ impl Blocker {
         Some(Self {
             outline,
             corners: count,
-            edges,
             edge_bounds,
             lo,
             hi,
@@ -299,10 +295,10 @@ impl Blocker {
     #[inline]
     pub fn covers(&self, p: DVec2) -> bool {
         (0..self.corners).all(|e| {
-            let a = self.outline[e];
-            match edge_sign(a, self.edges[e], p) {
+            let (a, b) = (self.outline[e], self.outline[e + 1]);
+            match edge_sign(a, b - a, p) {
                 Some(inside) => inside,
-                None => inside_edge(a, self.outline[e + 1], p),
+                None => inside_edge(a, b, p),
             }
         })
     }
@@ -323,7 +319,8 @@ impl Blocker {
     pub fn edge_masks(&self, xs: &[f64], ys: &[f64], lo: DVec2, hi: DVec2) -> (u64, u64) {
         let (mut maybe, mut surely) = (u64::MAX, u64::MAX);
         for e in 0..self.corners {
-            let (a, d, bound) = (self.outline[e], self.edges[e], self.edge_bounds[e]);
+            let (a, bound) = (self.outline[e], self.edge_bounds[e]);
+            let d = self.outline[e + 1] - a;
             let corner = DVec2::new(
                 if d.y > 0.0 { hi.x } else { lo.x },
                 if d.x > 0.0 { lo.y } else { hi.y },
