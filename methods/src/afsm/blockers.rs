@@ -12,9 +12,11 @@
 //! culling* skips it when the triangle's nearest corner is not in front of the node's largest
 //! threshold depth (`nodes_depth_culled`); *occlusion culling* skips it when all its samples
 //! are already dark (`nodes_occlusion_culled`); otherwise the triangle goes on to both children,
-//! or, in a leaf, to every sample that is not dark yet (`sampling_points_tested`): not the
-//! sample's own triangle, inside the bounding box, depth in front of the sample's threshold,
-//! and covered by the exact test ([`Blocker::covers`]).
+//! or, in a leaf, to every sample that is not dark yet: inside the bounding box (the samples
+//! counted by `sampling_points_tested`), not the sample's own triangle, depth in front of the
+//! sample's threshold, and covered by the exact test ([`Blocker::covers`]). The counter keeps
+//! its meaning whatever filter below decides a sample, so it stays comparable with the
+//! paper's Table 1 and with the GPU twin's.
 //!
 //! Neither culling changes a result: a depth-culled triangle's depth (clamped to its corners'
 //! range) is at or beyond every threshold in the node, and a dark sample stays dark.
