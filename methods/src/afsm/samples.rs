@@ -56,9 +56,10 @@ pub fn threshold_depth(light: &Projector, xy: DVec2, z: f64, offset: f64) -> f64
 /// Background sub-samples, and points a spot light cannot project (nearer than its `near`
 /// plane, or behind it), give no sample. Samples come out in id order.
 ///
-/// Every id is transformed in parallel (by rows of pixels, so that no index is divided) straight
-/// into its slot of one vector (ids without a sample get a NaN threshold), which is then
-/// compacted in place: no per-thread lists to concatenate.
+/// Every row of pixels is transformed in parallel into its own slots of one vector, its
+/// samples packed at the front of them (no index is divided, no per-thread list is
+/// concatenated); the rows' samples are then moved together in row order. Every pass but that
+/// last move runs in parallel.
 pub fn transform_samples(
     camera: &Projector,
     light: &Projector,
@@ -69,28 +70,47 @@ pub fn transform_samples(
     let rate = pattern.rate() as usize;
     let pixels = surfaces.first().map_or(0, |s| s.triangle.len());
     let w = width as usize;
-    let none = Sample { zt: f64::NAN, ..Sample::default() };
-    let mut samples = vec![none; pixels * rate];
-    samples.par_chunks_mut((w * rate).max(1)).enumerate().for_each(|(row, slots)| {
-        let first = row * w;
-        for (x, pixel_slots) in slots.chunks_mut(rate).enumerate() {
-            let pixel = first + x;
-            for (s, (slot, surface)) in pixel_slots.iter_mut().zip(surfaces).enumerate() {
-                let tri = surface.triangle[pixel];
-                if tri == NO_TRIANGLE {
-                    continue;
-                }
-                let ray = camera.ray(pattern.point(x as u32, row as u32, s));
-                let position = ray.at(surface.depth[pixel]);
-                let Some((xy, z)) = light.project(position) else { continue };
-                let zt = threshold_depth(light, xy, z, shadow_offset(ray.origin, position));
-                if zt.is_finite() {
-                    let id = (pixel * rate + s) as u32;
-                    *slot = Sample { x: xy.x, y: xy.y, zt, id, tri };
+    let row_len = (w * rate).max(1);
+    let mut samples = Vec::new();
+    (0..pixels * rate)
+        .into_par_iter()
+        .with_min_len(4096)
+        .map(|_| Sample::default())
+        .collect_into_vec(&mut samples);
+    let counts: Vec<usize> = samples
+        .par_chunks_mut(row_len)
+        .enumerate()
+        .map(|(row, slots)| {
+            let mut count = 0;
+            for x in 0..slots.len() / rate {
+                let pixel = row * w + x;
+                for (s, surface) in surfaces.iter().enumerate() {
+                    let tri = surface.triangle[pixel];
+                    if tri == NO_TRIANGLE {
+                        continue;
+                    }
+                    let ray = camera.ray(pattern.point(x as u32, row as u32, s));
+                    let position = ray.at(surface.depth[pixel]);
+                    let Some((xy, z)) = light.project(position) else { continue };
+                    let zt = threshold_depth(light, xy, z, shadow_offset(ray.origin, position));
+                    if zt.is_finite() {
+                        let id = (pixel * rate + s) as u32;
+                        slots[count] = Sample { x: xy.x, y: xy.y, zt, id, tri };
+                        count += 1;
+                    }
                 }
             }
+            count
+        })
+        .collect();
+    let mut end = 0;
+    for (row, &count) in counts.iter().enumerate() {
+        let start = row * row_len;
+        if start != end {
+            samples.copy_within(start..start + count, end);
         }
-    });
-    samples.retain(|s| s.zt.is_finite());
+        end += count;
+    }
+    samples.truncate(end);
     samples
 }
