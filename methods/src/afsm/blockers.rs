@@ -220,7 +220,8 @@ impl Blocker {
         let mut edge_bounds = [0.0; 4];
         for (e, bound) in edge_bounds[..count].iter_mut().enumerate() {
             let d = outline[e + 1] - outline[e];
-            *bound = EDGE_FILTER_BOUND * (d.x.abs() * size.y + d.y.abs() * size.x) + f64::MIN_POSITIVE;
+            *bound =
+                EDGE_FILTER_BOUND * (d.x.abs() * size.y + d.y.abs() * size.x) + f64::MIN_POSITIVE;
         }
         // The plane n·p = offset met by the light's ray through (x, y), with the projector's
         // sx = 2x / W - 1 and sy = 1 - 2y / H (see `Projector::ray`).
@@ -333,7 +334,9 @@ impl Blocker {
             let (mut keep, mut inside) = (0u64, 0u64);
             for (i, (&x, &y)) in xs.iter().zip(ys).enumerate() {
                 let det = d.x * (y - a.y) - d.y * (x - a.x);
-                keep |= u64::from(!(det < -bound)) << i;
+                // A NaN (overflowed) edge function is not certainly outside: kept.
+                let outside = det < -bound;
+                keep |= u64::from(!outside) << i;
                 inside |= u64::from(det > bound) << i;
             }
             maybe &= keep;
@@ -547,7 +550,8 @@ impl<S: Shade> Subtree<'_, S> {
         let (mut darkened, mut tested) = (0u32, 0u64);
         let (lo, hi) = (b.lo, b.hi);
         // A leaf inside the triangle's box needs no box test.
-        let all_boxed = lo.x <= node.lo.x && node.hi.x <= hi.x && lo.y <= node.lo.y && node.hi.y <= hi.y;
+        let all_boxed =
+            lo.x <= node.lo.x && node.hi.x <= hi.x && lo.y <= node.lo.y && node.hi.y <= hi.y;
         for first in (start..end).step_by(64) {
             let last = (first + 64).min(end);
             let (xs, ys) = (&bsp.xs[first..last], &bsp.ys[first..last]);
@@ -593,11 +597,8 @@ impl<S: Shade> Subtree<'_, S> {
                 let i = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
                 let s = &bsp.samples[first + i];
-                let shadowed = if surely & (1 << i) != 0 {
-                    b.shadows_covered(s)
-                } else {
-                    b.shadows_boxed(s)
-                };
+                let shadowed =
+                    if surely & (1 << i) != 0 { b.shadows_covered(s) } else { b.shadows_boxed(s) };
                 if shadowed {
                     darkened += u32::from(states[i].attenuate(pass));
                 }
