@@ -12,12 +12,23 @@
 //! culling* skips it when the triangle's nearest corner is not in front of the node's largest
 //! threshold depth (`nodes_depth_culled`); *occlusion culling* skips it when all its samples
 //! are already dark (`nodes_occlusion_culled`); otherwise the triangle goes on to both children,
-//! or, in a leaf, to every sample that is not dark yet (`sampling_points_tested`): not the
-//! sample's own triangle, inside the bounding box, depth in front of the sample's threshold,
-//! and covered by the exact test ([`Blocker::covers`]).
+//! or, in a leaf, to every sample that is not dark yet: inside the bounding box (the samples
+//! counted by `sampling_points_tested`), not the sample's own triangle, depth in front of the
+//! sample's threshold, and covered by the exact test ([`Blocker::covers`]). The counter keeps
+//! its meaning whatever filter below decides a sample, so it stays comparable with the
+//! paper's Table 1 and with the GPU twin's.
 //!
 //! Neither culling changes a result: a depth-culled triangle's depth (clamped to its corners'
 //! range) is at or beyond every threshold in the node, and a dark sample stays dark.
+//!
+//! The per-sample test ([`Blocker::shadows_boxed`]) runs its cheap parts first: the sample's
+//! own triangle, the threshold against the nearest corner's depth, then coverage, then the
+//! plane's depth (a division) only where the threshold lies within the corners' depth range.
+//! Coverage evaluates each edge function in `f64` with a forward error bound
+//! ([`edge_sign`]) and calls Shewchuk's exact `orient2d` (with the top-left rule) only where
+//! the bound cannot decide the sign, so the answer is the exact predicate's: for a long thin
+//! caster most samples in its bounding box are far outside an edge and cost a few
+//! multiplications (the paper does not say how its leaves test points).
 //!
 //! Parallel scheme: the BSP's top [`TOP_LEVELS`] levels are walked per triangle first
 //! (binning, in parallel over fixed chunks of triangles), giving for each *frontier* node (at
@@ -26,7 +37,9 @@
 //! rasterizes its triangles in triangle order. Samples are thus attenuated in the same order
 //! whatever the scheduling, and the result, the counters included, does not depend on the
 //! number of threads. Nodes above the frontier carry no occlusion state (they are only depth
-//! culled).
+//! culled). The bins hold copies of the blockers, so that each subtree task reads its
+//! triangles sequentially (indices into one list of blockers missed the cache on every
+//! blocker on bunny-plane).
 
 use super::{
     bsp::{Bsp, Node},
@@ -42,11 +55,17 @@ use scenes::{projection::ProjectionKind, Geometry, Projector};
 /// Depth of the frontier nodes, whose subtrees are the parallel tasks (up to 64).
 pub const TOP_LEVELS: usize = 6;
 
+/// A leaf's samples in a triangle's bounding box are tested one by one up to this many;
+/// beyond, the edge masks ([`Blocker::edge_masks`]) first drop those certainly outside.
+const SCALAR_MAX: u32 = 6;
+
 /// Triangles per binning task.
 const BIN_CHUNK: usize = 1024;
 
 /// Binning tasks per batch: triangles are binned and rasterized in batches of
-/// `BIN_CHUNK * BATCH_CHUNKS`, so that the bins stay small and their memory is reused.
+/// `BIN_CHUNK * BATCH_CHUNKS`, so that the bins stay small and their memory is reused. Each
+/// batch walks every subtree again, so smaller batches cost more than they save (8192
+/// triangles per batch made bunny-plane's rasterization some 15% slower).
 const BATCH_CHUNKS: usize = 64;
 
 /// Which culling tests run (both on by default; off only to measure them).
@@ -133,6 +152,9 @@ pub struct Blocker {
     outline: [DVec2; 5],
     /// Corners of the outline (3, or 4 after near clipping).
     corners: usize,
+    /// Per edge, a bound on the rounding error of its edge function anywhere in the bounding
+    /// box (see [`Blocker::edge_masks`]).
+    edge_bounds: [f64; 4],
     /// Bounding box of the outline.
     lo: DVec2,
     hi: DVec2,
@@ -194,6 +216,13 @@ impl Blocker {
             (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
             |(lo, hi), &p| (lo.min(p), hi.max(p)),
         );
+        let size = hi - lo;
+        let mut edge_bounds = [0.0; 4];
+        for (e, bound) in edge_bounds[..count].iter_mut().enumerate() {
+            let d = outline[e + 1] - outline[e];
+            *bound =
+                EDGE_FILTER_BOUND * (d.x.abs() * size.y + d.y.abs() * size.x) + f64::MIN_POSITIVE;
+        }
         // The plane n·p = offset met by the light's ray through (x, y), with the projector's
         // sx = 2x / W - 1 and sy = 1 - 2y / H (see `Projector::ray`).
         let offset = normal.dot(corners[0]);
@@ -217,6 +246,7 @@ impl Blocker {
         Some(Self {
             outline,
             corners: count,
+            edge_bounds,
             lo,
             hi,
             num,
@@ -262,9 +292,62 @@ impl Blocker {
     }
 
     /// Whether `p` lies inside the outline: exact orientation predicates, ties on an edge
-    /// decided by the rasterizer's top-left rule ([`crate::raster::inside_edge`]).
+    /// decided by the rasterizer's top-left rule ([`crate::raster::inside_edge`]). Each edge is
+    /// first decided by the floating-point filter [`edge_sign`]; the exact predicate runs only
+    /// where the filter cannot decide, so the answer is always the exact one.
     #[inline]
     pub fn covers(&self, p: DVec2) -> bool {
+        (0..self.corners).all(|e| {
+            let (a, b) = (self.outline[e], self.outline[e + 1]);
+            match edge_sign(a, b - a, p) {
+                Some(inside) => inside,
+                None => inside_edge(a, b, p),
+            }
+        })
+    }
+
+    /// Two masks over samples `i` (coordinates `xs[i]`, `ys[i]`, at most 64) inside the
+    /// bounding box and inside the box `lo..=hi` (a BSP node's): `maybe` clears the samples
+    /// that lie certainly outside an edge, `surely` sets those certainly inside every edge;
+    /// [`Blocker::covers`] is false where `maybe` is clear and true where `surely` is set.
+    ///
+    /// Per edge, the floating-point edge function is compared with the edge's bound for the
+    /// whole bounding box (in `edge_bounds`: [`EDGE_FILTER_BOUND`] times the largest
+    /// `|d.x (p.y - a.y)| + |d.y (p.x - a.x)|` there, which bounds every term of
+    /// [`edge_sign`]'s analysis for a point of the box). An edge whose inner side certainly
+    /// holds all of `lo..=hi` ([`edge_sign`] at the box corner where the edge function is
+    /// smallest) is skipped. Branch-free, one edge at a time over the samples, so that the
+    /// compiler can vectorise it.
+    #[inline]
+    pub fn edge_masks(&self, xs: &[f64], ys: &[f64], lo: DVec2, hi: DVec2) -> (u64, u64) {
+        let (mut maybe, mut surely) = (u64::MAX, u64::MAX);
+        for e in 0..self.corners {
+            let (a, bound) = (self.outline[e], self.edge_bounds[e]);
+            let d = self.outline[e + 1] - a;
+            let corner = DVec2::new(
+                if d.y > 0.0 { hi.x } else { lo.x },
+                if d.x > 0.0 { lo.y } else { hi.y },
+            );
+            if edge_sign(a, d, corner) == Some(true) {
+                continue;
+            }
+            let (mut keep, mut inside) = (0u64, 0u64);
+            for (i, (&x, &y)) in xs.iter().zip(ys).enumerate() {
+                let det = d.x * (y - a.y) - d.y * (x - a.x);
+                // A NaN (overflowed) edge function is not certainly outside: kept.
+                let outside = det < -bound;
+                keep |= u64::from(!outside) << i;
+                inside |= u64::from(det > bound) << i;
+            }
+            maybe &= keep;
+            surely &= inside;
+        }
+        (maybe, surely)
+    }
+
+    /// Whether `p` lies inside the outline by the exact predicates alone (no filter).
+    #[cfg(test)]
+    fn covers_exactly(&self, p: DVec2) -> bool {
         (0..self.corners).all(|e| inside_edge(self.outline[e], self.outline[e + 1], p))
     }
 
@@ -282,10 +365,21 @@ impl Blocker {
     }
 
     /// Whether the triangle shadows `s`, which lies in its bounding box: not the sample's own
-    /// triangle, in front of its threshold depth, and covering it.
-    #[inline(never)]
+    /// triangle, in front of its threshold depth, and covering it. The clamped depth lies in
+    /// `dmin..=dmax`, so a threshold at or in front of `dmin` rejects the sample, and one
+    /// beyond `dmax` accepts it, without the plane's division; the cheap tests run first.
+    #[inline]
     pub fn shadows_boxed(&self, s: &Sample) -> bool {
-        s.tri != self.id && self.depth_at(s.x, s.y) < s.zt && self.covers(DVec2::new(s.x, s.y))
+        s.tri != self.id
+            && self.dmin < s.zt
+            && self.covers(DVec2::new(s.x, s.y))
+            && (self.dmax < s.zt || self.depth_at(s.x, s.y) < s.zt)
+    }
+
+    /// [`Blocker::shadows_boxed`] for a sample the triangle is known to cover.
+    #[inline]
+    fn shadows_covered(&self, s: &Sample) -> bool {
+        s.tri != self.id && self.dmin < s.zt && (self.dmax < s.zt || self.depth_at(s.x, s.y) < s.zt)
     }
 
     /// Whether the triangle shadows `s` (the predicate the hierarchy evaluates in leaves).
@@ -295,10 +389,37 @@ impl Blocker {
     }
 }
 
+/// Relative error bound of the filter of [`edge_sign`]: `8u` (`u = 2^-53`, the unit roundoff),
+/// twice the bound `4u` of its rounded operations (see there).
+pub const EDGE_FILTER_BOUND: f64 = 4.0 * f64::EPSILON;
+
+/// The sign of `orient2d(a, a + d, p)` where a floating-point evaluation decides it: `Some(true)`
+/// when positive, `Some(false)` when negative, `None` when it may be zero or the rounding may
+/// hide its sign (the caller then runs the exact predicate). `d` is the edge vector as computed
+/// (`b - a` rounded), and the determinant `d.x (p.y - a.y) - d.y (p.x - a.x)` equals
+/// `orient2d(a, b, p)` in exact arithmetic. Evaluated in `f64`, each of the two products carries
+/// the rounding of one difference and of the product (relative error below `3u`, `u = 2^-53`),
+/// and the final difference one more, so the result lies within `4u (|u1| + |u2|)` of the exact
+/// value (plus underflow, at most `f64::MIN_POSITIVE`); the filter trusts a sign only beyond
+/// twice that ([`EDGE_FILTER_BOUND`]). Non-finite terms leave the sign undecided.
+#[inline(always)]
+pub fn edge_sign(a: DVec2, d: DVec2, p: DVec2) -> Option<bool> {
+    let (u, v) = (d.x * (p.y - a.y), d.y * (p.x - a.x));
+    let det = u - v;
+    let bound = EDGE_FILTER_BOUND * (u.abs() + v.abs()) + f64::MIN_POSITIVE;
+    if det > bound {
+        Some(true)
+    } else if det < -bound {
+        Some(false)
+    } else {
+        None
+    }
+}
+
 /// The triangles of one chunk that reach each frontier node, in triangle order.
 struct Chunk {
-    /// For each frontier slot, the blockers that reach it (copied, so that each subtree
-    /// task reads its own triangles sequentially).
+    /// For each frontier slot, the blockers that reach it (copied while they are in cache, so
+    /// that each subtree task reads its own triangles sequentially).
     bins: Vec<Vec<Blocker>>,
     counters: Counters,
 }
@@ -428,24 +549,58 @@ impl<S: Shade> Subtree<'_, S> {
         let skip_dark = self.culling.occlusion;
         let (mut darkened, mut tested) = (0u32, 0u64);
         let (lo, hi) = (b.lo, b.hi);
+        // A leaf inside the triangle's box needs no box test.
+        let all_boxed =
+            lo.x <= node.lo.x && node.hi.x <= hi.x && lo.y <= node.lo.y && node.hi.y <= hi.y;
         for first in (start..end).step_by(64) {
             let last = (first + 64).min(end);
+            let (xs, ys) = (&bsp.xs[first..last], &bsp.ys[first..last]);
             // Branch-free box test of up to 64 samples, one bit each.
-            let mut mask = 0u64;
-            for (i, (&x, &y)) in bsp.xs[first..last].iter().zip(&bsp.ys[first..last]).enumerate() {
-                let inside = (x >= lo.x) & (x <= hi.x) & (y >= lo.y) & (y <= hi.y);
-                mask |= u64::from(inside) << i;
-            }
-            while mask != 0 {
-                let k = first + mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                let st = &mut self.state[k - self.sample_base];
-                if skip_dark && st.is_dark() {
-                    continue;
+            let mut boxed = u64::MAX >> (64 - (last - first));
+            if !all_boxed {
+                boxed = 0;
+                for (i, (&x, &y)) in xs.iter().zip(ys).enumerate() {
+                    let inside = (x >= lo.x) & (x <= hi.x) & (y >= lo.y) & (y <= hi.y);
+                    boxed |= u64::from(inside) << i;
                 }
-                tested += 1;
-                if b.shadows_boxed(&bsp.samples[k]) {
-                    darkened += u32::from(st.attenuate(pass));
+            }
+            if boxed.count_ones() <= SCALAR_MAX {
+                // Few samples (a small triangle): test them one by one.
+                while boxed != 0 {
+                    let i = boxed.trailing_zeros() as usize;
+                    boxed &= boxed - 1;
+                    let st = &mut self.state[first + i - self.sample_base];
+                    if skip_dark && st.is_dark() {
+                        continue;
+                    }
+                    tested += 1;
+                    if b.shadows_boxed(&bsp.samples[first + i]) {
+                        darkened += u32::from(st.attenuate(pass));
+                    }
+                }
+                continue;
+            }
+            let states = &mut self.state[first - self.sample_base..last - self.sample_base];
+            let mut dark = 0u64;
+            if skip_dark {
+                for (i, st) in states.iter().enumerate() {
+                    dark |= u64::from(st.is_dark()) << i;
+                }
+            }
+            let live = boxed & !dark;
+            tested += u64::from(live.count_ones());
+            // Samples certainly outside an edge are not shadowed: skip them without a branch;
+            // those certainly inside every edge need only the depth test.
+            let (maybe, surely) = b.edge_masks(xs, ys, node.lo, node.hi);
+            let mut mask = live & maybe;
+            while mask != 0 {
+                let i = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                let s = &bsp.samples[first + i];
+                let shadowed =
+                    if surely & (1 << i) != 0 { b.shadows_covered(s) } else { b.shadows_boxed(s) };
+                if shadowed {
+                    darkened += u32::from(states[i].attenuate(pass));
                 }
             }
         }
@@ -635,6 +790,92 @@ mod tests {
                     let (t, _) =
                         rasterize_blockers::<[f64; 3]>(&g, |_| true, &passes, &light, &bsp, culling);
                     prop_assert_eq!(&t, &rgb);
+                }
+            }
+        }
+
+        /// Where the floating-point edge filter decides, it gives the sign of the exact
+        /// `orient2d`; on points exactly on or a few ulps beside an edge it must abstain or agree.
+        #[test]
+        fn edge_filter_agrees_with_orient2d(
+            a in (-1e3f64..1e3, -1e3f64..1e3),
+            b in (-1e3f64..1e3, -1e3f64..1e3),
+            t in -0.5f64..1.5,
+            nudge in (-4i64..=4, -4i64..=4),
+            scale in prop_oneof![Just(1.0), Just(1e-7), Just(3.0e5), Just(1e-150), Just(1e150)],
+            random in (-1e3f64..1e3, -1e3f64..1e3),
+            on_line in any::<bool>(),
+        ) {
+            let (a, b) = (DVec2::new(a.0, a.1) * scale, DVec2::new(b.0, b.1) * scale);
+            // A point on the line through a and b (rounded), moved by a few ulps, or anywhere.
+            let p = if on_line {
+                let q = a + (b - a) * t;
+                let step = |v: f64, k: i64| {
+                    let bits = v.to_bits() as i64 + if v >= 0.0 { k } else { -k };
+                    f64::from_bits(bits as u64)
+                };
+                DVec2::new(step(q.x, nudge.0), step(q.y, nudge.1))
+            } else {
+                DVec2::new(random.0, random.1) * scale
+            };
+            let exact = orient2d(coord(a), coord(b), coord(p));
+            match edge_sign(a, b - a, p) {
+                Some(true) => prop_assert!(exact > 0.0, "{a} {b} {p}: filter +, exact {exact}"),
+                Some(false) => prop_assert!(exact < 0.0, "{a} {b} {p}: filter -, exact {exact}"),
+                None => {}
+            }
+        }
+
+        /// Coverage through the filter equals the exact predicates alone, on samples of a
+        /// quarter-unit grid (many exactly on edges and corners) and off it.
+        #[test]
+        fn filtered_coverage_equals_exact_coverage(
+            t in tri(),
+            points in proptest::collection::vec((0u32..=64, 0u32..=64, -1.0f64..1.0), 1..200),
+            perspective in any::<bool>(),
+        ) {
+            let g = geometry(&[t]);
+            let light = if perspective { spot() } else { pixel_projector(16, 16) };
+            let Some(b) = Blocker::new(&g, 0, &light) else { return Ok(()) };
+            for &(x, y, jitter) in &points {
+                let on_grid = DVec2::new(f64::from(x), f64::from(y)) / 4.0;
+                for p in [on_grid, on_grid + DVec2::splat(jitter * 1e-13)] {
+                    prop_assert_eq!(b.covers(p), b.covers_exactly(p), "{}", p);
+                }
+            }
+        }
+
+        /// The leaves' edge masks clear only samples the triangle does not cover and set only
+        /// samples it covers, whatever node box holds the samples.
+        #[test]
+        fn edge_masks_agree_with_exact_coverage(
+            t in tri(),
+            points in proptest::collection::vec((0u32..=64, 0u32..=64, -1.0f64..1.0), 1..=64),
+            grow in 0.0f64..4.0,
+            perspective in any::<bool>(),
+        ) {
+            let g = geometry(&[t]);
+            let light = if perspective { spot() } else { pixel_projector(16, 16) };
+            let Some(b) = Blocker::new(&g, 0, &light) else { return Ok(()) };
+            // Grid points (on edges and corners) and points 1e-13 beside them, in the box.
+            let ps: Vec<DVec2> = points
+                .iter()
+                .map(|&(x, y, j)| {
+                    let p = DVec2::new(f64::from(x), f64::from(y)) / 4.0 + DVec2::splat(j * 1e-13);
+                    p.clamp(b.lo, b.hi)
+                })
+                .collect();
+            let xs: Vec<f64> = ps.iter().map(|p| p.x).collect();
+            let ys: Vec<f64> = ps.iter().map(|p| p.y).collect();
+            let (lo, hi) = ps.iter().fold((ps[0], ps[0]), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+            let (maybe, surely) = b.edge_masks(&xs, &ys, lo - grow, hi + grow);
+            for (i, &p) in ps.iter().enumerate() {
+                let covered = b.covers_exactly(p);
+                if maybe & (1 << i) == 0 {
+                    prop_assert!(!covered, "{} cleared but covered", p);
+                }
+                if surely & (1 << i) != 0 {
+                    prop_assert!(covered, "{} set but not covered", p);
                 }
             }
         }

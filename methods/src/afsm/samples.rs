@@ -55,6 +55,11 @@ pub fn threshold_depth(light: &Projector, xy: DVec2, z: f64, offset: f64) -> f64
 /// threshold depth takes the point's own [`shadow_offset`] from the camera ray's origin.
 /// Background sub-samples, and points a spot light cannot project (nearer than its `near`
 /// plane, or behind it), give no sample. Samples come out in id order.
+///
+/// Every row of pixels is transformed in parallel into its own slots of one vector, its
+/// samples packed at the front of them (no index is divided, no per-thread list is
+/// concatenated); the rows' samples are then moved together in row order. Every pass but that
+/// last move runs in parallel.
 pub fn transform_samples(
     camera: &Projector,
     light: &Projector,
@@ -65,22 +70,47 @@ pub fn transform_samples(
     let rate = pattern.rate() as usize;
     let pixels = surfaces.first().map_or(0, |s| s.triangle.len());
     let w = width as usize;
+    let row_len = (w * rate).max(1);
+    let mut samples = Vec::new();
     (0..pixels * rate)
         .into_par_iter()
         .with_min_len(4096)
-        .filter_map(|id| {
-            let (pixel, s) = (id / rate, id % rate);
-            let surface = &surfaces[s];
-            let tri = surface.triangle[pixel];
-            if tri == NO_TRIANGLE {
-                return None;
+        .map(|_| Sample::default())
+        .collect_into_vec(&mut samples);
+    let counts: Vec<usize> = samples
+        .par_chunks_mut(row_len)
+        .enumerate()
+        .map(|(row, slots)| {
+            let mut count = 0;
+            for x in 0..slots.len() / rate {
+                let pixel = row * w + x;
+                for (s, surface) in surfaces.iter().enumerate() {
+                    let tri = surface.triangle[pixel];
+                    if tri == NO_TRIANGLE {
+                        continue;
+                    }
+                    let ray = camera.ray(pattern.point(x as u32, row as u32, s));
+                    let position = ray.at(surface.depth[pixel]);
+                    let Some((xy, z)) = light.project(position) else { continue };
+                    let zt = threshold_depth(light, xy, z, shadow_offset(ray.origin, position));
+                    if zt.is_finite() {
+                        let id = (pixel * rate + s) as u32;
+                        slots[count] = Sample { x: xy.x, y: xy.y, zt, id, tri };
+                        count += 1;
+                    }
+                }
             }
-            let point = pattern.point((pixel % w) as u32, (pixel / w) as u32, s);
-            let ray = camera.ray(point);
-            let position = ray.at(surface.depth[pixel]);
-            let (xy, z) = light.project(position)?;
-            let zt = threshold_depth(light, xy, z, shadow_offset(ray.origin, position));
-            zt.is_finite().then_some(Sample { x: xy.x, y: xy.y, zt, id: id as u32, tri })
+            count
         })
-        .collect()
+        .collect();
+    let mut end = 0;
+    for (row, &count) in counts.iter().enumerate() {
+        let start = row * row_len;
+        if start != end {
+            samples.copy_within(start..start + count, end);
+        }
+        end += count;
+    }
+    samples.truncate(end);
+    samples
 }
