@@ -114,16 +114,18 @@
 
 mod accel;
 mod memory;
+mod packet;
 mod ray;
 
 pub use memory::{memory_estimate, AllocationError};
 
 use crate::reference::{Reference, ReferenceError, ReferenceImage};
-use accel::Accel;
+use accel::{Accel, Scratch};
 use glam::DVec3;
 use instrumentation::Recorder;
 use memory::Allocator;
 use methods::{afsm::shadow_offset, pattern::SamplePattern, Frame};
+use packet::PACKET;
 use ray::TraceRay;
 use rayon::prelude::*;
 use scenes::{projection::ProjectionKind, Geometry, Light};
@@ -166,8 +168,6 @@ struct SampleHit {
     light: f64,
     /// Rays traced (camera ray, and the shadow ray when it hit).
     rays: u64,
-    /// Ray-triangle tests made by both rays.
-    tests: u64,
 }
 
 impl From<AllocationError> for ReferenceError {
@@ -276,43 +276,135 @@ impl<'a> Tracer<'a> {
         })
     }
 
-    /// The camera ray and the shadow ray of sub-sample `s` of pixel `(i, j)`.
-    fn sample(&self, i: u32, j: u32, s: usize) -> SampleHit {
-        let r = self.frame.camera.ray(self.pattern.point(i, j, s));
-        let origin = r.origin + self.start_shift * r.direction;
-        let mut tests = 0;
-        let hit = TraceRay::new(origin, r.direction).and_then(|ray| {
-            self.camera_accel
-                .closest(&ray, self.camera_tmin, f64::INFINITY, &mut tests)
-                .map(|(t, id)| (ray.at(t), id))
-        });
-        let Some((p, id)) = hit else {
-            return SampleHit { triangle: None, light: 1.0, rays: 1, tests };
-        };
-        let (dir, tmax) = match self.light {
-            LightSource::Towards(d) => (Some(d), f64::INFINITY),
-            LightSource::At(q) => (scenes::direction::unit(q - p), (q - p).length()),
-        };
-        let tmin = shadow_offset(origin, p);
+    /// Pixels per packet tile `(width, height)` at `rate` sub-samples per pixel: `PACKET /
+    /// rate` pixels (one pixel above [`PACKET`] sub-samples), as square as a power of two
+    /// allows: 8 x 8 pixel centres at rate 1, 4 x 4 pixels at rate 4, one pixel at rate 64.
+    fn tile(rate: usize) -> (u32, u32) {
+        let pixels = (PACKET / rate.max(1)).max(1);
+        let height = 1usize << (pixels.ilog2() / 2);
+        ((pixels / height) as u32, height as u32)
+    }
+
+    /// Traces the sub-samples of the pixels of rows `rows` where `wanted(i, j)`, a tile at a
+    /// time, and hands each one's result to `emit(i, j, s, hit)`, a pixel's sub-samples in
+    /// order.
+    fn trace_band(
+        &self,
+        rows: std::ops::Range<u32>,
+        wanted: &impl Fn(u32, u32) -> bool,
+        work: &mut Work,
+        emit: &mut impl FnMut(u32, u32, usize, SampleHit),
+    ) {
+        let rate = self.pattern.rate() as usize;
+        let (tile_w, _) = Self::tile(rate);
+        let w = self.frame.width();
+        for i0 in (0..w).step_by(tile_w as usize) {
+            for j in rows.clone() {
+                for i in (i0..(i0 + tile_w).min(w)).filter(|&i| wanted(i, j)) {
+                    for s in 0..rate {
+                        work.ids.push((i, j, s));
+                        if work.ids.len() == PACKET {
+                            self.trace_packet(work, emit);
+                        }
+                    }
+                }
+            }
+            if !work.ids.is_empty() {
+                self.trace_packet(work, emit);
+            }
+        }
+    }
+
+    /// The camera rays of the sub-samples in `work.ids` as one packet, then the shadow rays of
+    /// those that hit as another; each sub-sample's result goes to `emit`, in order.
+    fn trace_packet(&self, work: &mut Work, emit: &mut impl FnMut(u32, u32, usize, SampleHit)) {
+        let Work { ids, hits, rays, of, best, limits, skip, light, scratch, tests } = work;
+        rays.clear();
+        of.clear();
+        hits.clear();
+        for &(i, j, s) in ids.iter() {
+            let r = self.frame.camera.ray(self.pattern.point(i, j, s));
+            let origin = r.origin + self.start_shift * r.direction;
+            if let Some(ray) = TraceRay::new(origin, r.direction) {
+                rays.push(ray);
+                of.push(hits.len());
+            }
+            hits.push(SampleHit { triangle: None, light: 1.0, rays: 1 });
+        }
+        best.clear();
+        best.resize(rays.len(), None);
+        let camera_limits = (self.camera_tmin, f64::INFINITY);
+        self.camera_accel.closest(rays, camera_limits, best, scratch, tests);
+
+        // The shadow rays replace the camera rays in `rays` and `of`.
+        let mut n = 0;
+        limits.clear();
+        skip.clear();
+        for c in 0..rays.len() {
+            let Some((t, id)) = best[c] else { continue };
+            let (origin, p) = (rays[c].origin, rays[c].at(t));
+            let k = of[c];
+            hits[k] = SampleHit { triangle: Some(id), light: 1.0, rays: 2 };
+            let (dir, tmax) = match self.light {
+                LightSource::Towards(d) => (Some(d), f64::INFINITY),
+                LightSource::At(q) => (scenes::direction::unit(q - p), (q - p).length()),
+            };
+            let tmin = shadow_offset(origin, p);
+            // A point at the light (or a degenerate ray) is lit.
+            if let Some(ray) = dir.and_then(|d| TraceRay::new(p, d)).filter(|_| tmax > tmin) {
+                (rays[n], of[n]) = (ray, k);
+                limits.push((tmin, tmax));
+                skip.push(id);
+                n += 1;
+            }
+        }
+        light.clear();
+        light.resize(n, 1.0);
         let casters = self.caster_accel.as_ref().unwrap_or(&self.camera_accel);
-        let light = match dir.and_then(|d| TraceRay::new(p, d)) {
-            Some(ray) if tmax > tmin => casters.transmittance(&ray, tmin, tmax, id, &mut tests),
-            // The point is at the light (or the ray is degenerate): lit.
-            _ => 1.0,
-        };
-        SampleHit { triangle: Some(id), light, rays: 2, tests }
+        casters.transmittance(&rays[..n], (limits, skip), light, scratch, tests);
+        for (&k, &l) in of[..n].iter().zip(light.iter()) {
+            hits[k].light = l;
+        }
+        for (&(i, j, s), &hit) in ids.iter().zip(hits.iter()) {
+            emit(i, j, s, hit);
+        }
+        ids.clear();
     }
 }
 
-/// One row of pixel results.
-struct Row {
+/// A thread's buffers for tracing packets, reused from packet to packet (at most [`PACKET`]
+/// entries each).
+#[derive(Default)]
+struct Work {
+    /// The packet's sub-samples: pixel `(i, j)` and sub-sample index.
+    ids: Vec<(u32, u32, usize)>,
+    /// Each sub-sample's result.
+    hits: Vec<SampleHit>,
+    /// The camera rays of the sub-samples that have one, then the shadow rays.
+    rays: Vec<TraceRay>,
+    /// The sub-sample (index into `ids`) of each ray.
+    of: Vec<usize>,
+    /// Each camera ray's closest hit.
+    best: Vec<Option<(f64, u32)>>,
+    /// Each shadow ray's range and the triangle it leaves.
+    limits: Vec<(f64, f64)>,
+    skip: Vec<u32>,
+    /// Each shadow ray's light.
+    light: Vec<f64>,
+    scratch: Scratch,
+    /// Ray-triangle tests made.
+    tests: u64,
+}
+
+/// The pixel results of a band of rows (row-major).
+struct Band {
     lit: Vec<f64>,
     evaluated: Vec<bool>,
     rays: u64,
 }
 
-/// One row of sub-sample results.
-struct SampleRow {
+/// The sub-sample results of a band of rows (row-major, a pixel's sub-samples together).
+struct SampleBand {
     triangle: Vec<u32>,
     light: Vec<f64>,
     rays: u64,
@@ -354,36 +446,41 @@ impl RayTrace {
         let n = per_row * h as usize;
         let tracer = Tracer::new(frame, &self.pattern, n as u64, rec)?;
         let alloc = tracer.alloc;
-        let rows = rec.stages.time(STAGE_RAY_TRACING, || {
-            (0..h)
+        let (_, band_h) = Tracer::tile(rate);
+        let bands = rec.stages.time(STAGE_RAY_TRACING, || {
+            (0..h.div_ceil(band_h))
                 .into_par_iter()
-                .map(|j| {
-                    let mut row = SampleRow {
-                        triangle: alloc.vec(per_row, "the sub-samples' triangles")?,
-                        light: alloc.vec(per_row, "the sub-samples' light")?,
+                .map(|b| {
+                    let rows = b * band_h..((b + 1) * band_h).min(h);
+                    let len = per_row * rows.len();
+                    let mut band = SampleBand {
+                        triangle: alloc.vec(len, "the sub-samples' triangles")?,
+                        light: alloc.vec(len, "the sub-samples' light")?,
                         rays: 0,
                         tests: 0,
                     };
-                    for i in 0..w {
-                        for s in 0..rate {
-                            let hit = tracer.sample(i, j, s);
-                            row.triangle.push(hit.triangle.unwrap_or(methods::raster::NO_TRIANGLE));
-                            row.light.push(hit.light);
-                            row.rays += hit.rays;
-                            row.tests += hit.tests;
-                        }
-                    }
-                    Ok(row)
+                    band.triangle.resize(len, methods::raster::NO_TRIANGLE);
+                    band.light.resize(len, 1.0);
+                    let mut work = Work::default();
+                    let j0 = rows.start;
+                    tracer.trace_band(rows, &|_, _| true, &mut work, &mut |i, j, s, hit| {
+                        let k = (j - j0) as usize * per_row + i as usize * rate + s;
+                        band.triangle[k] = hit.triangle.unwrap_or(methods::raster::NO_TRIANGLE);
+                        band.light[k] = hit.light;
+                        band.rays += hit.rays;
+                    });
+                    band.tests = work.tests;
+                    Ok(band)
                 })
-                .collect::<Result<Vec<SampleRow>, AllocationError>>()
+                .collect::<Result<Vec<SampleBand>, AllocationError>>()
         })?;
-        rec.counters.rays_traced += rows.iter().map(|r| r.rays).sum::<u64>();
-        let triangle_tests = rows.iter().map(|r| r.tests).sum();
+        rec.counters.rays_traced += bands.iter().map(|b| b.rays).sum::<u64>();
+        let triangle_tests = bands.iter().map(|b| b.tests).sum();
         let mut triangle = alloc.vec(n, "the sub-samples' triangles")?;
         let mut light = alloc.vec(n, "the sub-samples' light")?;
-        for row in rows {
-            triangle.extend(row.triangle);
-            light.extend(row.light);
+        for band in bands {
+            triangle.extend(band.triangle);
+            light.extend(band.light);
         }
         Ok(SampleImage { width: w, height: h, rate: rate as u32, triangle, light, triangle_tests })
     }
@@ -425,43 +522,50 @@ impl RayTrace {
         let tracer = Tracer::new(frame, &self.pattern, (n * rate) as u64, rec)?;
         let alloc = tracer.alloc;
         let wanted = |i: u32, j: u32| mask.is_none_or(|m| m[(j * w + i) as usize]);
-        let rows = rec.stages.time(STAGE_RAY_TRACING, || {
-            (0..h)
+        let (_, band_h) = Tracer::tile(rate);
+        let bands = rec.stages.time(STAGE_RAY_TRACING, || {
+            (0..h.div_ceil(band_h))
                 .into_par_iter()
-                .map(|j| {
-                    let mut row = Row {
-                        lit: alloc.vec(w as usize, "the pixels' lit fractions")?,
-                        evaluated: alloc.vec(w as usize, "the pixels' evaluated flags")?,
+                .map(|b| {
+                    let rows = b * band_h..((b + 1) * band_h).min(h);
+                    let len = w as usize * rows.len();
+                    let mut band = Band {
+                        lit: alloc.vec(len, "the pixels' lit fractions")?,
+                        evaluated: alloc.vec(len, "the pixels' evaluated flags")?,
                         rays: 0,
                     };
-                    for i in 0..w {
-                        if !wanted(i, j) {
-                            row.lit.push(1.0);
-                            row.evaluated.push(false);
-                            continue;
+                    // Sums of the sub-samples' light and whether all hit, then the results.
+                    band.lit.resize(len, 0.0);
+                    band.evaluated.resize(len, true);
+                    let mut work = Work::default();
+                    let j0 = rows.start;
+                    tracer.trace_band(rows.clone(), &wanted, &mut work, &mut |i, j, _, hit| {
+                        let k = ((j - j0) * w + i) as usize;
+                        band.lit[k] += hit.light;
+                        band.evaluated[k] &= hit.triangle.is_some();
+                        band.rays += hit.rays;
+                    });
+                    for (k, (lit, evaluated)) in
+                        band.lit.iter_mut().zip(band.evaluated.iter_mut()).enumerate()
+                    {
+                        let (i, j) = (k as u32 % w, j0 + k as u32 / w);
+                        if wanted(i, j) {
+                            *lit = (*lit / rate as f64).clamp(0.0, 1.0);
+                        } else {
+                            (*lit, *evaluated) = (1.0, false);
                         }
-                        let (mut sum, mut all_hit) = (0.0f64, true);
-                        for s in 0..rate {
-                            let hit = tracer.sample(i, j, s);
-                            row.rays += hit.rays;
-                            all_hit &= hit.triangle.is_some();
-                            sum += hit.light;
-                        }
-                        row.lit.push((sum / rate as f64).clamp(0.0, 1.0));
-                        row.evaluated.push(all_hit);
                     }
-                    Ok(row)
+                    Ok(band)
                 })
-                .collect::<Result<Vec<Row>, AllocationError>>()
+                .collect::<Result<Vec<Band>, AllocationError>>()
         })?;
 
-        let rays: u64 = rows.iter().map(|r| r.rays).sum();
-        rec.counters.rays_traced += rays;
+        rec.counters.rays_traced += bands.iter().map(|b| b.rays).sum::<u64>();
         let mut lit = alloc.vec(n, "the pixels' lit fractions")?;
         let mut evaluated = alloc.vec(n, "the pixels' evaluated flags")?;
-        for row in rows {
-            lit.extend(row.lit);
-            evaluated.extend(row.evaluated);
+        for band in bands {
+            lit.extend(band.lit);
+            evaluated.extend(band.evaluated);
         }
         let transmittance = if frame.effects.transparency {
             let mut t = alloc.vec(n, "the pixels' transmittance")?;
