@@ -38,7 +38,7 @@ const MAX_FRAME_COORDINATE: f64 = 1e15;
 /// rather than 8: packets share the node tests, while every triangle in a leaf costs each ray
 /// that reaches it an `f64` test.
 const BUILD: BvhBuildParams =
-    BvhBuildParams { max_prims_per_leaf: 4, ..BvhBuildParams::medium_build() };
+    BvhBuildParams { max_prims_per_leaf: 2, ..BvhBuildParams::medium_build() };
 
 /// An `f32` upper bound of a non-negative ray parameter, for the traversal's pruning.
 #[inline]
@@ -188,8 +188,10 @@ impl Cluster {
     /// How `ray` meets the cluster for world parameters in `[0, tmax]`. The ray is clipped in
     /// `f64` to the cluster's box enlarged by `extent / 64` plus a bound of the clip's own
     /// rounding, and the frame ray starts at the entry point: a ray from far away starts near
-    /// the cluster, so the padding need only cover the cluster's own extent.
-    #[inline]
+    /// the cluster, so the padding need only cover the cluster's own extent. Inlined into the
+    /// packet's set-up loop, where the latency of its square root and divisions overlaps from
+    /// ray to ray.
+    #[inline(always)]
     fn route(&self, ray: &TraceRay, tmax: f64) -> Route<'_> {
         let f = &self.frame;
         let o = ray.origin - f.centre;

@@ -3,57 +3,65 @@
 //!
 //! The scheme is Wald, Boulos and Shirley's ("Ray Tracing Deformable Scenes Using Dynamic
 //! Bounding Volume Hierarchies", ACM Transactions on Graphics 26(1), 2007), itself built on
-//! the coherent packets of Wald, Benthin, Wagner and Slusallek ("Interactive Rendering with
+//! the SIMD packets of Wald, Benthin, Wagner and Slusallek ("Interactive Rendering with
 //! Coherent Ray Tracing", Eurographics 2001), with the active range of Overbeck, Ramamoorthi
 //! and Mark ("Large Ray Packets for Real-Time Whitted Ray Tracing", IRT 2008):
 //!
-//! - Each stack entry is a node and the index of its **first active ray**: the rays before it
-//!   are known to miss the node (or an ancestor). A node is entered when the first active ray
-//!   hits it (one slab test for the whole packet in the common, coherent case). Otherwise the
-//!   packet's **interval bound** is tried: if it proves that no ray of the packet can hit the
-//!   box, the node is culled; if not, the rays after the first are tested one by one, and the
-//!   first that hits becomes the children's first active ray.
-//! - Children are visited nearer first, by the first active ray's entry distances.
-//! - At a **leaf**, each ray from the first active one whose own slab test hits the leaf's box
-//!   calls the leaf closure for each of the leaf's slots (the `f64` triangle test); the closure
-//!   may shorten the ray (closest hit) or end it (`f32::NEG_INFINITY`: no light left).
+//! - The rays are held in groups of [`LANES`], each tested against a box by one SIMD slab
+//!   test. Each stack entry is a node and its **first active group**: the groups before it
+//!   are known to miss the node (or an ancestor). A node is entered when a ray of the first
+//!   active group hits it (one group test for the whole packet in the common, coherent case).
+//!   Otherwise the packet's **interval bound** is tried: if it proves that no ray of the
+//!   packet can hit the box, the node is culled; if not, the groups after the first are
+//!   tested in turn, and the first with a hit becomes the children's first active group.
+//! - Children are visited nearer first, by the first active group's nearest entry.
+//! - At a **leaf**, each ray from the first active group on whose own slab test hits the
+//!   leaf's box calls the leaf closure for each of the leaf's slots (the `f64` triangle
+//!   test); the closure may shorten the ray (closest hit) or end it (`f32::NEG_INFINITY`: no
+//!   light left).
 //!
-//! Why it loses nothing: a ray's own slab test is obvhs' (`Aabb::intersect_ray`, the same
-//! `f32` operations, with the same clamped reciprocal of direction components below
-//! `f32::EPSILON`), which the boxes' padding covers (parent module, "Precision"). The interval
-//! bound only culls a node when it proves that this per-ray test fails for every ray: it
-//! bounds the rays' origins and reciprocal directions per axis, and each slab distance
-//! `(plane - o) * inv` by the extreme values over the corners of that box, computed with the
-//! same `f32` operations. Correctly rounded subtraction and multiplication are monotone in each
-//! argument, and a product is bilinear, so its rounded value over the box lies between the
-//! rounded values at the corners: the bound holds for each ray's computed (rounded) slab
-//! distances, not only for exact ones. A ray whose maximum only decreases (closest hit) or
-//! that is ended keeps missing a box it missed before, so the first active index never skips
-//! a ray that could still hit.
+//! Why it loses nothing: each lane of the group test computes exactly obvhs' slab test
+//! (`Aabb::intersect_ray`: the same `f32` subtractions, products, minima and maxima, with the
+//! same clamped reciprocal of direction components below `f32::EPSILON`), which the boxes'
+//! padding covers (parent module, "Precision"). The interval bound only culls a node when it
+//! proves that this per-ray test fails for every ray: it bounds the rays' origins and
+//! reciprocal directions per axis, and each slab distance `(plane - o) * inv` by the extreme
+//! values over the corners of that box, computed with the same `f32` operations. Correctly
+//! rounded subtraction and multiplication are monotone in each argument, and a product is
+//! bilinear, so its rounded value over the box lies between the rounded values at the
+//! corners: the bound holds for each ray's computed (rounded) slab distances, not only for
+//! exact ones. A ray whose maximum only decreases (closest hit) or that is ended keeps missing
+//! a box it missed before, so the first active group never skips a ray that could still hit.
 //!
 //! Hot path: fixed-size structure-of-arrays, no allocation (the stack is the caller's, reused
 //! from packet to packet), no division in the loop.
 
-use glam::Vec3A;
-use obvhs::{aabb::Aabb, bvh2::Bvh2, ray::safe_inverse};
+use glam::{Vec3A, Vec4};
+use obvhs::{aabb::Aabb, bvh2::Bvh2};
 
 /// Most rays in a packet: a pixel's 64 sub-samples, or 8 x 8 pixel centres at rate 1.
 pub(crate) const PACKET: usize = 64;
 
-/// Up to [`PACKET`] rays in a cluster's frame, structure of arrays, with the interval bounds of
-/// the active ones.
+/// Rays tested together by one SIMD slab test (SSE lanes).
+const LANES: usize = 4;
+
+/// Lane groups in a packet.
+const GROUPS: usize = PACKET / LANES;
+
+/// Up to [`PACKET`] rays in a cluster's frame, structure of arrays (groups of [`LANES`]), with
+/// the interval bounds of the active ones.
 pub(crate) struct FramePacket {
     len: usize,
     /// Rays not yet ended (inactive slots and ended rays excluded).
     live: usize,
-    ox: [f32; PACKET],
-    oy: [f32; PACKET],
-    oz: [f32; PACKET],
-    ix: [f32; PACKET],
-    iy: [f32; PACKET],
-    iz: [f32; PACKET],
+    ox: [Vec4; GROUPS],
+    oy: [Vec4; GROUPS],
+    oz: [Vec4; GROUPS],
+    ix: [Vec4; GROUPS],
+    iy: [Vec4; GROUPS],
+    iz: [Vec4; GROUPS],
     /// Frame parameter beyond which hits no longer count; `-inf` for an inactive or ended ray.
-    tmax: [f32; PACKET],
+    tmax: [Vec4; GROUPS],
     /// Per-axis bounds of the active rays' origins and reciprocal directions.
     omin: Vec3A,
     omax: Vec3A,
@@ -68,13 +76,13 @@ impl Default for FramePacket {
         Self {
             len: 0,
             live: 0,
-            ox: [0.0; PACKET],
-            oy: [0.0; PACKET],
-            oz: [0.0; PACKET],
-            ix: [0.0; PACKET],
-            iy: [0.0; PACKET],
-            iz: [0.0; PACKET],
-            tmax: [f32::NEG_INFINITY; PACKET],
+            ox: [Vec4::ZERO; GROUPS],
+            oy: [Vec4::ZERO; GROUPS],
+            oz: [Vec4::ZERO; GROUPS],
+            ix: [Vec4::ZERO; GROUPS],
+            iy: [Vec4::ZERO; GROUPS],
+            iz: [Vec4::ZERO; GROUPS],
+            tmax: [Vec4::NEG_INFINITY; GROUPS],
             omin: Vec3A::INFINITY,
             omax: Vec3A::NEG_INFINITY,
             imin: Vec3A::INFINITY,
@@ -94,13 +102,23 @@ impl FramePacket {
         self.max_tmax = f32::NEG_INFINITY;
     }
 
+    /// Sets slot `k`'s ray.
+    #[inline]
+    fn set(&mut self, k: usize, origin: Vec3A, inv: Vec3A, tmax: f32) {
+        let (g, l) = (k / LANES, k % LANES);
+        (self.ox[g][l], self.oy[g][l], self.oz[g][l]) = (origin.x, origin.y, origin.z);
+        (self.ix[g][l], self.iy[g][l], self.iz[g][l]) = (inv.x, inv.y, inv.z);
+        self.tmax[g][l] = tmax;
+    }
+
     /// Adds the ray `origin + t * dir`, `0 <= t <= tmax` (finite `f32` frame coordinates).
     pub(crate) fn push(&mut self, origin: Vec3A, dir: Vec3A, tmax: f32) {
-        let k = self.len;
-        let inv = Vec3A::new(safe_inverse(dir.x), safe_inverse(dir.y), safe_inverse(dir.z));
-        (self.ox[k], self.oy[k], self.oz[k]) = (origin.x, origin.y, origin.z);
-        (self.ix[k], self.iy[k], self.iz[k]) = (inv.x, inv.y, inv.z);
-        self.tmax[k] = tmax;
+        // obvhs' `safe_inverse` lane by lane: components below `f32::EPSILON` (zeros of
+        // either sign included) invert to `±1 / f32::EPSILON`, with their sign.
+        let small = dir.abs().cmple(Vec3A::splat(f32::EPSILON));
+        let clamped = Vec3A::splat(1.0 / f32::EPSILON).copysign(dir);
+        let inv = Vec3A::select(small, clamped, Vec3A::ONE / dir);
+        self.set(self.len, origin, inv, tmax);
         self.omin = self.omin.min(origin);
         self.omax = self.omax.max(origin);
         self.imin = self.imin.min(inv);
@@ -112,36 +130,40 @@ impl FramePacket {
 
     /// Adds a slot for a ray that does not traverse this BVH (it misses every box).
     pub(crate) fn push_inactive(&mut self) {
-        let k = self.len;
-        (self.ox[k], self.oy[k], self.oz[k]) = (0.0, 0.0, 0.0);
-        (self.ix[k], self.iy[k], self.iz[k]) = (0.0, 0.0, 0.0);
-        self.tmax[k] = f32::NEG_INFINITY;
+        self.set(self.len, Vec3A::ZERO, Vec3A::ZERO, f32::NEG_INFINITY);
         self.len += 1;
     }
 
-    /// Ray `k`'s entry distance into box `b` (obvhs' `Aabb::intersect_ray`, bounded by the
-    /// ray's `tmax`), or `f32::INFINITY` when it misses.
+    /// The entry distances of group `g`'s rays into box `b`, and which of them hit it within
+    /// their range: lane by lane, obvhs' `Aabb::intersect_ray` (the same `f32` operations).
     #[inline(always)]
-    fn entry(&self, k: usize, b: &Aabb) -> f32 {
-        let (o, inv) = (
-            Vec3A::new(self.ox[k], self.oy[k], self.oz[k]),
-            Vec3A::new(self.ix[k], self.iy[k], self.iz[k]),
-        );
-        let t1 = (b.min - o) * inv;
-        let t2 = (b.max - o) * inv;
-        let near = t1.min(t2).max_element();
-        let far = t1.max(t2).min_element();
-        if far >= near && far >= 0.0 && near <= self.tmax[k] {
-            near
-        } else {
-            f32::INFINITY
-        }
+    fn entry(&self, g: usize, b: &Aabb) -> (u32, Vec4) {
+        let slab = |lo: f32, hi: f32, o: Vec4, inv: Vec4| {
+            let (t1, t2) = ((Vec4::splat(lo) - o) * inv, (Vec4::splat(hi) - o) * inv);
+            (t1.min(t2), t1.max(t2))
+        };
+        let (nx, fx) = slab(b.min.x, b.max.x, self.ox[g], self.ix[g]);
+        let (ny, fy) = slab(b.min.y, b.max.y, self.oy[g], self.iy[g]);
+        let (nz, fz) = slab(b.min.z, b.max.z, self.oz[g], self.iz[g]);
+        let near = nx.max(ny).max(nz);
+        let far = fx.min(fy).min(fz);
+        let hit = far.cmpge(near) & far.cmpge(Vec4::ZERO) & near.cmple(self.tmax[g]);
+        (hit.bitmask(), near)
     }
 
-    /// Whether ray `k` hits box `b` within its range.
+    /// Which rays of group `g` hit box `b` (bit `l` for lane `l`).
     #[inline(always)]
-    fn hits(&self, k: usize, b: &Aabb) -> bool {
-        self.entry(k, b) != f32::INFINITY
+    fn hits(&self, g: usize, b: &Aabb) -> u32 {
+        self.entry(g, b).0
+    }
+
+    /// The nearest entry into box `b` of a ray of group `g` that hits it (`f32::INFINITY` when
+    /// none does): the order in which children are visited.
+    #[inline(always)]
+    fn nearest(&self, g: usize, b: &Aabb) -> f32 {
+        let (hit, near) = self.entry(g, b);
+        let lanes = Vec4::select(glam::BVec4A::from_array(lane_mask(hit)), near, Vec4::INFINITY);
+        lanes.min_element()
     }
 
     /// False only when no active ray of the packet can hit `b` (see the module doc).
@@ -167,6 +189,12 @@ impl FramePacket {
     }
 }
 
+/// The lanes set in a bitmask of [`LANES`] bits.
+#[inline(always)]
+fn lane_mask(bits: u32) -> [bool; LANES] {
+    [bits & 1 != 0, bits & 2 != 0, bits & 4 != 0, bits & 8 != 0]
+}
+
 /// Walks `bvh` with `packet`; `leaf(k, slot)` tests ray `k` against the triangle in `slot` and
 /// returns the ray's new `tmax` when it changes (`f32::NEG_INFINITY` ends the ray). `stack` is
 /// scratch space.
@@ -176,9 +204,13 @@ pub(crate) fn traverse(
     stack: &mut Vec<(u32, u32)>,
     mut leaf: impl FnMut(usize, usize) -> Option<f32>,
 ) {
-    let len = packet.len;
     if packet.live == 0 || bvh.nodes.is_empty() {
         return;
+    }
+    // The last group's unused lanes miss everything.
+    let groups = packet.len.div_ceil(LANES);
+    for k in packet.len..groups * LANES {
+        packet.set(k, Vec3A::ZERO, Vec3A::ZERO, f32::NEG_INFINITY);
     }
     stack.clear();
     stack.push((0, 0));
@@ -186,44 +218,107 @@ pub(crate) fn traverse(
         let node = &bvh.nodes[index as usize];
         let b = &node.aabb;
         let mut first = first as usize;
-        if !packet.hits(first, b) {
+        let mut hit = packet.hits(first, b);
+        if hit == 0 {
             if !packet.may_hit(b) {
                 continue;
             }
-            first += 1;
-            while first < len && !packet.hits(first, b) {
+            while hit == 0 && first + 1 < groups {
                 first += 1;
+                hit = packet.hits(first, b);
             }
-            if first == len {
+            if hit == 0 {
                 continue;
             }
         }
         if node.prim_count == 0 {
             let (l, r) = (node.first_index, node.first_index + 1);
-            let tl = packet.entry(first, &bvh.nodes[l as usize].aabb);
-            let tr = packet.entry(first, &bvh.nodes[r as usize].aabb);
+            let tl = packet.nearest(first, &bvh.nodes[l as usize].aabb);
+            let tr = packet.nearest(first, &bvh.nodes[r as usize].aabb);
             let (near, far) = if tl <= tr { (l, r) } else { (r, l) };
             stack.push((far, first as u32));
             stack.push((near, first as u32));
             continue;
         }
         let slots = node.first_index as usize..(node.first_index + node.prim_count) as usize;
-        for k in first..len {
-            if k != first && !packet.hits(k, b) {
-                continue;
-            }
-            for slot in slots.clone() {
-                if let Some(t) = leaf(k, slot) {
-                    packet.tmax[k] = t;
-                    if t == f32::NEG_INFINITY {
-                        packet.live -= 1;
-                        break;
+        for g in first..groups {
+            let mut lanes = if g == first { hit } else { packet.hits(g, b) };
+            while lanes != 0 {
+                let l = lanes.trailing_zeros() as usize;
+                lanes &= lanes - 1;
+                for slot in slots.clone() {
+                    if let Some(t) = leaf(g * LANES + l, slot) {
+                        packet.tmax[g][l] = t;
+                        if t == f32::NEG_INFINITY {
+                            packet.live -= 1;
+                            break;
+                        }
                     }
                 }
             }
         }
         if packet.live == 0 {
             return;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use obvhs::ray::safe_inverse;
+    use proptest::prelude::*;
+
+    #[test]
+    fn reciprocals_are_obvhs_safe_inverse() {
+        let eps = f32::EPSILON;
+        for x in [0.0, -0.0, 1e-30, -1e-30, eps, -eps, eps * 1.5, -eps * 1.5, 0.5, -3.0, 1.0] {
+            let mut p = FramePacket::default();
+            p.push(Vec3A::ZERO, Vec3A::new(x, 1.0, -x), 1.0);
+            assert_eq!(p.ix[0][0].to_bits(), safe_inverse(x).to_bits(), "{x}");
+            assert_eq!(p.iz[0][0].to_bits(), safe_inverse(-x).to_bits(), "{x}");
+        }
+    }
+
+    /// A component from a small set that includes zeros of both signs and values around
+    /// `f32::EPSILON`, or any value in `[-1, 1]`.
+    fn component() -> impl Strategy<Value = f32> {
+        prop_oneof![
+            prop::sample::select(vec![0.0, -0.0, 1e-9, -1e-9, f32::EPSILON, -f32::EPSILON, 1.0]),
+            -1.0f32..1.0,
+        ]
+    }
+
+    fn vector() -> impl Strategy<Value = Vec3A> {
+        (component(), component(), component()).prop_map(|(x, y, z)| Vec3A::new(x, y, z))
+    }
+
+    proptest! {
+        /// The interval bound never culls a box that one of the packet's rays hits, and the
+        /// group test of each ray is obvhs' own slab test, lane by lane.
+        #[test]
+        fn the_packet_tests_agree_with_obvhs_slab_test(
+            rays in prop::collection::vec((vector(), vector(), 0.0f32..4.0), 1..=PACKET),
+            lo in vector(), size in vector(), spread in 0.0f32..2.0,
+        ) {
+            let b = Aabb::new(lo, lo + size.abs() * spread);
+            let mut p = FramePacket::default();
+            for &(o, d, tmax) in &rays {
+                p.push(o * 2.0, d, tmax);
+            }
+            let mut any = false;
+            for (k, &(o, d, tmax)) in rays.iter().enumerate() {
+                let ray = obvhs::ray::Ray::new(o * 2.0, d, 0.0, tmax);
+                let theirs = b.intersect_ray(&ray);
+                let hit = theirs <= tmax;
+                let (mask, near) = p.entry(k / LANES, &b);
+                prop_assert_eq!(mask & (1 << (k % LANES)) != 0, hit, "ray {}", k);
+                if hit {
+                    prop_assert_eq!(near[k % LANES], theirs);
+                }
+                any |= hit;
+            }
+            prop_assert!(!any || p.may_hit(&b));
         }
     }
 }
