@@ -153,8 +153,9 @@ fn bounds(geometry: &Geometry) -> Option<(DVec3, DVec3)> {
 /// Where the light is, seen from a shading point.
 #[derive(Debug, Clone, Copy)]
 enum LightSource {
-    /// Unit direction towards a directional light.
-    Towards(DVec3),
+    /// A directional light: the ray from the origin along the unit direction towards it,
+    /// whose set-up every shadow ray shares (they are parallel).
+    Towards(TraceRay),
     /// Position of a spot light.
     At(DVec3),
 }
@@ -205,13 +206,15 @@ impl<'a> Tracer<'a> {
     ) -> Result<Self, ReferenceError> {
         let light = match frame.scene.light {
             Light::Directional { direction } => {
-                let Some(along) = scenes::direction::unit(direction) else {
+                let towards =
+                    scenes::direction::unit(direction).and_then(|d| TraceRay::new(DVec3::ZERO, -d));
+                let Some(towards) = towards else {
                     return Err(ReferenceError::NotApplicable(format!(
                         "raytrace: the directional light of scene `{}` has no direction",
                         frame.scene.name
                     )));
                 };
-                LightSource::Towards(-along)
+                LightSource::Towards(towards)
             }
             Light::Spot { position, .. } => {
                 if !position.is_finite() {
@@ -296,16 +299,21 @@ impl<'a> Tracer<'a> {
         emit: &mut impl FnMut(u32, u32, usize, SampleHit),
     ) {
         let rate = self.pattern.rate() as usize;
-        let (tile_w, _) = Self::tile(rate);
+        let (tile_w, tile_h) = Self::tile(rate);
+        let side = tile_w.max(tile_h).next_power_of_two();
         let w = self.frame.width();
         for i0 in (0..w).step_by(tile_w as usize) {
-            for j in rows.clone() {
-                for i in (i0..(i0 + tile_w).min(w)).filter(|&i| wanted(i, j)) {
-                    for s in 0..rate {
-                        work.ids.push((i, j, s));
-                        if work.ids.len() == PACKET {
-                            self.trace_packet(work, emit);
-                        }
+            // The tile's pixels in Z order, so that each lane group (and each run of groups)
+            // covers a compact block of pixels.
+            for (x, y) in (0..side * side).map(z_order) {
+                let (i, j) = (i0 + x, rows.start + y);
+                if x >= tile_w || i >= w || j >= rows.end || !wanted(i, j) {
+                    continue;
+                }
+                for s in 0..rate {
+                    work.ids.push((i, j, s));
+                    if work.ids.len() == PACKET {
+                        self.trace_packet(work, emit);
                     }
                 }
             }
@@ -345,13 +353,16 @@ impl<'a> Tracer<'a> {
             let (origin, p) = (rays[c].origin, rays[c].at(t));
             let k = of[c];
             hits[k] = SampleHit { triangle: Some(id), light: 1.0, rays: 2 };
-            let (dir, tmax) = match self.light {
-                LightSource::Towards(d) => (Some(d), f64::INFINITY),
-                LightSource::At(q) => (scenes::direction::unit(q - p), (q - p).length()),
+            let (ray, tmax) = match self.light {
+                LightSource::Towards(towards) => (towards.from(p), f64::INFINITY),
+                LightSource::At(q) => (
+                    scenes::direction::unit(q - p).and_then(|d| TraceRay::new(p, d)),
+                    (q - p).length(),
+                ),
             };
             let tmin = shadow_offset(origin, p);
             // A point at the light (or a degenerate ray) is lit.
-            if let Some(ray) = dir.and_then(|d| TraceRay::new(p, d)).filter(|_| tmax > tmin) {
+            if let Some(ray) = ray.filter(|_| tmax > tmin) {
                 (rays[n], of[n]) = (ray, k);
                 limits.push((tmin, tmax));
                 skip.push(id);
@@ -370,6 +381,16 @@ impl<'a> Tracer<'a> {
         }
         ids.clear();
     }
+}
+
+/// Point `code` of the Z-order (Morton) curve: `(x, y)` from the even and the odd bits.
+fn z_order(code: u32) -> (u32, u32) {
+    let (mut x, mut y) = (0, 0);
+    for b in 0..16 {
+        x |= ((code >> (2 * b)) & 1) << b;
+        y |= ((code >> (2 * b + 1)) & 1) << b;
+    }
+    (x, y)
 }
 
 /// A thread's buffers for tracing packets, reused from packet to packet (at most [`PACKET`]

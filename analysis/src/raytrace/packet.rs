@@ -40,7 +40,7 @@ use glam::{Vec3A, Vec4};
 use obvhs::{aabb::Aabb, bvh2::Bvh2};
 
 /// Most rays in a packet: a pixel's 64 sub-samples, or 8 x 8 pixel centres at rate 1.
-pub(crate) const PACKET: usize = 64;
+pub(crate) const PACKET: usize = 256;
 
 /// Rays tested together by one SIMD slab test (SSE lanes).
 const LANES: usize = 4;
@@ -201,7 +201,7 @@ fn lane_mask(bits: u32) -> [bool; LANES] {
 pub(crate) fn traverse(
     bvh: &Bvh2,
     packet: &mut FramePacket,
-    stack: &mut Vec<(u32, u32)>,
+    stack: &mut Vec<(u32, u32, u32)>,
     mut leaf: impl FnMut(usize, usize) -> Option<f32>,
 ) {
     if packet.live == 0 || bvh.nodes.is_empty() {
@@ -213,22 +213,25 @@ pub(crate) fn traverse(
         packet.set(k, Vec3A::ZERO, Vec3A::ZERO, f32::NEG_INFINITY);
     }
     stack.clear();
-    stack.push((0, 0));
-    while let Some((index, first)) = stack.pop() {
+    stack.push((0, 0, groups as u32));
+    while let Some((index, first, last)) = stack.pop() {
         let node = &bvh.nodes[index as usize];
         let b = &node.aabb;
-        let mut first = first as usize;
+        let (mut first, mut last) = (first as usize, last as usize);
         let mut hit = packet.hits(first, b);
         if hit == 0 {
             if !packet.may_hit(b) {
                 continue;
             }
-            while hit == 0 && first + 1 < groups {
+            while hit == 0 && first + 1 < last {
                 first += 1;
                 hit = packet.hits(first, b);
             }
             if hit == 0 {
                 continue;
+            }
+            while last > first + 1 && packet.hits(last - 1, b) == 0 {
+                last -= 1;
             }
         }
         if node.prim_count == 0 {
@@ -236,12 +239,12 @@ pub(crate) fn traverse(
             let tl = packet.nearest(first, &bvh.nodes[l as usize].aabb);
             let tr = packet.nearest(first, &bvh.nodes[r as usize].aabb);
             let (near, far) = if tl <= tr { (l, r) } else { (r, l) };
-            stack.push((far, first as u32));
-            stack.push((near, first as u32));
+            stack.push((far, first as u32, last as u32));
+            stack.push((near, first as u32, last as u32));
             continue;
         }
         let slots = node.first_index as usize..(node.first_index + node.prim_count) as usize;
-        for g in first..groups {
+        for g in first..last {
             let mut lanes = if g == first { hit } else { packet.hits(g, b) };
             while lanes != 0 {
                 let l = lanes.trailing_zeros() as usize;

@@ -16,6 +16,8 @@ pub(crate) struct TraceRay {
     k: [usize; 3],
     /// `(dir[kx] / dir[kz], dir[ky] / dir[kz], 1 / dir[kz])`.
     shear: DVec3,
+    /// `1 / dir`, component by component (infinite for zero components).
+    pub(crate) inv: DVec3,
 }
 
 /// Whether the triangle owns its edge `p -> q` on which the ray's point lies exactly (edge
@@ -49,13 +51,23 @@ impl TraceRay {
         if dir[kz] < 0.0 {
             std::mem::swap(&mut kx, &mut ky);
         }
-        let sz = 1.0 / dir[kz];
+        // All three reciprocals in one vector division; `1 / dir[kz]` is the shear's.
+        let inv = DVec3::ONE / dir;
+        let sz = inv[kz];
         Some(Self {
             origin,
             dir,
             k: [kx, ky, kz],
             shear: DVec3::new(dir[kx] * sz, dir[ky] * sz, sz),
+            inv,
         })
+    }
+
+    /// The ray with this direction from `origin` (`TraceRay::new(origin, self.dir)` without
+    /// its division: parallel rays share their set-up); `None` unless `origin` is finite.
+    #[inline]
+    pub(crate) fn from(&self, origin: DVec3) -> Option<Self> {
+        origin.is_finite().then_some(Self { origin, ..*self })
     }
 
     /// The point at parameter `t`.
