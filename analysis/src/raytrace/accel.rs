@@ -7,15 +7,12 @@
 //! [`Scratch`] reused from packet to packet; per ray they make one `f64` clip per cluster
 //! ([`Cluster::route`]) and the `f64` triangle tests the traversal leaves, and allocate nothing.
 
+use super::bvh::{self, Node};
 use super::memory::{AllocationError, Allocator};
 use super::packet::{self, FramePacket, PACKET};
 use super::ray::TraceRay;
 use glam::{DVec3, Vec3A};
-use obvhs::{
-    aabb::Aabb,
-    bvh2::{builder::build_bvh2, Bvh2},
-    BvhBuildParams,
-};
+use obvhs::{aabb::Aabb, bvh2::builder::build_bvh2, BvhBuildParams};
 use scenes::Geometry;
 
 /// Box padding in units of `f32::EPSILON` times (reach + box magnitude): covers the `f32`
@@ -166,7 +163,7 @@ enum Route<'a> {
     /// start point to be within the padding, or the cluster has no BVH).
     All,
     /// The cluster's BVH is traversed with this frame ray.
-    Bvh(&'a Bvh2, FrameRay),
+    Bvh(&'a [Node], FrameRay),
 }
 
 /// A ray in a cluster's frame, started near the cluster: frame parameter `(t - t0) * step` is
@@ -194,7 +191,7 @@ impl FrameRay {
 struct Cluster {
     frame: BvhFrame,
     /// `None` when the frame is not [`BvhFrame::traversable`].
-    bvh: Option<Bvh2>,
+    bvh: Option<Vec<Node>>,
     /// The cluster's first slot.
     first: usize,
     /// Its number of slots.
@@ -240,7 +237,7 @@ impl Cluster {
                 return Route::Skip;
             }
         }
-        let Some(bvh) = &self.bvh else { return Route::All };
+        let Some(bvh) = self.bvh.as_deref() else { return Route::All };
         // Also false for NaN (an overflowing `err`).
         let start_is_precise = err * f.scale <= 0.5 * f64::from(f32::EPSILON) * f.reach;
         if !start_is_precise {
@@ -340,10 +337,12 @@ impl Accel {
         pass: impl Fn(usize) -> f64,
         alloc: &Allocator,
     ) -> Result<Self, AllocationError> {
-        let wanted = |t: &usize| keep(*t) && hittable(geometry, *t);
-        let n = (0..geometry.len()).filter(wanted).count();
-        let mut tris: Vec<u32> = alloc.vec(n, "the BVH's triangle lists")?;
-        tris.extend((0..geometry.len()).filter(wanted).map(|t| t as u32));
+        // Room for every triangle, so that each is tested for area once.
+        let mut tris: Vec<u32> = alloc.vec(geometry.len(), "the BVH's triangle lists")?;
+        tris.extend(
+            (0..geometry.len()).filter(|&t| keep(t) && hittable(geometry, t)).map(|t| t as u32),
+        );
+        let n = tris.len();
         let mut accel = Self {
             clusters: Vec::new(),
             corners: alloc.vec(n, "the triangles' corners")?,
@@ -370,7 +369,7 @@ impl Accel {
                 for &p in &bvh.primitive_indices {
                     push(&mut accel, main[p as usize]);
                 }
-                Some(bvh)
+                Some(bvh::convert(&bvh, alloc)?)
             } else {
                 for &t in &main {
                     push(&mut accel, t);
@@ -836,7 +835,8 @@ mod tests {
             |next: &mut dyn FnMut() -> f64| DVec3::new(next(), next(), next()) * 2.0 - DVec3::ONE;
         let (eye, aim) = (unit(&mut next) * 8.0 + DVec3::new(0.0, 6.0, 0.0), unit(&mut next));
         let axis = [DVec3::X, DVec3::Y, DVec3::Z, DVec3::NEG_X, DVec3::NEG_Y][seed as usize % 5];
-        let along = if seed % 2 == 0 { -axis } else { (unit(&mut next) + DVec3::Y).normalize() };
+        let along =
+            if seed.is_multiple_of(2) { -axis } else { (unit(&mut next) + DVec3::Y).normalize() };
         let patch = unit(&mut next) * 3.0;
         let mut rays = Vec::new();
         for _ in 0..len {

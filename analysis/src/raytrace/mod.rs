@@ -25,12 +25,43 @@
 //! [`RayTrace::sample_image`] returns every sub-sample's hit triangle and light instead, for
 //! comparisons sample by sample.
 //!
-//! Stages: [`STAGE_BVH_BUILD`] ("BVH build": obvhs CWBVHs over all triangles for camera rays
-//! and, when some triangle does not cast shadows, over the casters, each set split into
-//! clusters of its own, see below) and [`STAGE_RAY_TRACING`] ("ray tracing", rayon over rows).
-//! Counter: `rays_traced` = camera rays (`W * H * rate`) + shadow rays (one per sub-sample that
-//! hit a surface), summed from per-row counts. [`SampleImage::triangle_tests`] counts the
-//! ray-triangle tests, the work the BVHs leave.
+//! Stages: [`STAGE_BVH_BUILD`] ("BVH build": binary BVHs built by obvhs over all triangles
+//! for camera rays and, when some triangle does not cast shadows, over the casters, each set
+//! split into clusters of its own, see below) and [`STAGE_RAY_TRACING`] ("ray tracing", rayon
+//! over bands of rows, by packets, see below). Counter: `rays_traced` = camera rays
+//! (`W * H * rate`) + shadow rays (one per sub-sample that hit a surface), summed from
+//! per-band counts. [`SampleImage::triangle_tests`] counts the ray-triangle tests, the work the
+//! BVHs leave.
+//!
+//! # Packets
+//!
+//! The rays are traced by coherent packets of up to 256 (`packet::PACKET`): a band of rows is
+//! cut into tiles of `256 / rate` pixels (16 x 16 pixel centres at rate 1, 2 x 2 pixels at rate
+//! 64, one pixel in runs of 256 sub-samples above), whose sub-samples, the pixels in Z order,
+//! form one packet of camera rays; the shadow rays of those that hit form the next packet
+//! (parallel for a directional light, whose set-up they share). Each packet walks each
+//! cluster's BVH together, one `f32` test of a node serving every ray (first and last active
+//! group of four rays, interval bounds of the packet: `packet`), and each ray decides its own
+//! hits in `f64` at the leaves, exactly as a ray traced alone would. Wald, Benthin, Wagner and
+//! Slusallek, "Interactive Rendering with Coherent Ray Tracing" (Eurographics 2001), Wald,
+//! Boulos and Shirley, "Ray Tracing Deformable Scenes Using Dynamic Bounding Volume
+//! Hierarchies" (ACM TOG 26(1), 2007) and Overbeck, Ramamoorthi and Mark, "Large Ray Packets
+//! for Real-Time Whitted Ray Tracing" (IRT 2008).
+//!
+//! obvhs builds the trees (PLOC) but its traversals cannot be driven by packets: they take one
+//! ray, keep their stack and node test to themselves (the CWBVH's sorts children by the ray's
+//! octant and ignores boxes left before frame distance 1e-4), and call back per primitive
+//! only. The traversal is therefore our own, over obvhs' binary tree converted to nodes that
+//! hold both children's boxes (`bvh`: half the node loads, a quarter of the traversal's time on
+//! bunny-plane with obvhs' own nodes); its per-ray slab test is obvhs' own, lane by lane.
+//!
+//! Hot path: the packets' buffers are a band's, reused from packet to packet; no allocation
+//! per ray or packet; one `f64` clip per ray and cluster, then `f32` group tests and `f64`
+//! triangle tests only where a ray's own box test hits. Results do not depend on the thread
+//! count: bands, tiles and packets are fixed by the image, and a ray's hits by its own tests.
+//! With transparency, the product of the transmittances a shadow ray meets follows the order
+//! in which the traversal meets them (as it did with obvhs' traversal), which rounding can
+//! tell apart in the last bit when three or more different opacities lie on one ray.
 //!
 //! Memory: the tracer's own buffers (triangle copies, per-sample and per-pixel results) are
 //! allocated fallibly; one that cannot be had is an [`AllocationError`] (as a
@@ -40,11 +71,11 @@
 //!
 //! # Precision: f32 BVH, f64 triangles
 //!
-//! obvhs is `f32`-only (boxes, rays, its Möller-Trumbore test). It is used only to *find
-//! candidates*; every hit decision is made in `f64` by our own triangle test (called from
-//! obvhs' traversal closures with the BVH slot, i.e. the position in `primitive_indices`, whose
-//! triangles we store in that order): Woop, Benthin and Wald's watertight ray-triangle test
-//! (JCGT 2013), double-sided. What makes the `f32` search lose nothing, whatever the scene's
+//! obvhs is `f32`-only (boxes, rays, its Möller-Trumbore test), and so are the packets' node
+//! tests. The BVHs are used only to *find candidates*; every hit decision is made in `f64` by
+//! our own triangle test (called at the leaves with the BVH slot, i.e. the position in obvhs'
+//! `primitive_indices`, whose triangles we store in that order): Woop, Benthin and Wald's
+//! watertight ray-triangle test (JCGT 2013), double-sided. What makes the `f32` search lose nothing, whatever the scene's
 //! size and position (tested from scale 1e-6 to 1e6, translations of 1e7, objects 1e12 away),
 //! and keeps its cost independent of a far object:
 //!
@@ -59,7 +90,9 @@
 //!   Every cluster looks to obvhs like one of unit triangles near the origin. Frame coordinates
 //!   are kept below 1e15 so that obvhs' `f32` areas stay finite.
 //! - **Rays clipped to the cluster**: each ray is clipped in `f64` to the cluster's box,
-//!   enlarged by 1/64 of its extent and by a bound of the clip's rounding; a ray that misses it
+//!   enlarged by 1/64 of its extent and by a bound of the clip's rounding (the clip multiplies
+//!   by the ray's reciprocal direction, one rounding more than a quotient, well within that
+//!   bound); a ray that misses it
 //!   within its range skips the cluster, the others start their frame ray at the entry point.
 //!   The frame ray's start thus lies within the cluster's reach (its extent plus 1/32), whatever
 //!   the ray's origin (the camera, another cluster). A ray from so far away that the `f64`
@@ -69,13 +102,17 @@
 //!   by 32 `f32` epsilons of (its own largest coordinate + the reach) before rounding to `f32`:
 //!   that covers the rounding of the ray's start and direction, obvhs' reciprocal of direction
 //!   components below `f32::EPSILON` (clamped to `1/EPSILON`, a drift of `EPSILON` per unit
-//!   travelled), its slab tests and the entry point's `f64` rounding.
-//! - **Start shift**: obvhs' CWBVH node test ignores children left before frame distance 1e-4
-//!   (its `EPSILON`); frame rays therefore start `2e-4` (plus 8 `f32` ulps of the start) behind
-//!   the entry point, and frame parameters map back by that shift. Occluders in contact with
-//!   the receiver are found at any scale.
+//!   travelled: the frame direction is the ray's scaled by a power of two to a largest
+//!   component in [1, 2), so a unit of frame parameter is at least a unit of distance), the
+//!   slab tests and the entry point's `f64` rounding.
+//! - **No start shift**: a box is entered when the ray's exit from it lies at frame parameter
+//!   0 or beyond, so a box the rounded start lies in (an occluder in contact with the receiver,
+//!   whose padded box holds the start) is never culled, at any scale. (obvhs' CWBVH node test
+//!   ignored boxes left before frame distance 1e-4; frame rays were started behind the entry
+//!   point to make up for it.)
 //! - The traversal prunes with `f32` frame distances rounded upwards, never losing the closest
-//!   `f64` hit; clusters are visited in turn, each pruned by the closest hit found so far.
+//!   `f64` hit; clusters are visited in turn, each pruned by the closest hit found so far. The
+//!   packets share node tests only where they provably change no ray's own test (`packet`).
 //!
 //! Edges and vertices: Woop's test evaluates the three edge functions of a triangle from
 //! per-vertex quantities that depend only on the ray and the vertex, so two triangles that
@@ -113,6 +150,7 @@
 //!   lower triangle id, as in the rasterizer.
 
 mod accel;
+mod bvh;
 mod memory;
 mod packet;
 mod ray;

@@ -36,8 +36,8 @@
 //! Hot path: fixed-size structure-of-arrays, no allocation (the stack is the caller's, reused
 //! from packet to packet), no division in the loop.
 
+use super::bvh::{Bounds, Node, EMPTY};
 use glam::{Vec3A, Vec4};
-use obvhs::{aabb::Aabb, bvh2::Bvh2};
 
 /// Most rays in a packet: a pixel's 64 sub-samples, or 8 x 8 pixel centres at rate 1.
 pub(crate) const PACKET: usize = 256;
@@ -137,14 +137,14 @@ impl FramePacket {
     /// The entry distances of group `g`'s rays into box `b`, and which of them hit it within
     /// their range: lane by lane, obvhs' `Aabb::intersect_ray` (the same `f32` operations).
     #[inline(always)]
-    fn entry(&self, g: usize, b: &Aabb) -> (u32, Vec4) {
+    fn entry(&self, g: usize, b: &Bounds) -> (u32, Vec4) {
         let slab = |lo: f32, hi: f32, o: Vec4, inv: Vec4| {
             let (t1, t2) = ((Vec4::splat(lo) - o) * inv, (Vec4::splat(hi) - o) * inv);
             (t1.min(t2), t1.max(t2))
         };
-        let (nx, fx) = slab(b.min.x, b.max.x, self.ox[g], self.ix[g]);
-        let (ny, fy) = slab(b.min.y, b.max.y, self.oy[g], self.iy[g]);
-        let (nz, fz) = slab(b.min.z, b.max.z, self.oz[g], self.iz[g]);
+        let (nx, fx) = slab(b.lo[0], b.hi[0], self.ox[g], self.ix[g]);
+        let (ny, fy) = slab(b.lo[1], b.hi[1], self.oy[g], self.iy[g]);
+        let (nz, fz) = slab(b.lo[2], b.hi[2], self.oz[g], self.iz[g]);
         let near = nx.max(ny).max(nz);
         let far = fx.min(fy).min(fz);
         let hit = far.cmpge(near) & far.cmpge(Vec4::ZERO) & near.cmple(self.tmax[g]);
@@ -153,22 +153,13 @@ impl FramePacket {
 
     /// Which rays of group `g` hit box `b` (bit `l` for lane `l`).
     #[inline(always)]
-    fn hits(&self, g: usize, b: &Aabb) -> u32 {
+    fn hits(&self, g: usize, b: &Bounds) -> u32 {
         self.entry(g, b).0
-    }
-
-    /// The nearest entry into box `b` of a ray of group `g` that hits it (`f32::INFINITY` when
-    /// none does): the order in which children are visited.
-    #[inline(always)]
-    fn nearest(&self, g: usize, b: &Aabb) -> f32 {
-        let (hit, near) = self.entry(g, b);
-        let lanes = Vec4::select(glam::BVec4A::from_array(lane_mask(hit)), near, Vec4::INFINITY);
-        lanes.min_element()
     }
 
     /// False only when no active ray of the packet can hit `b` (see the module doc).
     #[inline]
-    fn may_hit(&self, b: &Aabb) -> bool {
+    fn may_hit(&self, b: &Bounds) -> bool {
         // Slab distances to the `min` and `max` planes, bounded over the box of origins and
         // reciprocal directions by their values at its corners.
         let bound = |plane: Vec3A| {
@@ -176,8 +167,8 @@ impl FramePacket {
             let c = [a_lo * self.imin, a_lo * self.imax, a_hi * self.imin, a_hi * self.imax];
             (c[0].min(c[1]).min(c[2].min(c[3])), c[0].max(c[1]).max(c[2].max(c[3])))
         };
-        let (lo1, hi1) = bound(b.min);
-        let (lo2, hi2) = bound(b.max);
+        let (lo1, hi1) = bound(Vec3A::from_array(b.lo));
+        let (lo2, hi2) = bound(Vec3A::from_array(b.hi));
         // Per axis, the entry plane is `min` where every reciprocal is positive, `max` where
         // every one is negative, either where the signs differ.
         let positive = self.imin.cmpgt(Vec3A::ZERO);
@@ -195,16 +186,47 @@ fn lane_mask(bits: u32) -> [bool; LANES] {
     [bits & 1 != 0, bits & 2 != 0, bits & 4 != 0, bits & 8 != 0]
 }
 
-/// Walks `bvh` with `packet`; `leaf(k, slot)` tests ray `k` against the triangle in `slot` and
-/// returns the ray's new `tmax` when it changes (`f32::NEG_INFINITY` ends the ray). `stack` is
-/// scratch space.
+/// The groups in `first..last` whose rays may hit `b`, narrowed to the first and last group
+/// with a hit, and the nearest entry of a ray of the first (for the order of siblings); `None`
+/// when no ray hits.
+#[inline(always)]
+fn active(
+    packet: &FramePacket,
+    b: &Bounds,
+    first: usize,
+    last: usize,
+) -> Option<(usize, usize, f32)> {
+    let (mut first, mut last) = (first, last);
+    let (mut hit, mut near) = packet.entry(first, b);
+    if hit == 0 {
+        if !packet.may_hit(b) {
+            return None;
+        }
+        while hit == 0 && first + 1 < last {
+            first += 1;
+            (hit, near) = packet.entry(first, b);
+        }
+        if hit == 0 {
+            return None;
+        }
+        while last > first + 1 && packet.hits(last - 1, b) == 0 {
+            last -= 1;
+        }
+    }
+    let lanes = glam::BVec4A::from_array(lane_mask(hit));
+    Some((first, last, Vec4::select(lanes, near, Vec4::INFINITY).min_element()))
+}
+
+/// Walks the tree `nodes` with `packet`; `leaf(k, slot)` tests ray `k` against the triangle in
+/// `slot` and returns the ray's new `tmax` when it changes (`f32::NEG_INFINITY` ends the ray).
+/// `stack` is scratch space: entries `(2 * node + child, first group, last group + 1)`.
 pub(crate) fn traverse(
-    bvh: &Bvh2,
+    nodes: &[Node],
     packet: &mut FramePacket,
     stack: &mut Vec<(u32, u32, u32)>,
     mut leaf: impl FnMut(usize, usize) -> Option<f32>,
 ) {
-    if packet.live == 0 || bvh.nodes.is_empty() {
+    if packet.live == 0 || nodes.is_empty() {
         return;
     }
     // The last group's unused lanes miss everything.
@@ -213,39 +235,39 @@ pub(crate) fn traverse(
         packet.set(k, Vec3A::ZERO, Vec3A::ZERO, f32::NEG_INFINITY);
     }
     stack.clear();
-    stack.push((0, 0, groups as u32));
-    while let Some((index, first, last)) = stack.pop() {
-        let node = &bvh.nodes[index as usize];
-        let b = &node.aabb;
-        let (mut first, mut last) = (first as usize, last as usize);
-        let mut hit = packet.hits(first, b);
-        if hit == 0 {
-            if !packet.may_hit(b) {
-                continue;
+    // Pushes the children of `node` that rays of groups `first..last` may hit, nearer last.
+    let children =
+        |stack: &mut Vec<(u32, u32, u32)>, packet: &FramePacket, node: usize, first, last| {
+            let n = &nodes[node];
+            let mut found = [None; 2];
+            for (c, f) in found.iter_mut().enumerate() {
+                if n.count[c] != EMPTY {
+                    *f = active(packet, &n.boxes[c], first, last);
+                }
             }
-            while hit == 0 && first + 1 < last {
-                first += 1;
-                hit = packet.hits(first, b);
+            let entry = |c: usize, (f, l, _): (usize, usize, f32)| {
+                ((2 * node + c) as u32, f as u32, l as u32)
+            };
+            match found {
+                [Some(a), Some(b)] if a.2 <= b.2 => stack.extend([entry(1, b), entry(0, a)]),
+                [Some(a), Some(b)] => stack.extend([entry(0, a), entry(1, b)]),
+                [Some(a), None] => stack.push(entry(0, a)),
+                [None, Some(b)] => stack.push(entry(1, b)),
+                [None, None] => {}
             }
-            if hit == 0 {
-                continue;
-            }
-            while last > first + 1 && packet.hits(last - 1, b) == 0 {
-                last -= 1;
-            }
-        }
-        if node.prim_count == 0 {
-            let (l, r) = (node.first_index, node.first_index + 1);
-            let tl = packet.nearest(first, &bvh.nodes[l as usize].aabb);
-            let tr = packet.nearest(first, &bvh.nodes[r as usize].aabb);
-            let (near, far) = if tl <= tr { (l, r) } else { (r, l) };
-            stack.push((far, first as u32, last as u32));
-            stack.push((near, first as u32, last as u32));
+        };
+    children(stack, packet, 0, 0, groups);
+    while let Some((code, first, last)) = stack.pop() {
+        let (node, c) = (code as usize / 2, code as usize % 2);
+        let n = &nodes[node];
+        if n.count[c] == 0 {
+            children(stack, packet, n.child[c] as usize, first as usize, last as usize);
             continue;
         }
-        let slots = node.first_index as usize..(node.first_index + node.prim_count) as usize;
-        for g in first..last {
-            let mut lanes = if g == first { hit } else { packet.hits(g, b) };
+        let b = &n.boxes[c];
+        let slots = n.child[c] as usize..(n.child[c] + n.count[c]) as usize;
+        for g in first as usize..last as usize {
+            let mut lanes = packet.hits(g, b);
             while lanes != 0 {
                 let l = lanes.trailing_zeros() as usize;
                 lanes &= lanes - 1;
@@ -269,7 +291,7 @@ pub(crate) fn traverse(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use obvhs::ray::safe_inverse;
+    use obvhs::{aabb::Aabb, ray::safe_inverse};
     use proptest::prelude::*;
 
     #[test]
@@ -305,6 +327,7 @@ mod tests {
             lo in vector(), size in vector(), spread in 0.0f32..2.0,
         ) {
             let b = Aabb::new(lo, lo + size.abs() * spread);
+            let bounds = Bounds::from(&b);
             let mut p = FramePacket::default();
             for &(o, d, tmax) in &rays {
                 p.push(o * 2.0, d, tmax);
@@ -314,14 +337,14 @@ mod tests {
                 let ray = obvhs::ray::Ray::new(o * 2.0, d, 0.0, tmax);
                 let theirs = b.intersect_ray(&ray);
                 let hit = theirs <= tmax;
-                let (mask, near) = p.entry(k / LANES, &b);
+                let (mask, near) = p.entry(k / LANES, &bounds);
                 prop_assert_eq!(mask & (1 << (k % LANES)) != 0, hit, "ray {}", k);
                 if hit {
                     prop_assert_eq!(near[k % LANES], theirs);
                 }
                 any |= hit;
             }
-            prop_assert!(!any || p.may_hit(&b));
+            prop_assert!(!any || p.may_hit(&bounds));
         }
     }
 }
