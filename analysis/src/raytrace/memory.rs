@@ -9,10 +9,11 @@
 //! space limit that cannot give that much is refused with the typed error. Memory taken by
 //! something else between that probe and the build can still make obvhs fail.
 
-/// Bytes per triangle obvhs 0.4 allocates at the peak of its build, from its arrays' sizes: PLOC
-/// holds two node arrays, the Morton codes (32 bytes each) and the binary BVH (two 32-byte
-/// nodes per triangle), 164 bytes; the conversion to the compressed wide BVH then holds the
-/// binary BVH, 7 decisions of 8 bytes per binary node and the wide nodes, about 200.
+/// Bytes per triangle the BVH build allocates at its peak, from its arrays' sizes: obvhs 0.4's
+/// PLOC holds two node arrays, the Morton codes (32 bytes each) and the binary BVH (two 32-byte
+/// nodes per triangle), 164 bytes; the conversion to the tracer's nodes then holds the binary
+/// BVH (two 48-byte nodes per triangle) and at most one 64-byte node per triangle, 160. 200
+/// bounds both, as it bounded obvhs' wide BVH conversion before.
 pub(crate) const OBVHS_BYTES_PER_TRIANGLE: u64 = 200;
 
 /// Bytes per triangle of the tracer's own arrays kept beside the BVH: the `f64` corners (72),

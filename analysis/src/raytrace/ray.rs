@@ -16,6 +16,8 @@ pub(crate) struct TraceRay {
     k: [usize; 3],
     /// `(dir[kx] / dir[kz], dir[ky] / dir[kz], 1 / dir[kz])`.
     shear: DVec3,
+    /// `1 / dir`, component by component (infinite for zero components).
+    pub(crate) inv: DVec3,
 }
 
 /// Whether the triangle owns its edge `p -> q` on which the ray's point lies exactly (edge
@@ -31,6 +33,8 @@ fn owns_edge(p: (f64, f64), q: (f64, f64), ccw: bool) -> bool {
 
 impl TraceRay {
     /// The ray `origin + t * dir`; `None` unless both are finite and `dir` is non-zero.
+    /// Inlined: its division's latency then overlaps with the neighbouring rays' set-up.
+    #[inline(always)]
     pub(crate) fn new(origin: DVec3, dir: DVec3) -> Option<Self> {
         if !origin.is_finite() || !dir.is_finite() || dir == DVec3::ZERO {
             return None;
@@ -47,13 +51,23 @@ impl TraceRay {
         if dir[kz] < 0.0 {
             std::mem::swap(&mut kx, &mut ky);
         }
-        let sz = 1.0 / dir[kz];
+        // All three reciprocals in one vector division; `1 / dir[kz]` is the shear's.
+        let inv = DVec3::ONE / dir;
+        let sz = inv[kz];
         Some(Self {
             origin,
             dir,
             k: [kx, ky, kz],
             shear: DVec3::new(dir[kx] * sz, dir[ky] * sz, sz),
+            inv,
         })
+    }
+
+    /// The ray with this direction from `origin` (`TraceRay::new(origin, self.dir)` without
+    /// its division: parallel rays share their set-up); `None` unless `origin` is finite.
+    #[inline]
+    pub(crate) fn from(&self, origin: DVec3) -> Option<Self> {
+        origin.is_finite().then_some(Self { origin, ..*self })
     }
 
     /// The point at parameter `t`.
@@ -66,14 +80,31 @@ impl TraceRay {
     /// point exactly on an edge or vertex belongs to one triangle (top-left rule).
     #[inline]
     pub(crate) fn intersect(&self, tri: &[DVec3; 3]) -> Option<f64> {
-        let [kx, ky, kz] = self.k;
+        // One specialisation per axis order, so that the components are picked by constant
+        // indices rather than by a branch per component (the same operations in each).
+        match self.k {
+            [1, 2, 0] => self.intersect_axes::<1, 2, 0>(tri),
+            [2, 1, 0] => self.intersect_axes::<2, 1, 0>(tri),
+            [2, 0, 1] => self.intersect_axes::<2, 0, 1>(tri),
+            [0, 2, 1] => self.intersect_axes::<0, 2, 1>(tri),
+            [0, 1, 2] => self.intersect_axes::<0, 1, 2>(tri),
+            _ => self.intersect_axes::<1, 0, 2>(tri),
+        }
+    }
+
+    /// [`TraceRay::intersect`] for the axes `[KX, KY, KZ] == self.k`.
+    #[inline(always)]
+    fn intersect_axes<const KX: usize, const KY: usize, const KZ: usize>(
+        &self,
+        tri: &[DVec3; 3],
+    ) -> Option<f64> {
         let (sx, sy, sz) = (self.shear.x, self.shear.y, self.shear.z);
-        let a = tri[0] - self.origin;
-        let b = tri[1] - self.origin;
-        let c = tri[2] - self.origin;
-        let (ax, ay) = (a[kx] - sx * a[kz], a[ky] - sy * a[kz]);
-        let (bx, by) = (b[kx] - sx * b[kz], b[ky] - sy * b[kz]);
-        let (cx, cy) = (c[kx] - sx * c[kz], c[ky] - sy * c[kz]);
+        let a = (tri[0] - self.origin).to_array();
+        let b = (tri[1] - self.origin).to_array();
+        let c = (tri[2] - self.origin).to_array();
+        let (ax, ay) = (a[KX] - sx * a[KZ], a[KY] - sy * a[KZ]);
+        let (bx, by) = (b[KX] - sx * b[KZ], b[KY] - sy * b[KZ]);
+        let (cx, cy) = (c[KX] - sx * c[KZ], c[KY] - sy * c[KZ]);
         let u = cx * by - cy * bx;
         let v = ax * cy - ay * cx;
         let w = bx * ay - by * ax;
@@ -96,7 +127,7 @@ impl TraceRay {
                 return None;
             }
         }
-        let t = (u * (sz * a[kz]) + v * (sz * b[kz]) + w * (sz * c[kz])) / det;
+        let t = (u * (sz * a[KZ]) + v * (sz * b[KZ]) + w * (sz * c[KZ])) / det;
         t.is_finite().then_some(t)
     }
 }

@@ -1,7 +1,8 @@
 //! The ray-traced reference end to end: binary values at rate 1 with exact ray counts, lit
 //! planes without self-shadowing, closed meshes without light leaks, quantised values and
 //! convergence with the rate, multiplied transmittance through stacked semi-transparent quads,
-//! finite results on the hard scenes.
+//! finite results on the hard scenes, and packets that change no pixel whatever the mask or the
+//! thread count.
 
 use analysis::raytrace::{RayTrace, STAGE_BVH_BUILD, STAGE_RAY_TRACING};
 use analysis::{Reference, ReferenceImage};
@@ -363,5 +364,38 @@ fn rate_one_sees_what_the_g_buffer_sees() {
             .filter(|&k| image.evaluated[k] != frame.gbuffer.covered(k))
             .count();
         assert_eq!(mismatches, 0, "{:?}", s.camera);
+    }
+}
+
+/// Packets are formed from the pixels traced, a tile at a time: a sparse mask (as `exact`
+/// passes for its edge pixels) leaves each traced pixel's value as in the full image, so does
+/// the number of threads, and `sample_image` agrees with `evaluate` sub-sample by sub-sample.
+#[test]
+fn packets_change_no_pixel_whatever_the_mask_or_the_threads() {
+    for (name, rate) in [("cage", 1), ("spot-spheres", 4), ("random-10k", 16), ("grazing", 64)] {
+        let scene = scenes::load(name).expect("built-in");
+        let mut rec = Recorder::default();
+        let frame = Frame::new(&scene, W, H, &mut rec);
+        let rt = tracer(rate, PatternKind::Rotated);
+        let full = rt.evaluate(&frame, &mut rec).expect("raytrace runs");
+        let mask: Vec<bool> = (0..W * H).map(|k| k.is_multiple_of(7) || k % 11 == 3).collect();
+        let sparse = rt.evaluate_pixels(&frame, Some(&mask), &mut rec).expect("raytrace runs");
+        for (k, &traced) in mask.iter().enumerate() {
+            if traced {
+                assert_eq!(sparse.lit[k], full.lit[k], "{name}, pixel {k}");
+                assert_eq!(sparse.evaluated[k], full.evaluated[k], "{name}, pixel {k}");
+            } else {
+                assert_eq!((sparse.lit[k], sparse.evaluated[k]), (1.0, false), "{name}");
+            }
+        }
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(3).build().expect("a pool");
+        let threaded = pool.install(|| rt.evaluate(&frame, &mut Recorder::default()));
+        assert_eq!(threaded.expect("raytrace runs").lit, full.lit, "{name}");
+        let samples = rt.sample_image(&frame, &mut Recorder::default()).expect("raytrace runs");
+        let n = rate as usize;
+        for (k, &lit) in full.lit.iter().enumerate() {
+            let mean = samples.light[k * n..(k + 1) * n].iter().sum::<f64>() / f64::from(rate);
+            assert_eq!(mean.clamp(0.0, 1.0), lit, "{name}, pixel {k}");
+        }
     }
 }
