@@ -57,14 +57,14 @@ pub(crate) fn shadows(
     // Receivers in small runs: one result per run rather than per receiver, and runs small
     // enough that a receiver with many pixels does not hold a thread while the other waits.
     const RUN: usize = 16;
-    let screen = Screen::new(frame);
+    let shared = Shared { frame, screen: Screen::new(frame), grid };
     let runs: Vec<SurfaceShadows> = receivers
         .par_chunks(RUN)
         .map_init(Scratch::default, |scratch, run| {
             let mut out = SurfaceShadows::default();
             for &r in run {
                 let own = polygon(r);
-                receiver(frame, &screen, grid, r, own, |k| wanted(r, k), scratch, &mut out);
+                receiver(&shared, r, own, |k| wanted(r, k), scratch, &mut out);
             }
             out
         })
@@ -88,17 +88,24 @@ struct Scratch {
     coverage: coverage::Scratch,
 }
 
-/// The shadow on receiver triangle `r`, over the pixels `k` with `wanted(k)`, added to `out`.
+/// What every receiver reads.
+struct Shared<'a> {
+    frame: &'a Frame<'a>,
+    screen: Screen,
+    grid: &'a CasterGrid,
+}
+
+/// The shadow on receiver triangle `r` (screen polygon `own`), over the pixels `k` with
+/// `wanted(k)`, added to `out`.
 fn receiver(
-    frame: &Frame<'_>,
-    screen: &Screen,
-    grid: &CasterGrid,
+    shared: &Shared<'_>,
     r: u32,
     own: Option<Poly>,
     wanted: impl Fn(usize) -> bool,
     scratch: &mut Scratch,
     out: &mut SurfaceShadows,
 ) {
+    let Shared { frame, screen, grid } = shared;
     let Scratch { candidates, pieces, coverage } = scratch;
     let g = &frame.geometry;
     let corners = g.corners(r as usize);
