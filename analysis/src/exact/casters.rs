@@ -15,9 +15,10 @@
 //! on the lit side of a caster's plane, or within the rounding of it, as a shared corner is,
 //! cannot be shadowed by it). On `bumpy` they cut the pairs projected from 3.16 to 1.90
 //! million and the non-empty shadow polygons from 1.01 million to 378,000, with the same image
-//! bit for bit. The boxes of the casters are binned into a uniform grid
-//! over the receivers' region, about one cell per caster; a caster spanning many cells (a ground plane) and, under a spot light, a
-//! caster reaching behind the light's plane are kept in a list every receiver scans.
+//! bit for bit. The boxes of the casters are binned into a uniform grid over the receivers'
+//! region, about one cell per caster; a caster spanning many cells (a ground plane) and, under
+//! a spot light, a caster reaching behind the light's plane are kept in a list every receiver
+//! scans.
 //! Receivers reaching behind the spot's plane scan every caster. The test is conservative: it
 //! only skips casters whose shadow cannot fall on the receiver.
 
@@ -67,15 +68,10 @@ impl Space {
         }
     }
 
-    /// Light-space box `[x0, y0, x1, y1]` and depth span `[near, far]` of a triangle; `None`
-    /// when, under a spot light, the triangle reaches the light's plane or behind it (its
-    /// image is unbounded).
-    fn bounds(&self, tri: &[DVec3; 3]) -> Option<([f64; 4], [f64; 2])> {
-        self.bounds_of(tri)
-    }
-
-    /// [`Self::bounds`] of any set of points.
-    fn bounds_of(&self, tri: &[DVec3]) -> Option<([f64; 4], [f64; 2])> {
+    /// Light-space box `[x0, y0, x1, y1]` and depth span `[near, far]` of a set of points (a
+    /// triangle's corners); `None` when, under a spot light, a point lies on the light's plane
+    /// or behind it (the image is unbounded).
+    fn bounds(&self, tri: &[DVec3]) -> Option<([f64; 4], [f64; 2])> {
         let mut b = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
         let mut z = [f64::INFINITY, f64::NEG_INFINITY];
         for &p in tri {
@@ -294,7 +290,7 @@ impl CasterGrid {
             return;
         };
         let mut far = z[1];
-        if let Some((pb, pz)) = part.and_then(|p| self.space.bounds_of(p)) {
+        if let Some((pb, pz)) = part.and_then(|p| self.space.bounds(p)) {
             b = [b[0].max(pb[0]), b[1].max(pb[1]), b[2].min(pb[2]), b[3].min(pb[3])];
             far = far.min(pz[1]);
         }
@@ -352,9 +348,9 @@ impl CasterGrid {
 struct LitSide {
     /// Unit normal towards the light (NaN where the light is in the plane or the triangle has
     /// no normal: such a caster is never ruled out this way).
-    n: glam::DVec3,
+    n: DVec3,
     /// A corner of the caster.
-    corner: glam::DVec3,
+    corner: DVec3,
     /// Largest corner coordinate magnitude.
     magnitude: f64,
     /// `|e1| |e2| / |e1 × e2|` (at least 1): how much the rounding of the edges turns the
@@ -520,9 +516,8 @@ mod tests {
         }
     }
 
-    /// A caster lying on the far side of the receiver's plane, a caster whose image is apart
-    /// and a neighbour rising in front of the light are ruled out; a caster over the receiver
-    /// is not.
+    /// A caster whose image is apart from the receiver's, and one the receiver lies on the lit
+    /// side of, are ruled out; a caster over the receiver is ruled out by neither test.
     #[test]
     fn the_tests_rule_out_what_casts_nothing() {
         let down = DVec3::new(0.1, -1.0, 0.2).normalize();
@@ -538,8 +533,8 @@ mod tests {
         assert!(!sep(&ground, &over));
         assert!(sep(&ground, &far));
         assert!(!LitSide::new(&over, &light).holds(&ground, 1.0));
-        // A wall sharing the ground's edge x = 0 facing the light: the ground lies on its lit
-        // side only if the light comes from the ground's side, here it does not.
+        // The ground lies on the lit side of a copy of itself one unit below, which therefore
+        // casts nothing on it.
         let below = ground.map(|p| p - DVec3::Y);
         assert!(LitSide::new(&below, &light).holds(&ground, 1.0));
     }

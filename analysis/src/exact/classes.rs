@@ -44,7 +44,7 @@
 //! parallel over bands of rows.
 
 use super::clip::{self, Poly, Pt};
-use super::shadow::Screen;
+use super::shadow::{plane_depth, Screen};
 use super::ScreenPolygons;
 use crate::pixel_class::PixelClass;
 use glam::DVec3;
@@ -102,8 +102,7 @@ impl Classes {
     /// `None` when it has none.
     pub(crate) fn screen_polygon(&self, t: u32) -> Option<Poly> {
         let k = *self.contour_of.get(t as usize)?;
-        (k != u32::MAX)
-            .then(|| Poly::from_slice(&self.screen.points[self.screen.ranges[k as usize].clone()]))
+        (k != u32::MAX).then(|| Poly::from_slice(self.screen.contour(k as usize)))
     }
 }
 
@@ -161,7 +160,7 @@ impl Projected {
     }
 
     fn points(&self, k: usize) -> &[Pt] {
-        &self.polys.points[self.polys.ranges[k].clone()]
+        self.polys.contour(k)
     }
 
     fn poly(&self, k: usize) -> Poly {
@@ -203,7 +202,8 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
                     entries.push((local, Overlap { contour: k, area }));
                 });
             }
-            // The keys are unique (one entry per pixel and contour): an unstable sort gives the same order.
+            // The keys are unique (one entry per pixel and contour): an unstable sort gives
+            // the same order.
             entries.sort_unstable_by_key(|e| (e.0, e.1.contour));
             let count = (r1 - r0) * width;
             let mut class = vec![PixelClass::Uncovered; count];
@@ -391,7 +391,7 @@ impl Context<'_> {
                     || behind_on_square(
                         (normals[u], corners[u][0]),
                         (normals[t], corners[t][0]),
-                        rays.get_or_insert_with(|| self.corner_rays(i, j)),
+                        rays.get_or_insert_with(|| self.screen.corner_rays(i, j)),
                     )
                 {
                     continue;
@@ -413,20 +413,11 @@ impl Context<'_> {
         }
     }
 
-    /// The camera rays through the four corners of pixel `(i, j)`'s square.
-    fn corner_rays(&self, i: usize, j: usize) -> [Ray; 4] {
-        let (x, y) = (i as f64, j as f64);
-        [[x, y], [x + 1.0, y], [x, y + 1.0], [x + 1.0, y + 1.0]].map(|c| self.screen.ray(c))
-    }
-
     /// Whether the plane of triangle `u` is nearer to the camera than that of `t` along the
     /// camera ray through screen point `x` (beyond the tolerance of rule 5).
     fn in_front(&self, u: &[DVec3; 3], t: &[DVec3; 3], x: [f64; 2]) -> bool {
         let ray = self.screen.ray(x);
-        let depth = |c: &[DVec3; 3]| {
-            let n = (c[1] - c[0]).cross(c[2] - c[0]);
-            n.dot(c[0] - ray.origin) / n.dot(ray.direction)
-        };
+        let depth = |c: &[DVec3; 3]| plane_depth(&ray, (c[1] - c[0]).cross(c[2] - c[0]), c[0]);
         let (du, dt) = (depth(u), depth(t));
         if !(du.is_finite() && dt.is_finite()) {
             return false;
@@ -448,8 +439,7 @@ impl Context<'_> {
 fn behind_on_square(u: (DVec3, DVec3), t: (DVec3, DVec3), rays: &[Ray; 4]) -> bool {
     let ((nu, cu), (nt, ct)) = (u, t);
     rays.iter().all(|ray| {
-        let du = nu.dot(cu - ray.origin) / nu.dot(ray.direction);
-        let dt = nt.dot(ct - ray.origin) / nt.dot(ray.direction);
+        let (du, dt) = (plane_depth(ray, nu, cu), plane_depth(ray, nt, ct));
         dt > 0.0 && dt.is_finite() && du.is_finite() && du >= dt
     })
 }

@@ -333,9 +333,9 @@ pub(crate) fn intersect(a: &Poly, b: &Poly) -> Poly {
     cur
 }
 
-/// Whether the convex polygons `a` and `b` (vertex lists with positive [`Poly::area2_rel`]) have disjoint
-/// interiors by a separating line through an edge of one of them (the separating axis test;
-/// touching counts as disjoint). `false` means they may overlap.
+/// Whether the convex polygons `a` and `b` (vertex lists with positive [`Poly::area2_rel`])
+/// have disjoint interiors by a separating line through an edge of one of them (the separating
+/// axis test; touching counts as disjoint). `false` means they may overlap.
 pub(crate) fn separated(a: &[Pt], b: &[Pt]) -> bool {
     let outside = |p: &[Pt], q: &[Pt]| {
         (0..p.len()).any(|k| {

@@ -89,7 +89,7 @@ pub(crate) fn union_area(
         return (area, Work::default());
     }
     let (offsets, items) = clip::bin_by_band(polygons.len(), height, |p| {
-        let (lo, hi) = y_range(&polygons.points[polygons.ranges[p].clone()]);
+        let (lo, hi) = y_range(polygons.contour(p));
         clip::overlapped_rows(lo, hi, height)
     });
     let work = area
@@ -99,8 +99,7 @@ pub(crate) fn union_area(
             let mut work = Work::default();
             let r0 = band * clip::BAND;
             let ids = &items[offsets[band]..offsets[band + 1]];
-            let band_polys =
-                ids.iter().map(|&p| &polygons.points[polygons.ranges[p as usize].clone()]);
+            let band_polys = ids.iter().map(|&p| polygons.contour(p as usize));
             let rows = r0..r0 + chunk.len() / width;
             work += rows_areas(
                 band_polys,

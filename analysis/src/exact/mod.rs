@@ -132,6 +132,11 @@ impl ScreenPolygons {
         self.ranges.is_empty()
     }
 
+    /// Contour `k`'s vertices.
+    pub fn contour(&self, k: usize) -> &[[f64; 2]] {
+        &self.points[self.ranges[k].clone()]
+    }
+
     /// The contours, each as a slice of vertices.
     pub fn contours(&self) -> impl Iterator<Item = &[[f64; 2]]> + '_ {
         self.ranges.iter().map(|r| &self.points[r.clone()])
@@ -291,9 +296,9 @@ fn evaluate(
     receivers.dedup();
     let edges: Vec<bool> = class.iter().map(|&c| c == PixelClass::Edge).collect();
     let trace_edges = edge.is_some() && edges.contains(&true);
-    // The edge pixels' rays are traced among the triangles they can meet when those are
-    // worth finding: a query per (edge pixel, triangle) pair against one BVH build per
-    // triangle, so only when the pairs are far fewer than the triangles.
+    // The edge pixels' rays are traced among the triangles they can meet when finding those
+    // pays: it costs a grid query per (edge pixel, triangle) pair and saves a BVH build over
+    // every triangle, so only when the pairs are far fewer than the triangles.
     let edge_subset =
         trace_edges && classes.edge_overlaps.len() * EDGE_SUBSET_RATIO < frame.geometry.len();
     // The grid serves the surface receivers and the triangles the edge pixels' rays can meet.
@@ -436,15 +441,11 @@ fn edge_casters(
             let mut found = Vec::new();
             for &(k, t) in run {
                 let tri = g.corners(t as usize);
-                let (i, j) = ((k as usize % w) as f64, (k as usize / w) as f64);
                 let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
-                let corner = |x: f64, y: f64| {
-                    let ray = screen.ray([x, y]);
-                    let depth = n.dot(tri[0] - ray.origin) / n.dot(ray.direction);
+                let part = screen.corner_rays(k as usize % w, k as usize / w).map(|ray| {
+                    let depth = shadow::plane_depth(&ray, n, tri[0]);
                     (depth.is_finite() && depth > 0.0).then(|| ray.origin + depth * ray.direction)
-                };
-                let part = [(i, j), (i + 1.0, j), (i, j + 1.0), (i + 1.0, j + 1.0)]
-                    .map(|(x, y)| corner(x, y));
+                });
                 let part = match part {
                     [Some(a), Some(b), Some(c), Some(d)] => Some([a, b, c, d]),
                     _ => None,

@@ -200,6 +200,13 @@ impl Screen {
         self.camera.ray(glam::DVec2::new(xy[0], xy[1]))
     }
 
+    /// The camera rays through the four corners of pixel `(i, j)`'s square: top-left,
+    /// top-right, bottom-left, bottom-right.
+    pub fn corner_rays(&self, i: usize, j: usize) -> [scenes::projection::Ray; 4] {
+        let (x, y) = (i as f64, j as f64);
+        [[x, y], [x + 1.0, y], [x, y + 1.0], [x + 1.0, y + 1.0]].map(|c| self.ray(c))
+    }
+
     /// The camera depth of `p` (along the viewing direction from the origin): the parameter
     /// of `p` on the camera ray through it.
     #[inline]
@@ -271,7 +278,7 @@ impl Screen {
             [0.0, -1.0, y1 + m, 0.0, 0.0, 0.0],
         ];
         let eval = |pl: &Rec, r: &Rec| -> f64 { pl.iter().zip(r).map(|(a, b)| a * b).sum() };
-        // Trivial reject (culls everything whose shadow misses the frame) and accept; only the
+        // Trivial reject (culls everything whose shadow misses the rectangle) and accept; only the
         // planes that cut the triangle clip it (a plane every vertex is inside of leaves a
         // polygon as it is).
         let mut cutting = [false; 7];
@@ -390,4 +397,11 @@ fn collect(count: usize, f: impl Fn(usize) -> Option<Poly> + Sync) -> ScreenPoly
         }
     }
     all
+}
+
+/// The depth at which the camera ray `ray` (parameterised by depth) meets the plane through
+/// `corner` with normal `n` (any length); infinite or NaN when the ray runs along the plane.
+#[inline]
+pub(crate) fn plane_depth(ray: &scenes::projection::Ray, n: DVec3, corner: DVec3) -> f64 {
+    n.dot(corner - ray.origin) / n.dot(ray.direction)
 }
