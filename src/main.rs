@@ -13,15 +13,18 @@
 
 use analysis::{compare::Truth, exact::ExactCoverage, pixel_class::PixelClass, Reference};
 use anyhow::Context;
-use clap::{Parser, Subcommand, ValueEnum};
+use clap::builder::TypedValueParser;
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand, ValueEnum};
 use instrumentation::measure::{measure, Protocol};
 use instrumentation::stats::Summary;
 use instrumentation::{Recorder, RunRecord};
 #[cfg(feature = "gpu")]
 use methods::gpu::GpuError;
 use methods::{
-    pan09::VisibilityMode, pattern::PatternKind, registry::Device, Frame, MethodError,
-    MethodOptions, ShadowMethod, Visibility,
+    params::{self, Param},
+    pattern::PatternKind,
+    registry::Device,
+    Frame, MethodError, MethodOptions, ShadowMethod, Visibility,
 };
 use reports::publish::{Kind, PublishError, Transaction};
 use reports::suite::{check_frame, MAX_FRAME_SIDE};
@@ -167,41 +170,6 @@ struct MergeArgs {
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-enum Pattern {
-    /// Regular grid, shifted so that one sample is at the pixel centre.
-    Grid,
-    /// Rotated grid (N-rooks lattice) with one sample at the pixel centre.
-    Rotated,
-}
-
-impl From<Pattern> for PatternKind {
-    fn from(p: Pattern) -> Self {
-        match p {
-            Pattern::Grid => PatternKind::Grid,
-            Pattern::Rotated => PatternKind::Rotated,
-        }
-    }
-}
-
-#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-enum Visibility09 {
-    /// The paper's precomputed lookup table of quantized half-planes (sub-samples within
-    /// 1/128 pixel of a blocker's edge may flip).
-    Table,
-    /// Each half-plane tested against each sub-sample in f64.
-    Exact,
-}
-
-impl From<Visibility09> for VisibilityMode {
-    fn from(v: Visibility09) -> Self {
-        match v {
-            Visibility09::Table => VisibilityMode::Table,
-            Visibility09::Exact => VisibilityMode::Exact,
-        }
-    }
-}
-
-#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum DeviceArg {
     /// The CPU methods.
     Cpu,
@@ -267,58 +235,10 @@ struct RenderArgs {
     /// file (.obj, .off, .ply) placed over a ground plane with a default light and camera.
     #[arg(long)]
     scene: String,
-    /// Method: `sm` (standard shadow map); `pcf-reeves` (stochastic PCF of the pixel's
-    /// footprint, see `--rate`, `--seed`); `pcf-bs-2x2`, `pcf-bs-fast-2x2`, `pcf-bs-fast-4x4`
-    /// (Brabec & Seidel's packed PCF, see `--depth-bits`); `pcf-gems16`, `pcf-gems4` (GPU
-    /// Gems' 4x4-region PCF); `afsm`, `afsm-ss` (alias-free shadow maps, the latter at
-    /// `--rate` sub-samples); `pan09` (Pan et al.'s sub-pixel antialiased shadow maps, see
-    /// `--rate`, `--pattern`, `--map-res`, `--visibility`); `spsm`, `spsm-f32` (sub-pixel
-    /// shadow maps with packed or f32 texels, see `--rate`, `--derivative-power`); or a
-    /// reference run as a method: `exact`, `raytrace` (see `--rate`, `--pattern`).
+    /// Method: a name of the registry's table or a reference (the list, with each method's
+    /// parameters, is in `--help`).
     #[arg(long)]
     method: String,
-    /// Sub-samples per pixel for methods that supersample and for `raytrace`:
-    /// 1, 4, 8, 16, 32, 64, 128 (up to 1024 for `raytrace`); default 1 (32 for `afsm-ss` and
-    /// `pan09`). For `pcf-reeves`, the jittered samples per pixel footprint (the same values
-    /// up to 1024); default 16. For `spsm`, the sub-samples of uncertain pixels (1: no
-    /// antialiasing, the default).
-    #[arg(long, value_name = "N", allow_negative_numbers = true)]
-    rate: Option<u32>,
-    /// Sub-sample pattern, shared by every method at equal rate; default grid.
-    #[arg(long, value_enum)]
-    pattern: Option<Pattern>,
-    /// Shadow map resolution R (the map is R x R texels); default 1024 (512 for `pan09`, the
-    /// paper's).
-    #[arg(long, value_name = "R", allow_negative_numbers = true)]
-    map_res: Option<u32>,
-    /// Constant depth bias as a fraction of the scene's light depth range; default 1e-5
-    /// (for `pcf-bs-*`: max(1e-5, 2^(1 - depth bits)), the least valid at that precision).
-    #[arg(long, value_name = "B", allow_negative_numbers = true)]
-    constant_bias: Option<f64>,
-    /// Slope-scaled depth bias in units of the receiver's depth change over the farthest
-    /// texel a method compares against; default 1. Values >= 1 keep lit planes free of
-    /// shadow acne for every shadow-map method.
-    #[arg(long, value_name = "S", allow_negative_numbers = true)]
-    slope_bias: Option<f64>,
-    /// Upper bound of the receiver slope ratio used by the slope bias; default 1000 (planes up
-    /// to 89.94° from the light keep their lit parts lit; beyond, the run records a warning).
-    #[arg(long, value_name = "M", allow_negative_numbers = true)]
-    max_slope: Option<f64>,
-    /// Bits per stored depth of Brabec & Seidel's depth-as-colour maps: 8, 12, 24 or 32
-    /// (the paper's hardware had 8, at best 12); default 32.
-    #[arg(long, value_name = "BITS", allow_negative_numbers = true)]
-    depth_bits: Option<u32>,
-    /// Seed of stochastic sampling (`pcf-reeves`' jitter); default 0.
-    #[arg(long, value_name = "SEED", allow_negative_numbers = true)]
-    seed: Option<u64>,
-    /// Exponent n of the x^n code of `spsm`'s 8-bit depth derivatives, 1 (linear) to 9;
-    /// default 5.
-    #[arg(long, value_name = "N", allow_negative_numbers = true)]
-    derivative_power: Option<u32>,
-    /// How `pan09` turns a blocker's half-planes into sub-sample masks: `table` (the paper's
-    /// precomputed lookup table, the default) or `exact` (every sub-sample tested in f64).
-    #[arg(long, value_enum)]
-    visibility: Option<Visibility09>,
     /// Where the method runs: `cpu` (default) or `gpu` (kernels for sm, the pcf-* methods,
     /// afsm, pan09, and spsm's classification and depth stages; the run record names the
     /// adapter and how stage times were taken).
@@ -354,6 +274,66 @@ struct RenderArgs {
     /// metrics.json for `compare`).
     #[arg(long)]
     json: bool,
+    /// The method parameters given, by the flags the registry's table declares
+    /// ([`with_params`]).
+    #[arg(skip)]
+    params: Vec<(&'static Param, params::Value)>,
+}
+
+/// The method flags: one per parameter some method declares (`methods::params`), with its
+/// help and the methods that use it, and `--method`'s help listing every method with its
+/// parameters; added to `render` and `compare`.
+fn with_params(cmd: clap::Command) -> clap::Command {
+    let mut lines = vec!["Method (or a reference run as a method):".to_owned()];
+    let methods = methods::registry::METHODS.iter().map(|m| (m.name, m.description, m.params));
+    let references = analysis::registry::REFERENCES
+        .iter()
+        .map(|(n, d)| (*n, *d, analysis::registry::REFERENCE_PARAMS));
+    for (name, description, params) in methods.chain(references) {
+        let flags: Vec<&str> = params.iter().map(|p| p.flag).collect();
+        let flags = if flags.is_empty() { "no parameters".into() } else { flags.join(", ") };
+        lines.push(format!("  {name}: {description} [{flags}]"));
+    }
+    let mut cmd = cmd.mut_arg("method", |a| a.long_help(lines.join("\n")));
+    for p in methods::registry::all_params() {
+        let mut users: Vec<&str> = methods::registry::METHODS
+            .iter()
+            .filter(|m| m.params.iter().any(|q| q.key == p.key))
+            .map(|m| m.name)
+            .collect();
+        if analysis::registry::REFERENCE_PARAMS.iter().any(|q| q.key == p.key) {
+            users.extend(analysis::registry::REFERENCES.iter().map(|(n, _)| *n));
+        }
+        let arg = clap::Arg::new(p.key)
+            .long(&p.flag[2..])
+            .value_name(p.value_name)
+            .help(format!("{} Used by: {}.", p.help, users.join(", ")))
+            .allow_negative_numbers(true);
+        let arg = match p.kind {
+            params::Kind::Choice(names) => arg.value_parser(
+                clap::builder::PossibleValuesParser::new(
+                    names.iter().map(|(n, h)| clap::builder::PossibleValue::new(*n).help(*h)),
+                )
+                .try_map(move |text: String| p.parse(&text)),
+            ),
+            _ => arg.value_parser(move |text: &str| p.parse(text)),
+        };
+        cmd = cmd.arg(arg);
+    }
+    cmd
+}
+
+/// The command line, with the method flags of the registry's table ([`with_params`]).
+fn command() -> clap::Command {
+    Cli::command().mut_subcommand("render", with_params).mut_subcommand("compare", with_params)
+}
+
+/// The method parameters given on the command line `m` (of `render` or `compare`).
+fn given_params(m: &clap::ArgMatches) -> Vec<(&'static Param, params::Value)> {
+    methods::registry::all_params()
+        .into_iter()
+        .filter_map(|p| m.get_one::<params::Value>(p.key).map(|v| (p, *v)))
+        .collect()
 }
 
 /// A failure and the exit code it maps to.
@@ -565,19 +545,10 @@ fn check_budget(
 fn job(a: &RenderArgs, compared_with: Option<(&str, u32)>) -> Result<Job, Failure> {
     let scene_error = |e| input(anyhow::anyhow!("--scene: {e}"));
     let described = scenes::describe(&a.scene).map_err(scene_error)?;
-    let options = MethodOptions {
-        map_res: a.map_res,
-        constant_bias: a.constant_bias,
-        slope_bias: a.slope_bias,
-        max_slope: a.max_slope,
-        rate: a.rate,
-        pattern: a.pattern.map(PatternKind::from),
-        depth_bits: a.depth_bits,
-        seed: a.seed,
-        derivative_power: a.derivative_power,
-        visibility: a.visibility.map(VisibilityMode::from),
-        device: a.device.into(),
-    };
+    let mut options = MethodOptions { device: a.device.into(), ..Default::default() };
+    for (p, v) in &a.params {
+        options.set(p, *v);
+    }
     let technique = analysis::registry::technique(&a.method, &options).map_err(method_failure)?;
     // The same reference as `technique` wraps (`registry::technique`'s rate and pattern).
     let reference = if analysis::registry::REFERENCES.iter().any(|(n, _)| *n == a.method) {
@@ -588,17 +559,10 @@ fn job(a: &RenderArgs, compared_with: Option<(&str, u32)>) -> Result<Job, Failur
         None
     };
     let params = technique.params();
-    for (flag, given, key) in [
-        ("--rate", a.rate.is_some(), "rate"),
-        ("--pattern", a.pattern.is_some(), "pattern"),
-        ("--map-res", a.map_res.is_some(), "map_res"),
-        ("--depth-bits", a.depth_bits.is_some(), "depth_bits"),
-        ("--seed", a.seed.is_some(), "seed"),
-        ("--derivative-power", a.derivative_power.is_some(), "derivative_power"),
-        ("--visibility", a.visibility.is_some(), "visibility"),
-    ] {
-        if given && !params.contains_key(key) {
-            eprintln!("note: {} does not use {flag}; ignored", technique.name());
+    let declared = analysis::registry::params_of(&a.method).unwrap_or_default();
+    for (p, _) in &a.params {
+        if !declared.iter().any(|q| q.key == p.key) {
+            eprintln!("note: {} does not use {}; ignored", technique.name(), p.flag);
         }
     }
     let [scene_width, scene_height] = described.resolution();
@@ -1067,7 +1031,10 @@ fn compare(c: CompareArgs) -> Result<(), Failure> {
     let error_scale = c.error_scale.unwrap_or(analysis::error_map::DEFAULT_MAX_ERROR);
     analysis::error_map::check_scale(error_scale)
         .map_err(|e| input(anyhow::anyhow!("--error-scale: {e}")))?;
-    let pattern = a.pattern.map(PatternKind::from).unwrap_or_default();
+    let pattern = a.params.iter().find(|(p, _)| p.key == params::PATTERN.key).map_or(
+        PatternKind::default(),
+        |(_, v)| if *v == params::Value::Choice("rotated") { PatternKind::Rotated } else { PatternKind::Grid },
+    );
     let (reference, ref_rate, edge_name): (Box<dyn Reference>, _, _) =
         match (c.reference, edge_reference) {
             (ReferenceName::Exact, EdgeReference::Raytrace) => (
@@ -1209,11 +1176,22 @@ fn print_metrics(m: &reports::MetricsRecord, time: &str) {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let matches = command().get_matches();
+    let cli = match Cli::from_arg_matches(&matches) {
+        Ok(cli) => cli,
+        Err(e) => e.exit(),
+    };
+    let sub = matches.subcommand().map(|(_, m)| m);
     let result = match cli.command {
         Command::Scenes { json, toml } => scenes(json, toml),
-        Command::Render(a) => render(a),
-        Command::Compare(c) => compare(c),
+        Command::Render(mut a) => {
+            a.params = sub.map(given_params).unwrap_or_default();
+            render(a)
+        }
+        Command::Compare(mut c) => {
+            c.render.params = sub.map(given_params).unwrap_or_default();
+            compare(c)
+        }
         Command::Report(r) => report(r),
     };
     match result {

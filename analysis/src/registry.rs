@@ -8,6 +8,7 @@ use crate::{
 };
 use instrumentation::Recorder;
 use methods::{
+    params::{self, Param},
     pattern::{PatternKind, SamplePattern},
     Frame, MethodError, MethodOptions, ShadowMethod, Visibility,
 };
@@ -21,6 +22,20 @@ pub const REFERENCES: &[(&str, &str)] = &[
     ),
     ("raytrace", "ray-traced supersampling: one camera and one shadow ray per sub-sample"),
 ];
+
+/// The parameters a reference run as a method takes: its rate and pattern (`exact`'s for its
+/// edge pixels).
+pub static REFERENCE_PARAMS: &[&Param] = &[&params::RATE, &params::PATTERN];
+
+/// The parameters the method or reference called `name` uses (its entry's in
+/// [`methods::registry::METHODS`], [`REFERENCE_PARAMS`] for a reference), or `None` when there
+/// is no such method.
+pub fn params_of(name: &str) -> Option<&'static [&'static Param]> {
+    if REFERENCES.iter().any(|(n, _)| *n == name) {
+        return Some(REFERENCE_PARAMS);
+    }
+    methods::registry::entry(name).map(|m| m.params)
+}
 
 /// Default sub-sample rate of the `raytrace` reference in `compare`.
 pub const DEFAULT_REF_RATE: u32 = 256;

@@ -103,7 +103,7 @@ fn main() {
         .iter()
         .flat_map(|&(map, ..)| {
             let o = MethodOptions { map_res: Some(map), ..gpu() };
-            [("sm", o), ("spsm", o)]
+            [("sm", o.clone()), ("spsm", o)]
         })
         .collect();
     let timed = time_all(&bunny, w, h, &configs, runs);

@@ -9,7 +9,7 @@
 //! [`afsm`] (alias-free shadow maps, `afsm` and `afsm-ss`), [`pan09`] (Pan et al.'s fast
 //! sub-pixel antialiased shadow maps), [`spsm`] (Lecocq et al.'s sub-pixel shadow maps).
 //! Every technique implements [`method::ShadowMethod`];
-//! [`registry`] finds them by name.
+//! [`registry`] finds them by name, in one table whose entries declare their [`params`].
 
 pub mod afsm;
 pub mod depth_map;
@@ -21,6 +21,7 @@ pub mod gbuffer;
 pub mod gpu;
 pub mod method;
 pub mod pan09;
+pub mod params;
 pub mod pattern;
 pub mod pcf_bs;
 pub mod pcf_gems;

@@ -1,6 +1,11 @@
-//! Methods by name, as the command line and the reports name them.
+//! Methods by name, as the command line, the suites and the reports name them: one table,
+//! [`METHODS`], with an entry per method (name, description, the sample rates it takes, the
+//! parameters it uses, its CPU and GPU constructors). A method is added by writing its module
+//! and one entry here; its parameters reach `--help`, the command line, the suites, the run
+//! records and the reports from the entry (`docs/adding-a-method.md` walks through
+//! [`vsm`], which was added that way).
 //!
-//! The sample rates a method takes (`--rate`) are listed in one place, [`rates`], derived from
+//! The sample rates a method takes (`--rate`) come from its entry's [`Rates`], derived from
 //! the shared pattern's rates ([`crate::pattern::RATES`], capped at
 //! [`crate::pattern::MAX_METHOD_RATE`] for the techniques whose masks hold the sub-samples);
 //! [`method`] checks a given rate against that list before building anything, so the error
@@ -10,8 +15,9 @@ use crate::{
     afsm::{AfsmOptions, AliasFreeShadowMap},
     depth_test::{DepthCode, MapOptions},
     method::{MethodError, ShadowMethod},
-    pan09::{Pan09, Pan09Options, VisibilityMode},
-    pattern::{PatternKind, MAX_METHOD_RATE, RATES},
+    pan09::{Pan09, Pan09Options},
+    params::{self, Param},
+    pattern::{MAX_METHOD_RATE, RATES},
     pcf_bs::{BrabecSeidelPcf, BsOptions, Variant, DEFAULT_DEPTH_BITS},
     pcf_gems::{GemsPcf, GemsSamples},
     pcf_reeves::{ReevesOptions, ReevesPcf},
@@ -19,84 +25,243 @@ use crate::{
     spsm::{Spsm, SpsmOptions, TexelFormat},
 };
 
-/// Name and one-line description of every available method.
-pub const METHODS: &[(&str, &str)] = &[
-    ("sm", "standard shadow map: one depth test per pixel centre (Williams 1978)"),
-    (
-        "pcf-reeves",
-        "percentage-closer filtering of the pixel's footprint, N jittered samples (Reeves et al. \
-         1987)",
-    ),
-    ("pcf-bs-2x2", "PCF 2x2 from four jittered maps packed as RGBA, 5 levels (Brabec & Seidel)"),
-    (
-        "pcf-bs-fast-2x2",
-        "fast PCF: one map, each texel packed with its 2x2 neighbourhood (Brabec & Seidel)",
-    ),
-    ("pcf-bs-fast-4x4", "fast PCF over 4x4 texels in four accumulated passes (Brabec & Seidel)"),
-    ("pcf-gems16", "16 bilinear PCF lookups over a 4x4-texel region (GPU Gems ch. 11)"),
-    ("pcf-gems4", "4 of the 16 lookups, dithered by screen position (GPU Gems ch. 11)"),
-    ("afsm", "alias-free shadow map: pixel centres as sampling points, 2D BSP (Aila & Laine 2004)"),
-    ("afsm-ss", "alias-free shadow map at --rate sub-samples per pixel (default 32)"),
-    (
-        "spsm",
-        "sub-pixel shadow map: 128-bit triangle texels, silhouette recovery, AA at uncertain \
-         pixels with --rate (Lecocq et al. 2014)",
-    ),
-    ("spsm-f32", "sub-pixel shadow map with unpacked f32 texels (Lecocq et al. 2014)"),
-    (
-        "pan09",
-        "fast sub-pixel antialiased shadow maps: silhouette mask map, facets, half-plane bitmask \
-         lookup table, --rate sub-samples (default 32) (Pan et al. 2009)",
-    ),
+pub use crate::params::{Device, MethodOptions};
+
+// Methods added by their module beside this table and their entry in it alone (see
+// `docs/adding-a-method.md`).
+pub mod vsm;
+
+/// Builds a method from the options given (validated).
+pub type Build = fn(&MethodOptions) -> Result<Box<dyn ShadowMethod>, MethodError>;
+
+/// The sub-sample rates (`--rate`) a method takes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Rates {
+    /// It takes no rate.
+    None,
+    /// Every rate of the shared patterns ([`RATES`]).
+    All,
+    /// Those up to [`MAX_METHOD_RATE`], the width of its sub-sample masks.
+    Masks,
+}
+
+/// A method's entry in the table.
+pub struct MethodEntry {
+    /// Its name, as on the command line.
+    pub name: &'static str,
+    /// One line on what it is, with its paper.
+    pub description: &'static str,
+    /// The rates it takes.
+    pub rates: Rates,
+    /// The parameters it uses (`rate` among them when it takes rates).
+    pub params: &'static [&'static Param],
+    /// When it keeps every sub-sample of the frame in memory at once: its default rate (for
+    /// frame size limits, [`stored_samples`]).
+    pub stores_samples: Option<u32>,
+    /// Its CPU constructor.
+    pub cpu: Build,
+    /// Its GPU constructor, when it has GPU kernels (and this build has the `gpu` feature).
+    pub gpu: Option<Build>,
+}
+
+/// `Some(constructor)` in a build with the GPU kernels, `None` without.
+macro_rules! gpu {
+    ($build:expr) => {{
+        #[cfg(feature = "gpu")]
+        let build: Option<Build> = Some($build);
+        #[cfg(not(feature = "gpu"))]
+        let build: Option<Build> = None;
+        build
+    }};
+}
+
+/// The parameters of `afsm-ss`, `pan09` and `spsm-f32`'s sub-samples.
+static SUPERSAMPLED: &[&Param] = &[&params::RATE, &params::PATTERN];
+
+/// Every method, in the order the command line and the reports list them.
+pub static METHODS: &[MethodEntry] = &[
+    MethodEntry {
+        name: "sm",
+        description: "standard shadow map: one depth test per pixel centre (Williams 1978)",
+        rates: Rates::None,
+        params: params::MAP,
+        stores_samples: None,
+        cpu: |o| Ok(Box::new(StandardShadowMap { options: map(o)? })),
+        gpu: gpu!(|o| Ok(Box::new(crate::gpu::sm::GpuShadowMap { options: map(o)? }))),
+    },
+    MethodEntry {
+        name: "pcf-reeves",
+        description: "percentage-closer filtering of the pixel's footprint, N jittered samples \
+                      (Reeves et al. 1987)",
+        rates: Rates::All,
+        params: &[
+            &params::MAP_RES,
+            &params::CONSTANT_BIAS,
+            &params::SLOPE_BIAS,
+            &params::MAX_SLOPE,
+            &params::RATE,
+            &params::SEED,
+        ],
+        stores_samples: None,
+        cpu: |o| Ok(Box::new(ReevesPcf { options: reeves_options(o)? })),
+        gpu: gpu!(|o| Ok(Box::new(crate::gpu::pcf::GpuPcf::Reeves {
+            options: reeves_options(o)?
+        }))),
+    },
+    MethodEntry {
+        name: "pcf-bs-2x2",
+        description: "PCF 2x2 from four jittered maps packed as RGBA, 5 levels (Brabec & Seidel)",
+        rates: Rates::None,
+        params: BS,
+        stores_samples: None,
+        cpu: |o| bs(o, Variant::Stratified2x2),
+        gpu: gpu!(|o| gpu_bs(o, Variant::Stratified2x2)),
+    },
+    MethodEntry {
+        name: "pcf-bs-fast-2x2",
+        description: "fast PCF: one map, each texel packed with its 2x2 neighbourhood (Brabec & \
+                      Seidel)",
+        rates: Rates::None,
+        params: BS,
+        stores_samples: None,
+        cpu: |o| bs(o, Variant::Fast2x2),
+        gpu: gpu!(|o| gpu_bs(o, Variant::Fast2x2)),
+    },
+    MethodEntry {
+        name: "pcf-bs-fast-4x4",
+        description: "fast PCF over 4x4 texels in four accumulated passes (Brabec & Seidel)",
+        rates: Rates::None,
+        params: BS,
+        stores_samples: None,
+        cpu: |o| bs(o, Variant::Fast4x4),
+        gpu: gpu!(|o| gpu_bs(o, Variant::Fast4x4)),
+    },
+    MethodEntry {
+        name: "pcf-gems16",
+        description: "16 bilinear PCF lookups over a 4x4-texel region (GPU Gems ch. 11)",
+        rates: Rates::None,
+        params: params::MAP,
+        stores_samples: None,
+        cpu: |o| Ok(Box::new(GemsPcf { options: map(o)?, samples: GemsSamples::Sixteen })),
+        gpu: gpu!(|o| gpu_gems(o, GemsSamples::Sixteen)),
+    },
+    MethodEntry {
+        name: "pcf-gems4",
+        description: "4 of the 16 lookups, dithered by screen position (GPU Gems ch. 11)",
+        rates: Rates::None,
+        params: params::MAP,
+        stores_samples: None,
+        cpu: |o| Ok(Box::new(GemsPcf { options: map(o)?, samples: GemsSamples::FourDithered })),
+        gpu: gpu!(|o| gpu_gems(o, GemsSamples::FourDithered)),
+    },
+    MethodEntry {
+        name: "afsm",
+        description: "alias-free shadow map: pixel centres as sampling points, 2D BSP (Aila & \
+                      Laine 2004)",
+        rates: Rates::None,
+        params: &[],
+        stores_samples: None,
+        cpu: |_| {
+            let m = AliasFreeShadowMap::pixel_centres(AfsmOptions::default());
+            m.validate()?;
+            Ok(Box::new(m))
+        },
+        gpu: gpu!(|_| Ok(Box::new(crate::gpu::afsm::GpuAfsm { options: AfsmOptions::default() }))),
+    },
+    MethodEntry {
+        name: "afsm-ss",
+        description: "alias-free shadow map at --rate sub-samples per pixel (default 32)",
+        rates: Rates::Masks,
+        params: SUPERSAMPLED,
+        stores_samples: Some(32),
+        cpu: |o| {
+            let m = AliasFreeShadowMap::supersampled(afsm_ss_options(o));
+            m.validate()?;
+            Ok(Box::new(m))
+        },
+        gpu: gpu!(|o| Ok(Box::new(crate::gpu::afsm_ss::GpuAfsmSs {
+            options: afsm_ss_options(o)
+        }))),
+    },
+    MethodEntry {
+        name: "spsm",
+        description: "sub-pixel shadow map: 128-bit triangle texels, silhouette recovery, AA at \
+                      uncertain pixels with --rate (Lecocq et al. 2014)",
+        rates: Rates::Masks,
+        params: &[
+            &params::MAP_RES,
+            &params::CONSTANT_BIAS,
+            &params::DERIVATIVE_POWER,
+            &params::RATE,
+            &params::PATTERN,
+        ],
+        stores_samples: None,
+        cpu: |o| Ok(Box::new(Spsm { options: spsm_options(TexelFormat::Packed, o)? })),
+        gpu: gpu!(|o| Ok(Box::new(crate::gpu::spsm::GpuSpsm {
+            options: spsm_options(TexelFormat::Packed, o)?
+        }))),
+    },
+    MethodEntry {
+        name: "spsm-f32",
+        description: "sub-pixel shadow map with unpacked f32 texels (Lecocq et al. 2014)",
+        rates: Rates::Masks,
+        params: &[&params::MAP_RES, &params::CONSTANT_BIAS, &params::RATE, &params::PATTERN],
+        stores_samples: None,
+        cpu: |o| Ok(Box::new(Spsm { options: spsm_options(TexelFormat::F32, o)? })),
+        gpu: gpu!(|o| Ok(Box::new(crate::gpu::spsm::GpuSpsm {
+            options: spsm_options(TexelFormat::F32, o)?
+        }))),
+    },
+    MethodEntry {
+        name: "pan09",
+        description: "fast sub-pixel antialiased shadow maps: silhouette mask map, facets, \
+                      half-plane bitmask lookup table, --rate sub-samples (default 32) (Pan et \
+                      al. 2009)",
+        rates: Rates::Masks,
+        params: &[
+            &params::MAP_RES,
+            &params::CONSTANT_BIAS,
+            &params::SLOPE_BIAS,
+            &params::MAX_SLOPE,
+            &params::RATE,
+            &params::PATTERN,
+            &params::VISIBILITY,
+        ],
+        stores_samples: None,
+        cpu: |o| Ok(Box::new(Pan09::new(pan09_options(o)?)?)),
+        gpu: gpu!(|o| Ok(Box::new(crate::gpu::pan09::GpuPan09::new(pan09_options(o)?)?))),
+    },
+    vsm::ENTRY,
 ];
 
-/// Where a method runs (`--device`).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Device {
-    /// The CPU methods (default).
-    #[default]
-    Cpu,
-    /// The GPU kernels (the `gpu` module, with the `gpu` feature): every method has them
-    /// (the references run on the CPU only).
-    Gpu,
+/// The parameters of Brabec and Seidel's methods.
+static BS: &[&Param] = &[
+    &params::MAP_RES,
+    &params::CONSTANT_BIAS,
+    &params::SLOPE_BIAS,
+    &params::MAX_SLOPE,
+    &params::DEPTH_BITS,
+];
+
+/// The entry of the method called `name`.
+pub fn entry(name: &str) -> Option<&'static MethodEntry> {
+    METHODS.iter().find(|m| m.name == name)
 }
 
-impl Device {
-    /// The name, as on the command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            Device::Cpu => "cpu",
-            Device::Gpu => "gpu",
+/// Every parameter some method declares, each once, in the table's order.
+pub fn all_params() -> Vec<&'static Param> {
+    let mut out: Vec<&'static Param> = Vec::new();
+    for p in METHODS.iter().flat_map(|m| m.params.iter().copied()) {
+        if !out.iter().any(|q| q.key == p.key) {
+            out.push(p);
         }
     }
+    out
 }
 
-/// Options shared by the methods; `None` takes the method's documented default.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct MethodOptions {
-    /// Shadow map resolution (`--map-res`).
-    pub map_res: Option<u32>,
-    /// Constant depth bias (`--constant-bias`).
-    pub constant_bias: Option<f64>,
-    /// Slope-scaled depth bias (`--slope-bias`).
-    pub slope_bias: Option<f64>,
-    /// Bound of the slope ratio (`--max-slope`).
-    pub max_slope: Option<f64>,
-    /// Sub-samples per pixel (`--rate`), for methods that supersample or sample a filter.
-    pub rate: Option<u32>,
-    /// Sub-sample pattern (`--pattern`), for methods that supersample.
-    pub pattern: Option<PatternKind>,
-    /// Bits per stored depth (`--depth-bits`), for depth-as-colour maps.
-    pub depth_bits: Option<u32>,
-    /// Seed of stochastic sampling (`--seed`).
-    pub seed: Option<u64>,
-    /// Exponent of the derivative code `x^n` (`--derivative-power`), for packed SPSM texels.
-    pub derivative_power: Option<u32>,
-    /// How `pan09` turns half-planes into sub-sample masks (`--visibility`).
-    pub visibility: Option<VisibilityMode>,
-    /// Where the method runs (`--device`); default the CPU.
-    pub device: Device,
+/// The map options given, with the defaults for those not given; validated.
+pub fn map(options: &MethodOptions) -> Result<MapOptions, MethodError> {
+    map_options(options, MapOptions::default())
 }
 
 /// The map options given, with `defaults` for those not given; validated.
@@ -112,25 +277,23 @@ fn map_options(options: &MethodOptions, d: MapOptions) -> Result<MapOptions, Met
 }
 
 /// The sample rates (`--rate`) the method called `name` accepts, or `None` when it takes no
-/// rate: `pcf-reeves` every rate of the shared patterns (its jittered footprint samples);
-/// the supersampling techniques (`afsm-ss`, `pan09`, `spsm`, `spsm-f32`) those up to
-/// [`MAX_METHOD_RATE`], the width of their sub-sample masks.
+/// rate (or there is no such method): see [`Rates`].
 pub fn rates(name: &str) -> Option<Vec<u32>> {
-    let up_to = |max: u32| RATES.iter().copied().filter(|&r| r <= max).collect();
-    match name {
-        "pcf-reeves" => Some(RATES.to_vec()),
-        "afsm-ss" | "pan09" | "spsm" | "spsm-f32" => Some(up_to(MAX_METHOD_RATE)),
-        _ => None,
+    match entry(name)?.rates {
+        Rates::None => None,
+        Rates::All => Some(RATES.to_vec()),
+        Rates::Masks => Some(RATES.iter().copied().filter(|&r| r <= MAX_METHOD_RATE).collect()),
     }
 }
 
-/// Sub-samples per pixel the method `name` keeps in memory at once with `options`: the
-/// alias-free shadow map's sampling points (`afsm-ss`: its rate, about 35 bytes each); 1 for
-/// the others, whose memory grows with the pixels and the map only. For frame size limits.
+/// Sub-samples per pixel the method `name` keeps in memory at once with `options`: its rate
+/// for a method that stores every sub-sample (`afsm-ss`: its sampling points, about 35 bytes
+/// each); 1 for the others, whose memory grows with the pixels and the map only. For frame
+/// size limits.
 pub fn stored_samples(name: &str, options: &MethodOptions) -> u32 {
-    match name {
-        "afsm-ss" => options.rate.unwrap_or(AfsmOptions::supersampled().rate),
-        _ => 1,
+    match entry(name).and_then(|m| m.stores_samples) {
+        Some(default) => options.rate.unwrap_or(default),
+        None => 1,
     }
 }
 
@@ -152,51 +315,61 @@ fn check_rate(name: &str, options: &MethodOptions) -> Result<(), MethodError> {
 }
 
 /// The method called `name`, configured by `options` and validated, on `options.device`.
+/// The CPU method is built first in either case, so that a GPU run's options are checked
+/// by its twin's rules.
 pub fn method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMethod>, MethodError> {
+    let Some(m) = entry(name) else {
+        return Err(MethodError::InvalidOption {
+            option: "--method",
+            message: format!(
+                "unknown method `{name}`; available: {}",
+                METHODS.iter().map(|m| m.name).collect::<Vec<_>>().join(", ")
+            ),
+        });
+    };
     check_rate(name, options)?;
-    let cpu = cpu_method(name, options)?;
+    let cpu = (m.cpu)(options)?;
     let method = match options.device {
         Device::Cpu => cpu,
-        Device::Gpu => gpu_method(name, options)?,
+        Device::Gpu => match m.gpu {
+            Some(gpu) => gpu(options)?,
+            None => return Err(no_gpu(name)),
+        },
     };
     #[cfg(feature = "slowdown")]
     let method = crate::slowdown::wrap(name, method)?;
     Ok(method)
 }
 
-/// The GPU kernels of `name`, configured as [`cpu_method`] configures its twin.
+/// `--device gpu` for a method without GPU kernels, or in a build without any.
+fn no_gpu(name: &str) -> MethodError {
+    let why = if HAS_GPU {
+        "it has no GPU kernels"
+    } else {
+        "this build has no GPU kernels (built without the `gpu` feature; rebuild with default \
+         features)"
+    };
+    MethodError::InvalidOption { option: "--device", message: format!("`{name}` on the GPU: {why}") }
+}
+
+/// Brabec and Seidel's method of `variant` on the CPU.
+fn bs(options: &MethodOptions, variant: Variant) -> Result<Box<dyn ShadowMethod>, MethodError> {
+    Ok(Box::new(BrabecSeidelPcf { options: bs_options(options)?, variant }))
+}
+
+/// Brabec and Seidel's method of `variant` on the GPU.
 #[cfg(feature = "gpu")]
-fn gpu_method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMethod>, MethodError> {
-    use crate::gpu::{pcf::GpuPcf, sm::GpuShadowMap};
-    let map = || map_options(options, MapOptions::default());
-    let bs = |variant: Variant| -> Result<Box<dyn ShadowMethod>, MethodError> {
-        Ok(Box::new(GpuPcf::BrabecSeidel { options: bs_options(options)?, variant }))
-    };
-    let gems = |samples: GemsSamples| -> Result<Box<dyn ShadowMethod>, MethodError> {
-        Ok(Box::new(GpuPcf::Gems { options: map()?, samples }))
-    };
-    match name {
-        "sm" => Ok(Box::new(GpuShadowMap { options: map()? })),
-        "pcf-reeves" => Ok(Box::new(GpuPcf::Reeves { options: reeves_options(options)? })),
-        "pcf-bs-2x2" => bs(Variant::Stratified2x2),
-        "pcf-bs-fast-2x2" => bs(Variant::Fast2x2),
-        "pcf-bs-fast-4x4" => bs(Variant::Fast4x4),
-        "pcf-gems16" => gems(GemsSamples::Sixteen),
-        "pcf-gems4" => gems(GemsSamples::FourDithered),
-        "afsm" => Ok(Box::new(crate::gpu::afsm::GpuAfsm { options: AfsmOptions::default() })),
-        "afsm-ss" => {
-            Ok(Box::new(crate::gpu::afsm_ss::GpuAfsmSs { options: afsm_ss_options(options) }))
-        }
-        "pan09" => Ok(Box::new(crate::gpu::pan09::GpuPan09::new(pan09_options(options)?)?)),
-        "spsm" | "spsm-f32" => {
-            Ok(Box::new(crate::gpu::spsm::GpuSpsm { options: spsm_options(name, options)? }))
-        }
-        // `method` has checked the name with the CPU twin's registry.
-        _ => Err(MethodError::InvalidOption {
-            option: "--method",
-            message: format!("unknown method `{name}`"),
-        }),
-    }
+fn gpu_bs(options: &MethodOptions, variant: Variant) -> Result<Box<dyn ShadowMethod>, MethodError> {
+    Ok(Box::new(crate::gpu::pcf::GpuPcf::BrabecSeidel { options: bs_options(options)?, variant }))
+}
+
+/// GPU Gems' PCF with `samples` on the GPU.
+#[cfg(feature = "gpu")]
+fn gpu_gems(
+    options: &MethodOptions,
+    samples: GemsSamples,
+) -> Result<Box<dyn ShadowMethod>, MethodError> {
+    Ok(Box::new(crate::gpu::pcf::GpuPcf::Gems { options: map(options)?, samples }))
 }
 
 /// `afsm-ss`'s options from the shared ones (validated by the method).
@@ -221,12 +394,12 @@ fn reeves_options(options: &MethodOptions) -> Result<ReevesOptions, MethodError>
     Ok(o)
 }
 
-/// Lecocq et al.'s options for `spsm` or `spsm-f32` from the shared ones, validated.
-fn spsm_options(name: &str, options: &MethodOptions) -> Result<SpsmOptions, MethodError> {
+/// Lecocq et al.'s options with `texel`s from the shared ones, validated.
+fn spsm_options(texel: TexelFormat, options: &MethodOptions) -> Result<SpsmOptions, MethodError> {
     let d = SpsmOptions::default();
     let o = SpsmOptions {
         map: map_options(options, d.map)?,
-        texel: if name == "spsm" { TexelFormat::Packed } else { TexelFormat::F32 },
+        texel,
         derivative_power: options.derivative_power.unwrap_or(d.derivative_power),
         rate: options.rate.unwrap_or(d.rate),
         pattern: options.pattern.unwrap_or(d.pattern),
@@ -272,58 +445,6 @@ pub fn gpu_adapter_name() -> Option<String> {
     }
 }
 
-/// `--device gpu` in a build without the GPU kernels.
-#[cfg(not(feature = "gpu"))]
-fn gpu_method(name: &str, _options: &MethodOptions) -> Result<Box<dyn ShadowMethod>, MethodError> {
-    Err(MethodError::InvalidOption {
-        option: "--device",
-        message: format!(
-            "`{name}` on the GPU: this build has no GPU kernels (built without the `gpu` \
-             feature; rebuild with default features)"
-        ),
-    })
-}
-
-/// The CPU method called `name`, configured by `options` and validated.
-fn cpu_method(name: &str, options: &MethodOptions) -> Result<Box<dyn ShadowMethod>, MethodError> {
-    let bs = |variant: Variant| -> Result<Box<dyn ShadowMethod>, MethodError> {
-        Ok(Box::new(BrabecSeidelPcf { options: bs_options(options)?, variant }))
-    };
-    let gems = |samples: GemsSamples| -> Result<Box<dyn ShadowMethod>, MethodError> {
-        Ok(Box::new(GemsPcf { options: map_options(options, MapOptions::default())?, samples }))
-    };
-    match name {
-        "sm" => Ok(Box::new(StandardShadowMap {
-            options: map_options(options, MapOptions::default())?,
-        })),
-        "pcf-reeves" => Ok(Box::new(ReevesPcf { options: reeves_options(options)? })),
-        "pcf-bs-2x2" => bs(Variant::Stratified2x2),
-        "pcf-bs-fast-2x2" => bs(Variant::Fast2x2),
-        "pcf-bs-fast-4x4" => bs(Variant::Fast4x4),
-        "pcf-gems16" => gems(GemsSamples::Sixteen),
-        "pcf-gems4" => gems(GemsSamples::FourDithered),
-        "afsm" => {
-            let m = AliasFreeShadowMap::pixel_centres(AfsmOptions::default());
-            m.validate()?;
-            Ok(Box::new(m))
-        }
-        "afsm-ss" => {
-            let m = AliasFreeShadowMap::supersampled(afsm_ss_options(options));
-            m.validate()?;
-            Ok(Box::new(m))
-        }
-        "spsm" | "spsm-f32" => Ok(Box::new(Spsm { options: spsm_options(name, options)? })),
-        "pan09" => Ok(Box::new(Pan09::new(pan09_options(options)?)?)),
-        _ => Err(MethodError::InvalidOption {
-            option: "--method",
-            message: format!(
-                "unknown method `{name}`; available: {}",
-                METHODS.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")
-            ),
-        }),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -333,7 +454,7 @@ mod tests {
     #[test]
     fn rates_are_exactly_what_each_method_accepts() {
         let tried: Vec<u32> = (0..=1100).chain([2048, 4096, 1_000_000, u32::MAX]).collect();
-        for (name, _) in METHODS {
+        for name in METHODS.iter().map(|m| m.name) {
             let Some(accepted) = rates(name) else {
                 continue;
             };

@@ -247,14 +247,41 @@ pub struct Images {
     pub grids: Vec<GridImages>,
 }
 
-/// A short label of the row's parameters, e.g. `map_res=1024 rate=16`.
+/// A short label of the row's parameters, e.g. `map_res=1024 rate=16`: the map size, rate,
+/// depth bits and pattern where the method has them, then every other parameter whose value is
+/// not the method's default (a swept bias, a method's own parameter), then the device.
 pub fn param_label(row: &Row) -> String {
-    ["map_res", "rate", "depth_bits", "pattern", "device"]
-        .iter()
-        .filter(|k| row.params.contains_key(**k))
-        .map(|k| format!("{k}={}", row.param(k)))
-        .collect::<Vec<_>>()
-        .join(" ")
+    const ALWAYS: [&str; 4] = ["map_res", "rate", "depth_bits", "pattern"];
+    let defaults = default_params(&row.method);
+    let mut keys: Vec<&str> =
+        ALWAYS.iter().copied().filter(|k| row.params.contains_key(*k)).collect();
+    keys.extend(row.params.iter().filter_map(|(k, v)| {
+        let shown = ALWAYS.contains(&k.as_str()) || k == "device";
+        (!shown && defaults.and_then(|d| d.get(k)) != Some(v)).then_some(k.as_str())
+    }));
+    if row.params.contains_key("device") {
+        keys.push("device");
+    }
+    keys.iter().map(|k| format!("{k}={}", row.param(k))).collect::<Vec<_>>().join(" ")
+}
+
+/// The parameters of `method` built with no option given (its defaults), as its run record
+/// holds them; `None` for a name no method or reference has.
+fn default_params(method: &str) -> Option<&'static serde_json::Map<String, serde_json::Value>> {
+    type Defaults = BTreeMap<String, serde_json::Map<String, serde_json::Value>>;
+    static DEFAULTS: std::sync::OnceLock<Defaults> = std::sync::OnceLock::new();
+    let defaults = DEFAULTS.get_or_init(|| {
+        let names = methods::registry::METHODS.iter().map(|m| m.name);
+        let references = analysis::registry::REFERENCES.iter().map(|(n, _)| *n);
+        names
+            .chain(references)
+            .filter_map(|n| {
+                let t = analysis::registry::technique(n, &methods::MethodOptions::default());
+                t.ok().map(|t| (n.to_owned(), t.params()))
+            })
+            .collect()
+    });
+    defaults.get(method)
 }
 
 /// A scene's name as a file stem: ASCII letters, digits and `-` kept, the rest `_`.

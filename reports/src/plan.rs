@@ -3,7 +3,8 @@
 //!
 //! The items, in the order an unsharded report runs them: for each scene of the suite, one
 //! item per `[[run]]` (every combination of its parameters on that scene), then one per image
-//! grid of that scene; then the papers' tables, one item per scene and frame of a table (its
+//! grid of that scene, then, for each further frame size the runs give (`width`, `height`),
+//! one item per `[[run]]` that asks for it; then the papers' tables, one item per scene and frame of a table (its
 //! runs there, [`crate::tables::table_items`]). A table's item whose scene and frame are a
 //! suite scene's follows that scene's items, so that its runs share the scene's frame and are
 //! measured with its runs; the others come last. Each item names its scene, frame and
@@ -130,6 +131,18 @@ fn facts(suite: &Suite, name: &str) -> Option<SceneFacts> {
     })
 }
 
+/// The frame sizes of a scene's runs, the scene's own (`default`) first, then those the runs
+/// give (`width`, `height`) in the order they first appear.
+fn frame_sizes(suite: &Suite, default: (u32, u32)) -> Vec<(u32, u32)> {
+    let mut sizes = vec![default];
+    for size in suite.runs.iter().flat_map(|r| r.sizes()).flatten() {
+        if !sizes.contains(&size) {
+            sizes.push(size);
+        }
+    }
+    sizes
+}
+
 /// The cost of one method run with `rate` samples and a `map_res` map on `pixels` pixels.
 pub fn run_cost(pixels: f64, triangles: f64, rate: Option<u32>, map_res: Option<u32>) -> f64 {
     let texels = map_res.map_or(1024.0 * 1024.0, |m| f64::from(m) * f64::from(m));
@@ -144,8 +157,7 @@ pub fn plan(suite: &Suite) -> Vec<WorkItem> {
     let mut items = Vec::new();
     for (scene_index, name) in suite.scenes.iter().enumerate() {
         let f = facts(suite, name);
-        let (width, height) = f.as_ref().map_or((0, 0), |f| (f.width, f.height));
-        let pixels = f64::from(width) * f64::from(height);
+        let scene_size = f.as_ref().map_or((0, 0), |f| (f.width, f.height));
         let triangles = f.as_ref().map_or(0.0, |f| f.triangles);
         let (reference, ref_rate) = match &f {
             None => (None, None),
@@ -164,40 +176,62 @@ pub fn plan(suite: &Suite) -> Vec<WorkItem> {
         };
         let budget_reference =
             reference.as_deref().map(|r| (r, ref_rate.unwrap_or(suite.ref_rate)));
-        let item = |work: Work, cost: f64, memory: u64, items: &Vec<WorkItem>| WorkItem {
-            item: items.len(),
-            scene: Some(name.clone()),
-            scene_index: Some(scene_index),
-            width,
-            height,
-            reference: reference.clone(),
-            ref_rate,
-            work,
-            cost,
-            memory,
+        let item = |work: Work, (width, height), cost: f64, memory: u64, items: &Vec<WorkItem>| {
+            WorkItem {
+                item: items.len(),
+                scene: Some(name.clone()),
+                scene_index: Some(scene_index),
+                width,
+                height,
+                reference: reference.clone(),
+                ref_rate,
+                work,
+                cost,
+                memory,
+            }
         };
-        for (k, spec) in suite.runs.iter().enumerate() {
-            let combos = spec.expand();
-            let cost = combos
-                .iter()
-                .map(|o| runs_per * run_cost(pixels, triangles, o.rate, o.map_res))
-                .sum();
-            let memory = if f.is_some() {
-                let runs = combos.iter().map(|o| (spec.method.as_str(), o));
-                peak_memory(runs, triangles, (width, height), budget_reference)
-            } else {
-                0
-            };
-            let runs = combos.iter().map(combo_label).collect();
-            let work = Work::Runs { spec: k, method: spec.method.clone(), runs };
-            let it = item(work, cost, memory, &items);
-            items.push(it);
-        }
-        for (k, grid) in suite.grids.iter().enumerate().filter(|(_, g)| g.scene == *name) {
-            let cost =
-                grid.panels.iter().map(|p| run_cost(pixels, triangles, p.rate, p.map_res)).sum();
-            let it = item(Work::Grid { grid: k, title: grid.title.clone() }, cost, 0, &items);
-            items.push(it);
+        // One frame after another: the scene's own with its runs and grids, then each frame
+        // size the runs add, with the runs that ask for it.
+        for (n, size) in frame_sizes(suite, scene_size).into_iter().enumerate() {
+            let pixels = f64::from(size.0) * f64::from(size.1);
+            for (k, spec) in suite.runs.iter().enumerate() {
+                let on_frame =
+                    spec.sizes().iter().any(|s| match s {
+                        Some(s) if f.is_some() => *s == size,
+                        _ => n == 0,
+                    });
+                if !on_frame {
+                    continue;
+                }
+                let combos = spec.expand();
+                let cost = combos
+                    .iter()
+                    .map(|o| runs_per * run_cost(pixels, triangles, o.rate, o.map_res))
+                    .sum();
+                let memory = if f.is_some() {
+                    let runs = combos.iter().map(|o| (spec.method.as_str(), o));
+                    peak_memory(runs, triangles, size, budget_reference)
+                } else {
+                    0
+                };
+                let runs = combos.iter().map(combo_label).collect();
+                let work = Work::Runs { spec: k, method: spec.method.clone(), runs };
+                let it = item(work, size, cost, memory, &items);
+                items.push(it);
+            }
+            if n > 0 {
+                continue;
+            }
+            for (k, grid) in suite.grids.iter().enumerate().filter(|(_, g)| g.scene == *name) {
+                let cost = grid
+                    .panels
+                    .iter()
+                    .map(|p| run_cost(pixels, triangles, p.rate, p.map_res))
+                    .sum();
+                let work = Work::Grid { grid: k, title: grid.title.clone() };
+                let it = item(work, size, cost, 0, &items);
+                items.push(it);
+            }
         }
     }
     // A table's items: one per scene and frame. One whose scene and frame are a suite
@@ -254,12 +288,8 @@ pub fn plan(suite: &Suite) -> Vec<WorkItem> {
 
 /// A combination's parameters as `map_res=512 rate=16 device=gpu` (what it sets).
 fn combo_label(o: &methods::MethodOptions) -> String {
-    let mut parts = Vec::new();
-    for (k, v) in [("map_res", o.map_res), ("rate", o.rate), ("depth_bits", o.depth_bits)] {
-        if let Some(v) = v {
-            parts.push(format!("{k}={v}"));
-        }
-    }
+    let mut parts: Vec<String> =
+        o.given().into_iter().map(|(k, v)| format!("{k}={}", v.text())).collect();
     if o.device == methods::registry::Device::Gpu {
         parts.push("device=gpu".to_owned());
     }

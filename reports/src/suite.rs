@@ -22,12 +22,25 @@
 //! map_res = [512, 1024]   # each list is swept; a run is every combination
 //! rate = [4, 16]
 //!
+//! [[run]]
+//! method = "pan09"
+//! pattern = ["grid", "rotated"] # any parameter the method declares (`render --help`)
+//! slope_bias = 2                # a single value is a list of one
+//! width = [320, 640]            # frame sizes of this run: widths and heights paired,
+//! height = [240, 480]           # each a frame of its own (default: the suite's)
+//! device = ["cpu", "gpu"]
+//!
 //! [[table]]                  # a paper's table, see `tables`
 //! paper = "lecocq-table2"
 //! ```
 //!
 //! Unknown keys and bad values are errors that name the file and the key (and the line,
 //! through the TOML parser).
+//!
+//! A `[[run]]` takes `method`, `device`, `width` and `height`, and the parameters its method
+//! declares in the registry's table (`methods::registry::METHODS`, `methods::params`): a key
+//! the method does not declare is refused with its line and the method's parameters, as the
+//! command line notes it, so that no value of a suite is silently dropped.
 //!
 //! A suite is checked whole before anything runs ([`Suite::parse`]): every run's method with
 //! every combination of its values is built as the sweep will build it (so a value the method
@@ -40,8 +53,13 @@
 
 use crate::tables::TableSpec;
 use instrumentation::measure::{Clock, Protocol};
-use methods::{registry::Device, MethodOptions};
+use methods::{
+    params::{Param, Value},
+    registry::Device,
+    MethodOptions,
+};
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use toml::Spanned;
 
@@ -132,14 +150,14 @@ struct Spans {
     scenes: Vec<Spanned<String>>,
     ref_rate: Option<Spanned<u32>>,
     #[serde(default, rename = "run")]
-    runs: Vec<ValueSpans>,
+    runs: Vec<BTreeMap<String, Spanned<toml::Value>>>,
     #[serde(default, rename = "grid")]
     grids: Vec<GridSpans>,
     #[serde(default, rename = "table")]
     tables: Vec<TableSpans>,
 }
 
-/// The spans of a `[[run]]` or a grid panel.
+/// The spans of a grid panel.
 #[derive(Debug, Default, Deserialize)]
 struct ValueSpans {
     method: Option<Spanned<String>>,
@@ -149,8 +167,6 @@ struct ValueSpans {
     rate: Option<Spanned<toml::Value>>,
     #[serde(default)]
     depth_bits: Option<Spanned<toml::Value>>,
-    #[serde(default)]
-    device: Option<Spanned<toml::Value>>,
 }
 
 /// The spans of a `[[grid]]`.
@@ -175,22 +191,23 @@ impl ValueSpans {
             "--map-res" => &self.map_res,
             "--rate" => &self.rate,
             "--depth-bits" => &self.depth_bits,
-            "--device" => &self.device,
             _ => &None,
         };
         value.as_ref().map(Spanned::span).or_else(|| self.method.as_ref().map(Spanned::span))
     }
 }
 
-/// The suite key of a method option (`--map-res` -> `map_res`), or `method` for the others.
+/// The suite key of a method option (`--map-res` -> `map_res`), `device` for `--device`, or
+/// `method` for the others.
 fn key_of(option: &str) -> &'static str {
-    match option {
-        "--map-res" => "map_res",
-        "--rate" => "rate",
-        "--depth-bits" => "depth_bits",
-        "--device" => "device",
-        _ => "method",
+    if option == "--device" {
+        return "device";
     }
+    methods::registry::all_params()
+        .into_iter()
+        .chain(analysis::registry::REFERENCE_PARAMS.iter().copied())
+        .find(|p| p.flag == option)
+        .map_or("method", |p| p.key)
 }
 
 /// Builds `method` with `options` as a sweep will. Building a GPU method opens no device, so
@@ -200,7 +217,7 @@ fn key_of(option: &str) -> &'static str {
 fn check_method(method: &str, options: &MethodOptions) -> Result<(), (&'static str, String)> {
     // A build without GPU kernels checks a GPU run's CPU twin: the run itself is reported as
     // not run, with the reason, and the suite's other runs go on.
-    let cpu = MethodOptions { device: Device::Cpu, ..*options };
+    let cpu = MethodOptions { device: Device::Cpu, ..options.clone() };
     let options = if methods::registry::HAS_GPU { options } else { &cpu };
     match analysis::registry::technique(method, options) {
         Ok(_) => Ok(()),
@@ -230,57 +247,134 @@ pub enum ReferenceChoice {
     Raytrace,
 }
 
-/// One method and the parameter values to sweep; absent lists take the method's default.
+/// One method and the values to sweep: `device`, the frame sizes and any parameter the method
+/// declares, each a value or a list; absent ones take the method's default (the suite's frame).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
 pub struct RunSpec {
     /// Method name (see `shadowbench render --help`).
     pub method: String,
-    /// Shadow map resolutions.
-    #[serde(default)]
-    pub map_res: Vec<u32>,
-    /// Sub-sample rates (supersampling methods, `pcf-reeves`' samples).
-    #[serde(default)]
-    pub rate: Vec<u32>,
-    /// Depth precisions (`pcf-bs-*`).
-    #[serde(default)]
-    pub depth_bits: Vec<u32>,
     /// Devices to run on (`cpu`, `gpu`); default the CPU only. With both, the report shows
     /// CPU and GPU times side by side.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "one_or_many")]
     pub device: Vec<methods::registry::Device>,
+    /// Frame widths, paired with `height`; default the suite's.
+    #[serde(default, deserialize_with = "one_or_many")]
+    pub width: Vec<u32>,
+    /// Frame heights, paired with `width`.
+    #[serde(default, deserialize_with = "one_or_many")]
+    pub height: Vec<u32>,
+    /// The method's parameters by key, each a value or a list of values (checked against the
+    /// method's declared parameters by [`Suite::parse`]).
+    #[serde(flatten)]
+    pub params: BTreeMap<String, toml::Value>,
+}
+
+/// A value or a list of values, as a list.
+fn one_or_many<'de, D, T>(d: D) -> Result<Vec<T>, D::Error>
+where
+    D: serde::Deserializer<'de>,
+    T: Deserialize<'de>,
+{
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum OneOrMany<T> {
+        One(T),
+        Many(Vec<T>),
+    }
+    Ok(match OneOrMany::deserialize(d)? {
+        OneOrMany::One(v) => vec![v],
+        OneOrMany::Many(v) => v,
+    })
+}
+
+/// The values of the parameter `param` from a suite's `value` (a value or a list of values);
+/// the error says what the parameter takes.
+fn param_values(param: &'static Param, value: &toml::Value) -> Result<Vec<Value>, String> {
+    let one = |v: &toml::Value| match v {
+        toml::Value::Integer(i) => param.from_integer(*i),
+        toml::Value::Float(f) => param.from_float(*f),
+        toml::Value::String(s) => param.parse(s),
+        other => Err(format!("{other} is not {}", param.expected())),
+    };
+    match value {
+        toml::Value::Array(list) => list.iter().map(one).collect(),
+        v => one(v).map(|v| vec![v]),
+    }
 }
 
 impl RunSpec {
-    /// The parameter combinations of one run spec.
-    pub fn expand(&self) -> Vec<MethodOptions> {
-        let spec = self;
-        let or_default = |v: &[u32]| -> Vec<Option<u32>> {
-            if v.is_empty() {
-                vec![None]
-            } else {
-                v.iter().copied().map(Some).collect()
-            }
+    /// The method's declared parameter called `key`.
+    fn param(&self, key: &str) -> Option<&'static Param> {
+        analysis::registry::params_of(&self.method)?.iter().copied().find(|p| p.key == key)
+    }
+
+    /// Checks the keys against the method's declared parameters and the values against their
+    /// kinds: the key at fault and what is wrong. [`Suite::parse`] runs it on every run.
+    fn check_params(&self) -> Result<(), (String, String)> {
+        let Some(declared) = analysis::registry::params_of(&self.method) else {
+            return Ok(()); // The method itself is refused with the known ones.
         };
-        let mut out = Vec::new();
-        for map_res in or_default(&spec.map_res) {
-            for rate in or_default(&spec.rate) {
-                for depth_bits in or_default(&spec.depth_bits) {
-                    let devices =
-                        if spec.device.is_empty() { &[Device::Cpu][..] } else { &spec.device };
-                    for &device in devices {
-                        out.push(MethodOptions {
-                            map_res,
-                            rate,
-                            depth_bits,
-                            device,
-                            ..Default::default()
-                        });
-                    }
-                }
-            }
+        for (key, value) in &self.params {
+            let Some(param) = self.param(key) else {
+                let known: Vec<&str> = declared.iter().map(|p| p.key).collect();
+                let known = if known.is_empty() { "none".into() } else { known.join(", ") };
+                let any = methods::registry::all_params().iter().any(|p| p.key == key);
+                let what = if any { "does not use" } else { "has no parameter" };
+                return Err((
+                    key.clone(),
+                    format!("`{}` {what} `{key}`; its parameters: {known}", self.method),
+                ));
+            };
+            param_values(param, value).map_err(|m| (key.clone(), m))?;
         }
-        out
+        if self.width.len() != self.height.len() {
+            return Err((
+                "width".into(),
+                format!(
+                    "give as many heights as widths (paired into frame sizes), got {} and {}",
+                    self.width.len(),
+                    self.height.len()
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The frame sizes of the run: `width` and `height` paired, or `None` (the suite's frame)
+    /// when not given.
+    pub fn sizes(&self) -> Vec<Option<(u32, u32)>> {
+        if self.width.is_empty() {
+            return vec![None];
+        }
+        self.width.iter().zip(&self.height).map(|(&w, &h)| Some((w, h))).collect()
+    }
+
+    /// The parameter combinations of one run spec (on each of its frame sizes), in the order of
+    /// the keys, the last varying fastest, then the device. Values [`Suite::parse`] refused
+    /// cannot arise; a key the method does not declare is left out.
+    pub fn expand(&self) -> Vec<MethodOptions> {
+        let mut out = vec![MethodOptions::default()];
+        for (key, value) in &self.params {
+            let Some(param) = self.param(key) else { continue };
+            let values = param_values(param, value).unwrap_or_default();
+            if values.is_empty() {
+                continue;
+            }
+            out = out
+                .into_iter()
+                .flat_map(|o| {
+                    values.iter().map(move |v| {
+                        let mut o = o.clone();
+                        o.set(param, *v);
+                        o
+                    })
+                })
+                .collect();
+        }
+        let devices = if self.device.is_empty() { &[Device::Cpu][..] } else { &self.device };
+        out.into_iter()
+            .flat_map(|o| devices.iter().map(move |&device| MethodOptions { device, ..o.clone() }))
+            .collect()
     }
 }
 
@@ -518,16 +612,31 @@ impl Suite {
         }
         for (k, spec) in self.runs.iter().enumerate() {
             let span = spans.runs.get(k);
+            let span_of = |key: &str| span.and_then(|s| s.get(key)).map(Spanned::span);
+            // The method, then its keys, then every combination built as the sweep builds it.
+            let method_span = span_of("method");
+            check_method(&spec.method, &MethodOptions::default()).map_err(|(option, m)| {
+                let key = key_of(option);
+                let span = if key == "method" { method_span.clone() } else { span_of(key) };
+                at(span, &format!("run[{k}].{key}"), m)
+            })?;
+            spec.check_params()
+                .map_err(|(key, m)| at(span_of(&key), &format!("run[{k}].{key}"), m))?;
             for options in spec.expand() {
                 if let Err((option, message)) = check_method(&spec.method, &options) {
-                    let key = format!("run[{k}].{}", key_of(option));
-                    return Err(at(span.and_then(|s| s.of(option)), &key, message));
+                    let key = key_of(option);
+                    let span = span_of(key).or_else(|| method_span.clone());
+                    return Err(at(span, &format!("run[{k}].{key}"), message));
                 }
                 let samples = methods::registry::stored_samples(&spec.method, &options);
-                if self.width != 0 {
-                    check_frame(self.width, self.height, samples).map_err(|m| {
-                        at(span.and_then(|s| s.of("--rate")), &format!("run[{k}].rate"), m)
-                    })?;
+                for size in spec.sizes() {
+                    let (key, (w, h)) = match size {
+                        Some(size) => ("width", size),
+                        None if self.width != 0 => ("rate", (self.width, self.height)),
+                        None => continue,
+                    };
+                    check_frame(w, h, samples)
+                        .map_err(|m| at(span_of(key), &format!("run[{k}].{key}"), m))?;
                 }
             }
         }
@@ -597,13 +706,10 @@ mod tests {
 
     #[test]
     fn specs_expand_to_every_combination() {
-        let spec = RunSpec {
-            method: "pcf-bs-fast-2x2".into(),
-            map_res: vec![256, 512],
-            rate: vec![],
-            depth_bits: vec![8, 12, 32],
-            device: vec![],
-        };
+        let spec: RunSpec = toml::from_str(
+            "method = \"pcf-bs-fast-2x2\"\nmap_res = [256, 512]\ndepth_bits = [8, 12, 32]\n",
+        )
+        .expect("parses");
         let all = spec.expand();
         assert_eq!(all.len(), 6);
         assert!(all.iter().all(|o| o.rate.is_none() && o.device == Device::Cpu));

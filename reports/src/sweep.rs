@@ -188,7 +188,9 @@ pub fn items_run_count(plan: &[WorkItem], items: &[usize]) -> u64 {
 
 /// What every item of one scene shares: the frame, the reference and the pixel classes.
 struct SceneRun<'s> {
-    scene: &'s scenes::Scene,
+    /// The scene's name in the report: its own on its own frame (the suite's size, or the
+    /// scene's), `NAME WxH` on a frame size a `[[run]]` gives.
+    label: String,
     frame: &'s Frame<'s>,
     effects: Vec<String>,
     ref_name: String,
@@ -364,8 +366,17 @@ pub fn run_items(
                     let truth = Truth::new(&frame, image, &mut Recorder::default());
                     let effects: Vec<String> =
                         frame.effects.names().into_iter().map(String::from).collect();
+                    let own = match suite.width {
+                        0 => (scene.width, scene.height),
+                        _ => (suite.width, suite.height),
+                    };
+                    let label = if (w, h) == own {
+                        scene.name.clone()
+                    } else {
+                        format!("{} {w}x{h}", scene.name)
+                    };
                     report.scenes.push(SceneInfo {
-                        scene: scene.name.clone(),
+                        scene: label.clone(),
                         triangles: triangles as u64,
                         effects: effects.clone(),
                         width: w,
@@ -376,7 +387,7 @@ pub fn run_items(
                         reference_ms,
                     });
                     ctx = Some(SceneRun {
-                        scene: &scene,
+                        label,
                         frame: &frame,
                         effects,
                         ref_name,
@@ -583,7 +594,6 @@ fn add_run(
     report: &mut Report,
     images: &mut Images,
 ) {
-    let scene = ctx.scene;
     let (w, h) = (ctx.frame.width(), ctx.frame.height());
     if p.options.device == Device::Gpu && report.machine.gpu.is_none() {
         report.machine.gpu = methods::registry::gpu_adapter_name();
@@ -592,13 +602,13 @@ fn add_run(
     let comparison = match ctx.truth.compare(ctx.frame, v) {
         Ok(c) => c,
         Err(e) => {
-            report.skipped.push(format!("{} on {}: {e}", spec.method, scene.name));
+            report.skipped.push(format!("{} on {}: {e}", spec.method, ctx.label));
             return;
         }
     };
     let mut record = m.run_record(
         RunIdentity {
-            scene: scene.name.clone(),
+            scene: ctx.label.clone(),
             method: p.technique.name().to_owned(),
             params: p.technique.params(),
             width: w,
@@ -613,7 +623,7 @@ fn add_run(
         reference: ctx.ref_name.clone(),
         ref_rate: ctx.ref_rate,
         edge_reference: (ctx.ref_name == "exact").then(|| "none".to_owned()),
-        scene: scene.name.clone(),
+        scene: ctx.label.clone(),
         method: record.method.clone(),
         params: record.params.clone(),
         width: w,
@@ -623,7 +633,7 @@ fn add_run(
     };
     let truth = &ctx.truth;
     report.rows.push(Row {
-        scene: scene.name.clone(),
+        scene: ctx.label.clone(),
         method: record.method.clone(),
         params: record.params.clone(),
         width: w,

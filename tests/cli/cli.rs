@@ -241,7 +241,7 @@ fn render_on_the_gpu_names_the_adapter_and_the_timing_in_run_json() {
 fn gpu_device_runs_every_method_but_the_references() {
     let dir = tempfile::tempdir().expect("tempdir");
     let cpu_only = ["exact", "raytrace"];
-    for name in methods::registry::METHODS.iter().map(|(n, _)| *n).chain(cpu_only) {
+    for name in methods::registry::METHODS.iter().map(|m| m.name).chain(cpu_only) {
         let out = dir.path().join(name);
         let mut args = vec!["render", "--scene", "plane-square", "--method", name];
         args.extend(["--device", "gpu", "--width", "16", "--height", "12"]);
@@ -272,7 +272,7 @@ fn gpu_device_runs_every_method_on_a_scene_without_casters() {
     assert!(!toml.contains("casts_shadows = true"));
     let scene = dir.path().join("no-casters.toml");
     std::fs::write(&scene, toml).expect("scene file written");
-    for name in methods::registry::METHODS.iter().map(|(n, _)| *n) {
+    for name in methods::registry::METHODS.iter().map(|m| m.name) {
         let out = dir.path().join(name);
         let mut args = vec!["render", "--scene", scene.to_str().expect("utf-8"), "--method", name];
         args.extend(["--device", "gpu", "--width", "16", "--height", "12"]);

@@ -332,7 +332,7 @@ fn afsm_ss_at_rate_1_is_afsm() {
 #[test]
 fn registry_builds_both_and_rejects_bad_options() {
     for name in ["afsm", "afsm-ss"] {
-        assert!(methods::METHODS.iter().any(|(n, _)| *n == name));
+        assert!(methods::METHODS.iter().any(|m| m.name == name));
         assert_eq!(method(name, &MethodOptions::default()).expect("valid").name(), name);
     }
     let ss = method("afsm-ss", &MethodOptions::default()).expect("valid");

@@ -268,7 +268,7 @@ fn family() -> Vec<Case> {
 
 /// Every technique name: every method of the registry and both references.
 fn techniques() -> Vec<&'static str> {
-    let mut names: Vec<&str> = methods::METHODS.iter().map(|(n, _)| *n).collect();
+    let mut names: Vec<&str> = methods::METHODS.iter().map(|m| m.name).collect();
     names.extend(analysis::registry::REFERENCES.iter().map(|(n, _)| *n));
     names
 }
@@ -361,7 +361,7 @@ fn every_technique_agrees_with_exact_at_every_scale_and_position_as_at_scale_1()
     let mut checks: Vec<(&str, Option<u32>, bool)> =
         vec![("raytrace", Some(1), true), ("raytrace", Some(16), true), ("afsm", None, true)];
     checks.extend(
-        methods::METHODS.iter().filter(|(n, _)| *n != "afsm").map(|(n, _)| (*n, None, false)),
+        methods::METHODS.iter().filter(|m| m.name != "afsm").map(|m| (m.name, None, false)),
     );
     let errors = |scene: &Scene| -> Vec<Result<(f64, usize), String>> {
         let frame = Frame::new(scene, WIDTH, HEIGHT, &mut Recorder::default());

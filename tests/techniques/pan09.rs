@@ -435,7 +435,7 @@ fn results_and_counters_do_not_depend_on_the_thread_count() {
 
 #[test]
 fn registry_builds_pan09_and_rejects_bad_options() {
-    assert!(methods::METHODS.iter().any(|(n, _)| *n == "pan09"));
+    assert!(methods::METHODS.iter().any(|m| m.name == "pan09"));
     let m = method("pan09", &MethodOptions::default()).expect("valid");
     assert_eq!(m.name(), "pan09");
     let p = m.params();

@@ -158,9 +158,9 @@ fn a_one_pixel_frame_is_decided_by_its_centre_and_says_so() {
     // edge, which a finer map resolves.
     let (sm, w) = lit("sm", &defaults);
     assert_eq!(sm, 1.0);
-    assert_eq!(lit("sm", &MethodOptions { map_res: Some(2048), ..defaults }).0, 0.0);
+    assert_eq!(lit("sm", &MethodOptions { map_res: Some(2048), ..defaults.clone() }).0, 0.0);
     // The pixel's own lit fraction is neither.
-    let rate = MethodOptions { rate: Some(256), ..defaults };
+    let rate = MethodOptions { rate: Some(256), ..defaults.clone() };
     let area = lit("raytrace", &rate).0;
     assert!(area > 0.8 && area < 0.95, "{area}");
     assert!(
