@@ -1033,7 +1033,13 @@ fn compare(c: CompareArgs) -> Result<(), Failure> {
         .map_err(|e| input(anyhow::anyhow!("--error-scale: {e}")))?;
     let pattern = a.params.iter().find(|(p, _)| p.key == params::PATTERN.key).map_or(
         PatternKind::default(),
-        |(_, v)| if *v == params::Value::Choice("rotated") { PatternKind::Rotated } else { PatternKind::Grid },
+        |(_, v)| {
+            if *v == params::Value::Choice("rotated") {
+                PatternKind::Rotated
+            } else {
+                PatternKind::Grid
+            }
+        },
     );
     let (reference, ref_rate, edge_name): (Box<dyn Reference>, _, _) =
         match (c.reference, edge_reference) {

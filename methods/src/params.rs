@@ -350,21 +350,15 @@ impl MethodOptions {
             ("max_slope", Value::Real(v)) => self.max_slope = Some(v),
             ("rate", Value::Count(v)) => self.rate = Some(v),
             ("pattern", Value::Choice(v)) => {
-                self.pattern = Some(if v == "rotated" {
-                    PatternKind::Rotated
-                } else {
-                    PatternKind::Grid
-                });
+                self.pattern =
+                    Some(if v == "rotated" { PatternKind::Rotated } else { PatternKind::Grid });
             }
             ("depth_bits", Value::Count(v)) => self.depth_bits = Some(v),
             ("seed", Value::Seed(v)) => self.seed = Some(v),
             ("derivative_power", Value::Count(v)) => self.derivative_power = Some(v),
             ("visibility", Value::Choice(v)) => {
-                self.visibility = Some(if v == "exact" {
-                    VisibilityMode::Exact
-                } else {
-                    VisibilityMode::Table
-                });
+                self.visibility =
+                    Some(if v == "exact" { VisibilityMode::Exact } else { VisibilityMode::Table });
             }
             (key, value) => {
                 self.own.insert(key, value);
@@ -434,8 +428,13 @@ mod tests {
         assert!(o.own.is_empty());
         assert_eq!(o.pattern, Some(PatternKind::Rotated));
         assert_eq!(o.visibility, Some(VisibilityMode::Exact));
-        static OWN: Param =
-            Param { key: "width_x", flag: "--width-x", value_name: "X", help: "", kind: Kind::Real };
+        static OWN: Param = Param {
+            key: "width_x",
+            flag: "--width-x",
+            value_name: "X",
+            help: "",
+            kind: Kind::Real,
+        };
         o.set(&OWN, Value::Real(0.25));
         assert_eq!(o.real("width_x", 1.0), 0.25);
         assert_eq!(o.given().last(), Some(&("width_x", Value::Real(0.25))));

@@ -179,9 +179,7 @@ pub static METHODS: &[MethodEntry] = &[
             m.validate()?;
             Ok(Box::new(m))
         },
-        gpu: gpu!(|o| Ok(Box::new(crate::gpu::afsm_ss::GpuAfsmSs {
-            options: afsm_ss_options(o)
-        }))),
+        gpu: gpu!(|o| Ok(Box::new(crate::gpu::afsm_ss::GpuAfsmSs { options: afsm_ss_options(o) }))),
     },
     MethodEntry {
         name: "spsm",
@@ -349,7 +347,10 @@ fn no_gpu(name: &str) -> MethodError {
         "this build has no GPU kernels (built without the `gpu` feature; rebuild with default \
          features)"
     };
-    MethodError::InvalidOption { option: "--device", message: format!("`{name}` on the GPU: {why}") }
+    MethodError::InvalidOption {
+        option: "--device",
+        message: format!("`{name}` on the GPU: {why}"),
+    }
 }
 
 /// Brabec and Seidel's method of `variant` on the CPU.
@@ -477,6 +478,40 @@ mod tests {
         }
         assert_eq!(rates("pan09").and_then(|r| r.last().copied()), Some(MAX_METHOD_RATE));
         assert_eq!(rates("sm"), None);
+    }
+
+    /// Every key and every flag is declared once (one `Param` per key), and a method declares
+    /// exactly the parameters its run record holds among them.
+    #[test]
+    fn parameters_are_declared_once_and_as_the_methods_use_them() {
+        let all = all_params();
+        for p in &all {
+            for q in METHODS.iter().flat_map(|m| m.params.iter()) {
+                if q.key == p.key || q.flag == p.flag {
+                    assert!(std::ptr::eq(*p, *q), "`{}` declared twice", p.key);
+                }
+            }
+            assert_eq!(p.flag, format!("--{}", p.key.replace('_', "-")), "{}", p.key);
+        }
+        for m in METHODS {
+            let used = (m.cpu)(&MethodOptions::default()).expect("builds").params();
+            for p in m.params {
+                assert!(
+                    used.contains_key(p.key),
+                    "{} declares {} but does not use it",
+                    m.name,
+                    p.key
+                );
+            }
+            for key in used.keys().filter(|k| all.iter().any(|p| p.key == k.as_str())) {
+                assert!(
+                    m.params.iter().any(|p| p.key == key.as_str()),
+                    "{} uses {key} without declaring it",
+                    m.name
+                );
+            }
+            assert_eq!(m.rates == Rates::None, !m.params.contains(&&params::RATE), "{}", m.name);
+        }
     }
 
     #[test]

@@ -176,8 +176,8 @@ pub fn plan(suite: &Suite) -> Vec<WorkItem> {
         };
         let budget_reference =
             reference.as_deref().map(|r| (r, ref_rate.unwrap_or(suite.ref_rate)));
-        let item = |work: Work, (width, height), cost: f64, memory: u64, items: &Vec<WorkItem>| {
-            WorkItem {
+        let item =
+            |work: Work, (width, height), cost: f64, memory: u64, items: &Vec<WorkItem>| WorkItem {
                 item: items.len(),
                 scene: Some(name.clone()),
                 scene_index: Some(scene_index),
@@ -188,18 +188,16 @@ pub fn plan(suite: &Suite) -> Vec<WorkItem> {
                 work,
                 cost,
                 memory,
-            }
-        };
+            };
         // One frame after another: the scene's own with its runs and grids, then each frame
         // size the runs add, with the runs that ask for it.
         for (n, size) in frame_sizes(suite, scene_size).into_iter().enumerate() {
             let pixels = f64::from(size.0) * f64::from(size.1);
             for (k, spec) in suite.runs.iter().enumerate() {
-                let on_frame =
-                    spec.sizes().iter().any(|s| match s {
-                        Some(s) if f.is_some() => *s == size,
-                        _ => n == 0,
-                    });
+                let on_frame = spec.sizes().iter().any(|s| match s {
+                    Some(s) if f.is_some() => *s == size,
+                    _ => n == 0,
+                });
                 if !on_frame {
                     continue;
                 }

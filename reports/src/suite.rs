@@ -817,6 +817,61 @@ mod tests {
         }
     }
 
+    /// Any declared parameter sweeps, as a value or a list, and frame sizes pair widths with
+    /// heights; a parameter the method does not declare is refused with its line.
+    #[test]
+    fn any_declared_parameter_sweeps_and_others_are_refused_with_their_line() {
+        let p = Path::new("s.toml");
+        let base = "name = \"x\"\nscenes = [\"cage\"]\n[[run]]\n";
+        let run = "method = \"pan09\"\npattern = [\"grid\", \"rotated\"]\nslope_bias = [1, 2.5]\n\
+                   visibility = \"exact\"\nwidth = [64, 32]\nheight = [48, 24]\n";
+        let s = Suite::parse(&format!("{base}{run}"), p).expect("parses");
+        let spec = &s.runs[0];
+        assert_eq!(spec.sizes(), vec![Some((64, 48)), Some((32, 24))]);
+        let all = spec.expand();
+        assert_eq!(all.len(), 4);
+        assert!(all.iter().all(|o| o.visibility == Some(methods::pan09::VisibilityMode::Exact)));
+        let combos: Vec<(Option<_>, Option<f64>)> =
+            all.iter().map(|o| (o.pattern, o.slope_bias)).collect();
+        use methods::pattern::PatternKind::{Grid, Rotated};
+        assert_eq!(
+            combos,
+            vec![
+                (Some(Grid), Some(1.0)),
+                (Some(Grid), Some(2.5)),
+                (Some(Rotated), Some(1.0)),
+                (Some(Rotated), Some(2.5))
+            ]
+        );
+        let cases: &[(&str, &str, &[&str])] = &[
+            ("method = \"sm\"\nrate = [4]", "line 5: `run[0].rate`", &["`sm` does not use `rate`"]),
+            ("method = \"sm\"\ncolour = 3", "line 5: `run[0].colour`", &["has no parameter"]),
+            (
+                "method = \"sm\"\npattern = \"spiral\"",
+                "line 5: `run[0].pattern`",
+                &["does not use"],
+            ),
+            (
+                "method = \"pan09\"\npattern = \"spiral\"",
+                "line 5: `run[0].pattern`",
+                &["grid, rotated"],
+            ),
+            (
+                "method = \"sm\"\nwidth = [64, 32]\nheight = [48]",
+                "`run[0].width`",
+                &["as many heights as widths"],
+            ),
+            ("method = \"sm\"\nwidth = 0\nheight = 8", "line 5: `run[0].width`", &["1..="]),
+        ];
+        for (run, at, needles) in cases {
+            let e = Suite::parse(&format!("{base}{run}\n"), p).expect_err(at).to_string();
+            assert!(e.contains(at), "{at}: {e}");
+            for n in *needles {
+                assert!(e.contains(n), "{at}: `{n}` not in {e}");
+            }
+        }
+    }
+
     #[test]
     fn frames_beyond_the_limits_are_refused_with_the_limit() {
         assert!(check_frame(8192, 4096, 1).is_ok());

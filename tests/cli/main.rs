@@ -9,4 +9,5 @@ mod bad_input;
 mod cli;
 mod compare;
 mod fuzz_regressions;
+mod methods_table;
 mod scene_messages;

@@ -8,5 +8,6 @@ mod report;
 mod report_browser;
 mod shard;
 mod slurm;
+mod sweeps;
 mod timing;
 mod transactions;

@@ -16,4 +16,5 @@ mod pan09;
 mod pcf;
 mod shadow_maps;
 mod spsm;
+mod vsm;
 mod warnings;

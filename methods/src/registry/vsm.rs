@@ -25,6 +25,7 @@
 //! `min_variance = 0` the test is the standard shadow map's (`sm`), which the tests check pixel
 //! for pixel. Casters with opacity below 1 are treated as opaque, as by `sm`.
 
+use super::{map, MethodEntry, Rates};
 use crate::{
     depth_test::{filter_pixels, texel_at, DepthTester, MapOptions, PixelResult},
     footprint::Sampling,
@@ -32,7 +33,6 @@ use crate::{
     method::{MethodError, ShadowMethod, Visibility},
     params::{self, Kind, Param},
 };
-use super::{map, MethodEntry, Rates};
 use glam::DVec2;
 use instrumentation::Recorder;
 use rayon::prelude::*;
@@ -189,9 +189,9 @@ impl ShadowMethod for VarianceShadowMap {
         let (near, far) = frame.light_depth_bounds(&map.projector);
         let range = frame.light_depth_range(&map.projector);
         let res = map.res as usize;
-        let filtered = rec.stages.time(STAGE_MOMENTS, || {
-            moments(&map.depth, res, self.filter as usize, near, far)
-        });
+        let filtered = rec
+            .stages
+            .time(STAGE_MOMENTS, || moments(&map.depth, res, self.filter as usize, near, far));
         let tester = DepthTester::new(&self.map, map.projector, range);
         rec.warnings.extend(tester.warnings(self.name(), frame, Sampling::PixelCentre));
         let reach = DVec2::splat(f64::from(self.filter) / 2.0);
