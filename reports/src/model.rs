@@ -247,41 +247,63 @@ pub struct Images {
     pub grids: Vec<GridImages>,
 }
 
-/// A short label of the row's parameters, e.g. `map_res=1024 rate=16`: the map size, rate,
-/// depth bits and pattern where the method has them, then every other parameter whose value is
-/// not the method's default (a swept bias, a method's own parameter), then the device.
+/// The parameters every label names where a method has them (the ones the published
+/// techniques sweep).
+pub const LABEL_KEYS: [&str; 4] = ["map_res", "rate", "depth_bits", "pattern"];
+
+/// The row's other parameters whose value is not the one its method takes by default with
+/// the row's [`LABEL_KEYS`] (a swept bias, a method's own parameter; not a bias a depth
+/// precision implies), as keys, in the record's order; the device aside.
+pub fn other_params(row: &Row) -> Vec<&str> {
+    let defaults = default_params(row);
+    row.params
+        .iter()
+        .filter(|(k, v)| {
+            let named = LABEL_KEYS.contains(&k.as_str()) || *k == "device";
+            !named && defaults.as_ref().and_then(|d| d.get(*k)) != Some(*v)
+        })
+        .map(|(k, _)| k.as_str())
+        .collect()
+}
+
+/// A short label of the row's parameters, e.g. `map_res=1024 rate=16`: the [`LABEL_KEYS`]
+/// the method has, then its [`other_params`], then the device.
 pub fn param_label(row: &Row) -> String {
-    const ALWAYS: [&str; 4] = ["map_res", "rate", "depth_bits", "pattern"];
-    let defaults = default_params(&row.method);
     let mut keys: Vec<&str> =
-        ALWAYS.iter().copied().filter(|k| row.params.contains_key(*k)).collect();
-    keys.extend(row.params.iter().filter_map(|(k, v)| {
-        let shown = ALWAYS.contains(&k.as_str()) || k == "device";
-        (!shown && defaults.and_then(|d| d.get(k)) != Some(v)).then_some(k.as_str())
-    }));
+        LABEL_KEYS.iter().copied().filter(|k| row.params.contains_key(*k)).collect();
+    keys.extend(other_params(row));
     if row.params.contains_key("device") {
         keys.push("device");
     }
     keys.iter().map(|k| format!("{k}={}", row.param(k))).collect::<Vec<_>>().join(" ")
 }
 
-/// The parameters of `method` built with no option given (its defaults), as its run record
-/// holds them; `None` for a name no method or reference has.
-fn default_params(method: &str) -> Option<&'static serde_json::Map<String, serde_json::Value>> {
-    type Defaults = BTreeMap<String, serde_json::Map<String, serde_json::Value>>;
-    static DEFAULTS: std::sync::OnceLock<Defaults> = std::sync::OnceLock::new();
-    let defaults = DEFAULTS.get_or_init(|| {
-        let names = methods::registry::METHODS.iter().map(|m| m.name);
-        let references = analysis::registry::REFERENCES.iter().map(|(n, _)| *n);
-        names
-            .chain(references)
-            .filter_map(|n| {
-                let t = analysis::registry::technique(n, &methods::MethodOptions::default());
-                t.ok().map(|t| (n.to_owned(), t.params()))
-            })
-            .collect()
-    });
-    defaults.get(method)
+/// The parameters of the row's method built with the row's [`LABEL_KEYS`] and no other option
+/// (the defaults those imply), as its run record holds them; `None` for a name no method or
+/// reference has.
+fn default_params(row: &Row) -> Option<serde_json::Map<String, serde_json::Value>> {
+    type Defaults = BTreeMap<String, Option<serde_json::Map<String, serde_json::Value>>>;
+    static DEFAULTS: std::sync::Mutex<Defaults> = std::sync::Mutex::new(BTreeMap::new());
+    let params = analysis::registry::params_of(&row.method)?;
+    let mut options = methods::MethodOptions::default();
+    for key in LABEL_KEYS {
+        let (Some(param), Some(v)) =
+            (params.iter().find(|p| p.key == key), row.params.get(key).map(value_text))
+        else {
+            continue;
+        };
+        if let Ok(v) = param.parse(&v) {
+            options.set(param, v);
+        }
+    }
+    let key = format!("{} {:?}", row.method, options.given());
+    let mut defaults = DEFAULTS.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    defaults
+        .entry(key)
+        .or_insert_with(|| {
+            analysis::registry::technique(&row.method, &options).ok().map(|t| t.params())
+        })
+        .clone()
 }
 
 /// A scene's name as a file stem: ASCII letters, digits and `-` kept, the rest `_`.

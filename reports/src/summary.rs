@@ -55,7 +55,8 @@ pub fn full_time_text(t: &Summary) -> String {
     format!("{} [{}, {}]", time_text(t), ms_text(t.min), ms_text(t.max))
 }
 
-/// A run's swept parameters and device in few words: `map 512, 16x, grid, gpu`.
+/// A run's swept parameters and device in few words: `map 512, 16x, grid, gpu` (other
+/// parameters not at their method's default as `filter 5`).
 pub fn short_params(r: &Row) -> String {
     let mut words = Vec::new();
     for (key, v) in [
@@ -73,6 +74,9 @@ pub fn short_params(r: &Row) -> String {
             "depth_bits" => format!("{v} bits"),
             _ => v,
         });
+    }
+    for key in crate::model::other_params(r) {
+        words.push(format!("{key} {}", r.param(key)));
     }
     if r.on_gpu() {
         words.push("gpu".into());
