@@ -291,14 +291,25 @@ pub enum SceneError {
         /// Whether that object is a mesh file.
         from_file: bool,
     },
+    /// The glTF file given as the scene cannot be read, or a scene cannot be written as glTF:
+    /// the glTF error alone, which names the file and the node, mesh, accessor, buffer or
+    /// extension at fault.
+    #[error(transparent)]
+    Gltf(Box<crate::gltf_file::GltfError>),
     /// No built-in scene has this name and no file has this path.
-    #[error("unknown scene `{name}`: not a built-in scene (known: {known}) nor a .toml, .obj, .off or .ply file")]
+    #[error("unknown scene `{name}`: not a built-in scene (known: {known}) nor a .toml, .gltf, .glb, .obj, .off or .ply file")]
     Unknown {
         /// What was asked for.
         name: String,
         /// The built-in names.
         known: String,
     },
+}
+
+impl From<crate::gltf_file::GltfError> for SceneError {
+    fn from(e: crate::gltf_file::GltfError) -> Self {
+        Self::Gltf(Box::new(e))
+    }
 }
 
 impl SceneDesc {
@@ -520,6 +531,58 @@ impl SceneDesc {
         }
         Ok(scene)
     }
+}
+
+/// Checks a scene built from elsewhere than a scene file (a glTF scene) as [`SceneDesc::resolve_in`]
+/// checks its own: the whole-scene triangle limit, the coordinate range of the camera, the
+/// spot light and every object, and the smallest extent ([`crate::limits`]). Keys name the
+/// camera, the light or the object by its name.
+pub(crate) fn check_resolved(scene: &Scene, origin: &Path) -> Result<(), SceneError> {
+    let out_of_range = |key: String, message: String| SceneError::OutOfRange {
+        path: origin.to_owned(),
+        key,
+        message,
+    };
+    let triangles = scene.triangle_count() as u64;
+    if triangles > MAX_SCENE_TRIANGLES {
+        let largest = scene.objects.iter().rev().max_by_key(|o| o.mesh.triangle_count());
+        return Err(SceneError::TooManyTriangles {
+            path: origin.to_owned(),
+            triangles,
+            limit: MAX_SCENE_TRIANGLES,
+            largest: largest.map_or_else(String::new, |o| format!("`{}`", o.name)),
+            largest_triangles: largest.map_or(0, |o| o.mesh.triangle_count() as u64),
+            from_file: true,
+        });
+    }
+    let mut points = vec![("camera", scene.camera.eye()), ("camera", scene.camera.target())];
+    if let Light::Spot { position, target, .. } = scene.light {
+        points.extend([("light", position), ("light", target)]);
+    }
+    for (key, p) in points {
+        if let Some(message) = beyond_range(p.abs().max_element()) {
+            return Err(out_of_range(key.into(), message));
+        }
+    }
+    for o in &scene.objects {
+        let largest = o.mesh.positions.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
+        if let Some(message) = beyond_range(largest) {
+            return Err(out_of_range(o.name.clone(), message));
+        }
+    }
+    let (lo, hi) = scene.bounds();
+    let diagonal = (hi - lo).length();
+    if diagonal < MIN_EXTENT {
+        return Err(out_of_range(
+            "object".into(),
+            format!(
+                "the geometry's bounding box has a diagonal of {}, below the supported minimum \
+                 {MIN_EXTENT:e}",
+                apart(diagonal, MIN_EXTENT)
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// What [`SceneError::ModelMissing`] adds when the model was looked for in the models folder.
