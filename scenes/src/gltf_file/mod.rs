@@ -75,7 +75,6 @@ mod write;
 pub use write::write_glb;
 
 use crate::camera::Camera;
-use crate::direction::unit;
 use crate::light::Light;
 use crate::mesh::Mesh;
 use crate::scene::{Material, Object};
@@ -159,8 +158,8 @@ pub enum GltfError {
     },
     /// A point light: the workbench casts shadows from directional and spot lights only.
     #[error(
-        "{path}: node {node} holds the point light {light}; only directional and spot lights \
-         cast shadows here"
+        "{path}: {node}: {light} is a point light; only directional and spot lights cast shadows \
+         here"
     )]
     PointLight {
         /// The glTF file.
@@ -373,6 +372,21 @@ fn open(path: &Path, blob: bool) -> Result<Opened, GltfError> {
             path: path.to_owned(),
             extension: extension.clone(),
         });
+    }
+    // The crate's validation reads each primitive's POSITION accessor without checking its
+    // index: checked here first.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            if let Some(a) =
+                primitive.attributes.values().find(|a| a.value() >= root.accessors.len())
+            {
+                return Err(format(format!(
+                    "mesh {m}, primitive {p}: an attribute refers to accessor {}, which does not \
+                     exist",
+                    a.value()
+                )));
+            }
+        }
     }
     let document = gltf::Document::from_json(root).map_err(|e| format(e.to_string()))?;
     Ok(Opened { document, blob: bin })
@@ -628,7 +642,8 @@ fn light_at(light: &gltf::khr_lights_punctual::Light, world: &DMat4) -> Result<L
                 fov_deg: (2.0 * f64::from(outer_cone_angle)).to_degrees(),
             }
         }
-        _ => Light::Directional { direction: unit(axis).unwrap_or(axis) },
+        // Normalised with the scene (`Light::normalized`), as a scene file's.
+        _ => Light::Directional { direction: axis },
     };
     light.validate().map_err(|(key, message)| match key {
         "fov_deg" => format!("twice the outer cone angle {message}"),
