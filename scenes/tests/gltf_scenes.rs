@@ -528,3 +528,53 @@ fn an_exported_scene_reads_back_the_same() {
         }
     }
 }
+
+#[test]
+fn what_a_scene_leaves_out_is_noted_and_the_first_camera_and_light_are_taken() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = edited(dir.path(), |j| {
+        j.replace(r#""alphaMode": "BLEND""#, r#""alphaMode": "MASK", "alphaCutoff": 0.75"#)
+            .replace(
+                r#""baseColorFactor": [0.5, 0.5, 0.25, 1]"#,
+                r#""baseColorFactor": [0.5, 0.5, 0.25, 1], "baseColorTexture": {"index": 0}"#,
+            )
+            .replace(
+                r#""accessors""#,
+                r#""textures": [{"source": 0}], "images": [{"uri": "tex.png"}], "accessors""#,
+            )
+            .replace(
+                r#""extensionsUsed": ["KHR_lights_punctual"]"#,
+                r#""extensionsUsed": ["KHR_lights_punctual", "KHR_materials_emissive_strength"]"#,
+            )
+            .replace(
+                r#""lights": [{"name":"sun-light","type":"directional"}]"#,
+                r#""lights": [{"name":"sun-light","type":"directional"},
+                             {"type":"spot","spot":{"outerConeAngle":0.25}}]"#,
+            )
+            .replace(
+                r#""camera": 0, "translation": [0, 0, 10]"#,
+                r#""camera": 0, "translation": [0, 0, 10],
+                   "extensions": {"KHR_lights_punctual": {"light": 1}}"#,
+            )
+            .replace(r#"{"name":"sun","#, r#"{"name":"sun", "camera": 0,"#)
+    });
+    let described = registry::describe(path.to_str().expect("utf-8")).expect("described");
+    assert_eq!(
+        described.notes(),
+        [
+            "the extension KHR_materials_emissive_strength is not read",
+            "material `grey` (0): its base colour texture is ignored; its factor is used",
+            "node `sun` (5): its camera is ignored; the scene's is node `cam` (4)'s",
+            "node `sun` (5): light `sun-light` (0) is ignored; the scene's is node `cam` (4)'s",
+        ]
+    );
+    let scene = described.resolve().unwrap_or_else(|e| panic!("{e}"));
+    // The camera's node holds the first light: a spot at the eye, aimed down its -Z.
+    let eye = glam::DVec3::new(0.0, 2.0, 10.0);
+    let spot =
+        Light::Spot { position: eye, target: eye - glam::DVec3::Z, fov_deg: 0.5f64.to_degrees() };
+    assert_eq!(scene.light, spot);
+    // MASK: the constant alpha 0.5 is below the cutoff 0.75, so the triangle lets all light by.
+    assert_eq!(scene.objects[1].material.opacity, 0.0);
+    assert_eq!(scene.objects[0].material.color, [0.5, 0.5, 0.25]);
+}

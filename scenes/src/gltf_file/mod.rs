@@ -258,6 +258,7 @@ struct Instance {
     mesh: usize,
     primitive: usize,
     world: DMat4,
+    material: Material,
 }
 
 /// The JSON walked: instances, camera, light, notes and the triangle count.
@@ -282,34 +283,20 @@ pub fn read(path: &Path) -> Result<GltfScene, GltfError> {
     let walk = walk(&opened.document, path, Use::Scene)?;
     let data = Data::load(&opened.document, opened.blob, path)?;
     let mut objects = Vec::with_capacity(walk.instances.len());
-    let mut notes = walk.notes;
     for instance in &walk.instances {
-        let Some(mesh) = build(&opened.document, instance, &data, path, &mut notes)? else {
-            continue;
-        };
-        let gltf_mesh = mesh_of(&opened.document, instance.mesh);
-        let primitive = gltf_mesh.primitives().nth(instance.primitive);
-        let material = match &primitive {
-            Some(p) => material(&p.material(), path, &mut notes)?,
-            None => Material { color: [1.0; 3], opacity: 1.0 },
-        };
         objects.push(Object {
             name: object_name(&opened.document, instance),
-            mesh,
-            material,
+            mesh: build(&opened.document, instance, &data, path)?,
+            material: instance.material,
             casts_shadows: true,
         });
     }
-    if objects.is_empty() {
-        return Err(GltfError::NoTriangles { path: path.to_owned() });
-    }
-    notes.dedup();
     Ok(GltfScene {
         objects,
         camera: walk.camera,
         resolution: walk.resolution,
         light: walk.light,
-        notes,
+        notes: walk.notes,
     })
 }
 
@@ -334,14 +321,8 @@ pub fn read_mesh(path: &Path) -> Result<Mesh, GltfError> {
     let walk = walk(&opened.document, path, Use::Mesh)?;
     let data = Data::load(&opened.document, opened.blob, path)?;
     let mut merged = Mesh::default();
-    let mut notes = Vec::new();
     for instance in &walk.instances {
-        if let Some(mesh) = build(&opened.document, instance, &data, path, &mut notes)? {
-            merged.append(&mesh);
-        }
-    }
-    if merged.triangles.is_empty() {
-        return Err(GltfError::NoTriangles { path: path.to_owned() });
+        merged.append(&build(&opened.document, instance, &data, path)?);
     }
     Ok(merged)
 }
@@ -390,6 +371,13 @@ fn open(path: &Path, blob: bool) -> Result<Opened, GltfError> {
     }
     let document = gltf::Document::from_json(root).map_err(|e| format(e.to_string()))?;
     Ok(Opened { document, blob: bin })
+}
+
+/// Adds `text` to `notes` unless it is there already (a material shared by primitives).
+fn note(notes: &mut Vec<String>, text: String) {
+    if !notes.contains(&text) {
+        notes.push(text);
+    }
 }
 
 /// `name (index)`, or `index` alone for an unnamed item.
@@ -491,7 +479,7 @@ fn walk(document: &gltf::Document, path: &Path, usage: Use) -> Result<Walk, Gltf
     };
     for extension in document.extensions_used() {
         if !SUPPORTED_REQUIRED.contains(&extension) {
-            w.notes.push(format!("the extension {extension} is not read"));
+            note(&mut w.notes, format!("the extension {extension} is not read"));
         }
     }
     let nodes: Vec<gltf::Node> = document.nodes().collect();
@@ -521,7 +509,7 @@ fn walk(document: &gltf::Document, path: &Path, usage: Use) -> Result<Walk, Gltf
         }
         if let Some(mesh) = node.mesh() {
             if node.skin().is_some() {
-                w.notes.push(format!("{name}: its skin is ignored"));
+                note(&mut w.notes, format!("{name}: its skin is ignored"));
             }
             if world.determinant() == 0.0 {
                 return Err(invalid(name, "its transform is not invertible".into()));
@@ -530,22 +518,33 @@ fn walk(document: &gltf::Document, path: &Path, usage: Use) -> Result<Walk, Gltf
                 let p = primitive.index();
                 let where_ = format!("mesh {}, primitive {p}", mesh_label(&mesh));
                 if primitive.morph_targets().len() > 0 {
-                    w.notes.push(format!("{where_}: morph targets are ignored"));
+                    note(&mut w.notes, format!("{where_}: morph targets are ignored"));
                 }
                 let Some(positions) = primitive.get(&gltf::Semantic::Positions) else {
-                    w.notes.push(format!("{where_}: no POSITION, ignored"));
+                    note(&mut w.notes, format!("{where_}: no POSITION, ignored"));
                     continue;
                 };
                 let count = primitive.indices().map_or(positions.count(), |a| a.count());
                 let Some(triangles) = triangles_of(primitive.mode(), count) else {
-                    w.notes.push(format!(
-                        "{where_}: mode {:?} casts no shadow, ignored",
-                        primitive.mode()
-                    ));
+                    note(
+                        &mut w.notes,
+                        format!("{where_}: mode {:?} casts no shadow, ignored", primitive.mode()),
+                    );
                     continue;
                 };
+                if triangles == 0 {
+                    note(&mut w.notes, format!("{where_}: makes no triangle, ignored"));
+                    continue;
+                }
+                let material = material(&primitive.material(), path, &mut w.notes)?;
                 w.triangles = w.triangles.saturating_add(triangles as u64);
-                w.instances.push(Instance { node: index, mesh: mesh.index(), primitive: p, world });
+                w.instances.push(Instance {
+                    node: index,
+                    mesh: mesh.index(),
+                    primitive: p,
+                    world,
+                    material,
+                });
             }
         }
         if usage == Use::Mesh {
@@ -553,7 +552,10 @@ fn walk(document: &gltf::Document, path: &Path, usage: Use) -> Result<Walk, Gltf
         }
         if let Some(camera) = node.camera() {
             if let Some(first) = &camera_node {
-                w.notes.push(format!("{name}: its camera is ignored; the scene's is {first}'s"));
+                note(
+                    &mut w.notes,
+                    format!("{name}: its camera is ignored; the scene's is {first}'s"),
+                );
             } else {
                 let (camera, resolution) = camera_at(&camera, &world)
                     .map_err(|m| invalid(format!("{name}, {}", camera_label(&camera)), m))?;
@@ -572,7 +574,10 @@ fn walk(document: &gltf::Document, path: &Path, usage: Use) -> Result<Walk, Gltf
                 });
             }
             if let Some(first) = &light_node {
-                w.notes.push(format!("{name}: {light_name} is ignored; the scene's is {first}'s"));
+                note(
+                    &mut w.notes,
+                    format!("{name}: {light_name} is ignored; the scene's is {first}'s"),
+                );
             } else {
                 w.light = Some(
                     light_at(&light, &world)
@@ -581,6 +586,9 @@ fn walk(document: &gltf::Document, path: &Path, usage: Use) -> Result<Walk, Gltf
                 light_node = Some(name.clone());
             }
         }
+    }
+    if w.instances.is_empty() {
+        return Err(GltfError::NoTriangles { path: path.to_owned() });
     }
     Ok(w)
 }
@@ -672,7 +680,7 @@ fn material(
         });
     }
     if pbr.base_color_texture().is_some() {
-        notes.push(format!("{name}: its base colour texture is ignored; its factor is used"));
+        note(notes, format!("{name}: its base colour texture is ignored; its factor is used"));
     }
     let opacity = match m.alpha_mode() {
         gltf::material::AlphaMode::Opaque => 1.0,
@@ -688,17 +696,18 @@ fn material(
     Ok(Material { color: [r, g, b], opacity })
 }
 
-/// The mesh of one instance, in world space; `None` (noted) for a primitive that makes no
-/// triangle.
+/// The mesh of one instance, in world space.
 fn build(
     document: &gltf::Document,
     instance: &Instance,
     data: &Data,
     path: &Path,
-    notes: &mut Vec<String>,
-) -> Result<Option<Mesh>, GltfError> {
+) -> Result<Mesh, GltfError> {
     let mesh = mesh_of(document, instance.mesh);
-    let Some(primitive) = mesh.primitives().nth(instance.primitive) else { return Ok(None) };
+    let primitive = mesh
+        .primitives()
+        .nth(instance.primitive)
+        .unwrap_or_else(|| unreachable!("primitive {} was walked", instance.primitive));
     let p = primitive.index();
     let accessor_error = |accessor: usize, message: String| GltfError::Accessor {
         path: path.to_owned(),
@@ -707,7 +716,9 @@ fn build(
         accessor,
         message,
     };
-    let Some(positions) = primitive.get(&gltf::Semantic::Positions) else { return Ok(None) };
+    let positions = primitive
+        .get(&gltf::Semantic::Positions)
+        .unwrap_or_else(|| unreachable!("a walked primitive has POSITION"));
     let points = read_accessor(&positions, data, buffers::Want::Positions)
         .map_err(|m| accessor_error(positions.index(), format!("POSITION {m}")))?;
     let vertices = points.len() / 3;
@@ -756,13 +767,9 @@ fn build(
         Mode::TriangleFan => (0..order.len().saturating_sub(2))
             .map(|i| [order[i + 1], order[i + 2], order[0]])
             .collect(),
-        Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip => return Ok(None),
+        // `walk` hands over triangle primitives only.
+        Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip => Vec::new(),
     };
-    if corners.is_empty() {
-        notes
-            .push(format!("mesh {}, primitive {p}: makes no triangle, ignored", mesh_label(&mesh)));
-        return Ok(None);
-    }
     // The vertices the triangles use, in order of first use.
     let mut new_index = vec![u32::MAX; vertices];
     let mut kept: Vec<DVec3> = Vec::new();
@@ -790,5 +797,5 @@ fn build(
             message: "its transform makes the coordinates overflow".into(),
         });
     }
-    Ok(Some(mesh))
+    Ok(mesh)
 }
