@@ -13,6 +13,7 @@ pub mod mesh;
 pub mod models;
 pub mod projection;
 pub mod scene;
+mod toml_lines;
 
 pub use camera::Camera;
 pub use light::Light;

@@ -269,6 +269,8 @@ enum Source {
         folders: Vec<PathBuf>,
         /// Whether the scene is made around a mesh file given as the scene.
         mesh_file: bool,
+        /// The scene file's text, for errors to name the line of a key.
+        text: Option<String>,
     },
     /// A glTF file given as the scene: what its JSON says.
     Gltf(GltfPlan),
@@ -339,12 +341,19 @@ impl Described {
         }
     }
 
-    /// `e` as the user should read it: a mesh-file scene's errors name the file (and line)
-    /// alone, not the object the scene made of it.
+    /// `e` as the user should read it: a scene file's errors name the key as written and its
+    /// line; a mesh-file scene's name the file (and line) alone, not the object the scene made
+    /// of it.
     fn own(&self, e: SceneError) -> SceneError {
-        let Source::Desc { mesh_file: true, .. } = self.source else { return e };
+        let Source::Desc { desc, mesh_file, text, .. } = &self.source else { return e };
+        if let Some(text) = text {
+            return e.located(text, desc);
+        }
+        if !mesh_file {
+            return e;
+        }
         match e {
-            SceneError::Mesh { source, .. } => SceneError::MeshFile { source },
+            SceneError::Mesh { source, .. } => SceneError::MeshFile { source: *source },
             SceneError::TooManyTriangles { path, triangles, limit, largest_triangles, .. } => {
                 SceneError::TooManyTriangles {
                     largest: path.display().to_string(),
@@ -400,6 +409,7 @@ fn describe_builtin(name: &str) -> Option<Described> {
             desc: builtin(name)?,
             folders: vec![models_dir()],
             mesh_file: false,
+            text: None,
         },
         default_name: name.to_owned(),
         origin: PathBuf::from(format!("builtin:{name}")),
@@ -443,10 +453,14 @@ pub fn describe(arg: &str) -> Result<Described, SceneError> {
     let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
     match ext.as_deref() {
         Some("toml") => Ok(Described {
-            source: Source::Desc {
-                desc: SceneDesc::read(path)?,
-                folders: SceneDesc::mesh_folders(path),
-                mesh_file: false,
+            source: {
+                let (desc, text) = SceneDesc::read_with_text(path)?;
+                Source::Desc {
+                    desc,
+                    folders: SceneDesc::mesh_folders(path),
+                    mesh_file: false,
+                    text: Some(text),
+                }
             },
             default_name: stem.unwrap_or_else(|| "scene".into()),
             origin: path.to_owned(),
@@ -467,7 +481,12 @@ pub fn describe(arg: &str) -> Result<Described, SceneError> {
             Ok(Described {
                 default_name: desc.name.clone().unwrap_or_default(),
                 // The path as given, relative to the working folder.
-                source: Source::Desc { desc, folders: vec![PathBuf::new()], mesh_file: true },
+                source: Source::Desc {
+                    desc,
+                    folders: vec![PathBuf::new()],
+                    mesh_file: true,
+                    text: None,
+                },
                 origin: path.to_owned(),
             })
         }

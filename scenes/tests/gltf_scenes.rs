@@ -425,7 +425,8 @@ fn a_scene_file_takes_a_gltf_file_as_an_object() {
     std::fs::write(&path, text).expect("writes");
     let err = load(&path).expect_err("no buffer");
     assert!(
-        err.to_string().starts_with(&format!("{}: `object[0].shape.file.path`: ", path.display())),
+        err.to_string()
+            .starts_with(&format!("{}: line 9: `object[0].shape.file.path`: ", path.display())),
         "{err}"
     );
     assert!(err.to_string().contains(": buffer 0 needs the file "), "{err}");
