@@ -22,7 +22,10 @@
 //!
 //! Camera, light and shape are tables named after their kind (serde's external tagging), so
 //! that every parse error points at the offending key or value with its line.
-//! Unknown keys and bad values are errors naming the file and the key. A transform applies,
+//! Unknown keys and bad values are errors naming the file and the key. An error found after
+//! parsing (a value out of range, a mesh file missing or malformed) names, when the file's text
+//! is at hand ([`SceneDesc::load`], [`crate::registry::describe`]), the line the key is written
+//! on and the key as written (`camera.perspective.eye`, not the resolution's `camera.eye`). A transform applies,
 //! in order: `scale`, `rotate_deg` (about x, then y, then z), `fit_size` (centre the bounds on
 //! the origin and scale uniformly so the largest extent equals it), `on_ground` (lift so the
 //! lowest point is at y = 0), `translate`. The fit is exact in scale for any finite mesh with a
@@ -88,7 +91,9 @@ pub enum Shape {
     Heightfield(HeightfieldParams),
     /// A hair ball of thin strands.
     Hairball(HairballParams),
-    /// A mesh file (.obj, .off, .ply), relative to the scene file.
+    /// A mesh file (.obj, .off, .ply), or a glTF file (.gltf, .glb) whose triangle primitives,
+    /// in world space, make one mesh (its cameras and lights are ignored), relative to the
+    /// scene file.
     File(FileShape),
 }
 
