@@ -15,8 +15,9 @@
 //!   before its children ("node order" below). A node's transform is its `matrix` or its
 //!   `translation`, `rotation`, `scale` (T * R * S, §3.5.2; the rotation quaternion is
 //!   normalised), composed from the root down in `f64` from the file's `f32` values. A node
-//!   reached twice (the hierarchy must be a set of disjoint trees, §3.5.3) and a transform that
-//!   is not finite or not invertible are refused naming the node. Skins and morph targets are
+//!   reached twice (the hierarchy must be a set of disjoint trees, §3.5.3), a transform that is
+//!   not finite, and a mesh's node whose transform is not invertible (it would flatten the
+//!   mesh) are refused naming the node. Skins and morph targets are
 //!   ignored (noted): meshes are placed by their nodes' transforms, with their base positions.
 //! - **Meshes** (§3.7.2): every primitive of every mesh instanced by a node. `TRIANGLES`,
 //!   `TRIANGLE_STRIP` and `TRIANGLE_FAN` are triangulated as §3.7.2.1 says (strip triangle
@@ -626,7 +627,7 @@ fn camera_at(camera: &gltf::Camera, world: &DMat4) -> Result<(Camera, Option<[u3
             Some(f64::from(o.xmag()) / f64::from(o.ymag())),
         ),
     };
-    camera.validate().map_err(|(key, message)| format!("`{key}` {message}"))?;
+    camera.validate().map_err(|(key, message)| format!("{} {message}", gltf_name(key)))?;
     let resolution =
         match aspect {
             Some(a) => Some(resolution_for(a).ok_or_else(|| {
@@ -635,6 +636,20 @@ fn camera_at(camera: &gltf::Camera, world: &DMat4) -> Result<(Camera, Option<[u3
             None => None,
         };
     Ok((camera, resolution))
+}
+
+/// What the glTF file calls a camera's or light's value that the workbench's `key` is made of.
+fn gltf_name(key: &str) -> &'static str {
+    match key {
+        "fov_y_deg" => "yfov",
+        "near" => "znear",
+        "height" => "ymag",
+        "eye" | "position" => "the node's origin",
+        "target" | "direction" => "the node's -Z axis",
+        "up" => "the node's +Y axis",
+        "fov_deg" => "twice outerConeAngle",
+        _ => "a value",
+    }
 }
 
 /// The workbench light of a directional or spot light at a node whose world transform is
@@ -653,10 +668,7 @@ fn light_at(light: &gltf::khr_lights_punctual::Light, world: &DMat4) -> Result<L
         // Normalised with the scene (`Light::normalized`), as a scene file's.
         _ => Light::Directional { direction: axis },
     };
-    light.validate().map_err(|(key, message)| match key {
-        "fov_deg" => format!("twice the outer cone angle {message}"),
-        _ => format!("`{key}` {message}"),
-    })?;
+    light.validate().map_err(|(key, message)| format!("{} {message}", gltf_name(key)))?;
     Ok(light)
 }
 
@@ -798,4 +810,48 @@ fn build(
         });
     }
     Ok(mesh)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn triangle_counts_follow_the_mode() {
+        assert_eq!(triangles_of(Mode::Triangles, 7), Some(2));
+        assert_eq!(triangles_of(Mode::TriangleStrip, 5), Some(3));
+        assert_eq!(triangles_of(Mode::TriangleFan, 2), Some(0));
+        assert_eq!(triangles_of(Mode::Lines, 6), None);
+        assert_eq!(triangles_of(Mode::Points, 6), None);
+    }
+
+    #[test]
+    fn the_aspect_ratio_sets_a_resolution_600_pixels_high() {
+        assert_eq!(resolution_for(f64::from(4.0f32 / 3.0)), Some([800, 600]));
+        assert_eq!(resolution_for(1.5), Some([900, 600]));
+        for bad in [0.0, -1.0, f64::NAN, f64::INFINITY, 1e-4, 1e3] {
+            assert_eq!(resolution_for(bad), None, "{bad}");
+        }
+    }
+
+    #[test]
+    fn a_bad_camera_or_light_is_named_in_the_files_terms() {
+        let doc = |camera: &str| {
+            let json = format!(
+                r#"{{"asset": {{"version": "2.0"}}, "extensionsUsed": ["KHR_lights_punctual"],
+                "extensions": {{"KHR_lights_punctual": {{"lights": [
+                    {{"type": "spot", "spot": {{"outerConeAngle": 1.5}}}}]}}}},
+                "cameras": [{camera}]}}"#
+            );
+            let root = gltf::json::deserialize::from_slice(json.as_bytes()).expect("parses");
+            gltf::Document::from_json(root).expect("valid")
+        };
+        let d = doc(r#"{"type": "perspective", "perspective": {"yfov": 0.5, "znear": 0}}"#);
+        let camera = d.cameras().next().expect("a camera");
+        let err = camera_at(&camera, &DMat4::IDENTITY).expect_err("znear 0");
+        assert_eq!(err, "znear must be positive and finite, got 0");
+        let light = d.lights().and_then(|mut l| l.next()).expect("a light");
+        let err = light_at(&light, &DMat4::IDENTITY).expect_err("a cone of 172 degrees");
+        assert!(err.starts_with("twice outerConeAngle must be in (0, 170]"), "{err}");
+    }
 }
