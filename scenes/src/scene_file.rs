@@ -356,10 +356,12 @@ impl SceneDesc {
         Ok((Self::from_toml(&text, path)?, text))
     }
 
-    /// Where the mesh paths of the scene file `path` are looked for: its folder, then the
-    /// models folder.
+    /// Where the mesh paths of the scene file `path` are looked for: its folder, made absolute
+    /// (so that a missing mesh's message names the very place looked in, whatever the working
+    /// folder), then the models folder.
     pub fn mesh_folders(path: &Path) -> Vec<PathBuf> {
-        vec![path.parent().unwrap_or(Path::new(".")).to_owned(), models_dir()]
+        let folder = path.parent().unwrap_or(Path::new("."));
+        vec![std::path::absolute(folder).unwrap_or_else(|_| folder.to_owned()), models_dir()]
     }
 
     /// Reads and resolves a scene file, its mesh paths looked for in [`Self::mesh_folders`].

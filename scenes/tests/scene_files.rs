@@ -365,3 +365,11 @@ fn errors_found_after_parsing_name_the_line_and_the_key_as_written() {
         }
     }
 }
+
+#[test]
+fn a_scene_file_named_by_a_relative_path_looks_in_its_absolute_folder() {
+    // The working folder is the package's: a relative path to a scene file in `tests/data`.
+    let folders = SceneDesc::mesh_folders(Path::new("tests/data/any.toml"));
+    let here = std::env::current_dir().expect("a working folder");
+    assert_eq!(folders, [here.join("tests/data"), scenes::models::models_dir()]);
+}
