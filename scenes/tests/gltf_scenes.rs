@@ -384,6 +384,18 @@ fn bad_gltf_files_are_refused_naming_the_cause() {
             "{name}: {err}"
         );
     }
+    // A camera whose type names a projection it lacks.
+    let path = edited(d, |j| {
+        j.replace(
+            r#""perspective": {"yfov": 0.75, "znear": 0.125, "aspectRatio": 1.5}"#,
+            r#""orthographic": {"xmag": 1, "ymag": 1, "zfar": 10, "znear": 0}"#,
+        )
+    });
+    assert!(
+        error_of(&path).to_string().contains("camera 0 is of type perspective but has no"),
+        "{}",
+        error_of(&path)
+    );
     // An attribute naming an accessor that does not exist.
     let path = edited(d, |j| j.replace(r#""POSITION": 2"#, r#""POSITION": 7"#));
     assert!(

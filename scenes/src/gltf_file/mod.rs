@@ -370,6 +370,18 @@ fn open(path: &Path, blob: bool) -> Result<Opened, GltfError> {
             }
         }
     }
+    // Nor does it check that a camera has the projection its type names, which it unwraps.
+    for (i, camera) in root.cameras.iter().enumerate() {
+        use gltf::json::{camera::Type, validation::Checked::Valid};
+        let lacks = match camera.type_ {
+            Valid(Type::Perspective) => camera.perspective.is_none().then_some("perspective"),
+            Valid(Type::Orthographic) => camera.orthographic.is_none().then_some("orthographic"),
+            _ => None,
+        };
+        if let Some(kind) = lacks {
+            return Err(format(format!("camera {i} is of type {kind} but has no `{kind}` member")));
+        }
+    }
     let document = gltf::Document::from_json(root).map_err(|e| format(e.to_string()))?;
     Ok(Opened { document, blob: bin })
 }
