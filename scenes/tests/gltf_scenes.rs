@@ -591,3 +591,48 @@ fn what_a_scene_leaves_out_is_noted_and_the_first_camera_and_light_are_taken() {
     assert_eq!(scene.objects[1].material.opacity, 0.0);
     assert_eq!(scene.objects[0].material.color, [0.5, 0.5, 0.25]);
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(300))]
+
+    /// A valid GLB with a few of its bytes changed is read or refused, never a panic.
+    #[test]
+    fn a_damaged_glb_is_read_or_refused_without_panic(
+        flips in proptest::collection::vec((0usize..4096, proptest::prelude::any::<u8>()), 1..6)
+    ) {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let mut bytes = glb(&json(Lamp::Spot, ""), &buffer());
+        for (at, value) in flips {
+            let n = bytes.len();
+            bytes[at % n] = value;
+        }
+        let path = dir.path().join("damaged.glb");
+        std::fs::write(&path, &bytes).expect("writes");
+        if let Ok(described) = registry::describe(path.to_str().expect("utf-8")) {
+            let _ = described.triangles();
+            let _ = described.resolve();
+        }
+        let _ = scenes::io::load_mesh(&path);
+    }
+
+    /// The same with digits of the JSON changed into other digits: the JSON still parses, and
+    /// counts, offsets, lengths, indices and transforms take other values.
+    #[test]
+    fn a_glb_with_other_numbers_is_read_or_refused_without_panic(
+        flips in proptest::collection::vec((0usize..4096, b'0'..=b'9'), 1..4)
+    ) {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let mut text = json(Lamp::Sun, "").into_bytes();
+        let digits: Vec<usize> = (0..text.len()).filter(|&i| text[i].is_ascii_digit()).collect();
+        for (at, digit) in flips {
+            text[digits[at % digits.len()]] = digit;
+        }
+        let path = dir.path().join("numbers.glb");
+        std::fs::write(&path, glb(&String::from_utf8_lossy(&text), &buffer())).expect("writes");
+        if let Ok(described) = registry::describe(path.to_str().expect("utf-8")) {
+            let _ = described.triangles();
+            let _ = described.resolve();
+        }
+        let _ = scenes::io::load_mesh(&path);
+    }
+}
