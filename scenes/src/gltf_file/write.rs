@@ -12,8 +12,9 @@
 //! `znear` 0 and `zfar` beyond the farthest corner of the scene's bounds. The light is a
 //! `KHR_lights_punctual` node (the extension is used, not required): directional along its
 //! -Z, or spot at the position aimed at the target with `outerConeAngle` half the frustum's
-//! opening. Read back by [`super::read`], the file gives the same objects (to the rounding to
-//! `f32`), camera, light and materials. Not written: whether an object casts shadows (glTF has
+//! opening. Read back by [`super::read`], the file gives the same objects (their
+//! triangles to the rounding to `f32`, their vertices in order of first use), camera (its
+//! target one unit along the view), light and materials. Not written: whether an object casts shadows (glTF has
 //! no such property: every exported object casts), the effect switches and the resolution
 //! beyond its aspect ratio.
 
