@@ -5,6 +5,7 @@ mod arrays;
 pub mod camera;
 pub mod direction;
 pub mod generators;
+pub mod gltf_file;
 pub mod io;
 pub mod light;
 pub mod limits;
@@ -12,6 +13,7 @@ pub mod mesh;
 pub mod models;
 pub mod projection;
 pub mod scene;
+mod toml_lines;
 
 pub use camera::Camera;
 pub use light::Light;
@@ -21,5 +23,6 @@ pub use scene::{Effects, Geometry, Material, Object, Scene};
 pub mod registry;
 pub mod scene_file;
 
+pub use gltf_file::{write_glb, GltfError};
 pub use registry::{describe, load, Described, BUILTINS};
 pub use scene_file::{SceneDesc, SceneError};

@@ -18,6 +18,7 @@ use crate::{
         CageParams, CityParams, HairballParams, HeightfieldParams, PlaneParams, PlantParams,
         RandomTrianglesParams, SpheresParams,
     },
+    gltf_file::GltfPlan,
     io::LoadError,
     light::Light,
     models::models_dir,
@@ -250,61 +251,110 @@ pub fn builtin(name: &str) -> Option<SceneDesc> {
 /// A scene found and read, but not built: see [`describe`].
 #[derive(Debug, Clone)]
 pub struct Described {
-    desc: SceneDesc,
+    /// What the scene is made from.
+    source: Source,
     /// The name when the description has none: the built-in's name or the file stem.
     default_name: String,
-    /// What messages name: `builtin:NAME`, the scene file or the mesh file.
+    /// What messages name: `builtin:NAME`, the scene file, the mesh file or the glTF file.
     origin: PathBuf,
-    /// Where mesh paths are looked for, in order.
-    folders: Vec<PathBuf>,
-    /// Whether the scene is made around a mesh file given as the scene.
-    mesh_file: bool,
+}
+
+/// What a described scene is made from.
+#[derive(Debug, Clone)]
+enum Source {
+    /// A built-in, a scene file, or a mesh file given as the scene.
+    Desc {
+        desc: SceneDesc,
+        /// Where mesh paths are looked for, in order.
+        folders: Vec<PathBuf>,
+        /// Whether the scene is made around a mesh file given as the scene.
+        mesh_file: bool,
+        /// The scene file's text, for errors to name the line of a key.
+        text: Option<String>,
+    },
+    /// A glTF file given as the scene: what its JSON says.
+    Gltf(GltfPlan),
 }
 
 impl Described {
     /// The scene's name.
     pub fn name(&self) -> &str {
-        self.desc.name.as_deref().unwrap_or(&self.default_name)
+        match &self.source {
+            Source::Desc { desc, .. } => desc.name.as_deref().unwrap_or(&self.default_name),
+            Source::Gltf(_) => &self.default_name,
+        }
     }
 
     /// The scene's default image size `[width, height]`.
     pub fn resolution(&self) -> [u32; 2] {
-        self.desc.resolution
+        match &self.source {
+            Source::Desc { desc, .. } => desc.resolution,
+            Source::Gltf(plan) => plan.resolution.unwrap_or(DEFAULT_RESOLUTION),
+        }
+    }
+
+    /// What a glTF scene holds that the workbench leaves out (ignored primitives, lights,
+    /// cameras, textures, extensions), a sentence each, for the user to be told; empty for
+    /// other scenes.
+    pub fn notes(&self) -> &[String] {
+        match &self.source {
+            Source::Desc { .. } => &[],
+            Source::Gltf(plan) => &plan.notes,
+        }
     }
 
     /// An upper bound of the scene's triangle count, computed without generating or loading
     /// any mesh: generators count theirs from their parameters (exactly), mesh files are
     /// bounded from their headers and sizes ([`crate::io::triangle_bound`]: exact for binary
-    /// PLY of triangles, loose for text files). Generator parameters are checked and mesh
-    /// files found, with the errors [`Self::resolve`] would give.
+    /// PLY of triangles and glTF, loose for text files), a glTF scene from its accessors'
+    /// counts (exactly). Generator parameters are checked and mesh files found, with the
+    /// errors [`Self::resolve`] would give.
     pub fn triangles(&self) -> Result<u64, SceneError> {
-        self.desc
-            .triangles(&self.default_name, &self.origin, &self.folders)
-            .map_err(|e| self.own(e))
+        match &self.source {
+            Source::Desc { desc, folders, .. } => {
+                desc.triangles(&self.default_name, &self.origin, folders).map_err(|e| self.own(e))
+            }
+            Source::Gltf(plan) => Ok(plan.triangles),
+        }
     }
 
-    /// Whether [`Self::triangles`] is the exact count: no object is a mesh file, whose bound
-    /// from a text file's size can be loose.
+    /// Whether [`Self::triangles`] is the exact count: no object is a mesh file other than
+    /// glTF, whose bound from a text file's size can be loose.
     pub fn triangles_exact(&self) -> bool {
-        !self.desc.objects.iter().any(|o| matches!(o.shape, crate::scene_file::Shape::File(_)))
+        match &self.source {
+            Source::Desc { desc, .. } => !desc.objects.iter().any(|o| match &o.shape {
+                Shape::File(f) => !crate::io::is_gltf(&f.path),
+                _ => false,
+            }),
+            Source::Gltf(_) => true,
+        }
     }
 
     /// Builds the scene; one whose [`Self::triangles`] exceed
     /// [`crate::limits::MAX_SCENE_TRIANGLES`] is refused before any mesh is built.
     pub fn resolve(&self) -> Result<Scene, SceneError> {
-        self.desc
-            .resolve_in(&self.default_name, &self.origin, &self.folders)
-            .map_err(|e| self.own(e))
+        match &self.source {
+            Source::Desc { desc, folders, .. } => {
+                desc.resolve_in(&self.default_name, &self.origin, folders).map_err(|e| self.own(e))
+            }
+            Source::Gltf(_) => gltf_scene(&self.origin, &self.default_name),
+        }
     }
 
-    /// `e` as the user should read it: a mesh-file scene's errors name the file (and line)
-    /// alone, not the object the scene made of it.
+    /// `e` as the user should read it: a scene file's errors name the key as written and its
+    /// line; a mesh-file scene's name the file (and line) alone, not the object the scene made
+    /// of it.
     fn own(&self, e: SceneError) -> SceneError {
+        let Source::Desc { desc, mesh_file, text, .. } = &self.source else { return e };
+        if let Some(text) = text {
+            return e.located(text, desc);
+        }
+        if !mesh_file {
+            return e;
+        }
         match e {
-            SceneError::Mesh { source, .. } if self.mesh_file => SceneError::MeshFile { source },
-            SceneError::TooManyTriangles { path, triangles, limit, largest_triangles, .. }
-                if self.mesh_file =>
-            {
+            SceneError::Mesh { source, .. } => SceneError::MeshFile { source: *source },
+            SceneError::TooManyTriangles { path, triangles, limit, largest_triangles, .. } => {
                 SceneError::TooManyTriangles {
                     largest: path.display().to_string(),
                     path,
@@ -319,14 +369,50 @@ impl Described {
     }
 }
 
+/// The default resolution of a scene that names none.
+const DEFAULT_RESOLUTION: [u32; 2] = [800, 600];
+
+/// The default camera of a mesh file given as the scene, and of a glTF scene without one.
+fn default_camera() -> Camera {
+    perspective([0.0, 5.0, 8.0], [0.0, 1.5, 0.0], 45.0)
+}
+
+/// The default light of a mesh file given as the scene, and of a glTF scene without one.
+fn default_light() -> Light {
+    directional([-0.5, -1.0, -0.4])
+}
+
+/// Builds the glTF scene in `path` ([`crate::gltf_file::read`]), with the mesh file's default
+/// camera and light where it has none, and without a ground plane (a glTF scene is a whole
+/// scene), then checks it as a scene file is checked: the triangle limit, the coordinate
+/// range and the smallest extent ([`crate::limits`]).
+fn gltf_scene(path: &Path, name: &str) -> Result<Scene, SceneError> {
+    let gltf = crate::gltf_file::read(path)?;
+    let [width, height] = gltf.resolution.unwrap_or(DEFAULT_RESOLUTION);
+    let scene = Scene {
+        name: name.to_owned(),
+        width,
+        height,
+        camera: gltf.camera.unwrap_or_else(default_camera),
+        light: gltf.light.unwrap_or_else(default_light).normalized(),
+        objects: gltf.objects,
+        switches: Default::default(),
+    };
+    crate::scene_file::check_resolved(&scene, path)?;
+    Ok(scene)
+}
+
 /// The built-in scene `name`, described.
 fn describe_builtin(name: &str) -> Option<Described> {
     Some(Described {
-        desc: builtin(name)?,
+        source: Source::Desc {
+            desc: builtin(name)?,
+            folders: vec![models_dir()],
+            mesh_file: false,
+            text: None,
+        },
         default_name: name.to_owned(),
         origin: PathBuf::from(format!("builtin:{name}")),
-        folders: vec![models_dir()],
-        mesh_file: false,
     })
 }
 
@@ -346,16 +432,18 @@ pub fn mesh_scene(path: &Path) -> SceneDesc {
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| "model".into()),
-        [800, 600],
-        perspective([0.0, 5.0, 8.0], [0.0, 1.5, 0.0], 45.0),
-        directional([-0.5, -1.0, -0.4]),
+        DEFAULT_RESOLUTION,
+        default_camera(),
+        default_light(),
         vec![ground(16.0), model],
     )
 }
 
 /// Finds a scene by built-in name, or from a path: a scene file (`.toml`, read and parsed; its
-/// mesh paths looked for beside it, then in the models folder) or a mesh file (`.obj`, `.off`,
-/// `.ply`, which must exist and not be a folder) placed over a ground plane. Builds nothing.
+/// mesh paths looked for beside it, then in the models folder), a glTF scene (`.gltf`, `.glb`:
+/// its JSON read and walked, its buffers not read; [`crate::gltf_file`]) or a mesh file
+/// (`.obj`, `.off`, `.ply`, which must exist and not be a folder) placed over a ground plane.
+/// Builds nothing.
 pub fn describe(arg: &str) -> Result<Described, SceneError> {
     if let Some(described) = describe_builtin(arg) {
         return Ok(described);
@@ -365,11 +453,22 @@ pub fn describe(arg: &str) -> Result<Described, SceneError> {
     let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
     match ext.as_deref() {
         Some("toml") => Ok(Described {
-            desc: SceneDesc::read(path)?,
+            source: {
+                let (desc, text) = SceneDesc::read_with_text(path)?;
+                Source::Desc {
+                    desc,
+                    folders: SceneDesc::mesh_folders(path),
+                    mesh_file: false,
+                    text: Some(text),
+                }
+            },
             default_name: stem.unwrap_or_else(|| "scene".into()),
             origin: path.to_owned(),
-            folders: SceneDesc::mesh_folders(path),
-            mesh_file: false,
+        }),
+        Some("gltf" | "glb") => Ok(Described {
+            source: Source::Gltf(crate::gltf_file::plan(path)?),
+            default_name: stem.unwrap_or_else(|| "scene".into()),
+            origin: path.to_owned(),
         }),
         Some("obj" | "off" | "ply") => {
             let metadata = std::fs::metadata(path)
@@ -381,11 +480,14 @@ pub fn describe(arg: &str) -> Result<Described, SceneError> {
             let desc = mesh_scene(path);
             Ok(Described {
                 default_name: desc.name.clone().unwrap_or_default(),
-                desc,
-                origin: path.to_owned(),
                 // The path as given, relative to the working folder.
-                folders: vec![PathBuf::new()],
-                mesh_file: true,
+                source: Source::Desc {
+                    desc,
+                    folders: vec![PathBuf::new()],
+                    mesh_file: true,
+                    text: None,
+                },
+                origin: path.to_owned(),
             })
         }
         _ => Err(SceneError::Unknown {

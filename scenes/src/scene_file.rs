@@ -22,7 +22,10 @@
 //!
 //! Camera, light and shape are tables named after their kind (serde's external tagging), so
 //! that every parse error points at the offending key or value with its line.
-//! Unknown keys and bad values are errors naming the file and the key. A transform applies,
+//! Unknown keys and bad values are errors naming the file and the key. An error found after
+//! parsing (a value out of range, a mesh file missing or malformed) names, when the file's text
+//! is at hand ([`SceneDesc::load`], [`crate::registry::describe`]), the line the key is written
+//! on and the key as written (`camera.perspective.eye`, not the resolution's `camera.eye`). A transform applies,
 //! in order: `scale`, `rotate_deg` (about x, then y, then z), `fit_size` (centre the bounds on
 //! the origin and scale uniformly so the largest extent equals it), `on_ground` (lift so the
 //! lowest point is at y = 0), `translate`. The fit is exact in scale for any finite mesh with a
@@ -65,6 +68,7 @@ use crate::{
 };
 use glam::{DMat4, DVec3, EulerRot};
 use serde::{Deserialize, Serialize};
+use std::num::NonZeroU32;
 use std::path::{Path, PathBuf};
 
 /// Where an object's mesh comes from.
@@ -87,7 +91,9 @@ pub enum Shape {
     Heightfield(HeightfieldParams),
     /// A hair ball of thin strands.
     Hairball(HairballParams),
-    /// A mesh file (.obj, .off, .ply), relative to the scene file.
+    /// A mesh file (.obj, .off, .ply), or a glTF file (.gltf, .glb) whose triangle primitives,
+    /// in world space, make one mesh (its cameras and lights are ignored), relative to the
+    /// scene file.
     File(FileShape),
 }
 
@@ -205,34 +211,41 @@ pub enum SceneError {
         message: String,
     },
     /// A value is out of range.
-    #[error("{path}: `{key}`: {message}")]
+    #[error("{path}: {}`{key}`: {message}", Line(*.line))]
     Invalid {
         /// The scene file (or `builtin:NAME`).
         path: PathBuf,
+        /// The 1-based line of the scene file where the key is written (or, when the value is a
+        /// default, the line of the table that lacks it), when the file's text is at hand.
+        line: Option<NonZeroU32>,
         /// The key, e.g. `object[1].shape.count`.
         key: String,
         /// What is wrong.
         message: String,
     },
     /// The scene lies beyond the supported range of coordinates or sizes ([`crate::limits`]).
-    #[error("{path}: `{key}`: {message}")]
+    #[error("{path}: {}`{key}`: {message}", Line(*.line))]
     OutOfRange {
         /// The scene file, mesh file or `builtin:NAME`.
         path: PathBuf,
+        /// The line of the scene file where the key is written, as for `Invalid`.
+        line: Option<NonZeroU32>,
         /// The key, e.g. `camera.eye` or `object[1]`.
         key: String,
         /// What is out of range, with the value and the supported range.
         message: String,
     },
     /// A mesh file referenced by the scene could not be loaded.
-    #[error("{path}: `{key}`: {source}")]
+    #[error("{path}: {}`{key}`: {source}", Line(*.line))]
     Mesh {
         /// The scene file.
         path: PathBuf,
+        /// The line of the scene file where the key is written, as for `Invalid`.
+        line: Option<NonZeroU32>,
         /// The key, e.g. `object[1].shape.file.path`.
         key: String,
         /// The loader's error (names the mesh file and line).
-        source: LoadError,
+        source: Box<LoadError>,
     },
     /// The mesh file given as the scene could not be loaded: the loader's error alone, which
     /// names the file and line (the scene made around it is no concern of the user's).
@@ -249,13 +262,16 @@ pub enum SceneError {
     },
     /// A model the scene needs is not present.
     #[error(
-        "{path}: `{key}`: scene `{scene}` needs {model}, which is missing (looked for {}){}",
+        "{path}: {}`{key}`: scene `{scene}` needs {model}, which is missing (looked for {}){}",
+        Line(*.line),
         Places(.looked),
         if *.fetch { FETCH_HINT } else { "" }
     )]
     ModelMissing {
         /// The scene file (or `builtin:NAME`).
         path: PathBuf,
+        /// The line of the scene file where the key is written, as for `Invalid`.
+        line: Option<NonZeroU32>,
         /// The key, e.g. `object[1].shape.file.path`.
         key: String,
         /// The scene.
@@ -291,14 +307,25 @@ pub enum SceneError {
         /// Whether that object is a mesh file.
         from_file: bool,
     },
+    /// The glTF file given as the scene cannot be read, or a scene cannot be written as glTF:
+    /// the glTF error alone, which names the file and the node, mesh, accessor, buffer or
+    /// extension at fault.
+    #[error(transparent)]
+    Gltf(Box<crate::gltf_file::GltfError>),
     /// No built-in scene has this name and no file has this path.
-    #[error("unknown scene `{name}`: not a built-in scene (known: {known}) nor a .toml, .obj, .off or .ply file")]
+    #[error("unknown scene `{name}`: not a built-in scene (known: {known}) nor a .toml, .gltf, .glb, .obj, .off or .ply file")]
     Unknown {
         /// What was asked for.
         name: String,
         /// The built-in names.
         known: String,
     },
+}
+
+impl From<crate::gltf_file::GltfError> for SceneError {
+    fn from(e: crate::gltf_file::GltfError) -> Self {
+        Self::Gltf(Box::new(e))
+    }
 }
 
 impl SceneDesc {
@@ -316,25 +343,33 @@ impl SceneDesc {
 
     /// Reads and parses a scene file; a folder is refused as such.
     pub fn read(path: &Path) -> Result<Self, SceneError> {
+        Self::read_with_text(path).map(|(desc, _)| desc)
+    }
+
+    /// [`Self::read`], with the file's text, which [`SceneError::located`] needs.
+    pub(crate) fn read_with_text(path: &Path) -> Result<(Self, String), SceneError> {
         if path.is_dir() {
             return Err(SceneError::Folder { path: path.to_owned() });
         }
         let text = std::fs::read_to_string(path)
             .map_err(|source| SceneError::Io { path: path.to_owned(), source })?;
-        Self::from_toml(&text, path)
+        Ok((Self::from_toml(&text, path)?, text))
     }
 
-    /// Where the mesh paths of the scene file `path` are looked for: its folder, then the
-    /// models folder.
+    /// Where the mesh paths of the scene file `path` are looked for: its folder, made absolute
+    /// (so that a missing mesh's message names the very place looked in, whatever the working
+    /// folder), then the models folder.
     pub fn mesh_folders(path: &Path) -> Vec<PathBuf> {
-        vec![path.parent().unwrap_or(Path::new(".")).to_owned(), models_dir()]
+        let folder = path.parent().unwrap_or(Path::new("."));
+        vec![std::path::absolute(folder).unwrap_or_else(|_| folder.to_owned()), models_dir()]
     }
 
     /// Reads and resolves a scene file, its mesh paths looked for in [`Self::mesh_folders`].
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
-        let desc = Self::read(path)?;
+        let (desc, text) = Self::read_with_text(path)?;
         let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned());
         desc.resolve_in(stem.as_deref().unwrap_or("scene"), path, &Self::mesh_folders(path))
+            .map_err(|e| e.located(&text, &desc))
     }
 
     /// Builds the scene: generates or loads every mesh and places it. `origin` names the file
@@ -412,6 +447,7 @@ impl SceneDesc {
     ) -> Result<Scene, SceneError> {
         let invalid = |key: String, message: String| SceneError::Invalid {
             path: origin.to_owned(),
+            line: None,
             key,
             message,
         };
@@ -423,6 +459,7 @@ impl SceneDesc {
         self.light.validate().map_err(|(k, m)| invalid(format!("light.{k}"), m))?;
         let out_of_range = |key: String, message: String| SceneError::OutOfRange {
             path: origin.to_owned(),
+            line: None,
             key,
             message,
         };
@@ -522,9 +559,146 @@ impl SceneDesc {
     }
 }
 
+/// Checks a scene built from elsewhere than a scene file (a glTF scene) as [`SceneDesc::resolve_in`]
+/// checks its own: the whole-scene triangle limit, the coordinate range of the camera, the
+/// spot light and every object, and the smallest extent ([`crate::limits`]). Keys name the
+/// camera, the light or the object by its name.
+pub(crate) fn check_resolved(scene: &Scene, origin: &Path) -> Result<(), SceneError> {
+    let out_of_range = |key: String, message: String| SceneError::OutOfRange {
+        path: origin.to_owned(),
+        line: None,
+        key,
+        message,
+    };
+    let triangles = scene.triangle_count() as u64;
+    if triangles > MAX_SCENE_TRIANGLES {
+        let largest = scene.objects.iter().rev().max_by_key(|o| o.mesh.triangle_count());
+        return Err(SceneError::TooManyTriangles {
+            path: origin.to_owned(),
+            triangles,
+            limit: MAX_SCENE_TRIANGLES,
+            largest: largest.map_or_else(String::new, |o| format!("`{}`", o.name)),
+            largest_triangles: largest.map_or(0, |o| o.mesh.triangle_count() as u64),
+            from_file: true,
+        });
+    }
+    let mut points = vec![("camera", scene.camera.eye()), ("camera", scene.camera.target())];
+    if let Light::Spot { position, target, .. } = scene.light {
+        points.extend([("light", position), ("light", target)]);
+    }
+    for (key, p) in points {
+        if let Some(message) = beyond_range(p.abs().max_element()) {
+            return Err(out_of_range(key.into(), message));
+        }
+    }
+    for o in &scene.objects {
+        let largest = o.mesh.positions.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
+        if let Some(message) = beyond_range(largest) {
+            return Err(out_of_range(o.name.clone(), message));
+        }
+    }
+    let (lo, hi) = scene.bounds();
+    let diagonal = (hi - lo).length();
+    if diagonal < MIN_EXTENT {
+        return Err(out_of_range(
+            "object".into(),
+            format!(
+                "the geometry's bounding box has a diagonal of {}, below the supported minimum \
+                 {MIN_EXTENT:e}",
+                apart(diagonal, MIN_EXTENT)
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// What [`SceneError::ModelMissing`] adds when the model was looked for in the models folder.
 const FETCH_HINT: &str = "; if it is one of CGAL's sample meshes, run `scripts/fetch-models` to \
                           fetch them into the models folder";
+
+/// Formats `line N: ` when a line is known.
+struct Line(Option<NonZeroU32>);
+
+impl std::fmt::Display for Line {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.0 {
+            Some(line) => write!(f, "line {line}: "),
+            None => Ok(()),
+        }
+    }
+}
+
+impl SceneError {
+    /// The error as the user of the scene file `text` (which `desc` was parsed from) should
+    /// read it: a key as written in the file (`camera.eye` is written
+    /// `camera.perspective.eye`, a generator's `shape.count` `shape.random_triangles.count`),
+    /// with the line it is written on ([`crate::toml_lines`]).
+    pub(crate) fn located(self, text: &str, desc: &SceneDesc) -> Self {
+        let place = |key: String| {
+            let written = desc.written_key(&key);
+            (
+                crate::toml_lines::line_of(text, &written)
+                    .and_then(|l| u32::try_from(l).ok())
+                    .and_then(NonZeroU32::new),
+                written,
+            )
+        };
+        match self {
+            Self::Invalid { path, key, message, .. } => {
+                let (line, key) = place(key);
+                Self::Invalid { path, line, key, message }
+            }
+            Self::OutOfRange { path, key, message, .. } => {
+                let (line, key) = place(key);
+                Self::OutOfRange { path, line, key, message }
+            }
+            Self::Mesh { path, key, source, .. } => {
+                let (line, key) = place(key);
+                Self::Mesh { path, line, key, source }
+            }
+            Self::ModelMissing { path, key, scene, model, looked, fetch, .. } => {
+                let (line, key) = place(key);
+                Self::ModelMissing { path, line, key, scene, model, looked, fetch }
+            }
+            e => e,
+        }
+    }
+}
+
+impl SceneDesc {
+    /// `key`, as the resolution names it, as written in the scene file: the camera's, the
+    /// light's and a generator's tables are named after their kind.
+    fn written_key(&self, key: &str) -> String {
+        let camera = match self.camera {
+            Camera::Perspective { .. } => "perspective",
+            Camera::Orthographic { .. } => "orthographic",
+        };
+        let light = match self.light {
+            Light::Directional { .. } => "directional",
+            Light::Spot { .. } => "spot",
+        };
+        if let Some(rest) = key.strip_prefix("camera.") {
+            return format!("camera.{camera}.{rest}");
+        }
+        if let Some(rest) = key.strip_prefix("light.") {
+            return format!("light.{light}.{rest}");
+        }
+        if let Some((object, rest)) = key.split_once(".shape.") {
+            let kind = object
+                .strip_prefix("object[")
+                .and_then(|i| i.strip_suffix(']'))
+                .and_then(|i| i.parse::<usize>().ok())
+                .and_then(|i| self.objects.get(i))
+                .map(|o| o.shape.kind());
+            if let Some(kind) = kind {
+                if !rest.starts_with(&format!("{kind}.")) {
+                    return format!("{object}.shape.{kind}.{rest}");
+                }
+            }
+        }
+        key.to_owned()
+    }
+}
 
 /// Paths joined by commas and a final `and`, for messages.
 struct Places<'a>(&'a [PathBuf]);
@@ -590,19 +764,22 @@ impl ShapeError {
         match self {
             ShapeError::Param(p) => SceneError::Invalid {
                 path,
+                line: None,
                 key: key(&format!("shape.{}", p.key)),
                 message: p.message,
             },
             ShapeError::EmptyPath => SceneError::Invalid {
                 path,
+                line: None,
                 key: key("shape.file.path"),
-                message: "the path is empty: name a .obj, .off or .ply file".into(),
+                message: "the path is empty: name a .obj, .off, .ply, .gltf or .glb file".into(),
             },
             ShapeError::Missing { model, looked } => {
                 let models = models_dir();
                 let fetch = looked.iter().any(|p| p.starts_with(&models));
                 SceneError::ModelMissing {
                     path,
+                    line: None,
                     key: key("shape.file.path"),
                     scene: scene.to_owned(),
                     model,
@@ -610,9 +787,12 @@ impl ShapeError {
                     fetch,
                 }
             }
-            ShapeError::Load(source) => {
-                SceneError::Mesh { path, key: key("shape.file.path"), source }
-            }
+            ShapeError::Load(source) => SceneError::Mesh {
+                path,
+                line: None,
+                key: key("shape.file.path"),
+                source: Box::new(source),
+            },
         }
     }
 }
@@ -883,8 +1063,8 @@ mod tests {
         ] {
             assert_eq!(
                 err.to_string(),
-                "e.toml: `object[0].shape.file.path`: the path is empty: name a .obj, .off or \
-                 .ply file"
+                "e.toml: `object[0].shape.file.path`: the path is empty: name a .obj, .off, .ply, \
+                 .gltf or .glb file"
             );
         }
     }

@@ -321,3 +321,55 @@ fn any_finite_non_zero_light_direction_resolves_to_a_unit_vector() {
     let err = resolve_with("[-0.3, -1.0, -0.2]", "[0.0, -0.0, 0.0]").expect_err("zero");
     assert!(err.to_string().contains("light.direction"), "{err}");
 }
+
+#[test]
+fn errors_found_after_parsing_name_the_line_and_the_key_as_written() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let head = "[camera.perspective]\neye = [0.0, 6.0, 8.0]\ntarget = [0.0, 0.0, 0.0]\n\
+                fov_y_deg = FOV\n[light.directional]\ndirection = [-0.3, -1.0, -0.2]\n";
+    for (name, fov, objects, want) in [
+        (
+            "count.toml",
+            "45.0",
+            "[[object]]\nshape.plane = { size = 4.0 }\n[[object]]\nname = \"cloud\"\n\
+             shape.random_triangles = { count = 0 }\n",
+            "line 11: `object[1].shape.random_triangles.count`: ",
+        ),
+        (
+            "fov.toml",
+            "180.0",
+            "[[object]]\nshape.plane = { size = 4.0 }\n",
+            "line 4: `camera.perspective.fov_y_deg`: must be in (0, 180), got 180",
+        ),
+        (
+            "opacity.toml",
+            "45.0",
+            "[[object]]\nshape.plane = { size = 4.0 }\nmaterial = { opacity = 1.5 }\n",
+            "line 9: `object[0].material.opacity`: must be in [0, 1], got 1.5",
+        ),
+        (
+            "model.toml",
+            "45.0",
+            "[[object]]\n\nshape.file = { path = \"nowhere.obj\" }\n",
+            "line 9: `object[0].shape.file.path`: scene `model` needs nowhere.obj, which is missing",
+        ),
+    ] {
+        let path = dir.path().join(name);
+        std::fs::write(&path, format!("{}{objects}", head.replace("FOV", fov))).expect("writes");
+        for err in [
+            registry::load(path.to_str().expect("utf-8")).expect_err("refused"),
+            SceneDesc::load(&path).expect_err("refused"),
+        ] {
+            let msg = err.to_string();
+            assert!(msg.starts_with(&format!("{}: {want}", path.display())), "{msg}");
+        }
+    }
+}
+
+#[test]
+fn a_scene_file_named_by_a_relative_path_looks_in_its_absolute_folder() {
+    // The working folder is the package's: a relative path to a scene file in `tests/data`.
+    let folders = SceneDesc::mesh_folders(Path::new("tests/data/any.toml"));
+    let here = std::env::current_dir().expect("a working folder");
+    assert_eq!(folders, [here.join("tests/data"), scenes::models::models_dir()]);
+}

@@ -1,5 +1,6 @@
 //! Mesh loaders: Wavefront OBJ, OFF and PLY, chosen by the file's extension (`.obj`, `.off`,
-//! `.ply`, any case).
+//! `.ply`, any case); `.gltf` and `.glb` are handed to [`crate::gltf_file`], whose meshes a
+//! scene file may take as one object.
 //!
 //! Every loader returns a validated [`Mesh`] in `f64`: polygons are fan-triangulated
 //! (`v0 vk vk+1`), and normals, texture coordinates, colours and materials are ignored. The text
@@ -86,12 +87,21 @@ pub enum LoadError {
         /// The folder.
         path: PathBuf,
     },
-    /// The extension is not one of `.obj`, `.off`, `.ply`.
-    #[error("{path}: unsupported mesh format (expected a .obj, .off or .ply file)")]
+    /// The extension is not one of `.obj`, `.off`, `.ply`, `.gltf`, `.glb`.
+    #[error("{path}: unsupported mesh format (expected a .obj, .off, .ply, .gltf or .glb file)")]
     UnsupportedFormat {
         /// The file.
         path: PathBuf,
     },
+    /// A glTF file cannot be read: the glTF error, which names the file and the cause.
+    #[error(transparent)]
+    Gltf(Box<crate::gltf_file::GltfError>),
+}
+
+impl From<crate::gltf_file::GltfError> for LoadError {
+    fn from(e: crate::gltf_file::GltfError) -> Self {
+        Self::Gltf(Box::new(e))
+    }
 }
 
 impl LoadError {
@@ -103,6 +113,7 @@ impl LoadError {
             | Self::Invalid { path, .. }
             | Self::Folder { path }
             | Self::UnsupportedFormat { path } => path,
+            Self::Gltf(e) => e.path(),
         }
     }
 
@@ -150,9 +161,21 @@ impl Syntax {
     }
 }
 
+/// Whether `path` names a glTF file (`.gltf`, `.glb`, any case): a scene file of its own,
+/// read by [`crate::gltf_file`], which a scene file may also take as one object's mesh.
+pub fn is_gltf(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"))
+}
+
 /// Loads the mesh in `path`, choosing the format by the extension (case-insensitive `.obj`,
-/// `.off`, `.ply`).
+/// `.off`, `.ply`; `.gltf` and `.glb` give every triangle primitive instanced by their scene, in
+/// world space, as one mesh: [`crate::gltf_file::read_mesh`]).
 pub fn load_mesh(path: &Path) -> Result<Mesh, LoadError> {
+    if is_gltf(path) {
+        return Ok(crate::gltf_file::read_mesh(path)?);
+    }
     let format = format_of(path)?;
     let bytes =
         std::fs::read(path).map_err(|source| LoadError::Io { path: path.to_owned(), source })?;
@@ -165,6 +188,10 @@ pub fn load_mesh(path: &Path) -> Result<Mesh, LoadError> {
 /// error loading would give. The bound is exact for a binary PLY of triangles; for text files
 /// it is loose, as the size of their numbers is not known.
 pub fn triangle_bound(path: &Path) -> Result<u64, LoadError> {
+    if is_gltf(path) {
+        // Exact: counted from the accessors, without reading a buffer.
+        return Ok(crate::gltf_file::mesh_triangles(path)?);
+    }
     let format = format_of(path)?;
     let io = |source| LoadError::Io { path: path.to_owned(), source };
     let size = std::fs::metadata(path).map_err(io)?.len();

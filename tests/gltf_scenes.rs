@@ -1,0 +1,128 @@
+//! `--scene` with a glTF file: the same frame, pixel for pixel, as the same scene written as a
+//! TOML scene file and OBJ files; a bad glTF file refused with exit code 2 naming the cause.
+
+mod common;
+
+use common::{shadowbench, stderr, write};
+use std::path::Path;
+
+/// A GLB (glTF 2.0 §4.4) of a ground quad (indexed, scaled by (2, 1, 2)) and a translucent
+/// triangle under a transformed parent, a camera under a transformed rig and a directional
+/// light; `light_type` is the light's `type`.
+fn glb(light_type: &str) -> Vec<u8> {
+    let mut bin: Vec<u8> = Vec::new();
+    for v in [[-4.0f32, 0.0, -4.0], [4.0, 0.0, -4.0], [4.0, 0.0, 4.0], [-4.0, 0.0, 4.0]] {
+        bin.extend(v.iter().flat_map(|c| c.to_le_bytes()));
+    }
+    bin.extend([0u16, 1, 2, 0, 2, 3].iter().flat_map(|i| i.to_le_bytes()));
+    for v in [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] {
+        bin.extend(v.iter().flat_map(|c| c.to_le_bytes()));
+    }
+    let json = format!(
+        r#"{{"asset": {{"version": "2.0"}}, "extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {{"KHR_lights_punctual": {{"lights": [{{"type": "{light_type}"}}]}}}},
+  "scene": 0, "scenes": [{{"nodes": [0, 1, 3, 5]}}],
+  "nodes": [
+    {{"name": "ground", "mesh": 0, "scale": [2, 1, 2]}},
+    {{"name": "parent", "translation": [1, 2, 0], "scale": [2, 2, 2], "children": [2]}},
+    {{"name": "caster", "mesh": 1, "matrix": [0,0,-1,0, 0,1,0,0, 1,0,0,0, 0,0.5,0,1]}},
+    {{"name": "rig", "translation": [0, 2, 0], "children": [4]}},
+    {{"name": "cam", "camera": 0, "translation": [0, 0, 10]}},
+    {{"name": "sun", "extensions": {{"KHR_lights_punctual": {{"light": 0}}}},
+      "matrix": [1,0,0,0, 0,1,0,0, 0.5,1,0.25,0, 0,0,0,1]}}],
+  "cameras": [{{"type": "perspective",
+               "perspective": {{"yfov": 0.75, "znear": 0.125, "aspectRatio": 1.5}}}}],
+  "meshes": [
+    {{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1, "material": 0}}]}},
+    {{"primitives": [{{"attributes": {{"POSITION": 2}}, "material": 1}}]}}],
+  "materials": [
+    {{"pbrMetallicRoughness": {{"baseColorFactor": [0.5, 0.5, 0.25, 1]}}}},
+    {{"alphaMode": "BLEND", "pbrMetallicRoughness": {{"baseColorFactor": [0.25, 0.5, 0.75, 0.5]}}}}],
+  "accessors": [
+    {{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+      "min": [-4, 0, -4], "max": [4, 0, 4]}},
+    {{"bufferView": 1, "componentType": 5123, "count": 6, "type": "SCALAR"}},
+    {{"bufferView": 2, "componentType": 5126, "count": 3, "type": "VEC3",
+      "min": [0, 0, 0], "max": [1, 1, 0]}}],
+  "bufferViews": [{{"buffer": 0, "byteOffset": 0, "byteLength": 48}},
+                  {{"buffer": 0, "byteOffset": 48, "byteLength": 12}},
+                  {{"buffer": 0, "byteOffset": 60, "byteLength": 36}}],
+  "buffers": [{{"byteLength": 96}}]}}"#
+    );
+    let mut json = json.into_bytes();
+    while !json.len().is_multiple_of(4) {
+        json.push(b' ');
+    }
+    let total = (12 + 8 + json.len() + 8 + bin.len()) as u32;
+    let mut out = b"glTF".to_vec();
+    out.extend(2u32.to_le_bytes());
+    out.extend(total.to_le_bytes());
+    out.extend((json.len() as u32).to_le_bytes());
+    out.extend(b"JSON");
+    out.extend(json);
+    out.extend((bin.len() as u32).to_le_bytes());
+    out.extend(b"BIN\0");
+    out.extend(bin);
+    out
+}
+
+/// The same scene as a TOML scene file and OBJ files, in world space.
+fn toml_scene(dir: &Path) -> String {
+    write(dir, "ground.obj", "v -8 0 -8\nv 8 0 -8\nv 8 0 8\nv -8 0 8\nf 1 2 3\nf 1 3 4\n");
+    write(dir, "caster.obj", "v 1 3 0\nv 1 3 -2\nv 1 5 0\nf 1 2 3\n");
+    let text = format!(
+        "resolution = [900, 600]\n[camera.perspective]\neye = [0.0, 2.0, 10.0]\n\
+         target = [0.0, 2.0, 9.0]\nfov_y_deg = {:?}\nnear = 0.125\n\
+         [light.directional]\ndirection = [-0.5, -1.0, -0.25]\n\
+         [[object]]\nshape.file = {{ path = \"ground.obj\" }}\n\
+         material = {{ color = [0.5, 0.5, 0.25] }}\n\
+         [[object]]\nshape.file = {{ path = \"caster.obj\" }}\n\
+         material = {{ color = [0.25, 0.5, 0.75], opacity = 0.5 }}\n",
+        0.75f64.to_degrees()
+    );
+    write(dir, "scene.toml", &text)
+}
+
+#[test]
+fn a_gltf_scene_renders_as_its_toml_and_obj_files_pixel_for_pixel() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let glb_path = dir.path().join("scene.glb");
+    std::fs::write(&glb_path, glb("directional")).expect("writes");
+    let toml_path = toml_scene(dir.path());
+    for method in ["sm", "pcf-reeves", "pan09", "afsm", "raytrace"] {
+        let mut images = Vec::new();
+        for (form, scene) in [("glb", glb_path.to_str().expect("utf-8")), ("toml", &toml_path)] {
+            let out = dir.path().join(format!("{method}-{form}"));
+            let o = shadowbench(&[
+                "render",
+                "--scene",
+                scene,
+                "--method",
+                method,
+                "--width",
+                "96",
+                "--height",
+                "64",
+                "--out",
+                out.to_str().expect("utf-8"),
+            ]);
+            assert_eq!(o.status.code(), Some(0), "{method} {form}: {}", stderr(&o));
+            images.push(std::fs::read(out.join("visibility.exr")).expect("an image"));
+        }
+        assert!(images[0] == images[1], "{method}: the glTF scene renders differently");
+    }
+}
+
+#[test]
+fn a_gltf_scene_with_a_point_light_is_bad_input_naming_the_node() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("point.glb");
+    std::fs::write(&path, glb("point")).expect("writes");
+    let o = shadowbench(&["render", "--scene", path.to_str().expect("utf-8"), "--method", "sm"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("point.glb: node `sun` (5): light 0 is a point light"),
+        "{}",
+        stderr(&o)
+    );
+}
