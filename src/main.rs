@@ -545,6 +545,9 @@ fn check_budget(
 fn job(a: &RenderArgs, compared_with: Option<(&str, u32)>) -> Result<Job, Failure> {
     let scene_error = |e| input(anyhow::anyhow!("--scene: {e}"));
     let described = scenes::describe(&a.scene).map_err(scene_error)?;
+    for note in described.notes() {
+        eprintln!("note: --scene {}: {note}", a.scene);
+    }
     let mut options = MethodOptions { device: a.device.into(), ..Default::default() };
     for (p, v) in &a.params {
         options.set(p, *v);

@@ -6,10 +6,23 @@ mod common;
 use common::{shadowbench, stderr, write};
 use std::path::Path;
 
+/// The light of the scene: `directional` (along (-0.5, -1, -0.25)), `spot` (at (3, 9, 2),
+/// aimed at the origin, outer cone angle 0.5 radians), or another type (`point`, refused).
+fn light(light_type: &str) -> (String, &'static str) {
+    match light_type {
+        "spot" => (
+            r#"{"type": "spot", "spot": {"outerConeAngle": 0.5}}"#.to_owned(),
+            "[1,0,0,0, 0,1,0,0, 3,9,2,0, 3,9,2,1]",
+        ),
+        t => (format!(r#"{{"type": "{t}"}}"#), "[1,0,0,0, 0,1,0,0, 0.5,1,0.25,0, 0,0,0,1]"),
+    }
+}
+
 /// A GLB (glTF 2.0 §4.4) of a ground quad (indexed, scaled by (2, 1, 2)) and a translucent
-/// triangle under a transformed parent, a camera under a transformed rig and a directional
-/// light; `light_type` is the light's `type`.
+/// triangle under a transformed parent, a camera under a transformed rig and a light (see
+/// [`light`]); `light_type` is the light's `type`.
 fn glb(light_type: &str) -> Vec<u8> {
+    let (light, light_matrix) = light(light_type);
     let mut bin: Vec<u8> = Vec::new();
     for v in [[-4.0f32, 0.0, -4.0], [4.0, 0.0, -4.0], [4.0, 0.0, 4.0], [-4.0, 0.0, 4.0]] {
         bin.extend(v.iter().flat_map(|c| c.to_le_bytes()));
@@ -20,7 +33,7 @@ fn glb(light_type: &str) -> Vec<u8> {
     }
     let json = format!(
         r#"{{"asset": {{"version": "2.0"}}, "extensionsUsed": ["KHR_lights_punctual"],
-  "extensions": {{"KHR_lights_punctual": {{"lights": [{{"type": "{light_type}"}}]}}}},
+  "extensions": {{"KHR_lights_punctual": {{"lights": [{light}]}}}},
   "scene": 0, "scenes": [{{"nodes": [0, 1, 3, 5]}}],
   "nodes": [
     {{"name": "ground", "mesh": 0, "scale": [2, 1, 2]}},
@@ -29,7 +42,7 @@ fn glb(light_type: &str) -> Vec<u8> {
     {{"name": "rig", "translation": [0, 2, 0], "children": [4]}},
     {{"name": "cam", "camera": 0, "translation": [0, 0, 10]}},
     {{"name": "sun", "extensions": {{"KHR_lights_punctual": {{"light": 0}}}},
-      "matrix": [1,0,0,0, 0,1,0,0, 0.5,1,0.25,0, 0,0,0,1]}}],
+      "matrix": {light_matrix}}}],
   "cameras": [{{"type": "perspective",
                "perspective": {{"yfov": 0.75, "znear": 0.125, "aspectRatio": 1.5}}}}],
   "meshes": [
@@ -66,14 +79,21 @@ fn glb(light_type: &str) -> Vec<u8> {
     out
 }
 
-/// The same scene as a TOML scene file and OBJ files, in world space.
-fn toml_scene(dir: &Path) -> String {
+/// The same scene as a TOML scene file and OBJ files, in world space, with the light of
+/// `light_type` (see [`light`]).
+fn toml_scene(dir: &Path, light_type: &str) -> String {
+    let light = match light_type {
+        "spot" => format!(
+            "[light.spot]\nposition = [3.0, 9.0, 2.0]\ntarget = [0.0, 0.0, 0.0]\nfov_deg = {:?}\n",
+            1.0f64.to_degrees()
+        ),
+        _ => "[light.directional]\ndirection = [-0.5, -1.0, -0.25]\n".to_owned(),
+    };
     write(dir, "ground.obj", "v -8 0 -8\nv 8 0 -8\nv 8 0 8\nv -8 0 8\nf 1 2 3\nf 1 3 4\n");
     write(dir, "caster.obj", "v 1 3 0\nv 1 3 -2\nv 1 5 0\nf 1 2 3\n");
     let text = format!(
         "resolution = [900, 600]\n[camera.perspective]\neye = [0.0, 2.0, 10.0]\n\
-         target = [0.0, 2.0, 9.0]\nfov_y_deg = {:?}\nnear = 0.125\n\
-         [light.directional]\ndirection = [-0.5, -1.0, -0.25]\n\
+         target = [0.0, 2.0, 9.0]\nfov_y_deg = {:?}\nnear = 0.125\n{light}\
          [[object]]\nshape.file = {{ path = \"ground.obj\" }}\n\
          material = {{ color = [0.5, 0.5, 0.25] }}\n\
          [[object]]\nshape.file = {{ path = \"caster.obj\" }}\n\
@@ -83,33 +103,40 @@ fn toml_scene(dir: &Path) -> String {
     write(dir, "scene.toml", &text)
 }
 
+/// Every method of the registry's table and the ray-traced reference (`exact` refuses the
+/// translucent caster in both forms), under a directional and a spot light.
 #[test]
 fn a_gltf_scene_renders_as_its_toml_and_obj_files_pixel_for_pixel() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let glb_path = dir.path().join("scene.glb");
-    std::fs::write(&glb_path, glb("directional")).expect("writes");
-    let toml_path = toml_scene(dir.path());
-    for method in ["sm", "pcf-reeves", "pan09", "afsm", "raytrace"] {
-        let mut images = Vec::new();
-        for (form, scene) in [("glb", glb_path.to_str().expect("utf-8")), ("toml", &toml_path)] {
-            let out = dir.path().join(format!("{method}-{form}"));
-            let o = shadowbench(&[
-                "render",
-                "--scene",
-                scene,
-                "--method",
-                method,
-                "--width",
-                "96",
-                "--height",
-                "64",
-                "--out",
-                out.to_str().expect("utf-8"),
-            ]);
-            assert_eq!(o.status.code(), Some(0), "{method} {form}: {}", stderr(&o));
-            images.push(std::fs::read(out.join("visibility.exr")).expect("an image"));
+    let every = methods::registry::METHODS.iter().map(|m| m.name).chain(["raytrace"]);
+    let methods: Vec<&str> = every.collect();
+    for light_type in ["directional", "spot"] {
+        let glb_path = dir.path().join(format!("{light_type}.glb"));
+        std::fs::write(&glb_path, glb(light_type)).expect("writes");
+        let toml_path = toml_scene(dir.path(), light_type);
+        for method in &methods {
+            let mut images = Vec::new();
+            for (form, scene) in [("glb", glb_path.to_str().expect("utf-8")), ("toml", &toml_path)]
+            {
+                let out = dir.path().join(format!("{light_type}-{method}-{form}"));
+                let o = shadowbench(&[
+                    "render",
+                    "--scene",
+                    scene,
+                    "--method",
+                    method,
+                    "--width",
+                    "48",
+                    "--height",
+                    "32",
+                    "--out",
+                    out.to_str().expect("utf-8"),
+                ]);
+                assert_eq!(o.status.code(), Some(0), "{method} {form}: {}", stderr(&o));
+                images.push(std::fs::read(out.join("visibility.exr")).expect("an image"));
+            }
+            assert!(images[0] == images[1], "{light_type} {method}: the glTF scene differs");
         }
-        assert!(images[0] == images[1], "{method}: the glTF scene renders differently");
     }
 }
 

@@ -175,7 +175,7 @@ fn scenes_beyond_the_supported_range_are_refused_naming_the_range() {
     let far_eye = VALID.replace("eye = [0.0, 6.0, 8.0]", "eye = [0.0, 6.0, 2e15]");
     for (name, text, needles) in [
         ("model.toml", model, &["`object[1]`", "(model.obj)", "coordinates reach 3.2e20"][..]),
-        ("eye.toml", far_eye, &["`camera.eye`", "coordinates reach 2e15"][..]),
+        ("eye.toml", far_eye, &["`camera.perspective.eye`", "coordinates reach 2e15"][..]),
     ] {
         let path = write(dir.path(), name, &text);
         let (code, err) = visibility(&path).expect_err(name);
@@ -215,7 +215,7 @@ fn scene_file_errors_name_the_file_and_the_line_or_key() {
         (
             "bad-fov.toml",
             VALID.replace("fov_y_deg = 45.0", "fov_y_deg = 190.0"),
-            &["camera.fov_y_deg"],
+            &["camera.perspective.fov_y_deg"],
         ),
         (
             "bad-opacity.toml",
@@ -225,7 +225,7 @@ fn scene_file_errors_name_the_file_and_the_line_or_key() {
         (
             "bad-generator.toml",
             VALID.replace("size = 10.0", "size = -1.0"),
-            &["object[0].shape.size"],
+            &["object[0].shape.plane.size"],
         ),
         (
             "unknown-shape.toml",

@@ -58,7 +58,7 @@ fn a_folder_named_as_a_mesh_is_a_folder_not_missing() {
     let scene = write(dir.path(), "folder.toml", &with_mesh("dir.obj"));
     let err = refused(dir.path(), &scene, None);
     assert!(
-        err.contains("folder.toml: `object[0].shape.file.path`: ")
+        err.contains("folder.toml: line 9: `object[0].shape.file.path`: ")
             && err.contains("dir.obj: is a folder, not a mesh file")
             && !err.contains("missing"),
         "{err}"
@@ -104,7 +104,7 @@ fn an_empty_mesh_path_is_named_as_empty() {
     let dir = tempfile::tempdir().expect("tempdir");
     let err = refused(dir.path(), &write(dir.path(), "empty.toml", &with_mesh("")), None);
     assert!(
-        err.contains("empty.toml: `object[0].shape.file.path`: the path is empty")
+        err.contains("empty.toml: line 9: `object[0].shape.file.path`: the path is empty")
             && !err.contains("unsupported")
             && !err.contains("missing"),
         "{err}"
