@@ -11,7 +11,7 @@
 //! the outputs are written into its staging folder and published whole at the end). A method
 //! error is bad input, except a GPU device failure, which is internal ([`method_failure`]).
 
-use analysis::{compare::Truth, exact::ExactCoverage, pixel_class::PixelClass, Reference};
+use analysis::{pixel_class::PixelClass, Reference};
 use anyhow::Context;
 use clap::{Parser, Subcommand, ValueEnum};
 use instrumentation::measure::{measure, Protocol};
@@ -28,6 +28,9 @@ use reports::suite::{check_frame, MAX_FRAME_SIDE};
 use reports::write::summary_text;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+
+mod external;
+mod reference;
 
 /// Research workbench for shadow-map antialiasing: runs the published techniques on the same
 /// scenes, counts their work, times every stage and writes what they compute.
@@ -59,6 +62,12 @@ enum Command {
     /// --error-scale), error_boundary.png, metrics.json and the method's visibility.exr,
     /// shadow.png and run.json.
     Compare(CompareArgs),
+    /// Write what another renderer needs to make the same frame into --out: frame.json (the
+    /// camera and light with their matrices, the shadow-map light frustum, the conventions),
+    /// gbuffer.exr (position, normal, depth, triangle id per pixel centre) and samples.json
+    /// (the sub-sample offsets of every rate of the shared patterns). Score its result with
+    /// `compare --visibility-file`.
+    Frame(external::FrameArgs),
     /// Run a suite (scenes x methods x parameters) under the timing protocol and write
     /// index.html, report.md, runs.csv, runs.json, a page per run and every visibility buffer
     /// as EXR into --out; or plan it (--plan), run one shard of it (--shard K/N), or merge
@@ -259,6 +268,10 @@ struct CompareArgs {
     /// default 0.1.
     #[arg(long, value_name = "X", allow_negative_numbers = true)]
     error_scale: Option<f64>,
+    #[command(flatten)]
+    outside: external::OutsideArgs,
+    #[command(flatten)]
+    cache: reference::CacheArgs,
 }
 
 #[derive(clap::Args)]
@@ -275,8 +288,9 @@ struct RenderArgs {
     /// `--rate`, `--pattern`, `--map-res`, `--visibility`); `spsm`, `spsm-f32` (sub-pixel
     /// shadow maps with packed or f32 texels, see `--rate`, `--derivative-power`); or a
     /// reference run as a method: `exact`, `raytrace` (see `--rate`, `--pattern`).
+    /// Required, except by `compare --visibility-file`.
     #[arg(long)]
-    method: String,
+    method: Option<String>,
     /// Sub-samples per pixel for methods that supersample and for `raytrace`:
     /// 1, 4, 8, 16, 32, 64, 128 (up to 1024 for `raytrace`); default 1 (32 for `afsm-ss` and
     /// `pan09`). For `pcf-reeves`, the jittered samples per pixel footprint (the same values
@@ -539,6 +553,7 @@ fn size_arg(text: &str) -> Result<u64, String> {
 /// the machine has available.
 fn check_budget(
     a: &RenderArgs,
+    method: &str,
     triangles: u64,
     (width, height): (u32, u32),
     options: &MethodOptions,
@@ -553,16 +568,21 @@ fn check_budget(
         triangles,
         width,
         height,
-        method: &a.method,
-        rate: methods::registry::stored_samples(&a.method, options).max(int("rate", 1)),
+        method,
+        rate: methods::registry::stored_samples(method, options).max(int("rate", 1)),
         map_res: int("map_res", 1024),
         reference,
     };
-    let what = format!("{} on {} at {width}x{height}", a.method, a.scene);
+    let what = format!("{method} on {} at {width}x{height}", a.scene);
     analysis::budget::check(&work, &limit, &what).map(|_| ()).map_err(input)
 }
 
 fn job(a: &RenderArgs, compared_with: Option<(&str, u32)>) -> Result<Job, Failure> {
+    let method = a.method.as_deref().ok_or_else(|| {
+        input(anyhow::anyhow!(
+            "--method is required (by compare, unless --visibility-file is given)"
+        ))
+    })?;
     let scene_error = |e| input(anyhow::anyhow!("--scene: {e}"));
     let described = scenes::describe(&a.scene).map_err(scene_error)?;
     let options = MethodOptions {
@@ -578,12 +598,12 @@ fn job(a: &RenderArgs, compared_with: Option<(&str, u32)>) -> Result<Job, Failur
         visibility: a.visibility.map(VisibilityMode::from),
         device: a.device.into(),
     };
-    let technique = analysis::registry::technique(&a.method, &options).map_err(method_failure)?;
+    let technique = analysis::registry::technique(method, &options).map_err(method_failure)?;
     // The same reference as `technique` wraps (`registry::technique`'s rate and pattern).
-    let reference = if analysis::registry::REFERENCES.iter().any(|(n, _)| *n == a.method) {
+    let reference = if analysis::registry::REFERENCES.iter().any(|(n, _)| *n == method) {
         let rate = options.rate.unwrap_or(1);
         let pattern = options.pattern.unwrap_or_default();
-        Some(analysis::registry::reference(&a.method, rate, pattern).map_err(input)?)
+        Some(analysis::registry::reference(method, rate, pattern).map_err(input)?)
     } else {
         None
     };
@@ -612,14 +632,14 @@ fn job(a: &RenderArgs, compared_with: Option<(&str, u32)>) -> Result<Job, Failur
             )));
         }
     }
-    let samples = methods::registry::stored_samples(&a.method, &options);
+    let samples = methods::registry::stored_samples(method, &options);
     let flags = if samples > 1 { "--width, --height and --rate" } else { "--width and --height" };
     check_frame(width, height, samples).map_err(|m| input(anyhow::anyhow!("{flags}: {m}")))?;
     // The memory budget, before anything is built: from the scene's triangle bound, exact for
     // generated objects; a mesh file's bound can be loose, so a scene with one that the bound
     // refuses is loaded and checked again by its real count before the frame is built.
     let budget = |triangles: u64| {
-        check_budget(a, triangles, (width, height), &options, &params, compared_with)
+        check_budget(a, method, triangles, (width, height), &options, &params, compared_with)
     };
     let scene = match budget(described.triangles().map_err(scene_error)?) {
         Ok(()) => described.resolve().map_err(scene_error)?,
@@ -1055,90 +1075,53 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
     Ok(())
 }
 
+/// `--error-scale`, checked.
+fn error_scale(c: &CompareArgs) -> Result<f64, Failure> {
+    let error_scale = c.error_scale.unwrap_or(analysis::error_map::DEFAULT_MAX_ERROR);
+    analysis::error_map::check_scale(error_scale)
+        .map_err(|e| input(anyhow::anyhow!("--error-scale: {e}")))?;
+    Ok(error_scale)
+}
+
 fn compare(c: CompareArgs) -> Result<(), Failure> {
+    if let Some(file) = &c.outside.visibility_file {
+        return external::compare(&c, file);
+    }
+    external::refuse_outside_flags(&c.outside)?;
     let a = &c.render;
     let rate = c.ref_rate.unwrap_or(analysis::registry::DEFAULT_REF_RATE);
-    let edge_reference = c.edge_reference.unwrap_or(EdgeReference::Raytrace);
     let budget_reference = match c.reference {
         ReferenceName::Exact => ("exact", rate),
         ReferenceName::Raytrace => ("raytrace", rate),
     };
     let job = job(a, Some(budget_reference))?;
-    let error_scale = c.error_scale.unwrap_or(analysis::error_map::DEFAULT_MAX_ERROR);
-    analysis::error_map::check_scale(error_scale)
-        .map_err(|e| input(anyhow::anyhow!("--error-scale: {e}")))?;
-    let pattern = a.pattern.map(PatternKind::from).unwrap_or_default();
-    let (reference, ref_rate, edge_name): (Box<dyn Reference>, _, _) =
-        match (c.reference, edge_reference) {
-            (ReferenceName::Exact, EdgeReference::Raytrace) => (
-                analysis::registry::reference("exact", rate, pattern).map_err(input)?,
-                Some(rate),
-                Some("raytrace"),
-            ),
-            (ReferenceName::Exact, EdgeReference::None) => {
-                if c.ref_rate.is_some() {
-                    eprintln!(
-                        "note: exact with --edge-reference none does not use --ref-rate; ignored"
-                    );
-                }
-                (Box::new(ExactCoverage { edge: None }), None, Some("none"))
-            }
-            (ReferenceName::Raytrace, _) => {
-                if c.edge_reference.is_some() {
-                    eprintln!("note: raytrace does not use --edge-reference; ignored");
-                }
-                (
-                    analysis::registry::reference("raytrace", rate, pattern).map_err(input)?,
-                    Some(rate),
-                    None,
-                )
-            }
-        };
-    let ref_name = reference.name();
-    let tx = out_dir(a, &job, &format!("-vs-{ref_name}"))?;
+    let error_scale = error_scale(&c)?;
+    let chosen = reference::choose(&c)?;
+    let tx = out_dir(a, &job, &format!("-vs-{}", chosen.reference.name()))?;
+    let mut cache = reference::open_cache(&c.cache)?;
     let staging = tx.staging().to_owned();
 
     let (frame, ran, spread) = run_repeated(&job, a.repeat)?;
-    let mut ref_rec = Recorder::default();
-    let image = reference.evaluate(&frame, &mut ref_rec).map_err(input)?;
-    // A reference without classes (`raytrace`) is measured per class all the same: the
-    // classes are the camera's view of the triangles, whatever the reference.
-    let truth = Truth::new(&frame, image, &mut ref_rec);
-    let v = &ran.visibility;
-    let comparison = truth.compare(&frame, v).map_err(input)?;
-
+    let evaluated = reference::evaluate(&chosen, &job.scene, &frame, cache.as_mut())?;
     write_run(&staging, &frame, &ran)?;
-    for (name, mask) in [("error.png", &truth.headline), ("error_boundary.png", &truth.boundary())]
-    {
-        let path = staging.join(name);
-        analysis::error_map::error_map(v, &truth.reference.lit, mask, error_scale)?
-            .save(&path)
-            .with_context(|| format!("cannot write {}", path.display()))?;
-    }
     let record = &ran.record;
-    let metrics = reports::MetricsRecord {
-        comparison,
-        reference: ref_name.to_owned(),
-        ref_rate,
-        edge_reference: edge_name.map(String::from),
-        scene: record.scene.clone(),
+    let compared = reference::Compared {
         method: record.method.clone(),
         params: record.params.clone(),
-        width: job.width,
-        height: job.height,
-        method_ms: record.total_ms,
-        reference_ms: ref_rec.stages.total_ms(),
+        method_ms: Some(record.total_ms),
+        external: false,
     };
-    let text = serde_json::to_string_pretty(&metrics)?;
-    let path = staging.join("metrics.json");
-    std::fs::write(&path, format!("{text}\n"))
-        .with_context(|| format!("cannot write {}", path.display()))?;
+    let metrics = reference::score(
+        &frame,
+        &ran.visibility,
+        &chosen,
+        evaluated,
+        compared,
+        error_scale,
+        &staging,
+    )?;
     let out = commit_out(tx, "--out")?;
-    if a.json {
-        println!("{text}");
-    } else {
-        print_metrics(&metrics, &time_text(&ran.record, spread.as_ref()));
-    }
+    reference::report(&metrics, a.json, &time_text(record, spread.as_ref()), cache.as_ref())?;
     eprintln!("wrote {}", out.display());
     Ok(())
 }
@@ -1205,7 +1188,14 @@ fn print_metrics(m: &reports::MetricsRecord, time: &str) {
         "  (pixels: compared/in the frame; {} uncovered)",
         c.class_pixels.get("uncovered").copied().unwrap_or(0)
     );
-    println!("  time: method {time}; reference {:.1} ms wall", m.reference_ms);
+    match m.reference_read_ms {
+        Some(read) => println!(
+            "  time: method {time}; reference read from the cache in {read:.1} ms (computed in \
+             {:.1} ms wall by an earlier run)",
+            m.reference_ms
+        ),
+        None => println!("  time: method {time}; reference {:.1} ms wall", m.reference_ms),
+    }
 }
 
 fn main() -> ExitCode {
@@ -1214,6 +1204,7 @@ fn main() -> ExitCode {
         Command::Scenes { json, toml } => scenes(json, toml),
         Command::Render(a) => render(a),
         Command::Compare(c) => compare(c),
+        Command::Frame(f) => external::frame(f),
         Command::Report(r) => report(r),
     };
     match result {

@@ -43,7 +43,7 @@ fn reference_for(
     frame: &Frame<'_>,
     cache: Option<&mut ReferenceCache>,
     build: &str,
-) -> Result<(String, Option<u32>, ReferenceImage, f64), String> {
+) -> Result<(String, Option<u32>, ReferenceImage, f64, bool), String> {
     let use_exact = match suite.reference {
         ReferenceChoice::Auto => !frame.effects.transparency,
         ReferenceChoice::Exact => true,
@@ -62,11 +62,18 @@ fn reference_for(
         let image = r.evaluate(frame, &mut Recorder::default()).map_err(|e| e.to_string())?;
         Ok::<_, String>((image, t.elapsed().as_secs_f64() * 1e3))
     };
-    let (image, ms) = match cache {
-        Some(c) => c.get_or_compute(scene, frame, name, rate, build, compute)?,
-        None => compute()?,
+    let (image, ms, cached) = match cache {
+        Some(c) => {
+            let hits = c.stats.hits;
+            let (image, ms) = c.get_or_compute(scene, frame, name, rate, build, compute)?;
+            (image, ms, c.stats.hits > hits)
+        }
+        None => {
+            let (image, ms) = compute()?;
+            (image, ms, false)
+        }
     };
-    Ok((name.to_owned(), rate, image, ms))
+    Ok((name.to_owned(), rate, image, ms, cached))
 }
 
 /// A panel of the sub-pixel shadow map's pixel classes (Lecocq et al. Fig. 14).
@@ -194,6 +201,8 @@ struct SceneRun<'s> {
     ref_name: String,
     ref_rate: Option<u32>,
     reference_ms: f64,
+    /// Whether the reference was read from the cache.
+    reference_cached: bool,
     /// The reference, the pixel classes and the shadow-only pixels the metrics are taken over.
     truth: Truth,
     /// Index of its images in [`Images::scenes`].
@@ -357,7 +366,7 @@ pub fn run_items(
                 None => "",
             };
             match reference_for(suite, &scene, &frame, cache.as_deref_mut(), build) {
-                Ok((ref_name, ref_rate, image, reference_ms)) => {
+                Ok((ref_name, ref_rate, image, reference_ms, reference_cached)) => {
                     // The metrics are taken over the shadow-only pixels, by the frame's pixel
                     // classes (the reference's own, or the camera's view of the triangles when
                     // it has none), as `compare`'s headline is.
@@ -382,6 +391,7 @@ pub fn run_items(
                         ref_name,
                         ref_rate,
                         reference_ms,
+                        reference_cached,
                         truth,
                         images: images.scenes.len(),
                     });
@@ -618,8 +628,11 @@ fn add_run(
         params: record.params.clone(),
         width: w,
         height: h,
-        method_ms: record.total_ms,
+        method_ms: Some(record.total_ms),
         reference_ms: ctx.reference_ms,
+        reference_cached: ctx.reference_cached,
+        reference_read_ms: None,
+        external: false,
     };
     let truth = &ctx.truth;
     report.rows.push(Row {

@@ -8,5 +8,6 @@ mod common;
 mod bad_input;
 mod cli;
 mod compare;
+mod external;
 mod fuzz_regressions;
 mod scene_messages;
