@@ -31,6 +31,7 @@ use analysis::compare::Truth;
 use analysis::metrics::exceedance;
 use analysis::{error_image, Metrics, ReferenceImage};
 use instrumentation::measure::{measure_all, Measured};
+use instrumentation::stats::Summary;
 use instrumentation::{Provenance, Recorder, RunIdentity};
 use methods::{registry::Device, Frame, MethodOptions, ShadowMethod, Visibility};
 use std::time::Duration;
@@ -188,6 +189,7 @@ pub fn items_run_count(plan: &[WorkItem], items: &[usize]) -> u64 {
         .map(|&k| match &plan[k].work {
             Work::Runs { runs, .. } => runs.len() as u64,
             Work::Grid { .. } => 0,
+            Work::External { .. } => 1,
             Work::Table { runs, .. } => runs.len() as u64,
         })
         .sum()
@@ -251,9 +253,15 @@ fn item_runs(suite: &Suite, item: &WorkItem) -> Vec<(String, f64)> {
             made.into_iter().map(|(m, o)| (m.to_owned(), o)).collect()
         }
         Work::Grid { .. } => Vec::new(),
+        Work::External { name, .. } => return vec![(external_key(name), item.cost)],
     };
     let per = item.cost / runs.len().max(1) as f64;
     runs.iter().map(|(m, o)| (key_of(m, o), per)).collect()
+}
+
+/// The key an estimate prices the scoring of an outside result by.
+fn external_key(name: &str) -> String {
+    format!("external {name}")
 }
 
 /// Every run of the items of `plan` numbered in `items`, with its key and estimated cost.
@@ -296,6 +304,7 @@ pub fn run_items(
         rows: Vec::new(),
         table_runs: Vec::new(),
         skipped: Vec::new(),
+        untimed: Vec::new(),
         grids: Vec::new(),
         tables: Vec::new(),
         cache: None,
@@ -424,7 +433,7 @@ pub fn run_items(
                         .map(|(run, (m, o))| (Purpose::Table { table: *table, run }, m, o))
                         .collect()
                 }
-                Work::Grid { .. } => continue,
+                Work::Grid { .. } | Work::External { .. } => continue,
             };
             let cost = item.cost / runs.len().max(1) as f64;
             for (purpose, method, options) in runs {
@@ -484,6 +493,21 @@ pub fn run_items(
                     counters: m.record.counters,
                 }),
                 (Purpose::Suite(_), None) => {}
+            }
+        }
+        for item in group {
+            let Work::External { external, name } = &item.work else { continue };
+            let spent = std::time::Instant::now();
+            let scored = match &ctx {
+                Some(ctx) => add_external(suite, ctx, item, *external, &mut report, &mut images),
+                None => Err("the scene's reference could not be computed".to_owned()),
+            };
+            match scored {
+                Ok(()) => tick(&label(name), &external_key(name), item.cost, Some(spent.elapsed())),
+                Err(e) => {
+                    report.skipped.push(format!("external {name} on {scene_name}: {e}"));
+                    tick(&label(name), &external_key(name), item.cost, None);
+                }
             }
         }
         let Some(ctx) = ctx else { continue };
@@ -575,6 +599,7 @@ pub fn run_table(
         runs: Vec::new(),
         grids: Vec::new(),
         tables: vec![spec.clone()],
+        externals: Vec::new(),
     };
     let (report, _) = run_suite(&suite, |p| progress(p.label));
     skipped.extend(report.skipped);
@@ -658,6 +683,7 @@ fn add_run(
         skipped_stages: record.skipped_stages.clone(),
         counters: record.counters,
         notes: record.notes.clone(),
+        external: false,
     });
     images.runs.push(Produced {
         row: report.rows.len() - 1,
@@ -668,9 +694,180 @@ fn add_run(
     });
 }
 
+/// Scores the suite's `[[external]]` entry number `k` on `item`'s scene, `ctx` (its file read
+/// and checked against the frame, [`crate::external::read_visibility`]), and adds its row: to
+/// the rows, with its record, metrics and images, when the suite gives its time on the scene;
+/// else to the untimed results ([`Report::untimed`]). The error says why it could not be
+/// scored.
+fn add_external(
+    suite: &Suite,
+    ctx: &SceneRun<'_>,
+    item: &WorkItem,
+    k: usize,
+    report: &mut Report,
+    images: &mut Images,
+) -> Result<(), String> {
+    let spec = &suite.externals[k];
+    let scene_key = item.scene.as_deref().unwrap_or_default();
+    let file = spec.files.get(scene_key).ok_or("the entry has no file for the scene")?;
+    let (w, h) = (ctx.frame.width(), ctx.frame.height());
+    let v = crate::external::read_visibility(file, w, h).map_err(|e| e.to_string())?;
+    let comparison = ctx.truth.compare(ctx.frame, &v).map_err(|e| e.to_string())?;
+    let time = spec.time_on(scene_key);
+    let truth = &ctx.truth;
+    let scene = ctx.scene;
+    let untimed = Summary {
+        n: 0,
+        median: 0.0,
+        ci_low: None,
+        ci_high: None,
+        ci_level: None,
+        min: 0.0,
+        max: 0.0,
+    };
+    let notes = vec![format!("an outside renderer's result, read from {}", file.display())];
+    let row = Row {
+        scene: scene.name.clone(),
+        method: spec.name.clone(),
+        params: serde_json::Map::new(),
+        width: w,
+        height: h,
+        reference: ctx.ref_name.clone(),
+        ref_rate: ctx.ref_rate,
+        metrics: Metrics::compare(&v, &truth.reference.lit, &truth.headline),
+        flip_mean: comparison.flip_mean,
+        pixel_match_lecocq: comparison.pixel_match_lecocq,
+        error_exceedance: exceedance(&v, &truth.reference.lit, &truth.headline).unwrap_or_default(),
+        classes: Some(comparison.classes),
+        item: item.item,
+        shard: None,
+        total_ms: time.and_then(|t| Summary::of(&[t])).unwrap_or(untimed),
+        cpu_ms: None,
+        contended: false,
+        conditions: None,
+        stages: Vec::new(),
+        skipped_stages: Vec::new(),
+        counters: Default::default(),
+        notes: notes.clone(),
+        external: true,
+    };
+    let Some(time) = time else {
+        report.untimed.push(row);
+        return Ok(());
+    };
+    let metrics = MetricsRecord {
+        comparison,
+        reference: ctx.ref_name.clone(),
+        ref_rate: ctx.ref_rate,
+        edge_reference: (ctx.ref_name == "exact").then(|| "none".to_owned()),
+        scene: scene.name.clone(),
+        method: spec.name.clone(),
+        params: serde_json::Map::new(),
+        width: w,
+        height: h,
+        method_ms: Some(time),
+        reference_ms: ctx.reference_ms,
+        reference_cached: ctx.reference_cached,
+        reference_read_ms: None,
+        external: true,
+    };
+    let record = instrumentation::RunRecord {
+        scene: scene.name.clone(),
+        method: spec.name.clone(),
+        params: serde_json::Map::new(),
+        width: w,
+        height: h,
+        effects: ctx.effects.clone(),
+        counters: Default::default(),
+        stages: Vec::new(),
+        skipped_stages: Vec::new(),
+        notes,
+        warnings: Vec::new(),
+        total_ms: time,
+        cpu_ms: None,
+        clocks: "total_ms: the time the suite gives for the outside renderer".to_owned(),
+        timing: None,
+        pixel_classes: None,
+        provenance: Some(report.provenance.clone()),
+    };
+    report.rows.push(row);
+    images.runs.push(Produced {
+        row: report.rows.len() - 1,
+        scene: ctx.images,
+        visibility: v,
+        record,
+        metrics,
+    });
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A suite's `[[external]]` results: `sm`'s own lit fraction, read back from an EXR, is
+    /// scored exactly as the `sm` run it came from; with a time it is a row, in the runs
+    /// table and on the error-against-time (Pareto) chart, marked external; without one, in
+    /// the runs table only, its time not given.
+    #[test]
+    fn outside_results_are_scored_as_rows_and_drawn_only_with_a_time() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let scene = scenes::load("plane-square").expect("built in");
+        let (w, h) = (48, 36);
+        let frame = Frame::new(&scene, w, h, &mut Recorder::default());
+        let sm = analysis::registry::technique("sm", &MethodOptions::default()).expect("sm");
+        let v = sm.run(&frame, &mut Recorder::default()).expect("runs");
+        crate::output::write_visibility_exr(&dir.path().join("sm.exr"), &v).expect("writes");
+        let text = format!(
+            "name = \"outside\"\nwidth = {w}\nheight = {h}\nwarmup = 0\nrepeats = 1\n\
+             scenes = [\"plane-square\"]\n[[run]]\nmethod = \"sm\"\n\
+             [[external]]\nname = \"mine\"\ntime_ms = 2.5\nfiles = {{ plane-square = \"sm.exr\" }}\n\
+             [[external]]\nname = \"untimed\"\nfiles = {{ plane-square = \"sm.exr\" }}\n"
+        );
+        let suite = Suite::parse(&text, &dir.path().join("suite.toml")).expect("parses");
+        let plan = crate::plan::plan(&suite);
+        let externals: Vec<&WorkItem> =
+            plan.iter().filter(|i| matches!(i.work, Work::External { .. })).collect();
+        assert_eq!(externals.len(), 2, "one item per entry and scene");
+        let all: Vec<usize> = (0..plan.len()).collect();
+        assert_eq!(items_run_count(&plan, &all), 3);
+        let (report, images) = run_suite(&suite, |_| {});
+        assert!(report.skipped.is_empty(), "{:?}", report.skipped);
+        let by = |m: &str| report.rows.iter().find(|r| r.method == m).expect(m);
+        let (method, mine) = (by("sm"), by("mine"));
+        assert!(mine.external && !method.external);
+        assert_eq!(mine.metrics, method.metrics, "the same lit fraction, the same metrics");
+        assert_eq!(mine.classes, method.classes);
+        assert_eq!((mine.total_ms.median, mine.total_ms.n), (2.5, 1));
+        assert!(report.rows.iter().all(|r| r.method != "untimed"));
+        let [untimed] = report.untimed.as_slice() else { panic!("{:?}", report.untimed) };
+        assert!(untimed.external && !untimed.timed());
+        assert_eq!(untimed.metrics, method.metrics);
+        assert_eq!(images.runs.len(), 2, "pages and images for the timed rows");
+        let produced = images.runs.iter().find(|p| p.row == 1).expect("the outside row's");
+        assert_eq!((produced.metrics.method_ms, produced.metrics.external), (Some(2.5), true));
+
+        // runs.json keeps both, and reads back.
+        let json = serde_json::to_string(&report).expect("serialises");
+        let back: Report = serde_json::from_str(&json).expect("reads back");
+        assert_eq!(back.untimed, report.untimed);
+        assert!(back.rows.iter().any(|r| r.external));
+        // The runs table: both, marked; the untimed one's time not given and no page.
+        let rows: Vec<&Row> = report.rows.iter().chain(&report.untimed).collect();
+        let table =
+            serde_json::to_string(&crate::index::runs_table(&rows, &report)).expect("serialises");
+        assert!(table.contains("mine (external)") && table.contains("untimed (external)"));
+        assert!(table.contains("not given"), "{table}");
+        assert!(!table.contains("runs/plane-square-untimed.html"), "{table}");
+        // The error-against-time chart has the timed one, at its time, and not the other.
+        let charts = crate::figures::charts(&report);
+        let pareto: Vec<_> = charts.iter().filter(|c| c.chart.pareto).collect();
+        let series: Vec<&crate::plots::Series> =
+            pareto.iter().flat_map(|c| &c.chart.series).collect();
+        let outside = series.iter().find(|s| s.label == "mine (external)").expect("drawn");
+        assert_eq!(outside.points[0].x, 2.5);
+        assert!(series.iter().all(|s| !s.label.contains("untimed")));
+    }
 
     #[test]
     fn cost_tables_measure_every_method_against_work_and_draw_it() {
