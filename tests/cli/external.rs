@@ -311,3 +311,61 @@ fn compare_computes_a_scene_reference_once() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(!metrics(&out).reference_cached);
 }
+
+/// `frame`'s folder is a transaction: one holding a file no manifest lists, or a run's
+/// output, is refused (exit 2, naming it) and left as it was; an earlier frame is replaced.
+#[test]
+fn frame_writes_whole_outputs_or_nothing() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let d = dir.path();
+    let frame = |out: &Path| {
+        shadowbench(&[
+            "frame",
+            "--scene",
+            "plane-square",
+            "--width",
+            "16",
+            "--height",
+            "12",
+            "--out",
+            path(out),
+        ])
+    };
+    let foreign = d.join("foreign");
+    std::fs::create_dir(&foreign).expect("mkdir");
+    std::fs::write(foreign.join("notes.txt"), "mine").expect("writes");
+    let o = frame(&foreign);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("notes.txt"), "{}", stderr(&o));
+    let left: Vec<_> = std::fs::read_dir(&foreign).expect("list").collect();
+    assert_eq!(left.len(), 1, "the folder as it was");
+
+    let run = d.join("run");
+    let render = [
+        "render",
+        "--scene",
+        "plane-square",
+        "--method",
+        "sm",
+        "--width",
+        "16",
+        "--height",
+        "12",
+        "--out",
+        path(&run),
+    ];
+    assert!(shadowbench(&render).status.success());
+    let before = std::fs::read(run.join("run.json")).expect("run.json");
+    let o = frame(&run);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(!run.join("frame.json").exists());
+    assert_eq!(std::fs::read(run.join("run.json")).expect("run.json"), before);
+
+    let out = d.join("frame");
+    assert!(frame(&out).status.success());
+    let o = frame(&out);
+    assert!(o.status.success(), "an earlier frame is replaced: {}", stderr(&o));
+    for f in ["frame.json", "gbuffer.exr", "samples.json"] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+}
