@@ -819,7 +819,7 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
         }
         None => format!("suite {}", suite.name),
     };
-    let measured = report.rows.len() + report.table_runs.len();
+    let measured = report.rows.len() + report.untimed.len() + report.table_runs.len();
     let not_run = match runs_planned.saturating_sub(measured as u64) {
         0 => String::new(),
         n => format!(" ({n} not run, see the notes above)"),
