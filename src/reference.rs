@@ -15,7 +15,8 @@ pub struct CacheArgs {
     /// Reference cache folder: a reference computed once is read back by every later
     /// `compare` of the same scene, frame, reference, edge reference, rate and pattern (by the
     /// same build of shadowbench; content-addressed, verified on read); default
-    /// `$XDG_CACHE_HOME/shadowbench/references`, else `~/.cache/shadowbench/references`.
+    /// `$XDG_CACHE_HOME/shadowbench/references`, else `~/.cache/shadowbench/references` (when
+    /// that folder cannot be made, the reference is computed without a cache, with a note).
     #[arg(long, value_name = "DIR")]
     cache: Option<PathBuf>,
     /// Compute the reference without reading or writing a cache.
@@ -34,29 +35,31 @@ fn default_cache_dir() -> Option<PathBuf> {
     Some(base.join("shadowbench").join("references"))
 }
 
-/// The cache `compare` uses: `--cache DIR`, the per-user folder, or none (`--no-cache`, or no
-/// home folder to put it in, which is said on standard error).
+/// The cache `compare` uses: `--cache DIR` (a folder that cannot be one is bad input), the
+/// per-user folder, or none: `--no-cache`, or a per-user folder that cannot be found or made,
+/// which is said on standard error.
 pub fn open_cache(a: &CacheArgs) -> Result<Option<ReferenceCache>, Failure> {
     if a.no_cache {
         return Ok(None);
     }
-    let (dir, flag) = match &a.cache {
-        Some(dir) => (dir.clone(), "--cache"),
-        None => match default_cache_dir() {
-            Some(dir) => (dir, "--cache (default)"),
-            None => {
-                eprintln!(
-                    "note: neither XDG_CACHE_HOME nor HOME is set; the reference is not cached"
-                );
-                return Ok(None);
-            }
-        },
+    if let Some(dir) = &a.cache {
+        super::check_folder_path(dir, "--cache")?;
+        let cache = ReferenceCache::open(dir).map_err(|e| {
+            input(anyhow::anyhow!("--cache {}: cannot create the folder: {e}", dir.display()))
+        })?;
+        return Ok(Some(cache));
+    }
+    let Some(dir) = default_cache_dir() else {
+        eprintln!("note: neither XDG_CACHE_HOME nor HOME is set; the reference is not cached");
+        return Ok(None);
     };
-    super::check_folder_path(&dir, flag)?;
-    let cache = ReferenceCache::open(&dir).map_err(|e| {
-        input(anyhow::anyhow!("{flag} {}: cannot create the folder: {e}", dir.display()))
-    })?;
-    Ok(Some(cache))
+    match ReferenceCache::open(&dir) {
+        Ok(cache) => Ok(Some(cache)),
+        Err(e) => {
+            eprintln!("note: the reference is not cached: cannot create {}: {e}", dir.display());
+            Ok(None)
+        }
+    }
 }
 
 /// The reference a `compare` asked for.

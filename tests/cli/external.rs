@@ -293,6 +293,36 @@ fn compare_computes_a_scene_reference_once() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(!metrics(&out).reference_cached);
+    // A --cache that cannot be a folder is bad input; a default one that cannot be made
+    // leaves the reference uncached, with a note.
+    let file = d.join("file");
+    std::fs::write(&file, "not a folder").expect("writes");
+    let o = shadowbench(&[
+        "compare",
+        "--scene",
+        "city",
+        "--method",
+        "sm",
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--cache",
+        path(&file),
+        "--out",
+        path(&d.join("refused")),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--cache") && !d.join("refused").exists(), "{}", stderr(&o));
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_shadowbench"))
+        .args(["compare", "--scene", "city", "--method", "sm", "--width", "64", "--height", "48"])
+        .args(["--out", path(&d.join("unwritable"))])
+        .env("XDG_CACHE_HOME", &file)
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("not cached"), "{}", stderr(&o));
+    assert!(!metrics(&d.join("unwritable")).reference_cached);
     let out = d.join("no-cache");
     let o = shadowbench(&[
         "compare",
