@@ -171,10 +171,12 @@ pub fn summary_text(t: &instrumentation::stats::Summary) -> String {
 }
 
 /// A row's cells in the per-scene run tables: [`RUN_COLUMNS`], the time on `clock` (median
-/// with its interval), the wall time and whether it was contended.
+/// with its interval), the wall time and whether it was contended. An outside result's method
+/// is marked `(external)`; one without a time has its times `not given`.
 pub fn run_cells(r: &Row, clock: instrumentation::measure::Clock) -> [String; 9] {
+    let given = |text: String| if r.timed() { text } else { "not given".to_owned() };
     [
-        r.method.clone(),
+        crate::model::method_label(r),
         param_label(r),
         format!("{:.5}", r.metrics.mean_abs_error),
         if r.metrics.boundary_pixels == 0 {
@@ -184,8 +186,8 @@ pub fn run_cells(r: &Row, clock: instrumentation::measure::Clock) -> [String; 9]
         },
         format!("{:.2} %", 100.0 * r.metrics.pixel_match),
         format!("{:.4}", r.flip_mean),
-        time_text(r.time(clock)),
-        ms_text(r.total_ms.median),
+        given(time_text(r.time(clock))),
+        given(ms_text(r.total_ms.median)),
         if r.contended { "yes" } else { "no" }.to_owned(),
     ]
 }
@@ -346,6 +348,7 @@ pub fn markdown(report: &Report, plots: &[PlotFile]) -> String {
         let rows: Vec<Vec<String>> = report
             .rows
             .iter()
+            .chain(&report.untimed)
             .filter(|r| r.scene == sc.scene)
             .map(|r| run_cells(r, report.clock).to_vec())
             .collect();
@@ -536,6 +539,8 @@ mod tests {
         assert!(table.contains("mine (external)") && table.contains("untimed (external)"));
         assert!(table.contains("not given"), "{table}");
         assert!(!table.contains("runs/plane-square-untimed.html"), "{table}");
+        let cells = super::run_cells(untimed, report.clock);
+        assert_eq!((cells[0].as_str(), cells[6].as_str()), ("untimed (external)", "not given"));
         // The error-against-time chart has the timed one, at its time, and not the other.
         let charts = crate::figures::charts(&report);
         let pareto: Vec<_> = charts.iter().filter(|c| c.chart.pareto).collect();

@@ -518,6 +518,8 @@ fn outside_results_of_a_suite_are_scored_planned_and_merged() {
     let page = std::fs::read_to_string(out.join("index.html")).expect("index.html");
     assert!(page.contains("mine (external)") && page.contains("later (external)"), "{page}");
     assert!(page.contains("not given"), "{page}");
+    let md = std::fs::read_to_string(out.join("report.md")).expect("report.md");
+    assert!(md.contains("| mine (external) |") && md.contains("| later (external) |"), "{md}");
     assert!(out.join("runs/plane-square-mine.html").is_file());
     assert!(!out.join("runs/plane-square-later.html").exists());
 
