@@ -62,6 +62,7 @@ pub const CSV_COLUMNS: &[&str] = &[
     "loadavg_after",
     "commit",
     "version",
+    "external",
 ];
 
 /// Stage names over every row of `report`, in the order they first appear.
@@ -75,7 +76,8 @@ fn stage_names(report: &Report) -> Vec<&str> {
     names
 }
 
-/// `runs.csv`, tidy: a header, then one line per run, one column per quantity. Cells are
+/// `runs.csv`, tidy: a header, then one line per run (outside results with a time included,
+/// `external` true), one column per quantity. Cells are
 /// numbers (or text for names), with no thousands suffix; an empty cell is a quantity that
 /// does not apply (a parameter the method has not, the boundary error of a run without
 /// boundary pixels, a stage the run did not have). After [`CSV_COLUMNS`], the error's
@@ -141,6 +143,7 @@ pub fn csv(report: &Report) -> Result<String, OutputError> {
             opt(r.conditions.and_then(|c| c.loadavg_after)),
             report.provenance.commit.clone(),
             report.provenance.version.clone(),
+            r.external.to_string(),
         ];
         let shares = r.error_exceedance.iter().map(|v| Some(*v)).chain(std::iter::repeat(None));
         cells.extend(shares.take(EXCEEDANCE_THRESHOLDS.len()).map(opt));

@@ -518,6 +518,13 @@ fn outside_results_of_a_suite_are_scored_planned_and_merged() {
     let page = std::fs::read_to_string(out.join("index.html")).expect("index.html");
     assert!(page.contains("mine (external)") && page.contains("later (external)"), "{page}");
     assert!(page.contains("not given"), "{page}");
+    let mut reader = csv::Reader::from_path(out.join("runs.csv")).expect("runs.csv");
+    let header = reader.headers().expect("header").clone();
+    let at = |name: &str| header.iter().position(|h| h == name).expect(name);
+    let lines: Vec<csv::StringRecord> = reader.records().map(|r| r.expect("a line")).collect();
+    let marked: Vec<(&str, &str)> =
+        lines.iter().map(|l| (&l[at("method")], &l[at("external")])).collect();
+    assert_eq!(marked, [("sm", "false"), ("mine", "true")], "timed runs only");
     let md = std::fs::read_to_string(out.join("report.md")).expect("report.md");
     assert!(md.contains("| mine (external) |") && md.contains("| later (external) |"), "{md}");
     assert!(out.join("runs/plane-square-mine.html").is_file());
