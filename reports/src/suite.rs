@@ -567,18 +567,13 @@ impl Suite {
                 }
             }
         }
-        suite.check_externals(&spans, &at, base)?;
+        suite.check_externals(&spans, &at)?;
         Ok(suite)
     }
 
-    /// Checks the `[[external]]` entries: names, scenes, files (relative to `base`, the suite
-    /// file's folder; already resolved) and times, as the module doc says.
-    fn check_externals(
-        &self,
-        spans: &Spans,
-        at: &ErrorAt<'_>,
-        base: &Path,
-    ) -> Result<(), SuiteError> {
+    /// Checks the `[[external]]` entries: names, scenes, files (their paths resolved from the
+    /// suite file's folder) and times, as the module doc says.
+    fn check_externals(&self, spans: &Spans, at: &ErrorAt<'_>) -> Result<(), SuiteError> {
         let plain = |c: char| c.is_ascii_alphanumeric() || "-_.".contains(c);
         for (k, e) in self.externals.iter().enumerate() {
             let span = spans.externals.get(k);
@@ -607,9 +602,8 @@ impl Suite {
                 }
                 if !file.is_file() {
                     let message = format!(
-                        "{} is not a file (relative paths are taken from {})",
-                        file.display(),
-                        if base.as_os_str().is_empty() { "." } else { "the suite's folder" }
+                        "{} is not a file (relative paths are taken from the suite file's folder)",
+                        file.display()
                     );
                     return Err(at(file_span, &key, message));
                 }
