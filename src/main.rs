@@ -11,7 +11,7 @@
 //! the outputs are written into its staging folder and published whole at the end). A method
 //! error is bad input, except a GPU device failure, which is internal ([`method_failure`]).
 
-use analysis::{compare::Truth, exact::ExactCoverage, pixel_class::PixelClass, Reference};
+use analysis::{pixel_class::PixelClass, Reference};
 use anyhow::Context;
 use clap::builder::TypedValueParser;
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand, ValueEnum};
@@ -31,6 +31,9 @@ use reports::suite::{check_frame, MAX_FRAME_SIDE};
 use reports::write::summary_text;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+
+mod external;
+mod reference;
 
 /// Research workbench for shadow-map antialiasing: runs the published techniques on the same
 /// scenes, counts their work, times every stage and writes what they compute.
@@ -62,6 +65,12 @@ enum Command {
     /// --error-scale), error_boundary.png, metrics.json and the method's visibility.exr,
     /// shadow.png and run.json.
     Compare(CompareArgs),
+    /// Write what another renderer needs to make the same frame into --out: frame.json (the
+    /// camera and light with their matrices, the shadow-map light frustum, the conventions),
+    /// gbuffer.exr (position, normal, depth, triangle id per pixel centre) and samples.json
+    /// (the sub-sample offsets of every rate of the shared patterns). Score its result with
+    /// `compare --visibility`.
+    Frame(external::FrameArgs),
     /// Run a suite (scenes x methods x parameters) under the timing protocol and write
     /// index.html, report.md, runs.csv, runs.json, a page per run and every visibility buffer
     /// as EXR into --out; or plan it (--plan), run one shard of it (--shard K/N), or merge
@@ -227,6 +236,10 @@ struct CompareArgs {
     /// default 0.1.
     #[arg(long, value_name = "X", allow_negative_numbers = true)]
     error_scale: Option<f64>,
+    #[command(flatten)]
+    outside: external::OutsideArgs,
+    #[command(flatten)]
+    cache: reference::CacheArgs,
 }
 
 #[derive(clap::Args)]
@@ -236,9 +249,9 @@ struct RenderArgs {
     #[arg(long)]
     scene: String,
     /// Method: a name of the registry's table or a reference (the list, with each method's
-    /// parameters, is in `--help`).
+    /// parameters, is in `--help`). Required, except by `compare --visibility`.
     #[arg(long)]
-    method: String,
+    method: Option<String>,
     /// Where the method runs: `cpu` (default) or `gpu` (kernels for sm, the pcf-* methods,
     /// afsm, pan09, and spsm's classification and depth stages; the run record names the
     /// adapter and how stage times were taken).
@@ -278,6 +291,17 @@ struct RenderArgs {
     /// ([`with_params`]).
     #[arg(skip)]
     params: Vec<(&'static Param, params::Value)>,
+}
+
+impl RenderArgs {
+    /// The sub-sample pattern given (`--pattern`), default grid.
+    fn pattern(&self) -> PatternKind {
+        let given = self.params.iter().find(|(p, _)| p.key == params::PATTERN.key);
+        match given {
+            Some((_, params::Value::Choice("rotated"))) => PatternKind::Rotated,
+            _ => PatternKind::Grid,
+        }
+    }
 }
 
 /// The method flags: one per parameter some method declares (`methods::params`), with its
@@ -519,6 +543,7 @@ fn size_arg(text: &str) -> Result<u64, String> {
 /// the machine has available.
 fn check_budget(
     a: &RenderArgs,
+    method: &str,
     triangles: u64,
     (width, height): (u32, u32),
     options: &MethodOptions,
@@ -533,16 +558,19 @@ fn check_budget(
         triangles,
         width,
         height,
-        method: &a.method,
-        rate: methods::registry::stored_samples(&a.method, options).max(int("rate", 1)),
+        method,
+        rate: methods::registry::stored_samples(method, options).max(int("rate", 1)),
         map_res: int("map_res", 1024),
         reference,
     };
-    let what = format!("{} on {} at {width}x{height}", a.method, a.scene);
+    let what = format!("{method} on {} at {width}x{height}", a.scene);
     analysis::budget::check(&work, &limit, &what).map(|_| ()).map_err(input)
 }
 
 fn job(a: &RenderArgs, compared_with: Option<(&str, u32)>) -> Result<Job, Failure> {
+    let method = a.method.as_deref().ok_or_else(|| {
+        input(anyhow::anyhow!("--method is required (by compare, unless --visibility is given)"))
+    })?;
     let scene_error = |e| input(anyhow::anyhow!("--scene: {e}"));
     let described = scenes::describe(&a.scene).map_err(scene_error)?;
     for note in described.notes() {
@@ -552,17 +580,17 @@ fn job(a: &RenderArgs, compared_with: Option<(&str, u32)>) -> Result<Job, Failur
     for (p, v) in &a.params {
         options.set(p, *v);
     }
-    let technique = analysis::registry::technique(&a.method, &options).map_err(method_failure)?;
+    let technique = analysis::registry::technique(method, &options).map_err(method_failure)?;
     // The same reference as `technique` wraps (`registry::technique`'s rate and pattern).
-    let reference = if analysis::registry::REFERENCES.iter().any(|(n, _)| *n == a.method) {
+    let reference = if analysis::registry::REFERENCES.iter().any(|(n, _)| *n == method) {
         let rate = options.rate.unwrap_or(1);
         let pattern = options.pattern.unwrap_or_default();
-        Some(analysis::registry::reference(&a.method, rate, pattern).map_err(input)?)
+        Some(analysis::registry::reference(method, rate, pattern).map_err(input)?)
     } else {
         None
     };
     let params = technique.params();
-    let declared = analysis::registry::params_of(&a.method).unwrap_or_default();
+    let declared = analysis::registry::params_of(method).unwrap_or_default();
     for (p, _) in &a.params {
         if !declared.iter().any(|q| q.key == p.key) {
             eprintln!("note: {} does not use {}; ignored", technique.name(), p.flag);
@@ -579,14 +607,14 @@ fn job(a: &RenderArgs, compared_with: Option<(&str, u32)>) -> Result<Job, Failur
             )));
         }
     }
-    let samples = methods::registry::stored_samples(&a.method, &options);
+    let samples = methods::registry::stored_samples(method, &options);
     let flags = if samples > 1 { "--width, --height and --rate" } else { "--width and --height" };
     check_frame(width, height, samples).map_err(|m| input(anyhow::anyhow!("{flags}: {m}")))?;
     // The memory budget, before anything is built: from the scene's triangle bound, exact for
     // generated objects; a mesh file's bound can be loose, so a scene with one that the bound
     // refuses is loaded and checked again by its real count before the frame is built.
     let budget = |triangles: u64| {
-        check_budget(a, triangles, (width, height), &options, &params, compared_with)
+        check_budget(a, method, triangles, (width, height), &options, &params, compared_with)
     };
     let scene = match budget(described.triangles().map_err(scene_error)?) {
         Ok(()) => described.resolve().map_err(scene_error)?,
@@ -766,7 +794,7 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
         }
         None => format!("suite {}", suite.name),
     };
-    let measured = report.rows.len() + report.table_runs.len();
+    let measured = report.rows.len() + report.untimed.len() + report.table_runs.len();
     let not_run = match runs_planned.saturating_sub(measured as u64) {
         0 => String::new(),
         n => format!(" ({n} not run, see the notes above)"),
@@ -1022,99 +1050,53 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
     Ok(())
 }
 
+/// `--error-scale`, checked.
+fn error_scale(c: &CompareArgs) -> Result<f64, Failure> {
+    let error_scale = c.error_scale.unwrap_or(analysis::error_map::DEFAULT_MAX_ERROR);
+    analysis::error_map::check_scale(error_scale)
+        .map_err(|e| input(anyhow::anyhow!("--error-scale: {e}")))?;
+    Ok(error_scale)
+}
+
 fn compare(c: CompareArgs) -> Result<(), Failure> {
+    if let Some(file) = &c.outside.visibility_file {
+        return external::compare(&c, file);
+    }
+    external::refuse_outside_flags(&c.outside)?;
     let a = &c.render;
     let rate = c.ref_rate.unwrap_or(analysis::registry::DEFAULT_REF_RATE);
-    let edge_reference = c.edge_reference.unwrap_or(EdgeReference::Raytrace);
     let budget_reference = match c.reference {
         ReferenceName::Exact => ("exact", rate),
         ReferenceName::Raytrace => ("raytrace", rate),
     };
     let job = job(a, Some(budget_reference))?;
-    let error_scale = c.error_scale.unwrap_or(analysis::error_map::DEFAULT_MAX_ERROR);
-    analysis::error_map::check_scale(error_scale)
-        .map_err(|e| input(anyhow::anyhow!("--error-scale: {e}")))?;
-    let pattern = a.params.iter().find(|(p, _)| p.key == params::PATTERN.key).map_or(
-        PatternKind::default(),
-        |(_, v)| {
-            if *v == params::Value::Choice("rotated") {
-                PatternKind::Rotated
-            } else {
-                PatternKind::Grid
-            }
-        },
-    );
-    let (reference, ref_rate, edge_name): (Box<dyn Reference>, _, _) =
-        match (c.reference, edge_reference) {
-            (ReferenceName::Exact, EdgeReference::Raytrace) => (
-                analysis::registry::reference("exact", rate, pattern).map_err(input)?,
-                Some(rate),
-                Some("raytrace"),
-            ),
-            (ReferenceName::Exact, EdgeReference::None) => {
-                if c.ref_rate.is_some() {
-                    eprintln!(
-                        "note: exact with --edge-reference none does not use --ref-rate; ignored"
-                    );
-                }
-                (Box::new(ExactCoverage { edge: None }), None, Some("none"))
-            }
-            (ReferenceName::Raytrace, _) => {
-                if c.edge_reference.is_some() {
-                    eprintln!("note: raytrace does not use --edge-reference; ignored");
-                }
-                (
-                    analysis::registry::reference("raytrace", rate, pattern).map_err(input)?,
-                    Some(rate),
-                    None,
-                )
-            }
-        };
-    let ref_name = reference.name();
-    let tx = out_dir(a, &job, &format!("-vs-{ref_name}"))?;
+    let error_scale = error_scale(&c)?;
+    let chosen = reference::choose(&c)?;
+    let tx = out_dir(a, &job, &format!("-vs-{}", chosen.reference.name()))?;
+    let mut cache = reference::open_cache(&c.cache)?;
     let staging = tx.staging().to_owned();
 
     let (frame, ran, spread) = run_repeated(&job, a.repeat)?;
-    let mut ref_rec = Recorder::default();
-    let image = reference.evaluate(&frame, &mut ref_rec).map_err(input)?;
-    // A reference without classes (`raytrace`) is measured per class all the same: the
-    // classes are the camera's view of the triangles, whatever the reference.
-    let truth = Truth::new(&frame, image, &mut ref_rec);
-    let v = &ran.visibility;
-    let comparison = truth.compare(&frame, v).map_err(input)?;
-
+    let evaluated = reference::evaluate(&chosen, &job.scene, &frame, cache.as_mut())?;
     write_run(&staging, &frame, &ran)?;
-    for (name, mask) in [("error.png", &truth.headline), ("error_boundary.png", &truth.boundary())]
-    {
-        let path = staging.join(name);
-        analysis::error_map::error_map(v, &truth.reference.lit, mask, error_scale)?
-            .save(&path)
-            .with_context(|| format!("cannot write {}", path.display()))?;
-    }
     let record = &ran.record;
-    let metrics = reports::MetricsRecord {
-        comparison,
-        reference: ref_name.to_owned(),
-        ref_rate,
-        edge_reference: edge_name.map(String::from),
-        scene: record.scene.clone(),
+    let compared = reference::Compared {
         method: record.method.clone(),
         params: record.params.clone(),
-        width: job.width,
-        height: job.height,
-        method_ms: record.total_ms,
-        reference_ms: ref_rec.stages.total_ms(),
+        method_ms: Some(record.total_ms),
+        external: false,
     };
-    let text = serde_json::to_string_pretty(&metrics)?;
-    let path = staging.join("metrics.json");
-    std::fs::write(&path, format!("{text}\n"))
-        .with_context(|| format!("cannot write {}", path.display()))?;
+    let metrics = reference::score(
+        &frame,
+        &ran.visibility,
+        &chosen,
+        evaluated,
+        compared,
+        error_scale,
+        &staging,
+    )?;
     let out = commit_out(tx, "--out")?;
-    if a.json {
-        println!("{text}");
-    } else {
-        print_metrics(&metrics, &time_text(&ran.record, spread.as_ref()));
-    }
+    reference::report(&metrics, a.json, &time_text(record, spread.as_ref()), cache.as_ref())?;
     eprintln!("wrote {}", out.display());
     Ok(())
 }
@@ -1181,7 +1163,14 @@ fn print_metrics(m: &reports::MetricsRecord, time: &str) {
         "  (pixels: compared/in the frame; {} uncovered)",
         c.class_pixels.get("uncovered").copied().unwrap_or(0)
     );
-    println!("  time: method {time}; reference {:.1} ms wall", m.reference_ms);
+    match m.reference_read_ms {
+        Some(read) => println!(
+            "  time: method {time}; reference read from the cache in {read:.1} ms (computed in \
+             {:.1} ms wall by an earlier run)",
+            m.reference_ms
+        ),
+        None => println!("  time: method {time}; reference {:.1} ms wall", m.reference_ms),
+    }
 }
 
 fn main() -> ExitCode {
@@ -1201,6 +1190,7 @@ fn main() -> ExitCode {
             c.render.params = sub.map(given_params).unwrap_or_default();
             compare(c)
         }
+        Command::Frame(f) => external::frame(f),
         Command::Report(r) => report(r),
     };
     match result {

@@ -239,9 +239,9 @@ pub static DERIVATIVE_POWER: Param = Param {
 };
 
 /// How `pan09` turns half-planes into masks.
-pub static VISIBILITY: Param = Param {
-    key: "visibility",
-    flag: "--visibility",
+pub static MASKS: Param = Param {
+    key: "masks",
+    flag: "--masks",
     value_name: "MODE",
     help: "How `pan09` turns a blocker's half-planes into sub-sample masks; default table.",
     kind: Kind::Choice(&[
@@ -265,7 +265,7 @@ pub static SHARED: &[&Param] = &[
     &DEPTH_BITS,
     &SEED,
     &DERIVATIVE_POWER,
-    &VISIBILITY,
+    &MASKS,
 ];
 
 /// The parameters of a shadow map's depth test (`map_res` and the biases).
@@ -315,7 +315,7 @@ pub struct MethodOptions {
     pub seed: Option<u64>,
     /// Exponent of the derivative code `x^n` (`--derivative-power`), for packed SPSM texels.
     pub derivative_power: Option<u32>,
-    /// How `pan09` turns half-planes into sub-sample masks (`--visibility`).
+    /// How `pan09` turns half-planes into sub-sample masks (`--masks`).
     pub visibility: Option<VisibilityMode>,
     /// The values of parameters methods declare in their own modules, by key.
     pub own: BTreeMap<&'static str, Value>,
@@ -336,7 +336,7 @@ impl MethodOptions {
             "depth_bits" => self.depth_bits.map(Value::Count),
             "seed" => self.seed.map(Value::Seed),
             "derivative_power" => self.derivative_power.map(Value::Count),
-            "visibility" => self.visibility.map(|v| Value::Choice(v.name())),
+            "masks" => self.visibility.map(|v| Value::Choice(v.name())),
             _ => self.own.get(key).copied(),
         }
     }
@@ -356,7 +356,7 @@ impl MethodOptions {
             ("depth_bits", Value::Count(v)) => self.depth_bits = Some(v),
             ("seed", Value::Seed(v)) => self.seed = Some(v),
             ("derivative_power", Value::Count(v)) => self.derivative_power = Some(v),
-            ("visibility", Value::Choice(v)) => {
+            ("masks", Value::Choice(v)) => {
                 self.visibility =
                     Some(if v == "exact" { VisibilityMode::Exact } else { VisibilityMode::Table });
             }
@@ -416,7 +416,7 @@ mod tests {
             (&DEPTH_BITS, "12"),
             (&SEED, "18446744073709551615"),
             (&DERIVATIVE_POWER, "3"),
-            (&VISIBILITY, "exact"),
+            (&MASKS, "exact"),
         ];
         assert_eq!(values.len(), SHARED.len());
         for (p, text) in values {

@@ -223,7 +223,7 @@ pub static METHODS: &[MethodEntry] = &[
             &params::MAX_SLOPE,
             &params::RATE,
             &params::PATTERN,
-            &params::VISIBILITY,
+            &params::MASKS,
         ],
         stores_samples: None,
         cpu: |o| Ok(Box::new(Pan09::new(pan09_options(o)?)?)),

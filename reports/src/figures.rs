@@ -39,7 +39,7 @@
 //! GPU runs are separate series marked with triangles, named with the adapter, and a software
 //! adapter (llvmpipe, lavapipe) is said to be one.
 
-use crate::model::{Report, Row};
+use crate::model::{method_label, Report, Row};
 use crate::output::OutputError;
 pub use crate::plots::MAX_SERIES;
 use crate::plots::{pareto_front, write_chart, Chart, Marker, Point, Series};
@@ -249,7 +249,7 @@ pub fn series(rows: &[&Row], x: Measure, y: Measure, adapter: Option<&str>) -> V
             .map(|k| format!("{k}={}", r.param(k)))
             .collect();
         let device = device_label(r, adapter);
-        let label = [r.method.clone(), fixed.join(" "), device.clone()]
+        let label = [method_label(r), fixed.join(" "), device.clone()]
             .into_iter()
             .filter(|s| !s.is_empty())
             .collect::<Vec<_>>()
@@ -394,7 +394,7 @@ pub fn exceedance_series(rows: &[&Row]) -> Vec<Series> {
                 .take_while(|(_, &share)| share > 0.0)
                 .map(|(&t, &share)| Point::at(t, share))
                 .collect();
-            let label = [r.method.clone(), params_text(r)].join(" ").trim().to_owned();
+            let label = [method_label(r), params_text(r)].join(" ").trim().to_owned();
             let marker = if r.on_gpu() { Marker::Triangle } else { Marker::Circle };
             (!points.is_empty()).then_some(Series { label, marker, points })
         })

@@ -363,6 +363,7 @@ mod tests {
             skipped_stages: Vec::new(),
             counters: Default::default(),
             notes: Vec::new(),
+            external: false,
         }
     }
 

@@ -35,7 +35,7 @@ use crate::html::{
     anchor, metric_cells, Cell, Head, Note, ParamSplit, TableView, METRIC_COLUMNS,
     RUN_TABLE_METRICS,
 };
-use crate::model::{params_of, row_stem, Report, Row};
+use crate::model::{method_label, params_of, row_stem, Report, Row};
 use crate::summary::{
     budget_table, error_text, fronts, measured, ms_text, time_text, verdicts, Front, Measured,
     Verdict,
@@ -236,7 +236,12 @@ pub fn runs_table(rows: &[&Row], report: &Report) -> TableView {
         .iter()
         .map(|r| {
             let p = params_of(r);
-            let mut cells = vec![Cell::text(&r.method).link(format!("runs/{}.html", row_stem(r)))];
+            let method = Cell::text(method_label(r));
+            let mut cells = vec![if r.timed() {
+                method.link(format!("runs/{}.html", row_stem(r)))
+            } else {
+                method
+            }];
             cells.extend(
                 split.columns.iter().map(|c| Cell::parsed(p.get(*c).cloned().unwrap_or_default())),
             );
@@ -245,9 +250,13 @@ pub fn runs_table(rows: &[&Row], report: &Report) -> TableView {
             }
             let metrics = metric_cells(r);
             cells.extend(RUN_TABLE_METRICS.iter().map(|&k| metrics[k].clone()));
-            let t = r.time(clock);
-            cells.push(Cell::sorted(time_text(t), t.median));
-            cells.push(Cell::sorted(ms_text(r.total_ms.median), r.total_ms.median));
+            if r.timed() {
+                let t = r.time(clock);
+                cells.push(Cell::sorted(time_text(t), t.median));
+                cells.push(Cell::sorted(ms_text(r.total_ms.median), r.total_ms.median));
+            } else {
+                cells.extend([Cell::text("not given"), Cell::text("not given")]);
+            }
             cells.push(Cell::text(if r.contended { "yes" } else { "no" }));
             cells
         })
@@ -357,7 +366,9 @@ pub fn index_page(report: &Report, plots: &[PlotFile], baseline: Option<&Compari
         .iter()
         .map(|sc| {
             let id = format!("scene-{}", anchor(&sc.scene));
-            let rows: Vec<&Row> = report.rows.iter().filter(|r| r.scene == sc.scene).collect();
+            let rows: Vec<&Row> =
+                report.rows.iter().chain(&report.untimed).filter(|r| r.scene == sc.scene).collect();
+            let untimed = rows.iter().any(|r| !r.timed());
             let ref_rate = rows.first().and_then(|r| r.ref_rate);
             SceneSection {
                 grids: report
@@ -384,11 +395,18 @@ pub fn index_page(report: &Report, plots: &[PlotFile], baseline: Option<&Compari
                     "Frame {}x{}; reference {}{}; metrics over the shadow-only pixels (see the \
                      glossary); time: the method's own stages on the {clock} clock, median of \
                      the timed runs with the 95 % interval of the median, wall time beside it. \
-                     Each method links to its run's page, with every metric, stage and counter.",
+                     Each method links to its run's page, with every metric, stage and counter.{}",
                     sc.width,
                     sc.height,
                     sc.reference,
                     ref_rate.map_or_else(String::new, |r| format!(" at {r} samples per pixel")),
+                    if untimed {
+                        " Outside results without a time (marked external, time not given) are \
+                         in this table only, not in the charts, fronts or budgets, and have no \
+                         page."
+                    } else {
+                        ""
+                    },
                 ),
                 runs: (!rows.is_empty()).then(|| runs_table(&rows, report)),
                 name: sc.scene.clone(),

@@ -7,12 +7,15 @@
 //! [`summary`] computes (Pareto fronts, what the runs say of each method, the machine and its
 //! load), with the charts chosen by [`figures`] and drawn by [`plots`];
 //! the papers' tables and the cost-against-work tables are measured by [`tables`]; shards are
-//! put back together by [`merge`].
+//! put back together by [`merge`]. A frame for another renderer is written by [`frame_export`],
+//! and an outside renderer's result read by [`external`].
 
 pub mod baseline;
 pub mod cache;
 pub mod devices;
+pub mod external;
 pub mod figures;
+pub mod frame_export;
 pub mod grids;
 pub mod html;
 pub mod index;

@@ -163,7 +163,20 @@ fn check_runs(f: &Finished, plan: &[crate::plan::WorkItem]) -> Result<(), MergeE
     let fail = |message: String| MergeError::Unplanned { dir: f.dir.clone(), message };
     let mut per_item: BTreeMap<usize, usize> = BTreeMap::new();
     let mut seen = std::collections::HashSet::new();
-    for r in &f.report.rows {
+    for r in f.report.rows.iter().chain(&f.report.untimed).filter(|r| r.external) {
+        let name = crate::model::row_stem(r);
+        let planned = f.info.items.contains(&r.item).then(|| plan.get(r.item)).flatten();
+        let Some(Work::External { name: planned, .. }) = planned.map(|i| &i.work) else {
+            return Err(fail(format!(
+                "outside result {name} is of item {}, which the shard does not plan as one",
+                r.item
+            )));
+        };
+        if *planned != r.method || !seen.insert(name.clone()) {
+            return Err(fail(format!("outside result {name} is not planned once")));
+        }
+    }
+    for r in f.report.rows.iter().filter(|r| !r.external) {
         let name = crate::model::row_stem(r);
         let Some(Work::Runs { method, runs, .. }) =
             f.info.items.contains(&r.item).then(|| plan.get(r.item).map(|i| &i.work)).flatten()
@@ -341,6 +354,7 @@ fn assemble(suite: &crate::suite::Suite, shards: Vec<&Finished>) -> Report {
     let mut machine = first.info.machine.clone();
     machine.gpu = shards.iter().find_map(|f| f.info.machine.gpu.clone());
     let mut rows = Vec::new();
+    let mut untimed = Vec::new();
     let mut grids = Vec::new();
     let mut scenes = BTreeMap::new();
     let mut table_runs = Vec::new();
@@ -348,6 +362,10 @@ fn assemble(suite: &crate::suite::Suite, shards: Vec<&Finished>) -> Report {
     for f in &shards {
         let k = f.info.shard.index;
         rows.extend(f.report.rows.iter().cloned().map(|mut r| {
+            r.shard = Some(k);
+            r
+        }));
+        untimed.extend(f.report.untimed.iter().cloned().map(|mut r| {
             r.shard = Some(k);
             r
         }));
@@ -364,6 +382,7 @@ fn assemble(suite: &crate::suite::Suite, shards: Vec<&Finished>) -> Report {
     }
     // Stable sorts keep each item's runs in the order they ran.
     rows.sort_by_key(|r| r.item);
+    untimed.sort_by_key(|r| r.item);
     table_runs.sort_by_key(|r| r.item);
     grids.sort_by_key(|g| g.item);
     let mut seen = std::collections::HashSet::new();
@@ -379,6 +398,7 @@ fn assemble(suite: &crate::suite::Suite, shards: Vec<&Finished>) -> Report {
         scenes: scenes.into_values().collect(),
         rows,
         skipped,
+        untimed,
         grids,
         tables: crate::tables::build_all(&suite.tables, &table_runs),
         table_runs,

@@ -82,6 +82,10 @@ pub struct Row {
     pub counters: Counters,
     /// The method's notes.
     pub notes: Vec<String>,
+    /// Whether the row is an outside renderer's result (a suite's `[[external]]`), scored
+    /// like a method's run; its time is the one the suite gives, on both clocks.
+    #[serde(default)]
+    pub external: bool,
 }
 
 impl Row {
@@ -91,6 +95,12 @@ impl Row {
             (Clock::Cpu, Some(cpu)) => cpu,
             _ => &self.total_ms,
         }
+    }
+
+    /// Whether the row has a time: every method's run, an outside result when the suite gives
+    /// its time ([`Report::untimed`] holds the others).
+    pub fn timed(&self) -> bool {
+        self.total_ms.n > 0
     }
 
     /// Whether the run was on a GPU (its parameters say `"device": "gpu"`).
@@ -154,6 +164,12 @@ pub struct Report {
     pub table_runs: Vec<TableRun>,
     /// What could not run, and why.
     pub skipped: Vec<String>,
+    /// Outside renderers' results without a time (a suite's `[[external]]` without
+    /// `time_ms` for their scene): scored as the rows are, shown in the runs tables, kept
+    /// out of everything that takes a time (charts, fronts, budgets, baselines); their
+    /// `total_ms` has `n` = 0.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub untimed: Vec<Row>,
     /// Image grids, by title and file.
     pub grids: Vec<GridFile>,
     /// The papers' tables, measured.
@@ -245,6 +261,16 @@ pub struct Images {
     pub scenes: Vec<SceneImages>,
     /// The grids' panels.
     pub grids: Vec<GridImages>,
+}
+
+/// The row's method as charts and tables name it: an outside renderer's result is marked
+/// `NAME (external)`.
+pub fn method_label(row: &Row) -> String {
+    if row.external {
+        format!("{} (external)", row.method)
+    } else {
+        row.method.clone()
+    }
 }
 
 /// The parameters every label names where a method has them (the ones the published

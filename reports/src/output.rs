@@ -153,10 +153,23 @@ pub struct MetricsRecord {
     pub width: u32,
     /// Frame height.
     pub height: u32,
-    /// The method's total stage time, milliseconds.
-    pub method_ms: f64,
-    /// The reference's total stage time (pixel classes included), milliseconds.
+    /// The method's total stage time, milliseconds; for an outside result, the time its
+    /// renderer reported (`--time-ms`), `None` when not given.
+    pub method_ms: Option<f64>,
+    /// The reference's total stage time (pixel classes included), milliseconds: the time of
+    /// its computation, by the run that computed it when it was read from a cache.
     pub reference_ms: f64,
+    /// Whether the reference was read from a cache instead of computed.
+    #[serde(default)]
+    pub reference_cached: bool,
+    /// The time this run took to read the reference from the cache, milliseconds (`None`
+    /// when it was computed).
+    #[serde(default)]
+    pub reference_read_ms: Option<f64>,
+    /// Whether the result is an outside renderer's (`compare --visibility`, a suite's
+    /// `[[external]]` entry) rather than a method's run.
+    #[serde(default)]
+    pub external: bool,
 }
 
 /// Writes the run record as pretty JSON.

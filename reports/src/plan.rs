@@ -4,8 +4,11 @@
 //! The items, in the order an unsharded report runs them: for each scene of the suite, one
 //! item per `[[run]]` (every combination of its parameters on that scene), then one per image
 //! grid of that scene, then, for each further frame size the runs give (`width`, `height`),
-//! one item per `[[run]]` that asks for it; then the papers' tables, one item per scene and frame of a table (its
-//! runs there, [`crate::tables::table_items`]). A table's item whose scene and frame are a
+//! one item per `[[run]]` that asks for it; then the papers' tables, one item per scene and
+//! frame of a table (its runs there, [`crate::tables::table_items`]). After a scene's `[[run]]`
+//! items on its own frame come its outside results, one item per `[[external]]` entry with a
+//! file for the scene (its cost: the frame's pixels, one comparison). A table's item whose
+//! scene and frame are a
 //! suite scene's follows that scene's items, so that its runs share the scene's frame and are
 //! measured with its runs; the others come last. Each item names its scene, frame and
 //! reference (none for a table's own frame: a table measures times and counters), lists its
@@ -45,6 +48,14 @@ pub enum Work {
         /// Its title.
         title: String,
     },
+    /// The suite's `[[external]]` entry number `external`: its result on the item's scene,
+    /// scored against the scene's reference.
+    External {
+        /// Index into the suite's externals.
+        external: usize,
+        /// The outside renderer's name.
+        name: String,
+    },
     /// The runs the suite's table number `table` makes on the item's scene at the item's
     /// frame (a table's scenes and frames are its own, [`crate::tables::table_items`]).
     Table {
@@ -81,8 +92,8 @@ pub struct WorkItem {
     /// The estimated cost (see the module documentation).
     pub cost: f64,
     /// The estimated peak memory of its heaviest run with its reference, bytes
-    /// (`analysis::budget`; 0 for a grid, whose runs are the suite's, and for a scene that
-    /// cannot be loaded).
+    /// (`analysis::budget`; 0 for a grid, whose runs are the suite's, for an outside result,
+    /// which runs nothing, and for a scene that cannot be loaded).
     #[serde(default)]
     pub memory: u64,
 }
@@ -219,6 +230,13 @@ pub fn plan(suite: &Suite) -> Vec<WorkItem> {
             }
             if n > 0 {
                 continue;
+            }
+            for (k, e) in suite.externals.iter().enumerate() {
+                if e.files.contains_key(name) {
+                    let work = Work::External { external: k, name: e.name.clone() };
+                    let it = item(work, size, pixels, 0, &items);
+                    items.push(it);
+                }
             }
             for (k, grid) in suite.grids.iter().enumerate().filter(|(_, g)| g.scene == *name) {
                 let cost = grid

@@ -79,6 +79,8 @@ pub enum Kind {
     Shard,
     /// One run's files (`render`, `compare`).
     Run,
+    /// A frame for another renderer (`frame`).
+    Frame,
 }
 
 impl Kind {
@@ -88,16 +90,19 @@ impl Kind {
             Kind::Report => "report",
             Kind::Shard => "report shard",
             Kind::Run => "run (render or compare)",
+            Kind::Frame => "frame (frame)",
         }
     }
 
     /// Whether an output of this kind may replace one of `earlier`'s: reports and shards
     /// replace each other (a folder reused for a sharded run of the same suite), runs replace
-    /// runs.
+    /// runs, frames frames.
     fn replaces(self, earlier: Kind) -> bool {
         matches!(
             (self, earlier),
-            (Kind::Report | Kind::Shard, Kind::Report | Kind::Shard) | (Kind::Run, Kind::Run)
+            (Kind::Report | Kind::Shard, Kind::Report | Kind::Shard)
+                | (Kind::Run, Kind::Run)
+                | (Kind::Frame, Kind::Frame)
         )
     }
 }

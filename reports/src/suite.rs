@@ -32,6 +32,13 @@
 //!
 //! [[table]]                  # a paper's table, see `tables`
 //! paper = "lecocq-table2"
+//!
+//! [[external]]                # an outside renderer's results, scored like a method's runs
+//! name = "my-renderer"        # its rows' method name (not a method of the workbench)
+//! time_ms = 12.5              # its time on every scene, or a table: { cage = 12.5 }; absent:
+//!                             # untimed (in the runs tables only, not in the cost charts)
+//! [external.files]            # scene -> EXR of the suite's frame (one channel, the lit fraction,
+//! plane-square = "out/plane-square.exr"  # see `shadowbench frame`); relative to this file
 //! ```
 //!
 //! Unknown keys and bad values are errors that name the file and the key (and the line,
@@ -50,6 +57,8 @@
 //! file, its line; the line comes from a second pass of the TOML parser that keeps spans
 //! ([`Spans`]), so the suite's own types stay plain. A built-in scene whose optional model
 //! has not been fetched is the one thing left to the run, which lists it as not run.
+//! An `[[external]]` entry's files must exist and be of the suite's scenes (their size is
+//! checked when they are scored, a file of another size is listed as not run).
 
 use crate::tables::TableSpec;
 use instrumentation::measure::{Clock, Protocol};
@@ -155,6 +164,17 @@ struct Spans {
     grids: Vec<GridSpans>,
     #[serde(default, rename = "table")]
     tables: Vec<TableSpans>,
+    #[serde(default, rename = "external")]
+    externals: Vec<ExternalSpans>,
+}
+
+/// The spans of an `[[external]]`.
+#[derive(Debug, Default, Deserialize)]
+struct ExternalSpans {
+    name: Option<Spanned<String>>,
+    #[serde(default)]
+    files: std::collections::BTreeMap<String, Spanned<toml::Value>>,
+    time_ms: Option<Spanned<toml::Value>>,
 }
 
 /// The spans of a grid panel.
@@ -403,6 +423,45 @@ pub struct PanelSpec {
     pub classes: bool,
 }
 
+/// An outside renderer's results on the suite's scenes (`[[external]]`), each scored against
+/// its scene's reference like a method's run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExternalSpec {
+    /// The renderer's name: its rows' method (letters, digits, `-`, `_`, `.`; not the name
+    /// of one of the workbench's methods).
+    pub name: String,
+    /// For each scene of the suite it rendered, its EXR (one channel named `Y`, `L`, `lit` or
+    /// `visibility`, the lit fraction in [0, 1], the suite's frame size,
+    /// [`crate::external::read_visibility`]); relative paths are resolved against the suite
+    /// file's folder when the suite is read.
+    pub files: std::collections::BTreeMap<String, PathBuf>,
+    /// Its time, milliseconds: one for every scene, or per scene; absent: untimed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub time_ms: Option<ExternalTime>,
+}
+
+/// An outside renderer's time (`[[external]]`'s `time_ms`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum ExternalTime {
+    /// The same on every scene.
+    All(f64),
+    /// Per scene (scenes not listed are untimed).
+    PerScene(std::collections::BTreeMap<String, f64>),
+}
+
+impl ExternalSpec {
+    /// Its time on `scene`, milliseconds, when given.
+    pub fn time_on(&self, scene: &str) -> Option<f64> {
+        match &self.time_ms {
+            Some(ExternalTime::All(t)) => Some(*t),
+            Some(ExternalTime::PerScene(m)) => m.get(scene).copied(),
+            None => None,
+        }
+    }
+}
+
 /// An image grid with a zoomed inset, like the papers' comparison figures.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -473,6 +532,9 @@ pub struct Suite {
     /// The papers' tables ([`crate::tables`]).
     #[serde(default, rename = "table")]
     pub tables: Vec<TableSpec>,
+    /// Outside renderers' results ([`ExternalSpec`]).
+    #[serde(default, rename = "external", skip_serializing_if = "Vec::is_empty")]
+    pub externals: Vec<ExternalSpec>,
 }
 
 fn one() -> u32 {
@@ -519,7 +581,7 @@ pub const BUILTIN_SUITES: &[(&str, &str)] = &[
 impl Suite {
     /// Parses and checks suite `text`, naming `path` in errors.
     pub fn parse(text: &str, path: &Path) -> Result<Self, SuiteError> {
-        let suite: Suite = toml::from_str(text)
+        let mut suite: Suite = toml::from_str(text)
             .map_err(|e| SuiteError::Parse { path: path.to_owned(), message: e.to_string() })?;
         let spans: Spans = toml::from_str(text).unwrap_or_default();
         let line = |span: Option<Span>| {
@@ -591,7 +653,73 @@ impl Suite {
             }
         }
         suite.check_values(&spans, &at)?;
+        let base = path.parent().unwrap_or(Path::new(""));
+        for e in &mut suite.externals {
+            for file in e.files.values_mut() {
+                if file.is_relative() {
+                    *file = base.join(&*file);
+                }
+            }
+        }
+        suite.check_externals(&spans, &at)?;
         Ok(suite)
+    }
+
+    /// Checks the `[[external]]` entries: names, scenes, files (their paths resolved from the
+    /// suite file's folder) and times, as the module doc says.
+    fn check_externals(&self, spans: &Spans, at: &ErrorAt<'_>) -> Result<(), SuiteError> {
+        let plain = |c: char| c.is_ascii_alphanumeric() || "-_.".contains(c);
+        for (k, e) in self.externals.iter().enumerate() {
+            let span = spans.externals.get(k);
+            let name_span = span.and_then(|s| s.name.as_ref().map(Spanned::span));
+            let key = |sub: &str| format!("external[{k}].{sub}");
+            if e.name.is_empty() || !e.name.chars().all(plain) || e.name.starts_with('.') {
+                let message = "use letters, digits, `-`, `_` and `.` (not first)".to_owned();
+                return Err(at(name_span, &key("name"), message));
+            }
+            let taken = methods::registry::METHODS.iter().any(|m| m.name == e.name)
+                || analysis::registry::REFERENCES.iter().any(|(m, _)| *m == e.name)
+                || self.externals[..k].iter().any(|o| o.name == e.name);
+            if taken {
+                let message = format!("`{}` is already the name of a method or entry", e.name);
+                return Err(at(name_span, &key("name"), message));
+            }
+            if e.files.is_empty() {
+                return Err(at(name_span, &key("files"), "must name at least one scene".into()));
+            }
+            for (scene, file) in &e.files {
+                let file_span = span.and_then(|s| s.files.get(scene).map(Spanned::span));
+                let key = key(&format!("files.{scene}"));
+                if !self.scenes.contains(scene) {
+                    let message = format!("`{scene}` is not one of the suite's scenes");
+                    return Err(at(file_span, &key, message));
+                }
+                if !file.is_file() {
+                    let message = format!(
+                        "{} is not a file (relative paths are taken from the suite file's folder)",
+                        file.display()
+                    );
+                    return Err(at(file_span, &key, message));
+                }
+            }
+            let time_span = span.and_then(|s| s.time_ms.as_ref().map(Spanned::span));
+            let times: Vec<(Option<&String>, f64)> = match &e.time_ms {
+                Some(ExternalTime::All(t)) => vec![(None, *t)],
+                Some(ExternalTime::PerScene(m)) => m.iter().map(|(s, t)| (Some(s), *t)).collect(),
+                None => Vec::new(),
+            };
+            for (scene, t) in times {
+                if !(t.is_finite() && t >= 0.0) {
+                    let message = format!("{t} is not a time (a finite number >= 0)");
+                    return Err(at(time_span, &key("time_ms"), message));
+                }
+                if let Some(scene) = scene.filter(|s| !e.files.contains_key(*s)) {
+                    let message = format!("`{scene}` has no file in `files`");
+                    return Err(at(time_span, &key("time_ms"), message));
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Checks what the runs take: methods and their values, grid panels, scenes and the
@@ -824,7 +952,7 @@ mod tests {
         let p = Path::new("s.toml");
         let base = "name = \"x\"\nscenes = [\"cage\"]\n[[run]]\n";
         let run = "method = \"pan09\"\npattern = [\"grid\", \"rotated\"]\nslope_bias = [1, 2.5]\n\
-                   visibility = \"exact\"\nwidth = [64, 32]\nheight = [48, 24]\n";
+                   masks = \"exact\"\nwidth = [64, 32]\nheight = [48, 24]\n";
         let s = Suite::parse(&format!("{base}{run}"), p).expect("parses");
         let spec = &s.runs[0];
         assert_eq!(spec.sizes(), vec![Some((64, 48)), Some((32, 24))]);
@@ -866,6 +994,70 @@ mod tests {
         for (run, at, needles) in cases {
             let e = Suite::parse(&format!("{base}{run}\n"), p).expect_err(at).to_string();
             assert!(e.contains(at), "{at}: {e}");
+            for n in *needles {
+                assert!(e.contains(n), "{at}: `{n}` not in {e}");
+            }
+        }
+    }
+
+    /// `[[external]]` entries: files relative to the suite's folder, times per scene or one;
+    /// every error names the file, the line and the key.
+    #[test]
+    fn external_entries_are_checked_with_their_line() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        std::fs::write(dir.path().join("cage.exr"), b"").expect("writes");
+        let p = dir.path().join("s.toml");
+        let suite = |external: &str| {
+            format!(
+                "name = \"x\"\nscenes = [\"cage\", \"plane-square\"]\n[[run]]\nmethod = \"sm\"\n\
+                 [[external]]\n{external}\n"
+            )
+        };
+        let ok = Suite::parse(
+            &suite("name = \"mine\"\ntime_ms = { cage = 3 }\nfiles = { cage = \"cage.exr\" }"),
+            &p,
+        )
+        .expect("parses");
+        let e = &ok.externals[0];
+        assert_eq!(e.files["cage"], dir.path().join("cage.exr"), "resolved beside the suite");
+        assert_eq!((e.time_on("cage"), e.time_on("plane-square")), (Some(3.0), None));
+        let one = suite("name = \"mine\"\ntime_ms = 4.5\nfiles = { cage = \"cage.exr\" }");
+        assert_eq!(Suite::parse(&one, &p).expect("parses").externals[0].time_on("cage"), Some(4.5));
+        let cases: &[(&str, &str, &[&str])] = &[
+            (
+                "name = \"sm\"\nfiles = { cage = \"cage.exr\" }",
+                "line 6: `external[0].name`",
+                &["`sm`"],
+            ),
+            (
+                "name = \"a b\"\nfiles = { cage = \"cage.exr\" }",
+                "line 6: `external[0].name`",
+                &["letters"],
+            ),
+            (
+                "name = \"mine\"\nfiles = { spheres = \"cage.exr\" }",
+                "line 7: `external[0].files.spheres`",
+                &["not one of the suite's scenes"],
+            ),
+            (
+                "name = \"mine\"\nfiles = { cage = \"missing.exr\" }",
+                "line 7: `external[0].files.cage`",
+                &["missing.exr", "is not a file"],
+            ),
+            (
+                "name = \"mine\"\ntime_ms = -1\nfiles = { cage = \"cage.exr\" }",
+                "line 7: `external[0].time_ms`",
+                &["-1"],
+            ),
+            (
+                "name = \"mine\"\ntime_ms = { plane-square = 1 }\nfiles = { cage = \"cage.exr\" }",
+                "line 7: `external[0].time_ms`",
+                &["plane-square", "no file"],
+            ),
+        ];
+        for (entry, at, needles) in cases {
+            let e = Suite::parse(&suite(entry), &p).expect_err(at).to_string();
+            assert!(e.starts_with(&format!("{}: ", p.display())) && e.contains(at), "{at}: {e}");
             for n in *needles {
                 assert!(e.contains(n), "{at}: `{n}` not in {e}");
             }

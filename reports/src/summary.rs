@@ -133,7 +133,7 @@ fn front_runs(report: &Report, rows: &[&Row]) -> Vec<FrontRun> {
         .map(|r| {
             let t = r.time(report.clock);
             FrontRun {
-                method: r.method.clone(),
+                method: crate::model::method_label(r),
                 params: params_text(r),
                 short: short_params(r),
                 page: format!("runs/{}.html", row_stem(r)),

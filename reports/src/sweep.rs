@@ -31,6 +31,7 @@ use analysis::compare::Truth;
 use analysis::metrics::exceedance;
 use analysis::{error_image, Metrics, ReferenceImage};
 use instrumentation::measure::{measure_all, Measured};
+use instrumentation::stats::Summary;
 use instrumentation::{Provenance, Recorder, RunIdentity};
 use methods::{registry::Device, Frame, MethodOptions, ShadowMethod, Visibility};
 use std::time::Duration;
@@ -43,7 +44,7 @@ fn reference_for(
     frame: &Frame<'_>,
     cache: Option<&mut ReferenceCache>,
     build: &str,
-) -> Result<(String, Option<u32>, ReferenceImage, f64), String> {
+) -> Result<(String, Option<u32>, ReferenceImage, f64, bool), String> {
     let use_exact = match suite.reference {
         ReferenceChoice::Auto => !frame.effects.transparency,
         ReferenceChoice::Exact => true,
@@ -62,11 +63,18 @@ fn reference_for(
         let image = r.evaluate(frame, &mut Recorder::default()).map_err(|e| e.to_string())?;
         Ok::<_, String>((image, t.elapsed().as_secs_f64() * 1e3))
     };
-    let (image, ms) = match cache {
-        Some(c) => c.get_or_compute(scene, frame, name, rate, build, compute)?,
-        None => compute()?,
+    let (image, ms, cached) = match cache {
+        Some(c) => {
+            let hits = c.stats.hits;
+            let (image, ms) = c.get_or_compute(scene, frame, name, rate, build, compute)?;
+            (image, ms, c.stats.hits > hits)
+        }
+        None => {
+            let (image, ms) = compute()?;
+            (image, ms, false)
+        }
     };
-    Ok((name.to_owned(), rate, image, ms))
+    Ok((name.to_owned(), rate, image, ms, cached))
 }
 
 /// A panel of the sub-pixel shadow map's pixel classes (Lecocq et al. Fig. 14).
@@ -181,6 +189,7 @@ pub fn items_run_count(plan: &[WorkItem], items: &[usize]) -> u64 {
         .map(|&k| match &plan[k].work {
             Work::Runs { runs, .. } => runs.len() as u64,
             Work::Grid { .. } => 0,
+            Work::External { .. } => 1,
             Work::Table { runs, .. } => runs.len() as u64,
         })
         .sum()
@@ -196,6 +205,8 @@ struct SceneRun<'s> {
     ref_name: String,
     ref_rate: Option<u32>,
     reference_ms: f64,
+    /// Whether the reference was read from the cache.
+    reference_cached: bool,
     /// The reference, the pixel classes and the shadow-only pixels the metrics are taken over.
     truth: Truth,
     /// Index of its images in [`Images::scenes`].
@@ -244,9 +255,15 @@ fn item_runs(suite: &Suite, item: &WorkItem) -> Vec<(String, f64)> {
             made.into_iter().map(|(m, o)| (m.to_owned(), o)).collect()
         }
         Work::Grid { .. } => Vec::new(),
+        Work::External { name, .. } => return vec![(external_key(name), item.cost)],
     };
     let per = item.cost / runs.len().max(1) as f64;
     runs.iter().map(|(m, o)| (key_of(m, o), per)).collect()
+}
+
+/// The key an estimate prices the scoring of an outside result by.
+fn external_key(name: &str) -> String {
+    format!("external {name}")
 }
 
 /// Every run of the items of `plan` numbered in `items`, with its key and estimated cost.
@@ -289,6 +306,7 @@ pub fn run_items(
         rows: Vec::new(),
         table_runs: Vec::new(),
         skipped: Vec::new(),
+        untimed: Vec::new(),
         grids: Vec::new(),
         tables: Vec::new(),
         cache: None,
@@ -359,7 +377,7 @@ pub fn run_items(
                 None => "",
             };
             match reference_for(suite, &scene, &frame, cache.as_deref_mut(), build) {
-                Ok((ref_name, ref_rate, image, reference_ms)) => {
+                Ok((ref_name, ref_rate, image, reference_ms, reference_cached)) => {
                     // The metrics are taken over the shadow-only pixels, by the frame's pixel
                     // classes (the reference's own, or the camera's view of the triangles when
                     // it has none), as `compare`'s headline is.
@@ -393,6 +411,7 @@ pub fn run_items(
                         ref_name,
                         ref_rate,
                         reference_ms,
+                        reference_cached,
                         truth,
                         images: images.scenes.len(),
                     });
@@ -425,7 +444,7 @@ pub fn run_items(
                         .map(|(run, (m, o))| (Purpose::Table { table: *table, run }, m, o))
                         .collect()
                 }
-                Work::Grid { .. } => continue,
+                Work::Grid { .. } | Work::External { .. } => continue,
             };
             let cost = item.cost / runs.len().max(1) as f64;
             for (purpose, method, options) in runs {
@@ -485,6 +504,21 @@ pub fn run_items(
                     counters: m.record.counters,
                 }),
                 (Purpose::Suite(_), None) => {}
+            }
+        }
+        for item in group {
+            let Work::External { external, name } = &item.work else { continue };
+            let spent = std::time::Instant::now();
+            let scored = match &ctx {
+                Some(ctx) => add_external(suite, ctx, item, *external, &mut report, &mut images),
+                None => Err("the scene's reference could not be computed".to_owned()),
+            };
+            match scored {
+                Ok(()) => tick(&label(name), &external_key(name), item.cost, Some(spent.elapsed())),
+                Err(e) => {
+                    report.skipped.push(format!("external {name} on {scene_name}: {e}"));
+                    tick(&label(name), &external_key(name), item.cost, None);
+                }
             }
         }
         let Some(ctx) = ctx else { continue };
@@ -576,6 +610,7 @@ pub fn run_table(
         runs: Vec::new(),
         grids: Vec::new(),
         tables: vec![spec.clone()],
+        externals: Vec::new(),
     };
     let (report, _) = run_suite(&suite, |p| progress(p.label));
     skipped.extend(report.skipped);
@@ -628,8 +663,11 @@ fn add_run(
         params: record.params.clone(),
         width: w,
         height: h,
-        method_ms: record.total_ms,
+        method_ms: Some(record.total_ms),
         reference_ms: ctx.reference_ms,
+        reference_cached: ctx.reference_cached,
+        reference_read_ms: None,
+        external: false,
     };
     let truth = &ctx.truth;
     report.rows.push(Row {
@@ -655,6 +693,7 @@ fn add_run(
         skipped_stages: record.skipped_stages.clone(),
         counters: record.counters,
         notes: record.notes.clone(),
+        external: false,
     });
     images.runs.push(Produced {
         row: report.rows.len() - 1,
@@ -663,6 +702,112 @@ fn add_run(
         record,
         metrics,
     });
+}
+
+/// Scores the suite's `[[external]]` entry number `k` on `item`'s scene, `ctx` (its file read
+/// and checked against the frame, [`crate::external::read_visibility`]), and adds its row: to
+/// the rows, with its record, metrics and images, when the suite gives its time on the scene;
+/// else to the untimed results ([`Report::untimed`]). The error says why it could not be
+/// scored.
+fn add_external(
+    suite: &Suite,
+    ctx: &SceneRun<'_>,
+    item: &WorkItem,
+    k: usize,
+    report: &mut Report,
+    images: &mut Images,
+) -> Result<(), String> {
+    let spec = &suite.externals[k];
+    let scene_key = item.scene.as_deref().unwrap_or_default();
+    let file = spec.files.get(scene_key).ok_or("the entry has no file for the scene")?;
+    let (w, h) = (ctx.frame.width(), ctx.frame.height());
+    let v = crate::external::read_visibility(file, w, h).map_err(|e| e.to_string())?;
+    let comparison = ctx.truth.compare(ctx.frame, &v).map_err(|e| e.to_string())?;
+    let time = spec.time_on(scene_key);
+    let truth = &ctx.truth;
+    let untimed = Summary {
+        n: 0,
+        median: 0.0,
+        ci_low: None,
+        ci_high: None,
+        ci_level: None,
+        min: 0.0,
+        max: 0.0,
+    };
+    let notes = vec![format!("an outside renderer's result, read from {}", file.display())];
+    let row = Row {
+        scene: ctx.label.clone(),
+        method: spec.name.clone(),
+        params: serde_json::Map::new(),
+        width: w,
+        height: h,
+        reference: ctx.ref_name.clone(),
+        ref_rate: ctx.ref_rate,
+        metrics: Metrics::compare(&v, &truth.reference.lit, &truth.headline),
+        flip_mean: comparison.flip_mean,
+        pixel_match_lecocq: comparison.pixel_match_lecocq,
+        error_exceedance: exceedance(&v, &truth.reference.lit, &truth.headline).unwrap_or_default(),
+        classes: Some(comparison.classes),
+        item: item.item,
+        shard: None,
+        total_ms: time.and_then(|t| Summary::of(&[t])).unwrap_or(untimed),
+        cpu_ms: None,
+        contended: false,
+        conditions: None,
+        stages: Vec::new(),
+        skipped_stages: Vec::new(),
+        counters: Default::default(),
+        notes: notes.clone(),
+        external: true,
+    };
+    let Some(time) = time else {
+        report.untimed.push(row);
+        return Ok(());
+    };
+    let metrics = MetricsRecord {
+        comparison,
+        reference: ctx.ref_name.clone(),
+        ref_rate: ctx.ref_rate,
+        edge_reference: (ctx.ref_name == "exact").then(|| "none".to_owned()),
+        scene: ctx.label.clone(),
+        method: spec.name.clone(),
+        params: serde_json::Map::new(),
+        width: w,
+        height: h,
+        method_ms: Some(time),
+        reference_ms: ctx.reference_ms,
+        reference_cached: ctx.reference_cached,
+        reference_read_ms: None,
+        external: true,
+    };
+    let record = instrumentation::RunRecord {
+        scene: ctx.label.clone(),
+        method: spec.name.clone(),
+        params: serde_json::Map::new(),
+        width: w,
+        height: h,
+        effects: ctx.effects.clone(),
+        counters: Default::default(),
+        stages: Vec::new(),
+        skipped_stages: Vec::new(),
+        notes,
+        warnings: Vec::new(),
+        total_ms: time,
+        cpu_ms: None,
+        clocks: "total_ms: the time the suite gives for the outside renderer".to_owned(),
+        timing: None,
+        pixel_classes: None,
+        provenance: Some(report.provenance.clone()),
+    };
+    report.rows.push(row);
+    images.runs.push(Produced {
+        row: report.rows.len() - 1,
+        scene: ctx.images,
+        visibility: v,
+        record,
+        metrics,
+    });
+    Ok(())
 }
 
 #[cfg(test)]

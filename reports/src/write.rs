@@ -62,6 +62,7 @@ pub const CSV_COLUMNS: &[&str] = &[
     "loadavg_after",
     "commit",
     "version",
+    "external",
 ];
 
 /// Stage names over every row of `report`, in the order they first appear.
@@ -75,7 +76,8 @@ fn stage_names(report: &Report) -> Vec<&str> {
     names
 }
 
-/// `runs.csv`, tidy: a header, then one line per run, one column per quantity. Cells are
+/// `runs.csv`, tidy: a header, then one line per run (outside results with a time included,
+/// `external` true), one column per quantity. Cells are
 /// numbers (or text for names), with no thousands suffix; an empty cell is a quantity that
 /// does not apply (a parameter the method has not, the boundary error of a run without
 /// boundary pixels, a stage the run did not have). After [`CSV_COLUMNS`], the error's
@@ -141,6 +143,7 @@ pub fn csv(report: &Report) -> Result<String, OutputError> {
             opt(r.conditions.and_then(|c| c.loadavg_after)),
             report.provenance.commit.clone(),
             report.provenance.version.clone(),
+            r.external.to_string(),
         ];
         let shares = r.error_exceedance.iter().map(|v| Some(*v)).chain(std::iter::repeat(None));
         cells.extend(shares.take(EXCEEDANCE_THRESHOLDS.len()).map(opt));
@@ -171,10 +174,12 @@ pub fn summary_text(t: &instrumentation::stats::Summary) -> String {
 }
 
 /// A row's cells in the per-scene run tables: [`RUN_COLUMNS`], the time on `clock` (median
-/// with its interval), the wall time and whether it was contended.
+/// with its interval), the wall time and whether it was contended. An outside result's method
+/// is marked `(external)`; one without a time has its times `not given`.
 pub fn run_cells(r: &Row, clock: instrumentation::measure::Clock) -> [String; 9] {
+    let given = |text: String| if r.timed() { text } else { "not given".to_owned() };
     [
-        r.method.clone(),
+        crate::model::method_label(r),
         param_label(r),
         format!("{:.5}", r.metrics.mean_abs_error),
         if r.metrics.boundary_pixels == 0 {
@@ -184,8 +189,8 @@ pub fn run_cells(r: &Row, clock: instrumentation::measure::Clock) -> [String; 9]
         },
         format!("{:.2} %", 100.0 * r.metrics.pixel_match),
         format!("{:.4}", r.flip_mean),
-        time_text(r.time(clock)),
-        ms_text(r.total_ms.median),
+        given(time_text(r.time(clock))),
+        given(ms_text(r.total_ms.median)),
         if r.contended { "yes" } else { "no" }.to_owned(),
     ]
 }
@@ -346,6 +351,7 @@ pub fn markdown(report: &Report, plots: &[PlotFile]) -> String {
         let rows: Vec<Vec<String>> = report
             .rows
             .iter()
+            .chain(&report.untimed)
             .filter(|r| r.scene == sc.scene)
             .map(|r| run_cells(r, report.clock).to_vec())
             .collect();
@@ -472,4 +478,79 @@ pub fn write_summary(
         }
     }
     crate::run_pages::write_run_pages(dir, report).map(|_| ())
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::model::{Report, Row};
+    use crate::plan::{Work, WorkItem};
+    use crate::suite::Suite;
+    use instrumentation::Recorder;
+    use methods::{Frame, MethodOptions};
+
+    /// A suite's `[[external]]` results: `sm`'s own lit fraction, read back from an EXR, is
+    /// scored exactly as the `sm` run it came from; with a time it is a row, in the runs
+    /// table and on the error-against-time (Pareto) chart, marked external; without one, in
+    /// the runs table only, its time not given.
+    #[test]
+    fn outside_results_are_scored_as_rows_and_drawn_only_with_a_time() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let scene = scenes::load("plane-square").expect("built in");
+        let (w, h) = (48, 36);
+        let frame = Frame::new(&scene, w, h, &mut Recorder::default());
+        let sm = analysis::registry::technique("sm", &MethodOptions::default()).expect("sm");
+        let v = sm.run(&frame, &mut Recorder::default()).expect("runs");
+        crate::output::write_visibility_exr(&dir.path().join("sm.exr"), &v).expect("writes");
+        let text = format!(
+            "name = \"outside\"\nwidth = {w}\nheight = {h}\nwarmup = 0\nrepeats = 1\n\
+             scenes = [\"plane-square\"]\n[[run]]\nmethod = \"sm\"\n\
+             [[external]]\nname = \"mine\"\ntime_ms = 2.5\nfiles = {{ plane-square = \"sm.exr\" }}\n\
+             [[external]]\nname = \"untimed\"\nfiles = {{ plane-square = \"sm.exr\" }}\n"
+        );
+        let suite = Suite::parse(&text, &dir.path().join("suite.toml")).expect("parses");
+        let plan = crate::plan::plan(&suite);
+        let externals: Vec<&WorkItem> =
+            plan.iter().filter(|i| matches!(i.work, Work::External { .. })).collect();
+        assert_eq!(externals.len(), 2, "one item per entry and scene");
+        let all: Vec<usize> = (0..plan.len()).collect();
+        assert_eq!(crate::sweep::items_run_count(&plan, &all), 3);
+        let (report, images) = crate::sweep::run_suite(&suite, |_| {});
+        assert!(report.skipped.is_empty(), "{:?}", report.skipped);
+        let by = |m: &str| report.rows.iter().find(|r| r.method == m).expect(m);
+        let (method, mine) = (by("sm"), by("mine"));
+        assert!(mine.external && !method.external);
+        assert_eq!(mine.metrics, method.metrics, "the same lit fraction, the same metrics");
+        assert_eq!(mine.classes, method.classes);
+        assert_eq!((mine.total_ms.median, mine.total_ms.n), (2.5, 1));
+        assert!(report.rows.iter().all(|r| r.method != "untimed"));
+        let [untimed] = report.untimed.as_slice() else { panic!("{:?}", report.untimed) };
+        assert!(untimed.external && !untimed.timed());
+        assert_eq!(untimed.metrics, method.metrics);
+        assert_eq!(images.runs.len(), 2, "pages and images for the timed rows");
+        let produced = images.runs.iter().find(|p| p.row == 1).expect("the outside row's");
+        assert_eq!((produced.metrics.method_ms, produced.metrics.external), (Some(2.5), true));
+
+        // runs.json keeps both, and reads back.
+        let json = serde_json::to_string(&report).expect("serialises");
+        let back: Report = serde_json::from_str(&json).expect("reads back");
+        assert_eq!(back.untimed, report.untimed);
+        assert!(back.rows.iter().any(|r| r.external));
+        // The runs table: both, marked; the untimed one's time not given and no page.
+        let rows: Vec<&Row> = report.rows.iter().chain(&report.untimed).collect();
+        let table =
+            serde_json::to_string(&crate::index::runs_table(&rows, &report)).expect("serialises");
+        assert!(table.contains("mine (external)") && table.contains("untimed (external)"));
+        assert!(table.contains("not given"), "{table}");
+        assert!(!table.contains("runs/plane-square-untimed.html"), "{table}");
+        let cells = super::run_cells(untimed, report.clock);
+        assert_eq!((cells[0].as_str(), cells[6].as_str()), ("untimed (external)", "not given"));
+        // The error-against-time chart has the timed one, at its time, and not the other.
+        let charts = crate::figures::charts(&report);
+        let pareto: Vec<_> = charts.iter().filter(|c| c.chart.pareto).collect();
+        let series: Vec<&crate::plots::Series> =
+            pareto.iter().flat_map(|c| &c.chart.series).collect();
+        let outside = series.iter().find(|s| s.label == "mine (external)").expect("drawn");
+        assert_eq!(outside.points[0].x, 2.5);
+        assert!(series.iter().all(|s| !s.label.contains("untimed")));
+    }
 }

@@ -235,12 +235,16 @@ fn render_on_the_gpu_names_the_adapter_and_the_timing_in_run_json() {
     assert!(stages.contains(&"G-buffer (GPU)") && stages.contains(&"rasterization of blockers"));
 }
 
-/// `render --device gpu` runs every technique; the references are refused, named.
+/// `render --device gpu` runs every technique with GPU kernels in the registry's table; the
+/// references and the methods without kernels (`vsm`) are refused, named.
 #[cfg(feature = "gpu")]
 #[test]
 fn gpu_device_runs_every_method_but_the_references() {
     let dir = tempfile::tempdir().expect("tempdir");
     let cpu_only = ["exact", "raytrace"];
+    let no_kernels: Vec<&str> =
+        methods::registry::METHODS.iter().filter(|m| m.gpu.is_none()).map(|m| m.name).collect();
+    assert_eq!(no_kernels, ["vsm"]);
     for name in methods::registry::METHODS.iter().map(|m| m.name).chain(cpu_only) {
         let out = dir.path().join(name);
         let mut args = vec!["render", "--scene", "plane-square", "--method", name];
@@ -253,6 +257,10 @@ fn gpu_device_runs_every_method_but_the_references() {
         if cpu_only.contains(&name) {
             assert_eq!(o.status.code(), Some(2), "{name}: {}", stderr(&o));
             assert!(stderr(&o).contains("runs on the CPU only"), "{name}: {}", stderr(&o));
+        } else if no_kernels.contains(&name) {
+            assert_eq!(o.status.code(), Some(2), "{name}: {}", stderr(&o));
+            let e = stderr(&o);
+            assert!(e.contains("--device: `vsm` on the GPU: it has no GPU kernels"), "{e}");
         } else {
             assert!(o.status.success(), "{name} on the GPU: {}", stderr(&o));
         }
@@ -272,7 +280,8 @@ fn gpu_device_runs_every_method_on_a_scene_without_casters() {
     assert!(!toml.contains("casts_shadows = true"));
     let scene = dir.path().join("no-casters.toml");
     std::fs::write(&scene, toml).expect("scene file written");
-    for name in methods::registry::METHODS.iter().map(|m| m.name) {
+    let with_kernels = methods::registry::METHODS.iter().filter(|m| m.gpu.is_some());
+    for name in with_kernels.map(|m| m.name) {
         let out = dir.path().join(name);
         let mut args = vec!["render", "--scene", scene.to_str().expect("utf-8"), "--method", name];
         args.extend(["--device", "gpu", "--width", "16", "--height", "12"]);

@@ -318,7 +318,7 @@ fn edge_reference_none_leaves_edge_pixels_out() {
     assert_eq!(none["classes"]["planar"], traced["classes"]["planar"]);
 }
 
-/// Issue 16's check: on `cage`, `pan09 --visibility exact --rate 32` makes no error of its own
+/// Issue 16's check: on `cage`, `pan09 --masks exact --rate 32` makes no error of its own
 /// on the ground (planar pixels): against `raytrace` at its own rate it matches (measured at
 /// 320 x 240: mean 7.9e-7, one sub-sample of one pixel differs), and against `exact` its
 /// planar error is that of 32 sub-samples (mean 0.0105 at 320 x 240, as `raytrace --rate 32`'s
@@ -326,7 +326,7 @@ fn edge_reference_none_leaves_edge_pixels_out() {
 /// surface, are reported apart.
 #[test]
 fn pan09_on_cage_is_exact_on_the_ground_and_surfaces_are_reported_apart() {
-    let pan09 = ["--method", "pan09", "--rate", "32", "--visibility", "exact"];
+    let pan09 = ["--method", "pan09", "--rate", "32", "--masks", "exact"];
     let run = |extra: &[&str]| {
         let (o, dir) = compare_at(320, 240, &[&["--scene", "cage"][..], extra].concat());
         assert!(o.status.success(), "{extra:?}: {}", stderr(&o));

@@ -8,6 +8,7 @@ mod common;
 mod bad_input;
 mod cli;
 mod compare;
+mod external;
 mod fuzz_regressions;
 mod methods_table;
 mod scene_messages;

@@ -37,12 +37,20 @@ pub const MAP_METHODS: &[&str] = &[
     "pan09",
 ];
 
-/// Runs the `shadowbench` binary with `args`.
+/// Runs the `shadowbench` binary with `args`, with `XDG_CACHE_HOME` in a folder of this test
+/// process ([`test_cache_home`]), so that `compare`'s default reference cache is the tests' own.
 pub fn shadowbench(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_shadowbench"))
         .args(args)
+        .env("XDG_CACHE_HOME", test_cache_home())
         .output()
         .expect("the shadowbench binary runs")
+}
+
+/// The `XDG_CACHE_HOME` of the binaries this test process runs: a temporary folder of its own.
+pub fn test_cache_home() -> &'static Path {
+    static HOME: std::sync::OnceLock<tempfile::TempDir> = std::sync::OnceLock::new();
+    HOME.get_or_init(|| tempfile::tempdir().expect("a temporary cache folder")).path()
 }
 
 /// Standard error as text.

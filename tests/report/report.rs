@@ -456,3 +456,101 @@ fn a_report_is_set_against_its_baseline_and_foreign_folders_are_refused() {
         stderr(&o)
     );
 }
+
+/// A suite's `[[external]]` entries: an outside renderer's result (here `sm`'s own, from
+/// `render`) is planned, scored like the `sm` run, listed in runs.json and the runs table
+/// marked external, and merged back from a shard; without a time it is in runs.json's
+/// `untimed` and the table only.
+#[test]
+fn outside_results_of_a_suite_are_scored_planned_and_merged() {
+    let _machine = crate::common::machine_shared();
+    let dir = tempfile::tempdir().expect("tempdir");
+    let d = dir.path();
+    let sm = d.join("sm");
+    let render = [
+        "render",
+        "--scene",
+        "plane-square",
+        "--method",
+        "sm",
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--out",
+        sm.to_str().expect("utf-8"),
+    ];
+    assert!(shadowbench(&render).status.success());
+    let suite = write(
+        d,
+        "outside.toml",
+        "name = \"outside\"\nwidth = 32\nheight = 24\nwarmup = 0\nrepeats = 1\n\
+         scenes = [\"plane-square\"]\n[[run]]\nmethod = \"sm\"\n\
+         [[external]]\nname = \"mine\"\ntime_ms = 1.5\nfiles = { plane-square = \"sm/visibility.exr\" }\n\
+         [[external]]\nname = \"later\"\nfiles = { plane-square = \"sm/visibility.exr\" }\n",
+    );
+    let o = shadowbench(&["report", "--suite", &suite, "--plan"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let plan = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert_eq!(plan.matches("\"kind\":\"external\"").count(), 2, "{plan}");
+    assert!(stderr(&o).contains("3 items, 3 runs"), "{}", stderr(&o));
+
+    let out = d.join("out");
+    let o = shadowbench(&["report", "--suite", &suite, "--out", out.to_str().expect("utf-8")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("3 of 3 planned runs measured"));
+    let runs = |dir: &std::path::Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(dir.join("runs.json")).expect("runs.json"))
+            .expect("JSON")
+    };
+    let json = runs(&out);
+    let rows = json["rows"].as_array().expect("rows");
+    let by = |m: &str| rows.iter().find(|r| r["method"] == m).unwrap_or_else(|| panic!("{m}"));
+    assert_eq!(by("mine")["metrics"], by("sm")["metrics"]);
+    assert_eq!((&by("mine")["external"], &by("sm")["external"]), (&true.into(), &false.into()));
+    assert_eq!(by("mine")["total_ms"]["median"], 1.5);
+    let untimed = json["untimed"].as_array().expect("untimed");
+    assert_eq!(untimed.len(), 1);
+    assert_eq!(
+        (&untimed[0]["method"], &untimed[0]["metrics"]),
+        (&"later".into(), &by("sm")["metrics"])
+    );
+    let page = std::fs::read_to_string(out.join("index.html")).expect("index.html");
+    assert!(page.contains("mine (external)") && page.contains("later (external)"), "{page}");
+    assert!(page.contains("not given"), "{page}");
+    let mut reader = csv::Reader::from_path(out.join("runs.csv")).expect("runs.csv");
+    let header = reader.headers().expect("header").clone();
+    let at = |name: &str| header.iter().position(|h| h == name).expect(name);
+    let lines: Vec<csv::StringRecord> = reader.records().map(|r| r.expect("a line")).collect();
+    let marked: Vec<(&str, &str)> =
+        lines.iter().map(|l| (&l[at("method")], &l[at("external")])).collect();
+    assert_eq!(marked, [("sm", "false"), ("mine", "true")], "timed runs only");
+    let md = std::fs::read_to_string(out.join("report.md")).expect("report.md");
+    assert!(md.contains("| mine (external) |") && md.contains("| later (external) |"), "{md}");
+    assert!(out.join("runs/plane-square-mine.html").is_file());
+    assert!(!out.join("runs/plane-square-later.html").exists());
+
+    let shard = d.join("shard");
+    let o = shadowbench(&[
+        "report",
+        "--suite",
+        &suite,
+        "--shard",
+        "0/1",
+        "--out",
+        shard.to_str().expect("utf-8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let merged = d.join("merged");
+    let o = shadowbench(&[
+        "report",
+        "merge",
+        shard.to_str().expect("utf-8"),
+        "--out",
+        merged.to_str().expect("utf-8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let m = runs(&merged);
+    assert_eq!(m["rows"].as_array().expect("rows").len(), 2);
+    assert_eq!(m["untimed"].as_array().expect("untimed").len(), 1);
+}

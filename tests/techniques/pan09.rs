@@ -440,7 +440,7 @@ fn registry_builds_pan09_and_rejects_bad_options() {
     assert_eq!(m.name(), "pan09");
     let p = m.params();
     assert_eq!((p["rate"].as_u64(), p["map_res"].as_u64()), (Some(32), Some(512)));
-    assert_eq!((p["pattern"].as_str(), p["visibility"].as_str()), (Some("grid"), Some("table")));
+    assert_eq!((p["pattern"].as_str(), p["masks"].as_str()), (Some("grid"), Some("table")));
     let exact = MethodOptions {
         rate: Some(128),
         pattern: Some(PatternKind::Rotated),
@@ -449,7 +449,7 @@ fn registry_builds_pan09_and_rejects_bad_options() {
         ..Default::default()
     };
     let p = method("pan09", &exact).expect("valid").params();
-    assert_eq!((p["rate"].as_u64(), p["visibility"].as_str()), (Some(128), Some("exact")));
+    assert_eq!((p["rate"].as_u64(), p["masks"].as_str()), (Some(128), Some("exact")));
     let error = |o: MethodOptions| method("pan09", &o).err();
     for rate in [0, 2, 256, 1024] {
         assert!(matches!(
@@ -463,7 +463,7 @@ fn registry_builds_pan09_and_rejects_bad_options() {
     ));
     assert!(matches!(
         "bitmask".parse::<VisibilityMode>(),
-        Err(MethodError::InvalidOption { option: "--visibility", .. })
+        Err(MethodError::InvalidOption { option: "--masks", .. })
     ));
     for mode in [VisibilityMode::Table, VisibilityMode::Exact] {
         assert_eq!(mode.name().parse::<VisibilityMode>().expect("parses"), mode);
@@ -481,7 +481,7 @@ fn cli_renders_pan09_in_both_modes_and_rejects_a_bad_mode() {
             "plane-square",
             "--method",
             "pan09",
-            "--visibility",
+            "--masks",
             mode,
             "--rate",
             "8",
@@ -496,7 +496,7 @@ fn cli_renders_pan09_in_both_modes_and_rejects_a_bad_mode() {
         assert!(o.status.success(), "{}", common::stderr(&o));
         let run: serde_json::Value = serde_json::from_slice(&o.stdout).expect("run.json");
         assert_eq!(run["method"], "pan09");
-        assert_eq!(run["params"]["visibility"], mode);
+        assert_eq!(run["params"]["masks"], mode);
         assert_eq!(run["params"]["rate"], 8);
         assert!(run["counters"]["silhouette_pixels"].as_u64().expect("count") > 0);
         assert_eq!(run["skipped_stages"][0], "validity mask");
@@ -508,7 +508,7 @@ fn cli_renders_pan09_in_both_modes_and_rejects_a_bad_mode() {
         "plane-square",
         "--method",
         "pan09",
-        "--visibility",
+        "--masks",
         "lut",
     ]);
     assert_eq!(o.status.code(), Some(2), "{}", common::stderr(&o));

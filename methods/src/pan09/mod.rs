@@ -226,7 +226,7 @@ pub const DEFAULT_RATE: u32 = 32;
 /// Default map resolution (the paper's, Table 1).
 pub const DEFAULT_MAP_RES: u32 = 512;
 
-/// How half-planes become sub-sample masks (`--visibility`).
+/// How half-planes become sub-sample masks (`--masks`).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum VisibilityMode {
@@ -261,7 +261,7 @@ impl FromStr for VisibilityMode {
             "table" => Ok(VisibilityMode::Table),
             "exact" => Ok(VisibilityMode::Exact),
             _ => Err(MethodError::InvalidOption {
-                option: "--visibility",
+                option: "--masks",
                 message: format!("unknown visibility mode `{s}`; available: table, exact"),
             }),
         }
@@ -278,7 +278,7 @@ pub struct Pan09Options {
     pub rate: u32,
     /// Sub-sample pattern (`--pattern`). Default grid.
     pub pattern: PatternKind,
-    /// Visibility evaluation (`--visibility`). Default table.
+    /// Visibility evaluation (`--masks`). Default table.
     pub visibility: VisibilityMode,
 }
 
@@ -631,7 +631,7 @@ impl ShadowMethod for Pan09 {
         let mut m = self.options.map.params();
         m.insert("rate".into(), self.options.rate.into());
         m.insert("pattern".into(), self.options.pattern.name().into());
-        m.insert("visibility".into(), self.options.visibility.name().into());
+        m.insert("masks".into(), self.options.visibility.name().into());
         m
     }
 

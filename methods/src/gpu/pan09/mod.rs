@@ -415,7 +415,7 @@ impl ShadowMethod for GpuPan09 {
         let mut m = self.options.map.params();
         m.insert("rate".into(), self.options.rate.into());
         m.insert("pattern".into(), self.options.pattern.name().into());
-        m.insert("visibility".into(), self.options.visibility.name().into());
+        m.insert("masks".into(), self.options.visibility.name().into());
         m.insert("device".into(), "gpu".into());
         m
     }
