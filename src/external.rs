@@ -177,7 +177,8 @@ pub fn compare(c: &CompareArgs, file: &Path) -> Result<(), Failure> {
     let tx = begin_out(&out, flag, Kind::Run)?;
     let mut cache = super::reference::open_cache(&c.cache)?;
     let frame = Frame::new(&s.scene, s.width, s.height, &mut Recorder::default());
-    let evaluated = super::reference::evaluate(&chosen, &s.scene, &frame, cache.as_mut())?;
+    let binary = visibility.lit.iter().all(|&x| x == 0.0 || x == 1.0);
+    let evaluated = super::reference::evaluate(&chosen, &s.scene, &frame, cache.as_mut(), binary)?;
     let result = super::reference::Compared {
         method: name,
         params: serde_json::Map::new(),

@@ -1077,7 +1077,8 @@ fn compare(c: CompareArgs) -> Result<(), Failure> {
     let staging = tx.staging().to_owned();
 
     let (frame, ran, spread) = run_repeated(&job, a.repeat)?;
-    let evaluated = reference::evaluate(&chosen, &job.scene, &frame, cache.as_mut())?;
+    let binary = ran.visibility.lit.iter().all(|&x| x == 0.0 || x == 1.0);
+    let evaluated = reference::evaluate(&chosen, &job.scene, &frame, cache.as_mut(), binary)?;
     write_run(&staging, &frame, &ran)?;
     let record = &ran.record;
     let compared = reference::Compared {

@@ -5,7 +5,7 @@
 use super::{input, CompareArgs, EdgeReference, Failure, ReferenceName};
 use analysis::{exact::ExactCoverage, Reference, ReferenceImage};
 use instrumentation::Recorder;
-use methods::Frame;
+use methods::{pattern::PatternKind, Frame};
 use reports::cache::ReferenceCache;
 use std::path::{Path, PathBuf};
 
@@ -121,14 +121,20 @@ pub struct Evaluated {
     pub computed_ms: f64,
     /// The time this run took to read it from the cache, when it did, milliseconds.
     pub read_ms: Option<f64>,
+    /// `raytrace` at one sample per pixel on the same frame, for Lecocq et al.'s pixel match of
+    /// a binary result, from the cache (`None` without one, or for a result that is not
+    /// binary: the comparison traces it when it needs it).
+    pub one_ray: Option<ReferenceImage>,
 }
 
-/// Evaluates `chosen` on `frame` of `scene`, through `cache` when there is one.
+/// Evaluates `chosen` on `frame` of `scene`, through `cache` when there is one; with a cache
+/// and a `binary` result (every value 0 or 1), also the one-ray image its pixel match needs.
 pub fn evaluate(
     chosen: &Chosen,
     scene: &scenes::Scene,
     frame: &Frame<'_>,
     cache: Option<&mut ReferenceCache>,
+    binary: bool,
 ) -> Result<Evaluated, Failure> {
     let compute = || {
         let mut rec = Recorder::default();
@@ -137,7 +143,7 @@ pub fn evaluate(
     };
     let Some(cache) = cache else {
         let (image, computed_ms) = compute()?;
-        return Ok(Evaluated { image, computed_ms, read_ms: None });
+        return Ok(Evaluated { image, computed_ms, read_ms: None, one_ray: None });
     };
     let provenance = instrumentation::Provenance::capture(String::new(), None);
     let build = reports::cache::build_id(&provenance.commit, provenance.dirty);
@@ -146,10 +152,23 @@ pub fn evaluate(
     let (image, computed_ms) =
         cache.get_or_compute(scene, frame, &chosen.cache_name, chosen.ref_rate, &build, compute)?;
     let read_ms = (cache.stats.hits > hits).then(|| started.elapsed().as_secs_f64() * 1e3);
+    // The same entry as `compare --reference raytrace --ref-rate 1` (grid pattern) would use.
+    let one_ray = if binary {
+        let traced = || {
+            let one = analysis::registry::reference("raytrace", 1, PatternKind::Grid);
+            let mut rec = Recorder::default();
+            let image = one.and_then(|r| r.evaluate(frame, &mut rec)).map_err(input)?;
+            Ok::<_, Failure>((image, rec.stages.total_ms()))
+        };
+        let name = "raytrace edge=- grid";
+        Some(cache.get_or_compute(scene, frame, name, Some(1), &build, traced)?.0)
+    } else {
+        None
+    };
     if cache.stats.write_failures > 0 {
         eprintln!("note: the reference could not be stored in {}", cache.dir().display());
     }
-    Ok(Evaluated { image, computed_ms, read_ms })
+    Ok(Evaluated { image, computed_ms, read_ms, one_ray })
 }
 
 /// What is scored: a method's run or an outside result.
@@ -180,7 +199,10 @@ pub fn score(
     // A reference without classes (`raytrace`) is measured per class all the same: the
     // classes are the camera's view of the triangles, whatever the reference.
     let mut rec = Recorder::default();
-    let truth = analysis::compare::Truth::new(frame, evaluated.image, &mut rec);
+    let mut truth = analysis::compare::Truth::new(frame, evaluated.image, &mut rec);
+    if let Some(image) = evaluated.one_ray {
+        truth = truth.with_one_ray(image);
+    }
     let comparison = truth.compare(frame, v).map_err(input)?;
     for (name, mask) in [("error.png", &truth.headline), ("error_boundary.png", &truth.boundary())]
     {

@@ -22,6 +22,11 @@ fn light(light_type: &str) -> (String, &'static str) {
 /// triangle under a transformed parent, a camera under a transformed rig and a light (see
 /// [`light`]); `light_type` is the light's `type`.
 fn glb(light_type: &str) -> Vec<u8> {
+    glb_edited(light_type, |json| json)
+}
+
+/// [`glb`] with its JSON chunk passed through `edit`.
+fn glb_edited(light_type: &str, edit: impl Fn(String) -> String) -> Vec<u8> {
     let (light, light_matrix) = light(light_type);
     let mut bin: Vec<u8> = Vec::new();
     for v in [[-4.0f32, 0.0, -4.0], [4.0, 0.0, -4.0], [4.0, 0.0, 4.0], [-4.0, 0.0, 4.0]] {
@@ -62,7 +67,7 @@ fn glb(light_type: &str) -> Vec<u8> {
                   {{"buffer": 0, "byteOffset": 60, "byteLength": 36}}],
   "buffers": [{{"byteLength": 96}}]}}"#
     );
-    let mut json = json.into_bytes();
+    let mut json = edit(json).into_bytes();
     while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
@@ -152,4 +157,47 @@ fn a_gltf_scene_with_a_point_light_is_bad_input_naming_the_node() {
         "{}",
         stderr(&o)
     );
+}
+
+/// Bad glTF files exit 2 naming the file and the cause: a buffer whose file is missing, an
+/// accessor of the wrong type, before anything is computed or written.
+#[test]
+fn bad_gltf_files_are_bad_input_naming_the_cause() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let wrong = dir.path().join("wrong.glb");
+    // The indices' accessor as 32-bit floats: not an index type.
+    let glb = glb_edited("directional", |j| {
+        j.replacen(r#""componentType": 5123"#, r#""componentType": 5126"#, 1)
+    });
+    std::fs::write(&wrong, glb).expect("writes");
+    let missing = dir.path().join("missing.gltf");
+    // The same scene as a .gltf whose buffer is a file that is not there.
+    let bytes = glb_edited("directional", |j| {
+        let with_uri = r#""buffers": [{"byteLength": 96, "uri": "nowhere.bin"}]"#;
+        j.replace(r#""buffers": [{"byteLength": 96}]"#, with_uri)
+    });
+    let len = u32::from_le_bytes(bytes[12..16].try_into().expect("4 bytes")) as usize;
+    let json = String::from_utf8(bytes[20..20 + len].to_vec()).expect("utf-8");
+    assert!(json.contains("nowhere.bin"));
+    std::fs::write(&missing, json.trim_end()).expect("writes");
+    for (path, needles) in [
+        (&wrong, &["wrong.glb", "accessor 1", "indices"][..]),
+        (&missing, &["missing.gltf", "buffer 0", "nowhere.bin", "missing"][..]),
+    ] {
+        let out = dir.path().join("out");
+        let o = shadowbench(&[
+            "render",
+            "--scene",
+            path.to_str().expect("utf-8"),
+            "--method",
+            "sm",
+            "--out",
+            out.to_str().expect("utf-8"),
+        ]);
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        for n in needles {
+            assert!(stderr(&o).contains(n), "`{n}` not in {}", stderr(&o));
+        }
+        assert!(!out.exists(), "a refused scene writes nothing");
+    }
 }

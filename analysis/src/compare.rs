@@ -7,7 +7,7 @@
 //! ([`crate::metrics::headline_pixels`]). [`Truth::compare`] measures a result against it
 //! ([`Comparison::new`]); Lecocq et al.'s pixel match needs `raytrace` at one sample per pixel
 //! on the same frame, which is traced the first time a binary result asks for it and kept for
-//! the others.
+//! the others (or given, [`Truth::with_one_ray`]).
 
 use crate::metrics::{headline_pixels, is_binary, Comparison};
 use crate::pixel_class::PixelClass;
@@ -60,6 +60,13 @@ impl Truth {
         let raytrace1 =
             if is_binary(result, &self.headline) { Some(self.raytrace1(frame)?) } else { None };
         Ok(Comparison::new(result, &self.reference, &self.classes, raytrace1))
+    }
+
+    /// The truth with `image` as its `raytrace` at one sample per pixel of the grid pattern on
+    /// the same frame (one kept from an earlier run, a reference cache's), so that comparing a
+    /// binary result does not trace it again.
+    pub fn with_one_ray(self, image: ReferenceImage) -> Self {
+        Self { raytrace1: OnceCell::from(image), ..self }
     }
 
     /// The pixels of the headline whose reference is strictly between 0 and 1.

@@ -267,8 +267,10 @@ fn compare_computes_a_scene_reference_once() {
             Some(ms) => assert_eq!(m.reference_ms, ms, "{method}: the computation's time kept"),
         }
     }
+    // The reference, and the one-ray image the binary results' pixel match takes (sm's,
+    // read back by afsm's).
     let entries = std::fs::read_dir(&cache).expect("cache").count();
-    assert_eq!(entries, 1, "one reference stored");
+    assert_eq!(entries, 2, "one reference and one one-ray image stored");
     // Another pattern, rate or edge reference is another reference.
     let out = d.join("other-rate");
     let o = shadowbench(&[
