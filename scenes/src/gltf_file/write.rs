@@ -216,38 +216,27 @@ fn glb_bytes(scene: &Scene) -> Result<Vec<u8>, String> {
         ..Default::default()
     }));
     use json::extensions::scene::khr_lights_punctual as punctual;
-    let (light, origin, axis) = match scene.light {
-        Light::Directional { direction } => (
-            punctual::Light {
-                color: [1.0; 3],
-                extensions: None,
-                extras: Default::default(),
-                intensity: 1.0,
-                name: Some("light".into()),
-                range: None,
-                spot: None,
-                type_: Valid(punctual::Type::Directional),
-            },
-            DVec3::ZERO,
-            direction,
-        ),
-        Light::Spot { position, target, fov_deg } => (
-            punctual::Light {
-                color: [1.0; 3],
-                extensions: None,
-                extras: Default::default(),
-                intensity: 1.0,
-                name: Some("light".into()),
-                range: None,
-                spot: Some(punctual::Spot {
-                    inner_cone_angle: 0.0,
-                    outer_cone_angle: (0.5 * fov_deg).to_radians() as f32,
-                }),
-                type_: Valid(punctual::Type::Spot),
-            },
-            position,
-            target - position,
-        ),
+    let (type_, spot, origin, axis) = match scene.light {
+        Light::Directional { direction } => {
+            (punctual::Type::Directional, None, DVec3::ZERO, direction)
+        }
+        Light::Spot { position, target, fov_deg } => {
+            let cone = punctual::Spot {
+                inner_cone_angle: 0.0,
+                outer_cone_angle: (0.5 * fov_deg).to_radians() as f32,
+            };
+            (punctual::Type::Spot, Some(cone), position, target - position)
+        }
+    };
+    let light = punctual::Light {
+        color: [1.0; 3],
+        extensions: None,
+        extras: Default::default(),
+        intensity: 1.0,
+        name: Some("light".into()),
+        range: None,
+        spot,
+        type_: Valid(type_),
     };
     let (x, y, forward) = look_basis(axis, DVec3::Y);
     root.extensions = Some(json::extensions::Root {
