@@ -543,20 +543,24 @@ impl SceneDesc {
             objects,
             switches: self.effects,
         };
-        let (lo, hi) = scene.bounds();
-        let diagonal = (hi - lo).length();
-        if diagonal < MIN_EXTENT {
-            return Err(out_of_range(
-                "object".into(),
-                format!(
-                    "the geometry's bounding box has a diagonal of {}, below the supported \
-                     minimum {MIN_EXTENT:e}",
-                    apart(diagonal, MIN_EXTENT)
-                ),
-            ));
+        if let Some(message) = too_small(&scene) {
+            return Err(out_of_range("object".into(), message));
         }
         Ok(scene)
     }
+}
+
+/// Why the scene's geometry is below the smallest supported extent, if it is.
+fn too_small(scene: &Scene) -> Option<String> {
+    let (lo, hi) = scene.bounds();
+    let diagonal = (hi - lo).length();
+    (diagonal < MIN_EXTENT).then(|| {
+        format!(
+            "the geometry's bounding box has a diagonal of {}, below the supported minimum \
+             {MIN_EXTENT:e}",
+            apart(diagonal, MIN_EXTENT)
+        )
+    })
 }
 
 /// Checks a scene built from elsewhere than a scene file (a glTF scene) as [`SceneDesc::resolve_in`]
@@ -597,19 +601,10 @@ pub(crate) fn check_resolved(scene: &Scene, origin: &Path) -> Result<(), SceneEr
             return Err(out_of_range(o.name.clone(), message));
         }
     }
-    let (lo, hi) = scene.bounds();
-    let diagonal = (hi - lo).length();
-    if diagonal < MIN_EXTENT {
-        return Err(out_of_range(
-            "object".into(),
-            format!(
-                "the geometry's bounding box has a diagonal of {}, below the supported minimum \
-                 {MIN_EXTENT:e}",
-                apart(diagonal, MIN_EXTENT)
-            ),
-        ));
+    match too_small(scene) {
+        Some(message) => Err(out_of_range("object".into(), message)),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 /// What [`SceneError::ModelMissing`] adds when the model was looked for in the models folder.
