@@ -242,7 +242,8 @@ pub fn plan(suite: &Suite) -> Vec<WorkItem> {
                 let cost = grid
                     .panels
                     .iter()
-                    .map(|p| run_cost(pixels, triangles, p.rate, p.map_res))
+                    .map(|p| p.options())
+                    .map(|o| run_cost(pixels, triangles, o.rate, o.map_res))
                     .sum();
                 let work = Work::Grid { grid: k, title: grid.title.clone() };
                 let it = item(work, size, cost, 0, &items);

@@ -177,23 +177,11 @@ struct ExternalSpans {
     time_ms: Option<Spanned<toml::Value>>,
 }
 
-/// The spans of a grid panel.
-#[derive(Debug, Default, Deserialize)]
-struct ValueSpans {
-    method: Option<Spanned<String>>,
-    #[serde(default)]
-    map_res: Option<Spanned<toml::Value>>,
-    #[serde(default)]
-    rate: Option<Spanned<toml::Value>>,
-    #[serde(default)]
-    depth_bits: Option<Spanned<toml::Value>>,
-}
-
 /// The spans of a `[[grid]]`.
 #[derive(Debug, Default, Deserialize)]
 struct GridSpans {
     #[serde(default)]
-    panels: Vec<ValueSpans>,
+    panels: Vec<BTreeMap<String, Spanned<toml::Value>>>,
 }
 
 /// The spans of a `[[table]]`.
@@ -201,20 +189,6 @@ struct GridSpans {
 struct TableSpans {
     #[serde(default)]
     scenes: Vec<Spanned<String>>,
-}
-
-impl ValueSpans {
-    /// The span of the value the failing option came from: the key the option names, else
-    /// the method.
-    fn of(&self, option: &str) -> Option<Span> {
-        let value = match option {
-            "--map-res" => &self.map_res,
-            "--rate" => &self.rate,
-            "--depth-bits" => &self.depth_bits,
-            _ => &None,
-        };
-        value.as_ref().map(Spanned::span).or_else(|| self.method.as_ref().map(Spanned::span))
-    }
 }
 
 /// The suite key of a method option (`--map-res` -> `map_res`), `device` for `--device`, or
@@ -322,31 +296,66 @@ fn param_values(param: &'static Param, value: &toml::Value) -> Result<Vec<Value>
     }
 }
 
-impl RunSpec {
-    /// The method's declared parameter called `key`.
-    fn param(&self, key: &str) -> Option<&'static Param> {
-        analysis::registry::params_of(&self.method)?.iter().copied().find(|p| p.key == key)
-    }
+/// The parameter called `key` that `method` declares.
+fn declared(method: &str, key: &str) -> Option<&'static Param> {
+    analysis::registry::params_of(method)?.iter().copied().find(|p| p.key == key)
+}
 
-    /// Checks the keys against the method's declared parameters and the values against their
-    /// kinds: the key at fault and what is wrong. [`Suite::parse`] runs it on every run.
-    fn check_params(&self) -> Result<(), (String, String)> {
-        let Some(declared) = analysis::registry::params_of(&self.method) else {
-            return Ok(()); // The method itself is refused with the known ones.
+/// Checks `params` (a run's or a panel's) against the parameters `method` declares and their
+/// kinds: the key at fault and what is wrong. A method that does not exist passes: it is
+/// refused itself, with the known ones.
+fn check_declared(
+    method: &str,
+    params: &BTreeMap<String, toml::Value>,
+) -> Result<(), (String, String)> {
+    let Some(known) = analysis::registry::params_of(method) else { return Ok(()) };
+    for (key, value) in params {
+        let Some(param) = declared(method, key) else {
+            let known: Vec<&str> = known.iter().map(|p| p.key).collect();
+            let known = if known.is_empty() { "none".into() } else { known.join(", ") };
+            let any = methods::registry::all_params().iter().any(|p| p.key == key);
+            let what = if any { "does not use" } else { "has no parameter" };
+            return Err((
+                key.clone(),
+                format!("`{method}` {what} `{key}`; its parameters: {known}"),
+            ));
         };
-        for (key, value) in &self.params {
-            let Some(param) = self.param(key) else {
-                let known: Vec<&str> = declared.iter().map(|p| p.key).collect();
-                let known = if known.is_empty() { "none".into() } else { known.join(", ") };
-                let any = methods::registry::all_params().iter().any(|p| p.key == key);
-                let what = if any { "does not use" } else { "has no parameter" };
-                return Err((
-                    key.clone(),
-                    format!("`{}` {what} `{key}`; its parameters: {known}", self.method),
-                ));
-            };
-            param_values(param, value).map_err(|m| (key.clone(), m))?;
+        param_values(param, value).map_err(|m| (key.clone(), m))?;
+    }
+    Ok(())
+}
+
+/// Every combination of the values of `params` (each a value or a list) for `method`, in the
+/// order of the keys, the last varying fastest; keys it does not declare are left out
+/// ([`check_declared`] refuses them first).
+fn combinations(method: &str, params: &BTreeMap<String, toml::Value>) -> Vec<MethodOptions> {
+    let mut out = vec![MethodOptions::default()];
+    for (key, value) in params {
+        let Some(param) = declared(method, key) else { continue };
+        let values = param_values(param, value).unwrap_or_default();
+        if values.is_empty() {
+            continue;
         }
+        out = out
+            .into_iter()
+            .flat_map(|o| {
+                values.iter().map(move |v| {
+                    let mut o = o.clone();
+                    o.set(param, *v);
+                    o
+                })
+            })
+            .collect();
+    }
+    out
+}
+
+impl RunSpec {
+    /// Checks the keys against the method's declared parameters and the values against their
+    /// kinds, and the frame sizes: the key at fault and what is wrong. [`Suite::parse`] runs it
+    /// on every run.
+    fn check_params(&self) -> Result<(), (String, String)> {
+        check_declared(&self.method, &self.params)?;
         if self.width.len() != self.height.len() {
             return Err((
                 "width".into(),
@@ -373,24 +382,7 @@ impl RunSpec {
     /// the keys, the last varying fastest, then the device. Values [`Suite::parse`] refused
     /// cannot arise; a key the method does not declare is left out.
     pub fn expand(&self) -> Vec<MethodOptions> {
-        let mut out = vec![MethodOptions::default()];
-        for (key, value) in &self.params {
-            let Some(param) = self.param(key) else { continue };
-            let values = param_values(param, value).unwrap_or_default();
-            if values.is_empty() {
-                continue;
-            }
-            out = out
-                .into_iter()
-                .flat_map(|o| {
-                    values.iter().map(move |v| {
-                        let mut o = o.clone();
-                        o.set(param, *v);
-                        o
-                    })
-                })
-                .collect();
-        }
+        let out = combinations(&self.method, &self.params);
         let devices = if self.device.is_empty() { &[Device::Cpu][..] } else { &self.device };
         out.into_iter()
             .flat_map(|o| devices.iter().map(move |&device| MethodOptions { device, ..o.clone() }))
@@ -400,27 +392,35 @@ impl RunSpec {
 
 /// One panel of an image grid: a method and its parameters.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
 pub struct PanelSpec {
     /// Method name.
     pub method: String,
     /// Label; default: the method and its parameters.
     #[serde(default)]
     pub label: Option<String>,
-    /// Shadow map resolution.
-    #[serde(default)]
-    pub map_res: Option<u32>,
-    /// Sample rate.
-    #[serde(default)]
-    pub rate: Option<u32>,
-    /// Depth precision.
-    #[serde(default)]
-    pub depth_bits: Option<u32>,
     /// Show the pixel classes of `spsm` / `spsm-f32` in Lecocq et al.'s Fig. 14 colours
     /// (green: shadowed by the 3x3 neighbourhood, red: silhouette recovery) instead of the
     /// shaded result.
     #[serde(default)]
     pub classes: bool,
+    /// The method's parameters by key (any it declares, as in a `[[run]]`), one value each.
+    #[serde(flatten)]
+    pub params: BTreeMap<String, toml::Value>,
+}
+
+impl PanelSpec {
+    /// Checks the keys against the method's declared parameters, one value each.
+    fn check_params(&self) -> Result<(), (String, String)> {
+        if let Some((key, _)) = self.params.iter().find(|(_, v)| v.is_array()) {
+            return Err((key.clone(), "a panel takes one value, not a list".into()));
+        }
+        check_declared(&self.method, &self.params)
+    }
+
+    /// The panel's options.
+    pub fn options(&self) -> MethodOptions {
+        combinations(&self.method, &self.params).pop().unwrap_or_default()
+    }
 }
 
 /// An outside renderer's results on the suite's scenes (`[[external]]`), each scored against
@@ -771,23 +771,22 @@ impl Suite {
         for (k, grid) in self.grids.iter().enumerate() {
             for (j, p) in grid.panels.iter().enumerate() {
                 let span = spans.grids.get(k).and_then(|g| g.panels.get(j));
-                let options = MethodOptions {
-                    map_res: p.map_res,
-                    rate: p.rate,
-                    depth_bits: p.depth_bits,
-                    ..Default::default()
-                };
+                let span_of = |key: &str| span.and_then(|s| s.get(key)).map(Spanned::span);
+                let prefix = format!("grid[{k}].panels[{j}]");
+                p.check_params()
+                    .map_err(|(key, m)| at(span_of(&key), &format!("{prefix}.{key}"), m))?;
                 let checked = if p.classes && !matches!(p.method.as_str(), "spsm" | "spsm-f32") {
                     Err((
                         "--method",
                         "`classes` shows the pixel classes of spsm or spsm-f32 only".to_owned(),
                     ))
                 } else {
-                    check_method(&p.method, &options)
+                    check_method(&p.method, &p.options())
                 };
                 if let Err((option, message)) = checked {
-                    let key = format!("grid[{k}].panels[{j}].{}", key_of(option));
-                    return Err(at(span.and_then(|s| s.of(option)), &key, message));
+                    let key = key_of(option);
+                    let span = span_of(key).or_else(|| span_of("method"));
+                    return Err(at(span, &format!("{prefix}.{key}"), message));
                 }
             }
         }
@@ -997,6 +996,34 @@ mod tests {
             for n in *needles {
                 assert!(e.contains(n), "{at}: `{n}` not in {e}");
             }
+        }
+    }
+
+    /// A grid's panels take any parameter their method declares, one value each.
+    #[test]
+    fn panels_take_declared_parameters_one_value_each() {
+        let p = Path::new("s.toml");
+        let suite = |panel: &str| {
+            format!(
+                "name = \"x\"\nscenes = [\"cage\"]\n[[run]]\nmethod = \"sm\"\n[[grid]]\n\
+                 title = \"g\"\nscene = \"cage\"\ninset = [0.1, 0.1, 0.2, 0.2]\n\
+                 panels = [\n{panel},\n]\n"
+            )
+        };
+        let ok = Suite::parse(&suite("{ method = \"pan09\", pattern = \"rotated\", rate = 8 }"), p)
+            .expect("parses");
+        let o = ok.grids[0].panels[0].options();
+        assert_eq!((o.pattern, o.rate), (Some(methods::pattern::PatternKind::Rotated), Some(8)));
+        for (panel, at, needle) in [
+            ("{ method = \"sm\", rate = 4 }", "line 10: `grid[0].panels[0].rate`", "does not use"),
+            (
+                "{ method = \"pan09\", pattern = [\"grid\"] }",
+                "line 10: `grid[0].panels[0].pattern`",
+                "one value",
+            ),
+        ] {
+            let e = Suite::parse(&suite(panel), p).expect_err(at).to_string();
+            assert!(e.contains(at) && e.contains(needle), "{at}: {e}");
         }
     }
 

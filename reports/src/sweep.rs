@@ -85,10 +85,18 @@ fn spsm_classes(p: &PanelSpec, frame: &Frame<'_>) -> Result<Panel, String> {
         "spsm-f32" => TexelFormat::F32,
         _ => return Err("`classes` shows the pixel classes of spsm or spsm-f32 only".into()),
     };
-    let d = SpsmOptions::default();
+    let (o, d) = (p.options(), SpsmOptions::default());
     let mut map = d.map;
-    map.map_res = p.map_res.unwrap_or(map.map_res);
-    let options = SpsmOptions { map, texel, rate: p.rate.unwrap_or(d.rate), ..d };
+    map.map_res = o.map_res.unwrap_or(map.map_res);
+    map.constant_bias = o.constant_bias.unwrap_or(map.constant_bias);
+    let options = SpsmOptions {
+        map,
+        texel,
+        rate: o.rate.unwrap_or(d.rate),
+        pattern: o.pattern.unwrap_or(d.pattern),
+        derivative_power: o.derivative_power.unwrap_or(d.derivative_power),
+    };
+    options.validate().map_err(|e| e.to_string())?;
     let (v, classes) = Spsm { options }
         .run_classified(frame, &mut Recorder::default())
         .map_err(|e| e.to_string())?;
@@ -114,12 +122,7 @@ fn grid_panels(
     let mut panels = Vec::new();
     let mut last = None;
     for p in &grid.panels {
-        let options = MethodOptions {
-            map_res: p.map_res,
-            rate: p.rate,
-            depth_bits: p.depth_bits,
-            ..Default::default()
-        };
+        let options = p.options();
         if p.classes {
             match spsm_classes(p, frame) {
                 Ok(panel) => panels.push(panel),
@@ -132,9 +135,18 @@ fn grid_panels(
         match run {
             Ok((t, v)) => {
                 let label = p.label.clone().unwrap_or_else(|| {
-                    let given = [("map", p.map_res), ("rate", p.rate), ("bits", p.depth_bits)];
-                    let params: Vec<String> =
-                        given.iter().filter_map(|(k, v)| v.map(|v| format!("{k} {v}"))).collect();
+                    let params: Vec<String> = options
+                        .given()
+                        .into_iter()
+                        .map(|(k, v)| {
+                            let k = match k {
+                                "map_res" => "map",
+                                "depth_bits" => "bits",
+                                k => k,
+                            };
+                            format!("{k} {}", v.text())
+                        })
+                        .collect();
                     format!("{} {}", t.name(), params.join(", "))
                 });
                 panels.push(Panel { label, image: shade(frame, &v) });

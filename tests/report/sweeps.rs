@@ -32,6 +32,12 @@ height = [36, 24]
 method = "vsm"
 map_res = 128
 filter = [1, 5]
+
+[[grid]]
+title = "a method's own parameter in a panel"
+scene = "cage"
+inset = [0.4, 0.4, 0.2, 0.2]
+panels = [{ method = "vsm", map_res = 128, filter = 5 }, { method = "pan09", pattern = "rotated" }]
 "#;
 
 #[test]
@@ -95,6 +101,8 @@ fn a_suite_sweeps_patterns_biases_sizes_and_a_methods_own_parameter() {
         .filter_map(|s| s["scene"].as_str())
         .collect();
     assert_eq!(scenes, ["cage", "cage 32x24"]);
+    assert!(out.join("grids/grid-1.png").exists(), "the grid of panels is drawn");
+    assert_eq!(json["skipped"], serde_json::json!([]), "every panel ran");
 }
 
 #[test]
