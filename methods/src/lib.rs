@@ -2,7 +2,8 @@
 //!
 //! Kernels: [`raster`] (exact CPU rasterizer), [`gbuffer`] (camera G-buffer), [`depth_map`]
 //! (light depth map), [`depth_test`] (map lookups, bias, depth quantization), [`footprint`]
-//! (whether a light map resolves the frame, and its warnings), [`pattern`] (sub-pixel sample
+//! (whether a light map resolves the frame, and its warnings), [`filtered_map`] (the box filter
+//! of the filtered shadow maps), [`pattern`] (sub-pixel sample
 //! patterns), [`frame`] (a scene at one resolution). Techniques, one module
 //! each: [`sm`] (standard shadow map), [`pcf_reeves`] (Reeves et al.'s stochastic PCF),
 //! [`pcf_bs`] (Brabec and Seidel's packed PCF), [`pcf_gems`] (GPU Gems' 4x4-region PCF),
@@ -14,6 +15,7 @@
 pub mod afsm;
 pub mod depth_map;
 pub mod depth_test;
+pub mod filtered_map;
 pub mod footprint;
 pub mod frame;
 pub mod gbuffer;

@@ -29,6 +29,7 @@ pub use crate::params::{Device, MethodOptions};
 
 // Methods added by their module beside this table and their entry in it alone (see
 // `docs/adding-a-method.md`).
+pub mod esm;
 pub mod vsm;
 
 /// Builds a method from the options given (validated).
@@ -230,6 +231,7 @@ pub static METHODS: &[MethodEntry] = &[
         gpu: gpu!(|o| Ok(Box::new(crate::gpu::pan09::GpuPan09::new(pan09_options(o)?)?))),
     },
     vsm::ENTRY,
+    esm::ENTRY,
 ];
 
 /// The parameters of Brabec and Seidel's methods.

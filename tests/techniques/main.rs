@@ -7,6 +7,7 @@
 mod common;
 
 mod afsm;
+mod esm;
 mod far_objects;
 mod frame;
 mod ground_truth;

@@ -4,11 +4,11 @@
 
 use crate::common;
 use instrumentation::Recorder;
-use methods::{params, registry::vsm, Frame, MethodOptions};
+use methods::{filtered_map::FILTER, params, registry::vsm, Frame, MethodOptions};
 
 fn options(filter: u32, min_variance: f64) -> MethodOptions {
     let mut o = MethodOptions::default();
-    o.set(&vsm::FILTER, params::Value::Count(filter));
+    o.set(&FILTER, params::Value::Count(filter));
     o.set(&vsm::MIN_VARIANCE, params::Value::Real(min_variance));
     o
 }

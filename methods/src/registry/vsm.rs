@@ -9,8 +9,8 @@
 //!   `M2 = d^2`, with `d` the depth above the scene's nearest light depth (a texel without a
 //!   caster holds the scene's farthest depth, as a cleared depth buffer holds the far plane),
 //!   then the moments are averaged over a `filter x filter` box of texels (section 3.2: the
-//!   moments, unlike depths, can be filtered linearly; the box is separable, texels beyond the
-//!   map's border repeat the border);
+//!   moments, unlike depths, can be filtered linearly; the box is
+//!   [`crate::filtered_map::box_filter`], shared with the other filtered maps);
 //! - **Chebyshev test** (section 3.1, equation 5): at the pixel centre's receiver depth `t`
 //!   (minus the shared bias tolerance, [`crate::depth_test`], with the reach of the filter's
 //!   half-width), `mu = M1`, `sigma^2 = max(M2 - M1^2, min_variance)`; lit when `t <= mu`,
@@ -28,6 +28,7 @@
 use super::{map, MethodEntry, Rates};
 use crate::{
     depth_test::{filter_pixels, texel_at, DepthTester, MapOptions, PixelResult},
+    filtered_map::{box_filter, check_filter, DEFAULT_FILTER, FILTER},
     footprint::Sampling,
     frame::Frame,
     method::{MethodError, ShadowMethod, Visibility},
@@ -36,16 +37,6 @@ use crate::{
 use glam::DVec2;
 use instrumentation::Recorder;
 use rayon::prelude::*;
-
-/// Width of the box filter over the moments.
-pub static FILTER: Param = Param {
-    key: "filter",
-    flag: "--filter",
-    value_name: "K",
-    help: "Width in texels of the box filter over a variance shadow map's moments (`vsm`): odd, \
-           1 to 63; default 3 (1: no filtering).",
-    kind: Kind::Count,
-};
 
 /// The least variance of the Chebyshev bound.
 pub static MIN_VARIANCE: Param = Param {
@@ -84,10 +75,6 @@ pub const ENTRY: MethodEntry = MethodEntry {
     gpu: None,
 };
 
-/// The default filter width, in texels.
-pub const DEFAULT_FILTER: u32 = 3;
-/// The widest filter.
-pub const MAX_FILTER: u32 = 63;
 /// The default minimum variance, as a fraction of the squared light depth range.
 pub const DEFAULT_MIN_VARIANCE: f64 = 1e-6;
 
@@ -111,12 +98,7 @@ impl VarianceShadowMap {
     /// Checks the options; the error names the flag.
     pub fn validate(&self) -> Result<(), MethodError> {
         self.map.validate()?;
-        if self.filter.is_multiple_of(2) || self.filter > MAX_FILTER {
-            return Err(MethodError::InvalidOption {
-                option: FILTER.flag,
-                message: format!("must be odd, 1 to {MAX_FILTER}, got {}", self.filter),
-            });
-        }
+        check_filter(self.filter)?;
         if !(0.0..=1.0).contains(&self.min_variance) {
             return Err(MethodError::InvalidOption {
                 option: MIN_VARIANCE.flag,
@@ -128,8 +110,7 @@ impl VarianceShadowMap {
 }
 
 /// The mean and mean square of depth at each texel, averaged over a `filter`-wide box
-/// (separable; texels beyond the border repeat it), depths measured from `near`, texels
-/// without a caster at `far`.
+/// ([`box_filter`]), depths measured from `near`, texels without a caster at `far`.
 fn moments(depth: &[f64], res: usize, filter: usize, near: f64, far: f64) -> Vec<[f64; 2]> {
     let raw: Vec<[f64; 2]> = depth
         .par_iter()
@@ -138,34 +119,7 @@ fn moments(depth: &[f64], res: usize, filter: usize, near: f64, far: f64) -> Vec
             [d, d * d]
         })
         .collect();
-    if filter == 1 {
-        return raw;
-    }
-    let half = (filter / 2) as isize;
-    let last = res as isize - 1;
-    let weight = 1.0 / filter as f64;
-    let blur = |src: &[[f64; 2]], along_rows: bool| -> Vec<[f64; 2]> {
-        let mut out = vec![[0.0; 2]; res * res];
-        out.par_chunks_mut(res).enumerate().for_each(|(y, row)| {
-            for (x, o) in row.iter_mut().enumerate() {
-                let mut sum = [0.0; 2];
-                for k in -half..=half {
-                    let (sx, sy) = if along_rows {
-                        ((x as isize + k).clamp(0, last) as usize, y)
-                    } else {
-                        (x, (y as isize + k).clamp(0, last) as usize)
-                    };
-                    let m = src[sy * res + sx];
-                    sum[0] += m[0];
-                    sum[1] += m[1];
-                }
-                *o = [sum[0] * weight, sum[1] * weight];
-            }
-        });
-        out
-    };
-    let rows = blur(&raw, true);
-    blur(&rows, false)
+    box_filter(raw, res, filter)
 }
 
 impl ShadowMethod for VarianceShadowMap {
