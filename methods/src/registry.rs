@@ -30,6 +30,7 @@ pub use crate::params::{Device, MethodOptions};
 // Methods added by their module beside this table and their entry in it alone (see
 // `docs/adding-a-method.md`).
 pub mod esm;
+pub mod msm;
 pub mod vsm;
 
 /// Builds a method from the options given (validated).
@@ -232,6 +233,7 @@ pub static METHODS: &[MethodEntry] = &[
     },
     vsm::ENTRY,
     esm::ENTRY,
+    msm::ENTRY,
 ];
 
 /// The parameters of Brabec and Seidel's methods.

@@ -236,7 +236,7 @@ fn render_on_the_gpu_names_the_adapter_and_the_timing_in_run_json() {
 }
 
 /// `render --device gpu` runs every technique with GPU kernels in the registry's table; the
-/// references and the methods without kernels (`vsm`, `esm`) are refused, named.
+/// references and the methods without kernels (`vsm`, `esm`, `msm`) are refused, named.
 #[cfg(feature = "gpu")]
 #[test]
 fn gpu_device_runs_every_method_but_the_references() {
@@ -244,7 +244,7 @@ fn gpu_device_runs_every_method_but_the_references() {
     let cpu_only = ["exact", "raytrace"];
     let no_kernels: Vec<&str> =
         methods::registry::METHODS.iter().filter(|m| m.gpu.is_none()).map(|m| m.name).collect();
-    assert_eq!(no_kernels, ["vsm", "esm"]);
+    assert_eq!(no_kernels, ["vsm", "esm", "msm"]);
     for name in methods::registry::METHODS.iter().map(|m| m.name).chain(cpu_only) {
         let out = dir.path().join(name);
         let mut args = vec!["render", "--scene", "plane-square", "--method", name];
