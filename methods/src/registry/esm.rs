@@ -10,7 +10,8 @@
 //!   before the test, the paper's point;
 //! - **exponential test**: at the pixel centre's receiver depth `d` (normalised the same way,
 //!   minus the shared bias tolerance of [`crate::depth_test`] with the reach of the filter's
-//!   half-width), lit `= min(1, F * exp(c * (1 - d)))` with `F` the filtered texel.
+//!   half-width), lit `= min(1, F * exp(c * (1 - d)))` with `F` the filtered texel (the stages
+//!   are [`crate::filtered_map::run`]'s).
 //!
 //! Choices where the paper leaves them open: the exponentials are kept in `f64` and offset by
 //! `-c` (`exp(c (z - 1))`, at most 1), so that `c` up to 700 neither overflows nor underflows
@@ -24,16 +25,13 @@
 
 use super::{map, MethodEntry, Rates};
 use crate::{
-    depth_test::{filter_pixels, texel_at, DepthTester, MapOptions, PixelResult},
-    filtered_map::{box_filter, check_filter, DEFAULT_FILTER, FILTER},
-    footprint::Sampling,
+    depth_test::MapOptions,
+    filtered_map::{self, check_filter, FilteredMap, DEFAULT_FILTER, FILTER},
     frame::Frame,
     method::{MethodError, ShadowMethod, Visibility},
     params::{self, Kind, Param},
 };
-use glam::DVec2;
 use instrumentation::Recorder;
-use rayon::prelude::*;
 
 /// The exponent `c`.
 pub static EXPONENT: Param = Param {
@@ -112,24 +110,27 @@ impl ExponentialShadowMap {
     }
 }
 
-/// `exp(c (z - 1))` at each texel, `z` the depth normalised over `[near, near + range]` (1
-/// without a caster), averaged over a `filter`-wide box.
-fn exponentials(
-    depth: &[f64],
-    res: usize,
-    filter: usize,
-    c: f64,
-    near: f64,
-    range: f64,
-) -> Vec<[f64; 1]> {
-    let raw: Vec<[f64; 1]> = depth
-        .par_iter()
-        .map(|&t| {
-            let z = if t.is_finite() { ((t - near) / range).clamp(0.0, 1.0) } else { 1.0 };
-            [(c * (z - 1.0)).exp()]
-        })
-        .collect();
-    box_filter(raw, res, filter)
+impl FilteredMap<1> for ExponentialShadowMap {
+    fn map(&self) -> &MapOptions {
+        &self.map
+    }
+
+    fn filter(&self) -> u32 {
+        self.filter
+    }
+
+    fn stages(&self) -> [&'static str; 2] {
+        [STAGE_EXPONENTIALS, STAGE_TEST]
+    }
+
+    fn store(&self, z: f64) -> [f64; 1] {
+        [(self.exponent * (z - 1.0)).exp()]
+    }
+
+    fn test(&self, &[f]: &[f64; 1], z: f64) -> f64 {
+        // `f >= exp(-c) > 0`: the logarithm is finite.
+        (f.ln() + self.exponent * (1.0 - z)).exp().min(1.0)
+    }
 }
 
 impl ShadowMethod for ExponentialShadowMap {
@@ -146,34 +147,7 @@ impl ShadowMethod for ExponentialShadowMap {
 
     fn run(&self, frame: &Frame<'_>, rec: &mut Recorder) -> Result<Visibility, MethodError> {
         self.validate()?;
-        if frame.effects.transparency {
-            rec.notes.push("esm treats semi-transparent casters as opaque".into());
-        }
-        let map = frame.light_depth_map(self.map.map_res, rec);
-        let (near, _) = frame.light_depth_bounds(&map.projector);
-        let range = frame.light_depth_range(&map.projector);
-        let res = map.res as usize;
-        let c = self.exponent;
-        let filtered = rec.stages.time(STAGE_EXPONENTIALS, || {
-            exponentials(&map.depth, res, self.filter as usize, c, near, range)
-        });
-        let tester = DepthTester::new(&self.map, map.projector, range);
-        rec.warnings.extend(tester.warnings(self.name(), frame, Sampling::PixelCentre));
-        let reach = DVec2::splat(f64::from(self.filter) / 2.0);
-        let (lit, counters) = rec.stages.time(STAGE_TEST, || {
-            filter_pixels(frame, &tester, |_, _, r| {
-                let Some((x, y)) = texel_at(r.xy, map.res) else {
-                    return PixelResult { lit: 1.0, ..Default::default() };
-                };
-                let [f] = filtered[y * res + x];
-                let d = (r.depth - tester.tolerance(r, reach) - near) / range;
-                // `f >= exp(-c) > 0`: the logarithm is finite.
-                let lit = (f.ln() + c * (1.0 - d)).exp().min(1.0);
-                PixelResult { lit: lit as f32, compares: 1, bilinear_lookups: 0 }
-            })
-        });
-        rec.counters.merge(&counters);
-        Ok(Visibility { width: frame.width(), height: frame.height(), lit, transmittance: None })
+        filtered_map::run(self, frame, rec)
     }
 }
 
@@ -181,16 +155,17 @@ impl ShadowMethod for ExponentialShadowMap {
 mod tests {
     use super::*;
 
-    /// Texels hold `exp(c (z - 1))`: 1 without a caster, `exp(-c)` at the nearest depth.
+    /// Texels hold `exp(c (z - 1))`, at most 1 (`exp(-c)` at the nearest depth, a normal
+    /// `f64` up to the largest `c`); behind a texel's one depth the test is `exp(-c (d - z))`.
     #[test]
     fn exponentials_are_offset_to_at_most_one() {
-        let depth = vec![2.0, 4.0, f64::INFINITY, 3.0];
-        let e = exponentials(&depth, 2, 1, 80.0, 2.0, 2.0);
-        assert_eq!(e[0][0], (-80.0f64).exp());
-        assert_eq!((e[1][0], e[2][0]), (1.0, 1.0));
-        assert!((e[3][0] - (-40.0f64).exp()).abs() < 1e-30);
-        let e = exponentials(&[0.0], 1, 1, MAX_EXPONENT, 0.0, 1.0);
-        assert!(e[0][0].is_normal() && e[0][0].ln().is_finite());
+        let m = ExponentialShadowMap { map: MapOptions::default(), filter: 1, exponent: 80.0 };
+        assert_eq!(m.store(0.0), [(-80.0f64).exp()]);
+        assert_eq!(m.store(1.0), [1.0]);
+        assert_eq!(m.test(&m.store(0.5), 0.25), 1.0);
+        assert!((m.test(&m.store(0.5), 0.75) - (-20.0f64).exp()).abs() < 1e-15);
+        let m = ExponentialShadowMap { exponent: MAX_EXPONENT, ..m };
+        assert!(m.store(0.0)[0].is_normal() && m.test(&m.store(0.0), 1.0).is_finite());
     }
 
     #[test]

@@ -16,7 +16,7 @@
 //!   support of the distribution that bounds the shadow from below, and the shadow intensity is
 //!   0 for `z_f <= z2`, `(z_f z3 - b1 (z_f + z3) + b2) / ((z3 - z2) (z_f - z2))` for
 //!   `z_f <= z3`, else `1 - (z2 z3 - b1 (z2 + z3) + b2) / ((z_f - z2) (z_f - z3))`; lit is one
-//!   minus it, clamped to [0, 1].
+//!   minus it, clamped to [0, 1] (the stages are [`crate::filtered_map::run`]'s).
 //!
 //! Choices where the paper leaves them open: the moments are kept in `f64` (the paper
 //! quantizes them to 16 or 32 bits with an optimized basis, section 4, and tunes `alpha` to
@@ -28,16 +28,13 @@
 
 use super::{map, MethodEntry, Rates};
 use crate::{
-    depth_test::{filter_pixels, texel_at, DepthTester, MapOptions, PixelResult},
-    filtered_map::{box_filter, check_filter, DEFAULT_FILTER, FILTER},
-    footprint::Sampling,
+    depth_test::MapOptions,
+    filtered_map::{self, check_filter, FilteredMap, DEFAULT_FILTER, FILTER},
     frame::Frame,
     method::{MethodError, ShadowMethod, Visibility},
     params::{self, Kind, Param},
 };
-use glam::DVec2;
 use instrumentation::Recorder;
-use rayon::prelude::*;
 
 /// The moment bias `alpha`.
 pub static MOMENT_BIAS: Param = Param {
@@ -110,19 +107,6 @@ impl MomentShadowMap {
     }
 }
 
-/// The four moments of the normalised depth at each texel, averaged over a `filter`-wide box.
-fn moments(depth: &[f64], res: usize, filter: usize, near: f64, range: f64) -> Vec<[f64; 4]> {
-    let raw: Vec<[f64; 4]> = depth
-        .par_iter()
-        .map(|&t| {
-            let z = if t.is_finite() { ((t - near) / range).clamp(0.0, 1.0) } else { 1.0 };
-            let z2 = z * z;
-            [z, z2, z2 * z, z2 * z2]
-        })
-        .collect();
-    box_filter(raw, res, filter)
-}
-
 /// The shadow intensity of the Hamburger four-moment reconstruction (see the module
 /// documentation) of the moments `b` at depth `zf` with moment bias `alpha`; `None` where it
 /// is not finite.
@@ -154,6 +138,30 @@ fn hamburger(b: [f64; 4], zf: f64, alpha: f64) -> Option<f64> {
     g.is_finite().then_some(g)
 }
 
+impl FilteredMap<4> for MomentShadowMap {
+    fn map(&self) -> &MapOptions {
+        &self.map
+    }
+
+    fn filter(&self) -> u32 {
+        self.filter
+    }
+
+    fn stages(&self) -> [&'static str; 2] {
+        [STAGE_MOMENTS, STAGE_HAMBURGER]
+    }
+
+    fn store(&self, z: f64) -> [f64; 4] {
+        let z2 = z * z;
+        [z, z2, z2 * z, z2 * z2]
+    }
+
+    fn test(&self, b: &[f64; 4], z: f64) -> f64 {
+        let shadow = hamburger(*b, z, self.moment_bias).unwrap_or(if z > b[0] { 1.0 } else { 0.0 });
+        1.0 - shadow
+    }
+}
+
 impl ShadowMethod for MomentShadowMap {
     fn name(&self) -> &'static str {
         ENTRY.name
@@ -168,34 +176,7 @@ impl ShadowMethod for MomentShadowMap {
 
     fn run(&self, frame: &Frame<'_>, rec: &mut Recorder) -> Result<Visibility, MethodError> {
         self.validate()?;
-        if frame.effects.transparency {
-            rec.notes.push("msm treats semi-transparent casters as opaque".into());
-        }
-        let map = frame.light_depth_map(self.map.map_res, rec);
-        let (near, _) = frame.light_depth_bounds(&map.projector);
-        let range = frame.light_depth_range(&map.projector);
-        let res = map.res as usize;
-        let filtered = rec
-            .stages
-            .time(STAGE_MOMENTS, || moments(&map.depth, res, self.filter as usize, near, range));
-        let tester = DepthTester::new(&self.map, map.projector, range);
-        rec.warnings.extend(tester.warnings(self.name(), frame, Sampling::PixelCentre));
-        let reach = DVec2::splat(f64::from(self.filter) / 2.0);
-        let (lit, counters) = rec.stages.time(STAGE_HAMBURGER, || {
-            filter_pixels(frame, &tester, |_, _, r| {
-                let Some((x, y)) = texel_at(r.xy, map.res) else {
-                    return PixelResult { lit: 1.0, ..Default::default() };
-                };
-                let b = filtered[y * res + x];
-                let zf = (r.depth - tester.tolerance(r, reach) - near) / range;
-                let shadow =
-                    hamburger(b, zf, self.moment_bias).unwrap_or(if zf > b[0] { 1.0 } else { 0.0 });
-                let lit = (1.0 - shadow).clamp(0.0, 1.0);
-                PixelResult { lit: lit as f32, compares: 1, bilinear_lookups: 0 }
-            })
-        });
-        rec.counters.merge(&counters);
-        Ok(Visibility { width: frame.width(), height: frame.height(), lit, transmittance: None })
+        filtered_map::run(self, frame, rec)
     }
 }
 

@@ -5,9 +5,9 @@
 //! Stages, as the paper's section 3:
 //! - **light depth map**: the nearest caster depth at each texel centre ([`crate::depth_map`]),
 //!   the shadow map every other technique renders;
-//! - **moments** (section 3.1): each texel stores the first two moments of depth, `M1 = d` and
-//!   `M2 = d^2`, with `d` the depth above the scene's nearest light depth (a texel without a
-//!   caster holds the scene's farthest depth, as a cleared depth buffer holds the far plane),
+//! - **moments** (section 3.1): each texel stores the first two moments of depth, `M1 = z` and
+//!   `M2 = z^2`, with `z` the depth normalised to [0, 1] over the scene's light depth range (a
+//!   texel without a caster holds 1, as a cleared depth buffer holds the far plane),
 //!   then the moments are averaged over a `filter x filter` box of texels (section 3.2: the
 //!   moments, unlike depths, can be filtered linearly; the box is
 //!   [`crate::filtered_map::box_filter`], shared with the other filtered maps);
@@ -17,26 +17,23 @@
 //!   else the upper bound `p_max = sigma^2 / (sigma^2 + (t - mu)^2)`.
 //!
 //! Choices where the paper leaves them open: the moments are kept in `f64` (the paper stores
-//! 16- or 32-bit floats; their precision is the subject of its section 4), and depths are
-//! measured from the scene's nearest light depth so that `M2 - M1^2` does not cancel far from
-//! the origin; the minimum variance is a fraction of the squared light depth range (the
-//! paper's is an absolute constant of its depth range); no light-bleeding reduction (the paper
+//! 16- or 32-bit floats; their precision is the subject of its section 4), of depths
+//! normalised over the scene's light depth range so that `M2 - M1^2` does not cancel far from
+//! the origin; the minimum variance is in those units, a fraction of the squared light depth
+//! range; the stages are [`crate::filtered_map::run`]'s; no light-bleeding reduction (the paper
 //! shows the bleeding, section 5; the reduction came later). With `filter = 1` and
 //! `min_variance = 0` the test is the standard shadow map's (`sm`), which the tests check pixel
 //! for pixel. Casters with opacity below 1 are treated as opaque, as by `sm`.
 
 use super::{map, MethodEntry, Rates};
 use crate::{
-    depth_test::{filter_pixels, texel_at, DepthTester, MapOptions, PixelResult},
-    filtered_map::{box_filter, check_filter, DEFAULT_FILTER, FILTER},
-    footprint::Sampling,
+    depth_test::MapOptions,
+    filtered_map::{self, check_filter, FilteredMap, DEFAULT_FILTER, FILTER},
     frame::Frame,
     method::{MethodError, ShadowMethod, Visibility},
     params::{self, Kind, Param},
 };
-use glam::DVec2;
 use instrumentation::Recorder;
-use rayon::prelude::*;
 
 /// The least variance of the Chebyshev bound.
 pub static MIN_VARIANCE: Param = Param {
@@ -109,17 +106,32 @@ impl VarianceShadowMap {
     }
 }
 
-/// The mean and mean square of depth at each texel, averaged over a `filter`-wide box
-/// ([`box_filter`]), depths measured from `near`, texels without a caster at `far`.
-fn moments(depth: &[f64], res: usize, filter: usize, near: f64, far: f64) -> Vec<[f64; 2]> {
-    let raw: Vec<[f64; 2]> = depth
-        .par_iter()
-        .map(|&t| {
-            let d = if t.is_finite() { t - near } else { far - near };
-            [d, d * d]
-        })
-        .collect();
-    box_filter(raw, res, filter)
+impl FilteredMap<2> for VarianceShadowMap {
+    fn map(&self) -> &MapOptions {
+        &self.map
+    }
+
+    fn filter(&self) -> u32 {
+        self.filter
+    }
+
+    fn stages(&self) -> [&'static str; 2] {
+        [STAGE_MOMENTS, STAGE_CHEBYSHEV]
+    }
+
+    fn store(&self, z: f64) -> [f64; 2] {
+        [z, z * z]
+    }
+
+    fn test(&self, &[mu, m2]: &[f64; 2], z: f64) -> f64 {
+        if z <= mu {
+            return 1.0;
+        }
+        let variance = (m2 - mu * mu).max(self.min_variance);
+        let over = z - mu;
+        // 0 / 0 cannot arise: `over > 0`.
+        variance / (variance + over * over)
+    }
 }
 
 impl ShadowMethod for VarianceShadowMap {
@@ -136,40 +148,7 @@ impl ShadowMethod for VarianceShadowMap {
 
     fn run(&self, frame: &Frame<'_>, rec: &mut Recorder) -> Result<Visibility, MethodError> {
         self.validate()?;
-        if frame.effects.transparency {
-            rec.notes.push("vsm treats semi-transparent casters as opaque".into());
-        }
-        let map = frame.light_depth_map(self.map.map_res, rec);
-        let (near, far) = frame.light_depth_bounds(&map.projector);
-        let range = frame.light_depth_range(&map.projector);
-        let res = map.res as usize;
-        let filtered = rec
-            .stages
-            .time(STAGE_MOMENTS, || moments(&map.depth, res, self.filter as usize, near, far));
-        let tester = DepthTester::new(&self.map, map.projector, range);
-        rec.warnings.extend(tester.warnings(self.name(), frame, Sampling::PixelCentre));
-        let reach = DVec2::splat(f64::from(self.filter) / 2.0);
-        let min_variance = self.min_variance * range * range;
-        let (lit, counters) = rec.stages.time(STAGE_CHEBYSHEV, || {
-            filter_pixels(frame, &tester, |_, _, r| {
-                let Some((x, y)) = texel_at(r.xy, map.res) else {
-                    return PixelResult { lit: 1.0, ..Default::default() };
-                };
-                let [mu, m2] = filtered[y * res + x];
-                let t = (r.depth - tester.tolerance(r, reach)) - near;
-                let lit = if t <= mu {
-                    1.0
-                } else {
-                    let variance = (m2 - mu * mu).max(min_variance);
-                    let over = t - mu;
-                    // 0 / 0 cannot arise: `over > 0`.
-                    (variance / (variance + over * over)) as f32
-                };
-                PixelResult { lit, compares: 1, bilinear_lookups: 0 }
-            })
-        });
-        rec.counters.merge(&counters);
-        Ok(Visibility { width: frame.width(), height: frame.height(), lit, transmittance: None })
+        filtered_map::run(self, frame, rec)
     }
 }
 
@@ -177,20 +156,18 @@ impl ShadowMethod for VarianceShadowMap {
 mod tests {
     use super::*;
 
-    /// The box filter averages the moments and repeats the border; one texel is no filter.
+    /// A texel stores the first two moments; at or in front of the mean the pixel is lit,
+    /// behind a texel of one depth it is dark, behind a spread of depths it is Chebyshev's
+    /// bound.
     #[test]
-    fn moments_are_box_filtered() {
-        let depth = vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, f64::INFINITY];
-        let m = moments(&depth, 3, 1, 1.0, 11.0);
-        assert_eq!(m[0], [0.0, 0.0]);
-        assert_eq!(m[8], [10.0, 100.0]);
-        let f = moments(&depth, 3, 3, 1.0, 11.0);
-        // Centre: the mean of all nine.
-        let mean = (0.0 + 1.0 + 2.0 + 3.0 + 4.0 + 5.0 + 6.0 + 7.0 + 10.0) / 9.0;
-        assert!((f[4][0] - mean).abs() < 1e-12, "{:?}", f[4]);
-        // Corner: rows 0,0,1 and columns 0,0,1.
-        let corner = (4.0 * 0.0 + 2.0 * 1.0 + 2.0 * 3.0 + 4.0) / 9.0;
-        assert!((f[0][0] - corner).abs() < 1e-12, "{:?}", f[0]);
+    fn the_test_is_chebyshevs_bound() {
+        let m = VarianceShadowMap { map: MapOptions::default(), filter: 3, min_variance: 0.0 };
+        assert_eq!(m.store(0.5), [0.5, 0.25]);
+        assert_eq!(m.test(&[0.5, 0.25], 0.5), 1.0);
+        assert_eq!(m.test(&[0.5, 0.25], 0.75), 0.0);
+        // Depths 0.25 and 0.75 in equal parts: variance 1/16; at 1, (1/16) / (1/16 + 1/4).
+        let two = [0.5, (0.0625 + 0.5625) / 2.0];
+        assert!((m.test(&two, 1.0) - 0.2).abs() < 1e-12);
     }
 
     #[test]
