@@ -79,8 +79,7 @@ fn sized_scene(
     max_memory: Option<u64>,
     reference: Option<(&str, u32)>,
 ) -> Result<Sized, Failure> {
-    let scene_error = |e| input(anyhow::anyhow!("--scene: {e}"));
-    let described = scenes::describe(name).map_err(scene_error)?;
+    let described = super::describe_scene(name)?;
     let [scene_width, scene_height] = described.resolution();
     let width = width.unwrap_or(scene_width);
     let height = height.unwrap_or(scene_height);
@@ -101,8 +100,8 @@ fn sized_scene(
         let what = format!("an outside result on {name} at {width}x{height}");
         analysis::budget::check(&work, &limit, &what).map(|_| ()).map_err(input)
     };
-    budget(described.triangles().map_err(scene_error)?)?;
-    let scene = described.resolve().map_err(scene_error)?;
+    budget(described.triangles().map_err(super::scene_error)?)?;
+    let scene = described.resolve().map_err(super::scene_error)?;
     Ok(Sized { scene, width, height })
 }
 
@@ -177,8 +176,8 @@ pub fn compare(c: &CompareArgs, file: &Path) -> Result<(), Failure> {
     let tx = begin_out(&out, flag, Kind::Run)?;
     let mut cache = super::reference::open_cache(&c.cache)?;
     let frame = Frame::new(&s.scene, s.width, s.height, &mut Recorder::default());
-    let binary = visibility.lit.iter().all(|&x| x == 0.0 || x == 1.0);
-    let evaluated = super::reference::evaluate(&chosen, &s.scene, &frame, cache.as_mut(), binary)?;
+    let evaluated =
+        super::reference::evaluate(&chosen, &s.scene, &frame, cache.as_mut(), &visibility)?;
     let result = super::reference::Compared {
         method: name,
         params: serde_json::Map::new(),

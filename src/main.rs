@@ -294,13 +294,18 @@ struct RenderArgs {
 }
 
 impl RenderArgs {
+    /// The method options given: the parameters' flags and `--device`.
+    fn options(&self) -> MethodOptions {
+        let mut options = MethodOptions { device: self.device.into(), ..Default::default() };
+        for (p, v) in &self.params {
+            options.set(p, *v);
+        }
+        options
+    }
+
     /// The sub-sample pattern given (`--pattern`), default grid.
     fn pattern(&self) -> PatternKind {
-        let given = self.params.iter().find(|(p, _)| p.key == params::PATTERN.key);
-        match given {
-            Some((_, params::Value::Choice("rotated"))) => PatternKind::Rotated,
-            _ => PatternKind::Grid,
-        }
+        self.options().pattern.unwrap_or_default()
     }
 }
 
@@ -567,19 +572,27 @@ fn check_budget(
     analysis::budget::check(&work, &limit, &what).map(|_| ()).map_err(input)
 }
 
+/// A `--scene` error: bad input naming the flag.
+fn scene_error(e: scenes::SceneError) -> Failure {
+    input(anyhow::anyhow!("--scene: {e}"))
+}
+
+/// The scene `--scene` names, described (not built), with the notes of what it leaves out
+/// (a glTF scene's textures, extra lights, ...) printed.
+fn describe_scene(name: &str) -> Result<scenes::Described, Failure> {
+    let described = scenes::describe(name).map_err(scene_error)?;
+    for note in described.notes() {
+        eprintln!("note: --scene {name}: {note}");
+    }
+    Ok(described)
+}
+
 fn job(a: &RenderArgs, compared_with: Option<(&str, u32)>) -> Result<Job, Failure> {
     let method = a.method.as_deref().ok_or_else(|| {
         input(anyhow::anyhow!("--method is required (by compare, unless --visibility is given)"))
     })?;
-    let scene_error = |e| input(anyhow::anyhow!("--scene: {e}"));
-    let described = scenes::describe(&a.scene).map_err(scene_error)?;
-    for note in described.notes() {
-        eprintln!("note: --scene {}: {note}", a.scene);
-    }
-    let mut options = MethodOptions { device: a.device.into(), ..Default::default() };
-    for (p, v) in &a.params {
-        options.set(p, *v);
-    }
+    let described = describe_scene(&a.scene)?;
+    let options = a.options();
     let technique = analysis::registry::technique(method, &options).map_err(method_failure)?;
     // The same reference as `technique` wraps (`registry::technique`'s rate and pattern).
     let reference = if analysis::registry::REFERENCES.iter().any(|(n, _)| *n == method) {
@@ -1077,8 +1090,8 @@ fn compare(c: CompareArgs) -> Result<(), Failure> {
     let staging = tx.staging().to_owned();
 
     let (frame, ran, spread) = run_repeated(&job, a.repeat)?;
-    let binary = ran.visibility.lit.iter().all(|&x| x == 0.0 || x == 1.0);
-    let evaluated = reference::evaluate(&chosen, &job.scene, &frame, cache.as_mut(), binary)?;
+    let evaluated =
+        reference::evaluate(&chosen, &job.scene, &frame, cache.as_mut(), &ran.visibility)?;
     write_run(&staging, &frame, &ran)?;
     let record = &ran.record;
     let compared = reference::Compared {

@@ -128,13 +128,13 @@ pub struct Evaluated {
 }
 
 /// Evaluates `chosen` on `frame` of `scene`, through `cache` when there is one; with a cache
-/// and a `binary` result (every value 0 or 1), also the one-ray image its pixel match needs.
+/// and a binary `result` (every value 0 or 1), also the one-ray image its pixel match needs.
 pub fn evaluate(
     chosen: &Chosen,
     scene: &scenes::Scene,
     frame: &Frame<'_>,
     cache: Option<&mut ReferenceCache>,
-    binary: bool,
+    result: &methods::Visibility,
 ) -> Result<Evaluated, Failure> {
     let compute = || {
         let mut rec = Recorder::default();
@@ -153,7 +153,7 @@ pub fn evaluate(
         cache.get_or_compute(scene, frame, &chosen.cache_name, chosen.ref_rate, &build, compute)?;
     let read_ms = (cache.stats.hits > hits).then(|| started.elapsed().as_secs_f64() * 1e3);
     // The same entry as `compare --reference raytrace --ref-rate 1` (grid pattern) would use.
-    let one_ray = if binary {
+    let one_ray = if result.lit.iter().all(|&x| x == 0.0 || x == 1.0) {
         let traced = || {
             let one = analysis::registry::reference("raytrace", 1, PatternKind::Grid);
             let mut rec = Recorder::default();
