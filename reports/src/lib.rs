@@ -10,6 +10,7 @@
 //! put back together by [`merge`]. A frame for another renderer is written by [`frame_export`],
 //! and an outside renderer's result read by [`external`].
 
+pub mod animation;
 pub mod baseline;
 pub mod cache;
 pub mod devices;

@@ -1,0 +1,182 @@
+//! The animation of a run in motion: each frame the method's shaded image, the reference's and
+//! the error map side by side ([`side_by_side`]), written as one animated PNG (APNG, which every
+//! current browser plays in an `<img>`) by [`Apng`], frame by frame, so that an animation of
+//! many frames never holds more than one in memory.
+//!
+//! APNG through the `png` crate (the encoder `image` uses for still PNGs): its `fcTL`/`fdAT`
+//! chunks are written by the crate; the frame count is declared up front, and a writer that
+//! is finished with fewer frames than declared is an error, not a short file.
+
+use image::RgbImage;
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+
+/// Grey of the gap between the three panels.
+const GAP_GREY: u8 = 24;
+/// Width of the gap between panels, pixels.
+const GAP: u32 = 4;
+
+/// An animated image could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum AnimationError {
+    /// Writing `path` failed.
+    #[error("cannot write {path}: {message}")]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        message: String,
+    },
+    /// A frame of the wrong size, or more or fewer frames than declared (a caller's bug).
+    #[error("{path}: {message}")]
+    Frames {
+        /// The file.
+        path: PathBuf,
+        /// What was wrong.
+        message: String,
+    },
+}
+
+/// The panels of one frame placed left to right on a dark background, top-aligned, with a
+/// gap of [`GAP`] pixels between them; the height is the tallest panel's (the error map
+/// carries its colour bar below the image).
+pub fn side_by_side(panels: &[&RgbImage]) -> RgbImage {
+    let width = panels.iter().map(|p| p.width()).sum::<u32>()
+        + GAP * (panels.len().saturating_sub(1) as u32);
+    let height = panels.iter().map(|p| p.height()).max().unwrap_or(0);
+    let mut out = RgbImage::from_pixel(width, height, image::Rgb([GAP_GREY; 3]));
+    let mut x0 = 0;
+    for p in panels {
+        image::imageops::replace(&mut out, *p, i64::from(x0), 0);
+        x0 += p.width() + GAP;
+    }
+    out
+}
+
+/// An APNG being written: created with its size, frame count and frame delay, then given
+/// every frame in order ([`Apng::push`]) and finished ([`Apng::finish`]).
+pub struct Apng {
+    path: PathBuf,
+    writer: png::Writer<BufWriter<File>>,
+    width: u32,
+    height: u32,
+    declared: u32,
+    written: u32,
+}
+
+impl Apng {
+    /// Starts `path`: `frames` frames of `width x height` RGB, each shown `delay_ms`
+    /// milliseconds, looping forever.
+    pub fn create(
+        path: &Path,
+        width: u32,
+        height: u32,
+        frames: u32,
+        delay_ms: u16,
+    ) -> Result<Self, AnimationError> {
+        let err = |e: &dyn std::fmt::Display| AnimationError::Write {
+            path: path.to_owned(),
+            message: e.to_string(),
+        };
+        let file = File::create(path).map_err(|e| err(&e))?;
+        let mut encoder = png::Encoder::new(BufWriter::new(file), width, height);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder.set_animated(frames, 0).map_err(|e| err(&e))?;
+        encoder.set_frame_delay(delay_ms, 1000).map_err(|e| err(&e))?;
+        let writer = encoder.write_header().map_err(|e| err(&e))?;
+        Ok(Self { path: path.to_owned(), writer, width, height, declared: frames, written: 0 })
+    }
+
+    /// Writes the next frame.
+    pub fn push(&mut self, frame: &RgbImage) -> Result<(), AnimationError> {
+        if frame.dimensions() != (self.width, self.height) || self.written == self.declared {
+            return Err(AnimationError::Frames {
+                path: self.path.clone(),
+                message: format!(
+                    "frame {} of {} is {}x{}, the animation is {}x{}",
+                    self.written + 1,
+                    self.declared,
+                    frame.width(),
+                    frame.height(),
+                    self.width,
+                    self.height
+                ),
+            });
+        }
+        self.writer.write_image_data(frame.as_raw()).map_err(|e| AnimationError::Write {
+            path: self.path.clone(),
+            message: e.to_string(),
+        })?;
+        self.written += 1;
+        Ok(())
+    }
+
+    /// Ends the file; every declared frame must have been written.
+    pub fn finish(self) -> Result<(), AnimationError> {
+        if self.written != self.declared {
+            return Err(AnimationError::Frames {
+                path: self.path,
+                message: format!("{} frames written, {} declared", self.written, self.declared),
+            });
+        }
+        let path = self.path;
+        self.writer
+            .finish()
+            .map_err(|e| AnimationError::Write { path: path.clone(), message: e.to_string() })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn plain(w: u32, h: u32, v: u8) -> RgbImage {
+        RgbImage::from_pixel(w, h, image::Rgb([v; 3]))
+    }
+
+    #[test]
+    fn panels_are_placed_left_to_right_with_gaps() {
+        let (a, b) = (plain(3, 2, 10), plain(2, 4, 200));
+        let out = side_by_side(&[&a, &b]);
+        assert_eq!(out.dimensions(), (3 + GAP + 2, 4));
+        assert_eq!(out.get_pixel(0, 0).0, [10; 3]);
+        assert_eq!(out.get_pixel(3, 0).0, [GAP_GREY; 3]);
+        assert_eq!(out.get_pixel(3 + GAP, 3).0, [200; 3]);
+        assert_eq!(out.get_pixel(0, 3).0, [GAP_GREY; 3], "below the shorter panel");
+    }
+
+    #[test]
+    fn an_apng_holds_its_frames_and_reads_back() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("a.png");
+        let mut apng = Apng::create(&path, 4, 3, 3, 100).expect("created");
+        for v in [0, 128, 255] {
+            apng.push(&plain(4, 3, v)).expect("frame");
+        }
+        assert!(apng.push(&plain(4, 3, 1)).is_err(), "a fourth frame is refused");
+        apng.finish().expect("finished");
+        let decoder = png::Decoder::new(std::io::BufReader::new(File::open(&path).expect("open")));
+        let mut reader = decoder.read_info().expect("header");
+        let control = reader.info().animation_control().copied().expect("animated");
+        assert_eq!((control.num_frames, control.num_plays), (3, 0));
+        let mut buf = vec![0; reader.output_buffer_size().expect("size")];
+        let mut firsts = Vec::new();
+        for _ in 0..3 {
+            reader.next_frame(&mut buf).expect("frame");
+            firsts.push(buf[0]);
+        }
+        assert_eq!(firsts, [0, 128, 255]);
+    }
+
+    #[test]
+    fn too_few_frames_or_a_wrong_size_are_errors() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("a.png");
+        let mut apng = Apng::create(&path, 4, 3, 2, 100).expect("created");
+        assert!(apng.push(&plain(3, 3, 0)).is_err());
+        apng.push(&plain(4, 3, 0)).expect("frame");
+        assert!(apng.finish().is_err());
+    }
+}
