@@ -103,6 +103,7 @@ fn desc(
         light,
         effects: Default::default(),
         objects,
+        animation: Default::default(),
     }
 }
 
@@ -397,6 +398,7 @@ fn gltf_scene(path: &Path, name: &str) -> Result<Scene, SceneError> {
         light: gltf.light.unwrap_or_else(default_light).normalized(),
         objects: gltf.objects,
         switches: Default::default(),
+        animation: Default::default(),
     };
     crate::scene_file::check_resolved(&scene, path)?;
     Ok(scene)
