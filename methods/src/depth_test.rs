@@ -461,6 +461,7 @@ mod tests {
                 casts_shadows: true,
             }],
             switches: Default::default(),
+            animation: Default::default(),
         }
     }
 

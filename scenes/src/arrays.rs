@@ -26,6 +26,13 @@ pub(crate) fn dvec3<'de, D: Deserializer<'de>>(deserializer: D) -> Result<DVec3,
     exact::<D, f64, 3>(deserializer).map(DVec3::from_array)
 }
 
+/// An optional vector of exactly 3 values (a field with `#[serde(default)]`: absent is `None`).
+pub(crate) fn option_dvec3<'de, D: Deserializer<'de>>(
+    deserializer: D,
+) -> Result<Option<DVec3>, D::Error> {
+    dvec3(deserializer).map(Some)
+}
+
 /// Reads an array of exactly `N` values.
 struct Exact<T, const N: usize>(PhantomData<T>);
 
@@ -66,6 +73,8 @@ mod tests {
         size: [u32; 2],
         #[serde(default, deserialize_with = "dvec3")]
         at: DVec3,
+        #[serde(default, deserialize_with = "option_dvec3")]
+        maybe: Option<DVec3>,
     }
 
     fn probe(text: &str) -> Result<Probe, String> {
@@ -77,6 +86,11 @@ mod tests {
         let p = probe("size = [4, 3]\nat = [1.0, -2.0, 0.5]").expect("valid");
         assert_eq!((p.size, p.at), ([4, 3], DVec3::new(1.0, -2.0, 0.5)));
         assert_eq!(probe("size = [4, 3]").expect("default").at, DVec3::ZERO);
+        assert_eq!(probe("size = [4, 3]").expect("absent").maybe, None);
+        let p = probe("size = [4, 3]\nmaybe = [1, 2, 3]").expect("present");
+        assert_eq!(p.maybe, Some(DVec3::new(1.0, 2.0, 3.0)));
+        let e = probe("size = [4, 3]\nmaybe = [1, 2]").expect_err("two values");
+        assert!(e.contains("line 2") && e.contains("invalid length 2"), "{e}");
     }
 
     #[test]

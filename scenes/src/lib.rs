@@ -1,6 +1,7 @@
 //! Scenes for the shadow workbench: meshes, materials, lights, cameras, scene files,
 //! procedural generators, mesh loaders, and the effects a scene calls for.
 
+pub mod animation;
 mod arrays;
 pub mod camera;
 pub mod direction;
@@ -15,6 +16,7 @@ pub mod projection;
 pub mod scene;
 mod toml_lines;
 
+pub use animation::{Animation, AnimationDesc, AnimationError, MAX_FRAMES};
 pub use camera::Camera;
 pub use light::Light;
 pub use mesh::{Mesh, MeshError};

@@ -13,6 +13,7 @@
 //! object the scene made of it.
 
 use crate::{
+    animation::{AnimationDesc, CameraKey, LightKey, ObjectKey, ObjectTrack, ScaleKey},
     camera::Camera,
     generators::{
         CageParams, CityParams, HairballParams, HeightfieldParams, PlaneParams, PlantParams,
@@ -53,7 +54,19 @@ pub const BUILTINS: &[(&str, &str)] = &[
         "bunny-plane",
         "the Stanford bunny (CGAL's bunny00.off, 75k triangles) over a plane (Pan et al. Fig. 8)",
     ),
+    (
+        "bumpy-orbit",
+        "animated: a light 55 degrees high orbiting the vertical once over spheres and a bumpy \
+         heightfield",
+    ),
+    ("cage-sweep", "animated: the cage under a light swept through 30 degrees"),
+    ("bunny-dolly", "animated: bunny-plane's camera dollying slowly towards the bunny"),
+    ("square-slide", "animated: plane-square's square sliding across the ground"),
+    ("cage-ramp", "animated: the cage, its shadow map's resolution ramping from 0.25 to 1"),
 ];
+
+/// The frames of the animated built-ins.
+const FRAMES: u32 = 24;
 
 fn ground(size: f64) -> ObjectDesc {
     ObjectDesc {
@@ -103,7 +116,83 @@ fn desc(
         light,
         effects: Default::default(),
         objects,
+        animation: Default::default(),
     }
+}
+
+/// One square occluder over a plane.
+fn plane_square(name: &str) -> SceneDesc {
+    let mut square = caster(
+        "square",
+        Shape::Plane(PlaneParams { size: 2.0, ..Default::default() }),
+        [0.7, 0.3, 0.3],
+    );
+    square.transform = Transform {
+        rotate_deg: DVec3::new(0.0, 20.0, 0.0),
+        translate: DVec3::new(0.0, 1.5, 0.0),
+        ..Default::default()
+    };
+    desc(
+        name,
+        [800, 600],
+        perspective([0.0, 7.0, 9.0], [0.0, 0.0, 0.0], 40.0),
+        directional([-0.4, -1.0, -0.25]),
+        vec![ground(12.0), square],
+    )
+}
+
+/// A cage of thin bars over a plane.
+fn cage(name: &str) -> SceneDesc {
+    desc(
+        name,
+        [800, 600],
+        perspective([0.0, 6.0, 10.0], [0.0, 1.5, 0.0], 45.0),
+        directional([-0.6, -1.0, -0.4]),
+        vec![ground(16.0), caster("cage", Shape::Cage(CageParams::default()), [0.6, 0.6, 0.7])],
+    )
+}
+
+/// Spheres over a heightfield of `resolution` quads a side.
+fn bumpy(name: &str, resolution: u32) -> SceneDesc {
+    let mut receiver = ground(20.0);
+    receiver.name = Some("heightfield".into());
+    receiver.shape =
+        Shape::Heightfield(HeightfieldParams { size: 20.0, resolution, ..Default::default() });
+    let spheres = SpheresParams { count: 5, ..Default::default() };
+    desc(
+        name,
+        [800, 600],
+        perspective([0.0, 7.0, 10.0], [0.0, 1.0, 0.0], 45.0),
+        directional([-0.5, -1.0, -0.4]),
+        vec![receiver, caster("spheres", Shape::Spheres(spheres), [0.5, 0.6, 0.8])],
+    )
+}
+
+/// The Stanford bunny over a plane.
+fn bunny_plane(name: &str) -> SceneDesc {
+    let mut bunny =
+        caster("bunny", Shape::File(FileShape { path: "bunny00.off".into() }), [0.8, 0.7, 0.6]);
+    bunny.transform = Transform { fit_size: Some(4.0), on_ground: true, ..Default::default() };
+    desc(
+        name,
+        [800, 600],
+        perspective([0.0, 5.0, 8.0], [0.0, 1.5, 0.0], 45.0),
+        directional([-0.5, -1.0, -0.4]),
+        vec![ground(16.0), bunny],
+    )
+}
+
+/// `scene` moving as `animation`, sampled at [`FRAMES`] frames.
+fn animated(scene: SceneDesc, animation: AnimationDesc) -> SceneDesc {
+    SceneDesc { animation: AnimationDesc { frames: FRAMES, ..animation }, ..scene }
+}
+
+/// A key of a directional light, its direction rounded to 12 decimals so that the printed
+/// scene file reads plainly (`0` rather than `1.0536428202654814e-16`); the direction is made
+/// unit when the scene is resolved.
+fn light_key(time: f64, direction: DVec3) -> LightKey {
+    let direction = (direction * 1e12).round() / 1e12;
+    LightKey { time, direction: Some(direction), position: None, target: None, fov_deg: None }
 }
 
 fn random(name: &str, count: u32) -> SceneDesc {
@@ -121,36 +210,12 @@ fn random(name: &str, count: u32) -> SceneDesc {
 pub fn builtin(name: &str) -> Option<SceneDesc> {
     let default_view = || perspective([0.0, 7.0, 10.0], [0.0, 1.0, 0.0], 45.0);
     Some(match name {
-        "plane-square" => {
-            let mut square = caster(
-                "square",
-                Shape::Plane(PlaneParams { size: 2.0, ..Default::default() }),
-                [0.7, 0.3, 0.3],
-            );
-            square.transform = Transform {
-                rotate_deg: DVec3::new(0.0, 20.0, 0.0),
-                translate: DVec3::new(0.0, 1.5, 0.0),
-                ..Default::default()
-            };
-            desc(
-                name,
-                [800, 600],
-                perspective([0.0, 7.0, 9.0], [0.0, 0.0, 0.0], 40.0),
-                directional([-0.4, -1.0, -0.25]),
-                vec![ground(12.0), square],
-            )
-        }
+        "plane-square" => plane_square(name),
         "random-1k" => random(name, 1_000),
         "random-10k" => random(name, 10_000),
         "random-100k" => random(name, 100_000),
         "random-1m" => random(name, 1_000_000),
-        "cage" => desc(
-            name,
-            [800, 600],
-            perspective([0.0, 6.0, 10.0], [0.0, 1.5, 0.0], 45.0),
-            directional([-0.6, -1.0, -0.4]),
-            vec![ground(16.0), caster("cage", Shape::Cage(CageParams::default()), [0.6, 0.6, 0.7])],
-        ),
+        "cage" => cage(name),
         "plant" => desc(
             name,
             [800, 600],
@@ -178,23 +243,7 @@ pub fn builtin(name: &str) -> Option<SceneDesc> {
             directional([-0.6, -1.0, -0.3]),
             vec![ground(16.0), caster("city", Shape::City(CityParams::default()), [0.7, 0.7, 0.7])],
         ),
-        "bumpy" => {
-            let mut receiver = ground(20.0);
-            receiver.name = Some("heightfield".into());
-            receiver.shape = Shape::Heightfield(HeightfieldParams {
-                size: 20.0,
-                resolution: 512,
-                ..Default::default()
-            });
-            let spheres = SpheresParams { count: 5, ..Default::default() };
-            desc(
-                name,
-                [800, 600],
-                default_view(),
-                directional([-0.5, -1.0, -0.4]),
-                vec![receiver, caster("spheres", Shape::Spheres(spheres), [0.5, 0.6, 0.8])],
-            )
-        }
+        "bumpy" => bumpy(name, 512),
         "hairball" => {
             let mut ball =
                 caster("hairball", Shape::Hairball(HairballParams::default()), [0.4, 0.3, 0.2]);
@@ -228,21 +277,65 @@ pub fn builtin(name: &str) -> Option<SceneDesc> {
                 caster("spheres", Shape::Spheres(SpheresParams::default()), [0.5, 0.6, 0.8]),
             ],
         ),
-        "bunny-plane" => {
-            let mut bunny = caster(
-                "bunny",
-                Shape::File(FileShape { path: "bunny00.off".into() }),
-                [0.8, 0.7, 0.6],
-            );
-            bunny.transform =
-                Transform { fit_size: Some(4.0), on_ground: true, ..Default::default() };
-            desc(
-                name,
-                [800, 600],
-                perspective([0.0, 5.0, 8.0], [0.0, 1.5, 0.0], 45.0),
-                directional([-0.5, -1.0, -0.4]),
-                vec![ground(16.0), bunny],
-            )
+        "bunny-plane" => bunny_plane(name),
+        "bumpy-orbit" => {
+            // 55 degrees above the horizon, a full turn about the vertical in steps of 30
+            // degrees (each step slerped along its great circle).
+            let (elevation, steps) = (55f64.to_radians(), 12);
+            let light = (0..=steps)
+                .map(|k| {
+                    let azimuth = (f64::from(k) * 30.0).to_radians();
+                    let direction = -DVec3::new(
+                        elevation.cos() * azimuth.cos(),
+                        elevation.sin(),
+                        elevation.cos() * azimuth.sin(),
+                    );
+                    light_key(f64::from(k), direction)
+                })
+                .collect();
+            animated(bumpy(name, 128), AnimationDesc { light, ..Default::default() })
+        }
+        "cage-sweep" => {
+            // The cage's light's azimuth, from 20 to 50 degrees off the vertical: a sweep
+            // through 30 degrees along one great circle.
+            let horizontal = DVec3::new(-0.6, 0.0, -0.4).normalize();
+            let light = [(0.0, 20f64), (1.0, 50.0)]
+                .map(|(time, off)| {
+                    let off = off.to_radians();
+                    light_key(time, horizontal * off.sin() - DVec3::Y * off.cos())
+                })
+                .into();
+            animated(cage(name), AnimationDesc { light, ..Default::default() })
+        }
+        "bunny-dolly" => {
+            // A quarter of the way from bunny-plane's eye to its target.
+            let camera = [(0.0, [0.0, 5.0, 8.0]), (1.0, [0.0, 4.125, 6.0])]
+                .map(|(time, eye)| CameraKey {
+                    time,
+                    eye: Some(DVec3::from(eye)),
+                    target: None,
+                    up: None,
+                    fov_y_deg: None,
+                    height: None,
+                })
+                .into();
+            animated(bunny_plane(name), AnimationDesc { camera, ..Default::default() })
+        }
+        "square-slide" => {
+            let keys = [(0.0, -2.5), (1.0, 2.5)]
+                .map(|(time, x)| ObjectKey {
+                    time,
+                    translate: DVec3::new(x, 0.0, 0.0),
+                    rotate_deg: DVec3::ZERO,
+                })
+                .into();
+            let object = vec![ObjectTrack { name: "square".into(), keys }];
+            animated(plane_square(name), AnimationDesc { object, ..Default::default() })
+        }
+        "cage-ramp" => {
+            let map_scale =
+                [(0.0, 0.25), (1.0, 1.0)].map(|(time, value)| ScaleKey { time, value }).into();
+            animated(cage(name), AnimationDesc { map_scale, ..Default::default() })
         }
         _ => return None,
     })
@@ -397,6 +490,7 @@ fn gltf_scene(path: &Path, name: &str) -> Result<Scene, SceneError> {
         light: gltf.light.unwrap_or_else(default_light).normalized(),
         objects: gltf.objects,
         switches: Default::default(),
+        animation: Default::default(),
     };
     crate::scene_file::check_resolved(&scene, path)?;
     Ok(scene)
@@ -532,6 +626,90 @@ mod tests {
                 Err(e) => panic!("{name}: {e}"),
             }
         }
+    }
+
+    /// The animated built-ins.
+    const ANIMATED: [&str; 5] =
+        ["bumpy-orbit", "cage-sweep", "bunny-dolly", "square-slide", "cage-ramp"];
+
+    #[test]
+    fn animated_builtins_round_trip_and_keep_their_triangles_in_every_pose() {
+        for name in ANIMATED {
+            assert!(BUILTINS.iter().any(|(n, _)| *n == name), "{name} is listed");
+            let desc = builtin(name).expect("a built-in");
+            assert_eq!(desc.animation.frames, FRAMES, "{name}");
+            let text = desc.to_toml();
+            assert!(text.contains("[animation]"), "{name}:\n{text}");
+            let back = SceneDesc::from_toml(&text, Path::new("round-trip.toml"))
+                .unwrap_or_else(|e| panic!("{name}: {e}\n{text}"));
+            assert_eq!(back, desc, "{name}");
+            let scene = match load_builtin(name).expect("a built-in") {
+                Ok(scene) => scene,
+                // The models folder may not be fetched.
+                Err(SceneError::ModelMissing { .. }) => continue,
+                Err(e) => panic!("{name}: {e}"),
+            };
+            let animation = &scene.animation;
+            assert!(!animation.is_still(), "{name}");
+            let rest = scene.geometry();
+            let mut poses = (0..animation.frames()).map(|i| animation.pose(&scene, i));
+            let first = poses.next().expect("a frame");
+            let mut moved = false;
+            for posed in std::iter::once(first.clone()).chain(poses) {
+                let g = posed.geometry();
+                assert_eq!((&g.triangles, &g.object), (&rest.triangles, &rest.object), "{name}");
+                assert!(posed.animation.is_still(), "{name}");
+                moved |= posed != first;
+            }
+            // Every animated built-in changes from frame to frame, but the one whose map
+            // resolution alone changes.
+            assert_eq!(moved, name != "cage-ramp", "{name}");
+            let scales = (animation.map_scale(0), animation.map_scale(FRAMES - 1));
+            let want = if name == "cage-ramp" { (0.25, 1.0) } else { (1.0, 1.0) };
+            assert_eq!(scales, want, "{name}");
+        }
+    }
+
+    #[test]
+    fn animated_builtins_move_as_described() {
+        let angle = |a: DVec3, b: DVec3| a.angle_between(b).to_degrees();
+        let light = |scene: &Scene| match scene.light {
+            Light::Directional { direction } => direction,
+            Light::Spot { .. } => panic!("a directional light"),
+        };
+        let sweep = load_builtin("cage-sweep").expect("built-in").expect("builds");
+        let (a, b) = (sweep.animation.pose(&sweep, 0), sweep.animation.pose(&sweep, FRAMES - 1));
+        assert!((angle(light(&a), light(&b)) - 30.0).abs() < 1e-9);
+        let orbit = load_builtin("bumpy-orbit").expect("built-in").expect("builds");
+        let mut turned = 0.0;
+        for i in 0..FRAMES {
+            let d = light(&orbit.animation.pose(&orbit, i));
+            // 55 degrees high, give or take the great circles between the keys 30 degrees
+            // apart (each rises above the circle of latitude by at most 2 degrees).
+            let elevation = (-d.y).asin().to_degrees();
+            assert!((55.0..57.0).contains(&elevation), "frame {i}: {elevation}");
+            if i > 0 {
+                let p = light(&orbit.animation.pose(&orbit, i - 1));
+                turned += angle(DVec3::new(p.x, 0.0, p.z), DVec3::new(d.x, 0.0, d.z));
+            }
+        }
+        assert!((turned - 360.0).abs() < 1e-6, "{turned}");
+        let slide = load_builtin("square-slide").expect("built-in").expect("builds");
+        let x = |i: u32| {
+            let posed = slide.animation.pose(&slide, i);
+            posed.objects[1].mesh.bounds().map(|(lo, hi)| 0.5 * (lo.x + hi.x))
+        };
+        for (i, want) in [(0, -2.5), (FRAMES - 1, 2.5)] {
+            let got = x(i).expect("vertices");
+            assert!((got - want).abs() < 1e-14, "frame {i}: {got}");
+        }
+        assert!(!slide.animation.moves_camera());
+        let dolly = builtin("bunny-dolly").expect("built-in");
+        let keys: Vec<_> = dolly.animation.camera.iter().filter_map(|k| k.eye).collect();
+        let target = dolly.camera.target();
+        let toward = (keys[1] - target).length() / (keys[0] - target).length();
+        assert!((toward - 0.75).abs() < 1e-15, "{toward}");
+        assert_eq!((keys[0] - target).cross(keys[1] - target), DVec3::ZERO);
     }
 
     #[test]

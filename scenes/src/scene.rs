@@ -1,7 +1,7 @@
 //! Resolved scenes: world-space objects with materials, a camera, a light, a default
-//! resolution, and the effects the content calls for.
+//! resolution, the effects the content calls for, and the scene's animation.
 
-use crate::{camera::Camera, light::Light, mesh::Mesh};
+use crate::{animation::Animation, camera::Camera, light::Light, mesh::Mesh};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
@@ -127,6 +127,9 @@ pub struct Scene {
     pub objects: Vec<Object>,
     /// Effects forced off by the scene file.
     pub switches: EffectSwitches,
+    /// How the scene moves ([`Animation::still`] for a still scene, and for a scene posed at
+    /// a frame, [`Animation::pose`]).
+    pub animation: Animation,
 }
 
 impl Scene {

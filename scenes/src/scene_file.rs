@@ -54,6 +54,7 @@
 //! every place looked in. An empty path is refused as such.
 
 use crate::{
+    animation::{Animation, AnimationDesc, AnimationError},
     camera::Camera,
     generators::{
         CageParams, CityParams, Generator, HairballParams, HeightfieldParams, ParamError,
@@ -61,7 +62,7 @@ use crate::{
     },
     io::{load_mesh, triangle_bound, LoadError},
     light::Light,
-    limits::{MAX_COORDINATE, MAX_SCENE_TRIANGLES, MIN_EXTENT},
+    limits::{below_extent, beyond_range, MAX_SCENE_TRIANGLES},
     mesh::Mesh,
     models::models_dir,
     scene::{EffectSwitches, Material, Object, Scene},
@@ -189,6 +190,9 @@ pub struct SceneDesc {
     /// Objects, in order (`[[object]]`).
     #[serde(rename = "object")]
     pub objects: Vec<ObjectDesc>,
+    /// How the scene moves (`[animation]`, [`crate::animation`]; default: still).
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub animation: AnimationDesc,
 }
 
 /// Why a scene could not be loaded.
@@ -534,7 +538,7 @@ impl SceneDesc {
         }
         let built: Vec<u64> = objects.iter().map(|o| o.mesh.triangle_count() as u64).collect();
         self.check_triangles(origin, &built)?;
-        let scene = Scene {
+        let mut scene = Scene {
             name,
             width,
             height,
@@ -542,10 +546,16 @@ impl SceneDesc {
             light: self.light.normalized(),
             objects,
             switches: self.effects,
+            animation: Animation::still(),
         };
         if let Some(message) = too_small(&scene) {
             return Err(out_of_range("object".into(), message));
         }
+        scene.animation = Animation::resolve(&self.animation, &scene).map_err(|e| match e {
+            AnimationError::Invalid { key, message } => invalid(key, message),
+            AnimationError::OutOfRange { key, message } => out_of_range(key, message),
+            e @ AnimationError::Frames { .. } => invalid("animation.frames".into(), e.to_string()),
+        })?;
         Ok(scene)
     }
 }
@@ -553,14 +563,7 @@ impl SceneDesc {
 /// Why the scene's geometry is below the smallest supported extent, if it is.
 fn too_small(scene: &Scene) -> Option<String> {
     let (lo, hi) = scene.bounds();
-    let diagonal = (hi - lo).length();
-    (diagonal < MIN_EXTENT).then(|| {
-        format!(
-            "the geometry's bounding box has a diagonal of {}, below the supported minimum \
-             {MIN_EXTENT:e}",
-            apart(diagonal, MIN_EXTENT)
-        )
-    })
+    below_extent((hi - lo).length())
 }
 
 /// Checks a scene built from elsewhere than a scene file (a glTF scene) as [`SceneDesc::resolve_in`]
@@ -709,37 +712,6 @@ impl std::fmt::Display for Places<'_> {
             write!(f, "{sep}{}", path.display())?;
         }
         Ok(())
-    }
-}
-
-/// `x` for a message that sets it against `bound`: in scientific notation with at most 3
-/// significant digits when those differ from the bound (`3.2e20`), else with every digit it
-/// takes (`1.0000000000000001e15`), so that a value just beyond a bound never reads as the
-/// bound itself.
-fn apart(x: f64, bound: f64) -> String {
-    let text = format!("{x:.2e}");
-    let short = match text.split_once('e') {
-        Some((mantissa, exponent)) => {
-            let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
-            format!("{mantissa}e{exponent}")
-        }
-        None => text,
-    };
-    if short.parse::<f64>().is_ok_and(|s| (s > bound) == (x > bound) && s != bound) {
-        short
-    } else {
-        format!("{x:e}")
-    }
-}
-
-/// Why a largest coordinate magnitude `m` is beyond [`MAX_COORDINATE`] (or not finite), if it is.
-fn beyond_range(m: f64) -> Option<String> {
-    let beyond = format!("beyond the supported range |x| <= {MAX_COORDINATE:e}");
-    if m.is_finite() {
-        (m > MAX_COORDINATE)
-            .then(|| format!("coordinates reach {}, {beyond}", apart(m, MAX_COORDINATE)))
-    } else {
-        Some(format!("coordinates overflow, {beyond}"))
     }
 }
 
@@ -983,21 +955,6 @@ mod tests {
              fov_y_deg = 45.0\n[light.directional]\ndirection = [-0.3, -1.0, -0.2]\n{objects}"
         );
         SceneDesc::from_toml(&text, Path::new("test.toml")).unwrap_or_else(|e| panic!("{e}"))
-    }
-
-    #[test]
-    fn a_value_beside_its_bound_is_printed_apart_from_it() {
-        assert_eq!(apart(3.2e20, MAX_COORDINATE), "3.2e20");
-        assert_eq!(apart(1.5e15, MAX_COORDINATE), "1.5e15");
-        assert_eq!(apart(1e15 + 1.0, MAX_COORDINATE), "1.000000000000001e15");
-        assert_eq!(apart(MAX_COORDINATE.next_up(), MAX_COORDINATE), "1.0000000000000001e15");
-        assert_eq!(apart(MIN_EXTENT.next_down(), MIN_EXTENT), "9.999999999999999e-10");
-        assert_eq!(apart(4e-10, MIN_EXTENT), "4e-10");
-        let message = beyond_range(MAX_COORDINATE.next_up()).expect("beyond");
-        assert_eq!(
-            message,
-            "coordinates reach 1.0000000000000001e15, beyond the supported range |x| <= 1e15"
-        );
     }
 
     #[test]

@@ -128,6 +128,7 @@ fn base(light: Light) -> Scene {
             ),
         ],
         switches: Default::default(),
+        animation: Default::default(),
     }
 }
 
