@@ -12,6 +12,7 @@ pub mod pixel_class;
 pub mod raytrace;
 pub mod reference;
 pub mod registry;
+pub mod temporal;
 
 pub use metrics::{error_image, Metrics};
 pub use reference::{Reference, ReferenceError, ReferenceImage};

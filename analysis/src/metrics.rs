@@ -62,12 +62,15 @@ pub struct Metrics {
 /// The `p`-th percentile (0 < `p` <= 100) of `values` by nearest rank (see the module doc);
 /// `None` when there are no values. Reorders `values`.
 pub fn nearest_rank(values: &mut [f64], p: usize) -> Option<f64> {
-    let n = values.len();
-    (n > 0).then(|| {
-        // The ceil(p n / 100)-th smallest, computed in integers.
-        let rank = (p * n).div_ceil(100).max(1);
-        *values.select_nth_unstable_by(rank - 1, f64::total_cmp).1
-    })
+    let index = nearest_rank_index(values.len(), p)?;
+    Some(*values.select_nth_unstable_by(index, f64::total_cmp).1)
+}
+
+/// The 0-based position, among `n` values sorted ascending, of their `p`-th percentile
+/// (0 < `p` <= 100) by nearest rank: rank `ceil(p n / 100)`, computed in integers; `None` when
+/// `n` is 0. [`nearest_rank`] and the temporal metrics' `f32` values share it.
+pub fn nearest_rank_index(n: usize, p: usize) -> Option<usize> {
+    (n > 0).then(|| p.saturating_mul(n).div_ceil(100).clamp(1, n) - 1)
 }
 
 /// The 50th, 95th and 99th percentiles of `values` (nearest rank). Reorders `values`.
