@@ -44,7 +44,7 @@
 
 mod reproject;
 
-pub use reproject::reproject;
+pub use reproject::{reproject, View};
 
 use crate::compare::Truth;
 use crate::metrics::nearest_rank_index;
@@ -57,15 +57,22 @@ use std::collections::BTreeMap;
 /// The percentile reported by `p95` and `boundary_p95`.
 const PERCENTILE: usize = 95;
 
-/// One frame of a run: the frame (camera projector, geometry, G-buffer), its truth, the
+/// One frame of a run: what is read of the frame (camera, geometry, G-buffer), its truth, the
 /// method's result.
 pub struct FrameInput<'a> {
-    /// The frame.
-    pub frame: &'a Frame<'a>,
+    /// The frame's camera, geometry and G-buffer.
+    pub view: View<'a>,
     /// Its truth.
     pub truth: &'a Truth,
     /// The method's result on it.
     pub result: &'a Visibility,
+}
+
+impl<'a> FrameInput<'a> {
+    /// The input of `result` on `frame` against `truth`.
+    pub fn of(frame: &'a Frame<'_>, truth: &'a Truth, result: &'a Visibility) -> Self {
+        Self { view: View::of(frame), truth, result }
+    }
 }
 
 /// The temporal error over the pairs whose frame-`t` pixel is of one class.
@@ -164,8 +171,8 @@ impl Temporal {
     /// truth or result is not of its frame's size, compares none (its `per_frame` entry is
     /// `None`).
     pub fn add(&mut self, prev: &FrameInput<'_>, cur: &FrameInput<'_>) -> u64 {
-        let moved = prev.frame.camera != cur.frame.camera
-            || prev.frame.geometry.positions != cur.frame.geometry.positions;
+        let moved = prev.view.camera != cur.view.camera
+            || prev.view.geometry.positions != cur.view.geometry.positions;
         self.add_pairs(prev, cur, moved)
     }
 
@@ -176,14 +183,14 @@ impl Temporal {
         let comparable = prev_pixels.is_some()
             && cur_pixels.is_some()
             && (moved || prev_pixels == cur_pixels)
-            && prev.frame.geometry.triangles == cur.frame.geometry.triangles;
+            && prev.view.geometry.triangles == cur.view.geometry.triangles;
         if !comparable {
             self.per_frame.push(None);
             return 0;
         }
         let (prev, cur) = (Side::of(prev), Side::of(cur));
-        let width = cur.frame.width() as usize;
-        let rows: Vec<Row> = (0..cur.frame.height() as usize)
+        let width = cur.view.gbuffer.width as usize;
+        let rows: Vec<Row> = (0..cur.view.gbuffer.height as usize)
             .into_par_iter()
             .map(|j| {
                 let mut row = Row::default();
@@ -191,7 +198,7 @@ impl Temporal {
                     if !cur.headline[k] {
                         continue;
                     }
-                    let partner = if moved { reproject(prev.frame, cur.frame, k) } else { Some(k) };
+                    let partner = if moved { reproject(&prev.view, &cur.view, k) } else { Some(k) };
                     let Some(q) = partner.filter(|&q| prev.headline[q]) else {
                         continue;
                     };
@@ -229,6 +236,12 @@ impl Temporal {
         frame.n
     }
 
+    /// The mean temporal error of the last pair added (`None` before any pair, or for a pair
+    /// with no pixel pair).
+    pub fn last_mean(&self) -> Option<f64> {
+        self.per_frame.last().copied().flatten()
+    }
+
     /// The metrics of the pairs added.
     pub fn finish(mut self) -> TemporalMetrics {
         let class = |s: Sum| ClassTemporal { pairs: s.n, mean: s.mean() };
@@ -257,7 +270,7 @@ impl Temporal {
 
 /// What a pair reads of one frame, shared by the rows.
 struct Side<'a> {
-    frame: &'a Frame<'a>,
+    view: View<'a>,
     headline: &'a [bool],
     boundary: Vec<bool>,
     classes: &'a [PixelClass],
@@ -269,7 +282,7 @@ impl<'a> Side<'a> {
     fn of(input: &FrameInput<'a>) -> Self {
         let truth = input.truth;
         Self {
-            frame: input.frame,
+            view: input.view,
             headline: &truth.headline,
             boundary: truth.boundary(),
             classes: &truth.classes,
@@ -282,8 +295,8 @@ impl<'a> Side<'a> {
 /// The pixel count of the frame when its G-buffer, truth and result all have one value per
 /// pixel, `None` otherwise.
 fn pixels(input: &FrameInput<'_>) -> Option<usize> {
-    let n = input.frame.width() as usize * input.frame.height() as usize;
-    let gbuffer = &input.frame.gbuffer;
+    let gbuffer = input.view.gbuffer;
+    let n = gbuffer.width as usize * gbuffer.height as usize;
     let truth = input.truth;
     [
         gbuffer.triangle.len(),
@@ -339,7 +352,7 @@ mod tests {
     }
 
     fn input<'a>(frame: &'a Frame<'a>, truth: &'a Truth, result: &'a Visibility) -> FrameInput<'a> {
-        FrameInput { frame, truth, result }
+        FrameInput::of(frame, truth, result)
     }
 
     fn visibility(lit: Vec<f32>, width: u32, height: u32) -> Visibility {

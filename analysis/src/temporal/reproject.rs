@@ -16,21 +16,41 @@
 //! (`methods::gbuffer`), half a pixel from any pixel border.
 
 use glam::DVec3;
-use methods::{raster::NO_TRIANGLE, Frame};
-use scenes::Geometry;
+use methods::{gbuffer::GBuffer, raster::NO_TRIANGLE, Frame};
+use scenes::{Geometry, Projector};
+
+/// What the temporal metrics read of a frame: its camera, its triangles and its G-buffer; a
+/// frame's own ([`View::of`]), or parts kept from a frame after its scene is gone, so that a
+/// caller holds the previous frame without its scene.
+#[derive(Debug, Clone, Copy)]
+pub struct View<'a> {
+    /// The camera's projector at the frame's size.
+    pub camera: &'a Projector,
+    /// Every triangle, posed at the frame.
+    pub geometry: &'a Geometry,
+    /// The camera G-buffer.
+    pub gbuffer: &'a GBuffer,
+}
+
+impl<'a> View<'a> {
+    /// The view of `frame`.
+    pub fn of(frame: &'a Frame<'_>) -> Self {
+        Self { camera: &frame.camera, geometry: &frame.geometry, gbuffer: &frame.gbuffer }
+    }
+}
 
 /// The pixel of `prev` paired with pixel `k` of `cur` (see the module doc), or `None` when
 /// `k` sees no triangle (or is not a pixel of `cur`), when the point it sees projects outside
 /// `prev`'s image (or not at all: behind a perspective camera's near plane) or when `prev`'s
 /// G-buffer sees another triangle there. A triangle id that `prev` lacks, or a triangle of zero
 /// area, pairs nothing.
-pub fn reproject(prev: &Frame<'_>, cur: &Frame<'_>, k: usize) -> Option<usize> {
+pub fn reproject(prev: &View<'_>, cur: &View<'_>, k: usize) -> Option<usize> {
     let t = *cur.gbuffer.triangle.get(k)?;
     if t == NO_TRIANGLE {
         return None;
     }
-    let (v, w) = barycentric(corners(&cur.geometry, t)?, *cur.gbuffer.position.get(k)?)?;
-    let [a, b, c] = corners(&prev.geometry, t)?;
+    let (v, w) = barycentric(corners(cur.geometry, t)?, *cur.gbuffer.position.get(k)?)?;
+    let [a, b, c] = corners(prev.geometry, t)?;
     let p = a + v * (b - a) + w * (c - a);
     let (xy, _) = prev.camera.project(p)?;
     let (x, y) = (xy.x.floor(), xy.y.floor());
@@ -101,6 +121,7 @@ mod tests {
             light: Light::Directional { direction: DVec3::NEG_Y },
             objects,
             switches: EffectSwitches::default(),
+            animation: scenes::Animation::still(),
         }
     }
 
@@ -132,10 +153,10 @@ mod tests {
             let covered = (0..f.gbuffer.triangle.len()).filter(|&k| f.gbuffer.covered(k));
             assert!(covered.clone().count() > 1000, "the test sees the ground");
             for k in covered {
-                assert_eq!(reproject(&f, &f, k), Some(k), "pixel {k}");
+                assert_eq!(reproject(&View::of(&f), &View::of(&f), k), Some(k), "pixel {k}");
             }
             let uncovered = (0..f.gbuffer.triangle.len()).find(|&k| !f.gbuffer.covered(k));
-            assert!(uncovered.is_none_or(|k| reproject(&f, &f, k).is_none()));
+            assert!(uncovered.is_none_or(|k| reproject(&View::of(&f), &View::of(&f), k).is_none()));
         }
     }
 
@@ -151,7 +172,7 @@ mod tests {
                 // Pixel i of the moved camera sees what pixel i + shift saw.
                 let want = (i + shift < 64).then_some(k + shift);
                 assert_eq!(
-                    reproject(&prev, &cur, k),
+                    reproject(&View::of(&prev), &View::of(&cur), k),
                     want,
                     "pixel ({i}, {}), shift {shift}",
                     k / 64
@@ -171,7 +192,7 @@ mod tests {
         let on_square = |f: &Frame<'_>, k: usize| matches!(f.gbuffer.triangle[k], 2 | 3);
         let (mut moved, mut hidden) = (0, 0);
         for k in 0..64 * 48 {
-            let got = reproject(&prev, &cur, k);
+            let got = reproject(&View::of(&prev), &View::of(&cur), k);
             assert!(cur.gbuffer.covered(k), "the ground fills the view");
             if on_square(&cur, k) {
                 // A point of the square comes from 4 pixels to the left.
@@ -196,16 +217,18 @@ mod tests {
         let mut lacking = f.clone();
         lacking.geometry.triangles.truncate(2);
         let k = (0..64 * 48).find(|&k| f.gbuffer.triangle[k] >= 2).expect("the square is seen");
-        assert_eq!(reproject(&lacking, &f, k), None);
-        assert_eq!(reproject(&f, &f, 64 * 48), None);
+        assert_eq!(reproject(&View::of(&lacking), &View::of(&f), k), None);
+        assert_eq!(reproject(&View::of(&f), &View::of(&f), 64 * 48), None);
         // A triangle of zero area.
         let mut flat = f.clone();
         let [a, b, _] = flat.geometry.triangles[0];
         flat.geometry.triangles[0] = [a, b, b];
         let k0 = (0..64 * 48).find(|&k| f.gbuffer.triangle[k] == 0).expect("seen");
-        assert_eq!(reproject(&f, &flat, k0), None);
+        assert_eq!(reproject(&View::of(&f), &View::of(&flat), k0), None);
         // Far to the side: the previous camera sees none of it.
         let away = ground_and_square(down(200.0), 0.0);
-        assert!((0..64 * 48).all(|k| reproject(&frame(&away), &f, k).is_none()));
+        assert!(
+            (0..64 * 48).all(|k| reproject(&View::of(&frame(&away)), &View::of(&f), k).is_none())
+        );
     }
 }
