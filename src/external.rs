@@ -156,7 +156,7 @@ pub fn compare(c: &CompareArgs, file: &Path) -> Result<(), Failure> {
         }
     }
     note_method_flags(a);
-    let chosen = super::reference::choose(c)?;
+    let chosen = super::reference::choose(&c.truth, a.pattern())?;
     let rate = chosen.ref_rate.unwrap_or(analysis::registry::DEFAULT_REF_RATE);
     let s = sized_scene(
         &a.scene,
@@ -165,7 +165,7 @@ pub fn compare(c: &CompareArgs, file: &Path) -> Result<(), Failure> {
         a.max_memory,
         Some((chosen.reference.name(), rate)),
     )?;
-    let error_scale = super::error_scale(c)?;
+    let error_scale = super::error_scale(&c.truth)?;
     let visibility = reports::external::read_visibility(file, s.width, s.height)
         .map_err(|e| input(anyhow::anyhow!("--visibility {e}")))?;
     let out = a.out.clone().unwrap_or_else(|| {
@@ -174,7 +174,7 @@ pub fn compare(c: &CompareArgs, file: &Path) -> Result<(), Failure> {
     });
     let flag = if a.out.is_some() { "--out" } else { "--out (default)" };
     let tx = begin_out(&out, flag, Kind::Run)?;
-    let mut cache = super::reference::open_cache(&c.cache)?;
+    let mut cache = super::reference::open_cache(&c.truth.cache)?;
     let frame = Frame::new(&s.scene, s.width, s.height, &mut Recorder::default());
     let evaluated =
         super::reference::evaluate(&chosen, &s.scene, &frame, cache.as_mut(), &visibility)?;

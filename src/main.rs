@@ -32,6 +32,7 @@ use reports::write::summary_text;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+mod animate;
 mod external;
 mod reference;
 
@@ -71,6 +72,12 @@ enum Command {
     /// (the sub-sample offsets of every rate of the shared patterns). Score its result with
     /// `compare --visibility`.
     Frame(external::FrameArgs),
+    /// Run one method through every frame of an animated scene (a scene file's [animation],
+    /// or a built-in such as bumpy-orbit; see `shadowbench scenes`), each frame compared with
+    /// the reference as `compare` does, and the frames with each other (temporal error: the
+    /// flicker the truth does not have); write frames/visibility-NNNN.exr, frames.csv,
+    /// temporal.json and animation.png (the method, the reference and the error, animated).
+    Animate(animate::AnimateArgs),
     /// Run a suite (scenes x methods x parameters) under the timing protocol and write
     /// index.html, report.md, runs.csv, runs.json, a page per run and every visibility buffer
     /// as EXR into --out; or plan it (--plan), run one shard of it (--shard K/N), or merge
@@ -197,8 +204,9 @@ impl From<DeviceArg> for Device {
     }
 }
 
+/// The ground truth of a comparison (`--reference`).
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-enum ReferenceName {
+pub enum ReferenceName {
     /// Exact lit area per pixel on every visible surface (planar and surface pixels); edge
     /// pixels as --edge-reference says.
     Exact,
@@ -206,8 +214,9 @@ enum ReferenceName {
     Raytrace,
 }
 
+/// The reference of `exact`'s edge pixels (`--edge-reference`).
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-enum EdgeReference {
+pub enum EdgeReference {
     /// Ray traced at --ref-rate sub-samples per pixel; their error is reported under
     /// `classes.edge`.
     Raytrace,
@@ -219,27 +228,10 @@ enum EdgeReference {
 struct CompareArgs {
     #[command(flatten)]
     render: RenderArgs,
-    /// The ground truth to compare against.
-    #[arg(long, value_enum, default_value_t = ReferenceName::Exact)]
-    reference: ReferenceName,
-    /// Sub-samples per pixel of the `raytrace` reference, and of `exact`'s edge pixels
-    /// (1, 4, 8, ..., 1024); default 256.
-    #[arg(long, value_name = "N", allow_negative_numbers = true)]
-    ref_rate: Option<u32>,
-    /// With `--reference exact`: the reference of the `edge` pixels (silhouettes, depth
-    /// discontinuities, several objects or background in the square), which `exact` does not
-    /// evaluate; default raytrace.
-    #[arg(long, value_enum, value_name = "REF")]
-    edge_reference: Option<EdgeReference>,
-    /// The absolute error at the top of the colour scale (magma) of error.png and
-    /// error_boundary.png, written on their colour bar; larger errors take the top colour;
-    /// default 0.1.
-    #[arg(long, value_name = "X", allow_negative_numbers = true)]
-    error_scale: Option<f64>,
+    #[command(flatten)]
+    truth: reference::TruthArgs,
     #[command(flatten)]
     outside: external::OutsideArgs,
-    #[command(flatten)]
-    cache: reference::CacheArgs,
 }
 
 #[derive(clap::Args)]
@@ -354,7 +346,10 @@ fn with_params(cmd: clap::Command) -> clap::Command {
 
 /// The command line, with the method flags of the registry's table ([`with_params`]).
 fn command() -> clap::Command {
-    Cli::command().mut_subcommand("render", with_params).mut_subcommand("compare", with_params)
+    Cli::command()
+        .mut_subcommand("render", with_params)
+        .mut_subcommand("compare", with_params)
+        .mut_subcommand("animate", with_params)
 }
 
 /// The method parameters given on the command line `m` (of `render` or `compare`).
@@ -587,14 +582,13 @@ fn describe_scene(name: &str) -> Result<scenes::Described, Failure> {
     Ok(described)
 }
 
-fn job(a: &RenderArgs, compared_with: Option<(&str, u32)>) -> Result<Job, Failure> {
-    let method = a.method.as_deref().ok_or_else(|| {
-        input(anyhow::anyhow!("--method is required (by compare, unless --visibility is given)"))
-    })?;
-    let described = describe_scene(&a.scene)?;
-    let options = a.options();
-    let technique = analysis::registry::technique(method, &options).map_err(method_failure)?;
-    // The same reference as `technique` wraps (`registry::technique`'s rate and pattern).
+/// The technique `method` with `options`, and the reference it wraps when it is one (with
+/// `registry::technique`'s rate and pattern), so that its pixel classes come with its values.
+fn techniques(
+    method: &str,
+    options: &MethodOptions,
+) -> Result<(Box<dyn ShadowMethod>, Option<Box<dyn Reference>>), Failure> {
+    let technique = analysis::registry::technique(method, options).map_err(method_failure)?;
     let reference = if analysis::registry::REFERENCES.iter().any(|(n, _)| *n == method) {
         let rate = options.rate.unwrap_or(1);
         let pattern = options.pattern.unwrap_or_default();
@@ -602,6 +596,16 @@ fn job(a: &RenderArgs, compared_with: Option<(&str, u32)>) -> Result<Job, Failur
     } else {
         None
     };
+    Ok((technique, reference))
+}
+
+fn job(a: &RenderArgs, compared_with: Option<(&str, u32)>) -> Result<Job, Failure> {
+    let method = a.method.as_deref().ok_or_else(|| {
+        input(anyhow::anyhow!("--method is required (by compare, unless --visibility is given)"))
+    })?;
+    let described = describe_scene(&a.scene)?;
+    let options = a.options();
+    let (technique, reference) = techniques(method, &options)?;
     let params = technique.params();
     let declared = analysis::registry::params_of(method).unwrap_or_default();
     for (p, _) in &a.params {
@@ -1064,7 +1068,7 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
 }
 
 /// `--error-scale`, checked.
-fn error_scale(c: &CompareArgs) -> Result<f64, Failure> {
+fn error_scale(c: &reference::TruthArgs) -> Result<f64, Failure> {
     let error_scale = c.error_scale.unwrap_or(analysis::error_map::DEFAULT_MAX_ERROR);
     analysis::error_map::check_scale(error_scale)
         .map_err(|e| input(anyhow::anyhow!("--error-scale: {e}")))?;
@@ -1077,16 +1081,16 @@ fn compare(c: CompareArgs) -> Result<(), Failure> {
     }
     external::refuse_outside_flags(&c.outside)?;
     let a = &c.render;
-    let rate = c.ref_rate.unwrap_or(analysis::registry::DEFAULT_REF_RATE);
-    let budget_reference = match c.reference {
+    let rate = c.truth.ref_rate.unwrap_or(analysis::registry::DEFAULT_REF_RATE);
+    let budget_reference = match c.truth.reference {
         ReferenceName::Exact => ("exact", rate),
         ReferenceName::Raytrace => ("raytrace", rate),
     };
     let job = job(a, Some(budget_reference))?;
-    let error_scale = error_scale(&c)?;
-    let chosen = reference::choose(&c)?;
+    let error_scale = error_scale(&c.truth)?;
+    let chosen = reference::choose(&c.truth, a.pattern())?;
     let tx = out_dir(a, &job, &format!("-vs-{}", chosen.reference.name()))?;
-    let mut cache = reference::open_cache(&c.cache)?;
+    let mut cache = reference::open_cache(&c.truth.cache)?;
     let staging = tx.staging().to_owned();
 
     let (frame, ran, spread) = run_repeated(&job, a.repeat)?;
@@ -1205,6 +1209,10 @@ fn main() -> ExitCode {
             compare(c)
         }
         Command::Frame(f) => external::frame(f),
+        Command::Animate(mut a) => {
+            a.render.params = sub.map(given_params).unwrap_or_default();
+            animate::animate(a)
+        }
         Command::Report(r) => report(r),
     };
     match result {

@@ -2,7 +2,7 @@
 //! pattern, and taken from the per-user reference cache when an earlier `compare` computed it
 //! on the same scene and frame (`--cache DIR`, `--no-cache`; `reports::cache`).
 
-use super::{input, CompareArgs, EdgeReference, Failure, ReferenceName};
+use super::{input, EdgeReference, Failure, ReferenceName};
 use analysis::{exact::ExactCoverage, Reference, ReferenceImage};
 use instrumentation::Recorder;
 use methods::{pattern::PatternKind, Frame};
@@ -62,6 +62,30 @@ pub fn open_cache(a: &CacheArgs) -> Result<Option<ReferenceCache>, Failure> {
     }
 }
 
+/// The ground truth a comparison is made against, and how its error is drawn: `compare`'s and
+/// `animate`'s flags.
+#[derive(clap::Args)]
+pub struct TruthArgs {
+    /// The ground truth to compare against.
+    #[arg(long, value_enum, default_value_t = ReferenceName::Exact)]
+    pub reference: ReferenceName,
+    /// Sub-samples per pixel of the `raytrace` reference, and of `exact`'s edge pixels
+    /// (1, 4, 8, ..., 1024); default 256.
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
+    pub ref_rate: Option<u32>,
+    /// With `--reference exact`: the reference of the `edge` pixels (silhouettes, depth
+    /// discontinuities, several objects or background in the square), which `exact` does not
+    /// evaluate; default raytrace.
+    #[arg(long, value_enum, value_name = "REF")]
+    pub edge_reference: Option<EdgeReference>,
+    /// The absolute error at the top of the colour scale (magma) of the error images, written
+    /// on their colour bar; larger errors take the top colour; default 0.1.
+    #[arg(long, value_name = "X", allow_negative_numbers = true)]
+    pub error_scale: Option<f64>,
+    #[command(flatten)]
+    pub cache: CacheArgs,
+}
+
 /// The reference a `compare` asked for.
 pub struct Chosen {
     /// The reference.
@@ -75,11 +99,10 @@ pub struct Chosen {
     pub cache_name: String,
 }
 
-/// The reference of `c` (`--reference`, `--ref-rate`, `--edge-reference`, and the pattern of
-/// `--pattern`), with notes for the flags it does not use.
-pub fn choose(c: &CompareArgs) -> Result<Chosen, Failure> {
+/// The reference of `c` (`--reference`, `--ref-rate`, `--edge-reference`) with `pattern`
+/// (`--pattern`), with notes for the flags it does not use.
+pub fn choose(c: &TruthArgs, pattern: PatternKind) -> Result<Chosen, Failure> {
     let rate = c.ref_rate.unwrap_or(analysis::registry::DEFAULT_REF_RATE);
-    let pattern = c.render.pattern();
     let edge_reference = c.edge_reference.unwrap_or(EdgeReference::Raytrace);
     let (reference, ref_rate, edge): (Box<dyn Reference>, _, _) =
         match (c.reference, edge_reference) {

@@ -3,11 +3,17 @@
 //! current browser plays in an `<img>`) by [`Apng`], frame by frame, so that an animation of
 //! many frames never holds more than one in memory.
 //!
+//! The records of a run in motion: [`FrameRecord`], one per frame (`frames.csv`), and
+//! [`AnimationRecord`], the whole run with its temporal metrics (`temporal.json`), written by
+//! `animate` and by a report's runs over animated scenes.
+//!
 //! APNG through the `png` crate (the encoder `image` uses for still PNGs): its `fcTL`/`fdAT`
 //! chunks are written by the crate; the frame count is declared up front, and a writer that
 //! is finished with fewer frames than declared is an error, not a short file.
 
+use analysis::temporal::TemporalMetrics;
 use image::RgbImage;
+use serde::{Deserialize, Serialize};
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
@@ -126,6 +132,103 @@ impl Apng {
             .finish()
             .map_err(|e| AnimationError::Write { path: path.clone(), message: e.to_string() })
     }
+}
+
+/// One frame of a run in motion: a row of `frames.csv`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FrameRecord {
+    /// Frame index, from 0.
+    pub frame: u32,
+    /// The animation's time at this frame (the keys' time unit).
+    pub time: f64,
+    /// The shadow-map resolution this frame ran at (the run's, times the scene's map scale);
+    /// `None` for a method without a map.
+    pub map_res: Option<u32>,
+    /// Shadow-only mean absolute error against the reference (the headline of `compare`).
+    pub mean_abs_error: Option<f64>,
+    /// Mean absolute error over the boundary pixels.
+    pub boundary_mean_abs_error: Option<f64>,
+    /// 95th percentile of the absolute error over the boundary pixels.
+    pub boundary_p95_abs_error: Option<f64>,
+    /// Temporal error of the pair (previous frame, this frame): the mean over its pixel pairs
+    /// (`analysis::temporal`); `None` for frame 0 or a pair with no pixel pair.
+    pub temporal_error: Option<f64>,
+    /// Pixel pairs compared for `temporal_error`.
+    pub temporal_pairs: u64,
+    /// The method's time on this frame (the median run's total stage time), milliseconds,
+    /// wall clock.
+    pub method_ms: f64,
+    /// The same run's CPU time, milliseconds, where measured.
+    pub method_cpu_ms: Option<f64>,
+    /// The reference's time (by the run that computed it when it came from a cache),
+    /// milliseconds, wall clock.
+    pub reference_ms: f64,
+    /// Whether the reference was read from a cache.
+    pub reference_cached: bool,
+}
+
+/// A run in motion: who ran, on what, and its errors over time (`temporal.json`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AnimationRecord {
+    /// Scene name.
+    pub scene: String,
+    /// Method name.
+    pub method: String,
+    /// The method's parameters (frame 0's run record; `map_res` is the unscaled one).
+    pub params: serde_json::Map<String, serde_json::Value>,
+    /// Frame width.
+    pub width: u32,
+    /// Frame height.
+    pub height: u32,
+    /// Frames sampled.
+    pub frames: u32,
+    /// The reference (`exact`, `raytrace`).
+    pub reference: String,
+    /// Sub-samples per pixel of its ray-traced part.
+    pub ref_rate: Option<u32>,
+    /// Mean over frames of the shadow-only mean absolute error.
+    pub mean_abs_error: Option<f64>,
+    /// Mean over frames of the boundary mean absolute error.
+    pub boundary_mean_abs_error: Option<f64>,
+    /// Mean over frames of the method's time, milliseconds, wall clock.
+    pub method_ms: f64,
+    /// Mean over frames of the method's CPU time, milliseconds, where measured.
+    pub method_cpu_ms: Option<f64>,
+    /// The temporal metrics over every frame pair.
+    pub temporal: TemporalMetrics,
+    /// Every frame.
+    pub per_frame: Vec<FrameRecord>,
+}
+
+impl AnimationRecord {
+    /// Writes `per_frame` as CSV, a header and a row per frame (empty cells for `None`).
+    pub fn write_frames_csv(&self, path: &Path) -> Result<(), AnimationError> {
+        let err = |e: &dyn std::fmt::Display| AnimationError::Write {
+            path: path.to_owned(),
+            message: e.to_string(),
+        };
+        let mut w = csv::Writer::from_path(path).map_err(|e| err(&e))?;
+        for r in &self.per_frame {
+            w.serialize(r).map_err(|e| err(&e))?;
+        }
+        w.flush().map_err(|e| err(&e))
+    }
+
+    /// Writes the record as pretty JSON.
+    pub fn write_json(&self, path: &Path) -> Result<(), AnimationError> {
+        let err = |e: &dyn std::fmt::Display| AnimationError::Write {
+            path: path.to_owned(),
+            message: e.to_string(),
+        };
+        let text = serde_json::to_string_pretty(self).map_err(|e| err(&e))?;
+        std::fs::write(path, format!("{text}\n")).map_err(|e| err(&e))
+    }
+}
+
+/// The mean of the values that are there; `None` when none is.
+pub fn mean_of(values: impl IntoIterator<Item = Option<f64>>) -> Option<f64> {
+    let (sum, n) = values.into_iter().flatten().fold((0.0, 0u32), |(s, n), v| (s + v, n + 1));
+    (n > 0).then(|| sum / f64::from(n))
 }
 
 #[cfg(test)]

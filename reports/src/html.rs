@@ -364,6 +364,8 @@ mod tests {
             counters: Default::default(),
             notes: Vec::new(),
             external: false,
+            temporal: None,
+            per_frame: Vec::new(),
         }
     }
 

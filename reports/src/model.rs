@@ -86,6 +86,14 @@ pub struct Row {
     /// like a method's run; its time is the one the suite gives, on both clocks.
     #[serde(default)]
     pub external: bool,
+    /// A run in motion's temporal metrics (its scene has an animation); `None` for a still
+    /// scene.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub temporal: Option<analysis::temporal::TemporalMetrics>,
+    /// A run in motion's frames, each as `animate` records it (`frames.csv`); empty for a still
+    /// scene.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub per_frame: Vec<crate::animation::FrameRecord>,
 }
 
 impl Row {
@@ -236,6 +244,21 @@ pub struct Produced {
     pub record: RunRecord,
     /// Its comparison with the reference, as `compare` writes it (`metrics.json`).
     pub metrics: MetricsRecord,
+    /// A run in motion's frames, for its run page's players; `None` for a still scene.
+    pub motion: Option<MotionFrames>,
+}
+
+/// A run in motion's frames as PNG files' bytes, frame 0 first, one entry per frame in each.
+pub struct MotionFrames {
+    /// The method's shaded image (`crate::output::shade`).
+    pub method: Vec<Vec<u8>>,
+    /// The reference's shaded image.
+    pub reference: Vec<Vec<u8>>,
+    /// The error map over the compared pixels (`analysis::error_map::error_map` at its
+    /// default scale).
+    pub error: Vec<Vec<u8>>,
+    /// How long a player shows each frame, milliseconds.
+    pub frame_ms: u16,
 }
 
 /// A scene's reference, as the image outputs need it.

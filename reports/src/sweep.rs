@@ -706,6 +706,8 @@ fn add_run(
         counters: record.counters,
         notes: record.notes.clone(),
         external: false,
+        temporal: None,
+        per_frame: Vec::new(),
     });
     images.runs.push(Produced {
         row: report.rows.len() - 1,
@@ -713,6 +715,7 @@ fn add_run(
         visibility: m.output,
         record,
         metrics,
+        motion: None,
     });
 }
 
@@ -771,6 +774,8 @@ fn add_external(
         counters: Default::default(),
         notes: notes.clone(),
         external: true,
+        temporal: None,
+        per_frame: Vec::new(),
     };
     let Some(time) = time else {
         report.untimed.push(row);
@@ -818,6 +823,7 @@ fn add_external(
         visibility: v,
         record,
         metrics,
+        motion: None,
     });
     Ok(())
 }
