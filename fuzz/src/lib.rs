@@ -14,7 +14,10 @@
 //! - `scene` (the scene-file parser): when the text parses, the description is resolved, and an
 //!   `Ok` scene is checked against what resolution promises: meshes checked the same way, every
 //!   vertex, camera point and spot-light point within `limits::MAX_COORDINATE`, a bounding-box
-//!   diagonal of at least `limits::MIN_EXTENT`, a directional light of unit direction. Shapes that name a mesh file are resolved
+//!   diagonal of at least `limits::MIN_EXTENT`, a directional light of unit direction; the
+//!   same of the scene posed at its first, middle and last frames (an animation is checked for
+//!   every time it may be sampled at), each pose still and with the rest scene's triangles.
+//!   Shapes that name a mesh file are resolved
 //!   against [`NO_MESH_FOLDER`], a folder that does not exist, and only when the path is
 //!   relative and made of plain names, so no input reads the disk (every such file is then
 //!   missing); a description whose file paths are anything else is parsed but not resolved.
@@ -76,6 +79,14 @@ pub fn scene(data: &[u8]) -> bool {
     match desc.resolve("fuzz", origin, base) {
         Ok(scene) => {
             check_scene(&scene);
+            let animation = &scene.animation;
+            let last = animation.frames().saturating_sub(1);
+            for i in [0, last / 2, last] {
+                let posed = animation.pose(&scene, i);
+                assert!(posed.animation.is_still(), "frame {i}: a pose that moves");
+                assert_eq!(posed.geometry().triangles, scene.geometry().triangles, "frame {i}");
+                check_scene(&posed);
+            }
             true
         }
         Err(SceneError::ModelMissing { .. }) => true,

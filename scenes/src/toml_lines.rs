@@ -5,7 +5,8 @@
 use toml_edit::{ImDocument, TableLike};
 
 /// The 1-based line of `key` (dotted, with `name[i]` for the `i`th table of an array of
-/// tables, e.g. `object[1].shape.plane.size`) in the TOML `text`: where its deepest part that
+/// tables or of an inline array of inline tables, e.g. `object[1].shape.plane.size`,
+/// `animation.object[0].key[1].time`) in the TOML `text`: where its deepest part that
 /// is written is (a key left to its default is placed at its table); `None` when the text does
 /// not parse or nothing of the key is written.
 pub(crate) fn line_of(text: &str, key: &str) -> Option<usize> {
@@ -21,11 +22,15 @@ pub(crate) fn line_of(text: &str, key: &str) -> Option<usize> {
         span = written.span().or_else(|| item.span()).or(span);
         let item_table: Option<&dyn TableLike> = match index {
             Some(i) => {
-                let Some(element) = item.as_array_of_tables().and_then(|a| a.get(i)) else {
-                    break;
-                };
-                span = element.span().or(span);
-                Some(element)
+                if let Some(element) = item.as_array_of_tables().and_then(|a| a.get(i)) {
+                    span = element.span().or(span);
+                    Some(element)
+                } else {
+                    // An inline array of inline tables: `key = [{ time = 0.0 }, ...]`.
+                    let Some(element) = item.as_array().and_then(|a| a.get(i)) else { break };
+                    span = element.span().or(span);
+                    element.as_inline_table().map(|t| t as &dyn TableLike)
+                }
             }
             None => item.as_table_like(),
         };
@@ -52,7 +57,11 @@ mod tests {
                         name = \"m\"\n\
                         shape.file = { path = \"m.obj\" }\n\
                         material = { color = [1.0,\n\
-                        \x20 0.0, 0.0], opacity = 2.0 }\n";
+                        \x20 0.0, 0.0], opacity = 2.0 }\n\
+                        [[animation.object]]\n\
+                        name = \"m\"\n\
+                        key = [{ time = 0.0 },\n\
+                        \x20 { time = 1.0, translate = [1.0, 0.0, 0.0] }]\n";
 
     #[test]
     fn keys_are_found_on_the_line_they_are_written() {
@@ -68,6 +77,11 @@ mod tests {
             ("object[1].transform.fit_size", Some(7)),
             ("object[1]", Some(7)),
             ("resolution", None),
+            ("animation.object[0].name", Some(13)),
+            ("animation.object[0].key[1].translate", Some(15)),
+            ("animation.object[0].key[1].rotate_deg", Some(15)),
+            ("animation.object[0].key[0].time", Some(14)),
+            ("animation.object[0].key[2].time", Some(14)),
         ] {
             assert_eq!(line_of(TEXT, key), line, "{key}");
         }

@@ -92,6 +92,7 @@ pub fn lone_plane(light: Light) -> Scene {
         },
         light,
         effects: Default::default(),
+        animation: Default::default(),
         objects: vec![ObjectDesc {
             name: None,
             shape: Shape::Plane(PlaneParams { size: 12.0, subdivisions: 7 }),

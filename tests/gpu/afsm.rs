@@ -123,6 +123,7 @@ fn edge_through_samples(dir: &Path) -> Scene {
         },
         light: Light::Directional { direction: DVec3::new(0.0, -1.0, 0.0) },
         effects: Default::default(),
+        animation: Default::default(),
         objects: vec![
             object(Shape::Plane(PlaneParams { size: 12.0, subdivisions: 1 })),
             object(Shape::File(FileShape { path: obj.into() })),

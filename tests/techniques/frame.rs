@@ -56,6 +56,7 @@ fn spheres_scene(camera: Camera) -> Scene {
         camera,
         light: Light::Directional { direction: DVec3::new(-0.3, -1.0, -0.2) },
         effects: Default::default(),
+        animation: Default::default(),
         objects: vec![ObjectDesc {
             name: None,
             shape: Shape::Spheres(SpheresParams { count: 3, seed: 7, ..Default::default() }),

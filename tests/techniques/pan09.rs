@@ -199,6 +199,7 @@ fn scene(camera: Camera, light: Light, objects: Vec<ObjectDesc>, res: [u32; 2]) 
         camera,
         light,
         effects: Default::default(),
+        animation: Default::default(),
         objects,
     }
     .resolve("hard", std::path::Path::new("test"), std::path::Path::new("."))

@@ -67,6 +67,7 @@ fn scene(camera: Camera, light: Light, objects: Vec<ObjectDesc>) -> Scene {
         camera,
         light,
         effects: Default::default(),
+        animation: Default::default(),
         objects,
     }
     .resolve("test", std::path::Path::new("test"), std::path::Path::new("."))

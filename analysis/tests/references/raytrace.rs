@@ -55,9 +55,17 @@ fn plane(name: &str, size: f64, subdivisions: u32, translate: DVec3, opacity: f6
 }
 
 fn scene(camera: Camera, light: Light, effects: EffectSwitches, objects: Vec<ObjectDesc>) -> Scene {
-    SceneDesc { name: Some("test".into()), resolution: [W, H], camera, light, effects, objects }
-        .resolve("test", std::path::Path::new("test"), std::path::Path::new("."))
-        .expect("valid scene")
+    SceneDesc {
+        name: Some("test".into()),
+        resolution: [W, H],
+        camera,
+        light,
+        effects,
+        objects,
+        animation: Default::default(),
+    }
+    .resolve("test", std::path::Path::new("test"), std::path::Path::new("."))
+    .expect("valid scene")
 }
 
 fn perspective(eye: DVec3, target: DVec3, fov_y_deg: f64) -> Camera {

@@ -112,6 +112,7 @@ fn a_closed_mesh_shadows_its_own_far_half() {
         },
         light: Light::Directional { direction },
         effects: Default::default(),
+        animation: Default::default(),
         objects: vec![sphere],
     }
     .resolve("sphere", std::path::Path::new("sphere"), std::path::Path::new("."))

@@ -60,14 +60,16 @@ fn fraction(a: f64, b: f64, t: f64) -> f64 {
     s.clamp(0.0, 1.0)
 }
 
-/// `a + (b - a) s`, as a weighted sum that cannot overflow between finite values.
+/// `a + (b - a) s`, as a weighted sum that cannot overflow between finite values, kept
+/// between `a` and `b` despite rounding: a value interpolated between keys within a range
+/// (the coordinate limits, a field of view's interval) stays within it.
 fn lerp(a: f64, b: f64, s: f64) -> f64 {
-    a * (1.0 - s) + b * s
+    (a * (1.0 - s) + b * s).max(a.min(b)).min(a.max(b))
 }
 
 /// [`lerp`] of each coordinate.
 fn lerp3(a: DVec3, b: DVec3, s: f64) -> DVec3 {
-    a * (1.0 - s) + b * s
+    (a * (1.0 - s) + b * s).max(a.min(b)).min(a.max(b))
 }
 
 /// The angle between the unit vectors `a` and `b`, in [0, pi], from its sine and cosine

@@ -118,7 +118,7 @@ fn check_view(
         (Some(a), Some(b)) if opposite(a, b) => Err(invalid(
             key,
             format!(
-                "the view points opposite to `{track}[{}]`'s (within {OPPOSITE_TOLERANCE} \
+                "the view points opposite to `{track}[{}]`'s (within {OPPOSITE_TOLERANCE:e} \
                  radians): between the keys the two points would meet",
                 k - 1
             ),
@@ -140,7 +140,7 @@ fn check_turn(
         (Some(a), Some(b)) if opposite(a, b) => Err(invalid(
             key,
             format!(
-                "is opposite to `{track}[{}]`'s (within {OPPOSITE_TOLERANCE} radians): the turn \
+                "is opposite to `{track}[{}]`'s (within {OPPOSITE_TOLERANCE:e} radians): the turn \
                  between them has no unique path",
                 k - 1
             ),
@@ -182,7 +182,11 @@ fn light_track(keys: &[LightKey], rest: &Light) -> Result<Vec<Key<Light>>, Anima
                 }
             }
         };
-        value.validate().map_err(|(field, message)| invalid(name(field), message))?;
+        value.validate().map_err(|(field, message)| {
+            // A target that meets the position the key moved names the position.
+            let moved = field == "target" && key.target.is_none() && key.position.is_some();
+            invalid(name(if moved { "position" } else { field }), message)
+        })?;
         let previous = track.last().map(|p| &p.value);
         match (&value, previous) {
             (Light::Directional { direction }, previous) => {
@@ -199,7 +203,12 @@ fn light_track(keys: &[LightKey], rest: &Light) -> Result<Vec<Key<Light>>, Anima
                     Some(Light::Spot { position, target, .. }) => Some((*position, *target)),
                     _ => None,
                 };
-                check_view(name("target"), previous, *position, *target, TRACK, k)?;
+                let moved = if key.target.is_none() && key.position.is_some() {
+                    "position"
+                } else {
+                    "target"
+                };
+                check_view(name(moved), previous, *position, *target, TRACK, k)?;
             }
         }
         track.push(Key { time: key.time, value: value.normalized() });
@@ -245,12 +254,17 @@ fn camera_track(keys: &[CameraKey], rest: &Camera) -> Result<Vec<Key<Camera>>, A
                 }
             }
         };
-        value.validate().map_err(|(field, message)| invalid(name(field), message))?;
+        value.validate().map_err(|(field, message)| {
+            // A target that meets the eye the key moved names the eye.
+            let moved = field == "target" && key.target.is_none() && key.eye.is_some();
+            invalid(name(if moved { "eye" } else { field }), message)
+        })?;
         let (eye, target) = (value.eye(), value.target());
         check_point(name("eye"), eye)?;
         check_point(name("target"), target)?;
         let previous = track.last().map(|p| &p.value);
-        check_view(name("target"), previous.map(|p| (p.eye(), p.target())), eye, target, TRACK, k)?;
+        let moved = if key.target.is_none() && key.eye.is_some() { "eye" } else { "target" };
+        check_view(name(moved), previous.map(|p| (p.eye(), p.target())), eye, target, TRACK, k)?;
         check_turn(name("up"), previous.map(up_of), up_of(&value), TRACK, k)?;
         track.push(Key { time: key.time, value });
     }
@@ -349,8 +363,11 @@ fn check_reach(
     for (k, key) in keys.iter().enumerate() {
         let t = key.value.translate;
         let reach = if rotates {
-            (centre + t).abs().max_element() + radius
+            // With a margin for the rounding of the rotation about the centre.
+            ((centre + t).abs().max_element() + radius) * (1.0 + 16.0 * f64::EPSILON)
         } else {
+            // Exact: a translation between keys stays within theirs, coordinate by
+            // coordinate, and rounded sums are monotone.
             (lo + t).abs().max((hi + t).abs()).max_element()
         };
         if let Some(message) = beyond_range(reach) {
@@ -389,7 +406,8 @@ fn check_extent(motions: &[Motion], rest: &Scene) -> Result<(), AnimationError> 
             })
         })
         .fold(0.0, f64::max);
-    if least >= MIN_EXTENT {
+    // With a margin for the rounding of the motions.
+    if least * (1.0 - 64.0 * f64::EPSILON) >= MIN_EXTENT {
         return Ok(());
     }
     Err(out_of_range(
