@@ -13,6 +13,7 @@ mod frame;
 mod ground_truth;
 mod hard_cases;
 mod modules;
+mod motion;
 mod msm;
 mod pan09;
 mod pcf;
