@@ -71,7 +71,7 @@ fn map_options(map_res: u32) -> MapOptions {
 
 /// The CPU's map, the tester the CPU method builds for it, and both uploaded.
 fn uploaded(frame: &Frame<'_>, options: &MapOptions) -> (GpuFrame, GpuDepthMap, DepthTester) {
-    let map = frame.light_depth_map(options.map_res, &mut Recorder::default());
+    let map = frame.light_depth_map(options.map_res, options.frustum, &mut Recorder::default());
     let tester = DepthTester::new(options, map.projector, frame.light_depth_range(&map.projector));
     (GpuFrame::upload(ctx(), frame, &frame.gbuffer), GpuDepthMap::upload(ctx(), &map), tester)
 }
@@ -139,7 +139,7 @@ fn gpu_parity_pcf_bs_matches_the_cpu_per_pixel() {
                 options.map.map_res = 256;
                 let twin = BrabecSeidelPcf { options, variant };
                 let (cpu, cpu_counters) = cpu_run(&twin, frame);
-                let projector = frame.light_projector(256);
+                let projector = frame.light_projector(256, options.map.frustum);
                 let (near, far) = frame.light_depth_bounds(&projector);
                 let code = GpuDepthCode::new(depth_bits, near, far).expect("valid bits");
                 let tester =
@@ -148,14 +148,15 @@ fn gpu_parity_pcf_bs_matches_the_cpu_per_pixel() {
                 let mut rec = Recorder::default();
                 let (lit, counters) = if variant == Variant::Stratified2x2 {
                     let maps = JITTERS.map(|shift| {
-                        let m = frame.jittered_light_depth_map(256, shift, "map", &mut rec);
+                        let fit = options.map.frustum;
+                        let m = frame.jittered_light_depth_map(256, fit, shift, "map", &mut rec);
                         GpuDepthMap::upload(ctx(), &m)
                     });
                     let maps = [&maps[0], &maps[1], &maps[2], &maps[3]];
                     gpu_pcf::bs_stratified(ctx(), &gframe, maps, &tester, &code, &mut rec)
                         .expect("kernels run")
                 } else {
-                    let m = frame.light_depth_map(256, &mut rec);
+                    let m = frame.light_depth_map(256, options.map.frustum, &mut rec);
                     let map = GpuDepthMap::upload(ctx(), &m);
                     gpu_pcf::bs_fast(ctx(), &gframe, &map, &tester, &code, variant, &mut rec)
                         .expect("kernels run")
