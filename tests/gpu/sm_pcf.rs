@@ -15,7 +15,7 @@ use methods::{
     pcf_gems::{GemsPcf, GemsSamples},
     pcf_reeves::{ReevesOptions, ReevesPcf},
     sm::StandardShadowMap,
-    Frame, ShadowMethod, Visibility,
+    Frame, LightFit, ShadowMethod, Visibility,
 };
 
 const SCENES: [&str; 5] = ["plane-square", "cage", "random-10k", "bumpy", "spot-spheres"];
@@ -79,15 +79,17 @@ fn uploaded(frame: &Frame<'_>, options: &MapOptions) -> (GpuFrame, GpuDepthMap, 
 #[test]
 fn gpu_parity_sm_equals_the_cpu_per_pixel() {
     for_each_frame(|frame| {
-        for map_res in [256, 512] {
-            let options = map_options(map_res);
+        for (map_res, frustum) in
+            [(256, LightFit::Scene), (512, LightFit::Scene), (256, LightFit::ViewSnapped)]
+        {
+            let options = MapOptions { frustum, ..map_options(map_res) };
             let (cpu, cpu_counters) = cpu_run(&StandardShadowMap { options }, frame);
             let (gframe, map, tester) = uploaded(frame, &options);
             let mut rec = Recorder::default();
             let (lit, counters) =
                 gpu_sm::depth_test(ctx(), &gframe, &map, &tester, &mut rec).expect("kernel runs");
             let (differ, _) = compare(&cpu.lit, &lit);
-            let what = format!("{} sm map {map_res}", frame.scene.name);
+            let what = format!("{} sm map {map_res} {}", frame.scene.name, frustum.as_str());
             eprintln!("{what}: {differ} pixels differ, {} compares", counters.shadow_map_lookups);
             assert_eq!(differ, 0, "{what}");
             assert_counters(&what, &cpu_counters, &counters);
@@ -177,8 +179,10 @@ fn gpu_methods_run_end_to_end_with_the_twins_stages() {
     let map = map_options(256);
     type Pair = (Box<dyn ShadowMethod>, Box<dyn ShadowMethod>);
     let reeves = ReevesOptions { map, ..Default::default() };
+    let view = MapOptions { frustum: LightFit::View, ..map };
     let mut methods: Vec<Pair> = vec![
         (Box::new(GpuShadowMap { options: map }), Box::new(StandardShadowMap { options: map })),
+        (Box::new(GpuShadowMap { options: view }), Box::new(StandardShadowMap { options: view })),
         (Box::new(GpuPcf::Reeves { options: reeves }), Box::new(ReevesPcf { options: reeves })),
     ];
     for samples in [GemsSamples::Sixteen, GemsSamples::FourDithered] {
