@@ -57,6 +57,7 @@
 use crate::{
     footprint::{Footprint, Sampling},
     frame::Frame,
+    light_fit::LightFit,
     method::MethodError,
 };
 use glam::{DVec2, DVec3};
@@ -77,11 +78,20 @@ pub struct MapOptions {
     /// Upper bound of the slope ratio `|n·axis| / |n·ray|`. Default [`DEFAULT_MAX_SLOPE`]
     /// (1000: planes up to 89.94° from the light's ray).
     pub max_slope: f64,
+    /// The light frustum the map is rendered through ([`crate::light_fit`]). Default
+    /// [`LightFit::Scene`], fitted to the scene's bounds.
+    pub frustum: LightFit,
 }
 
 impl Default for MapOptions {
     fn default() -> Self {
-        Self { map_res: 1024, constant_bias: 1e-5, slope_bias: 1.0, max_slope: DEFAULT_MAX_SLOPE }
+        Self {
+            map_res: 1024,
+            constant_bias: 1e-5,
+            slope_bias: 1.0,
+            max_slope: DEFAULT_MAX_SLOPE,
+            frustum: LightFit::Scene,
+        }
     }
 }
 
@@ -124,6 +134,7 @@ impl MapOptions {
         m.insert("constant_bias".into(), self.constant_bias.into());
         m.insert("slope_bias".into(), self.slope_bias.into());
         m.insert("max_slope".into(), self.max_slope.into());
+        m.insert("frustum".into(), self.frustum.as_str().into());
         m
     }
 }
@@ -468,7 +479,7 @@ mod tests {
     /// The bias warning of `sm` with `options` on `scene`.
     fn warning(scene: &scenes::Scene, options: &MapOptions) -> Option<String> {
         let frame = Frame::new(scene, 32, 24, &mut instrumentation::Recorder::default());
-        let light = frame.light_projector(options.map_res);
+        let light = frame.light_projector(options.map_res, options.frustum);
         let tester = DepthTester::new(options, light, frame.light_depth_range(&light));
         tester.range_warning("sm", &frame)
     }

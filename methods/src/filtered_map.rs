@@ -113,7 +113,7 @@ pub fn run<const N: usize, M: FilteredMap<N>>(
     if frame.effects.transparency {
         rec.notes.push(format!("{} treats semi-transparent casters as opaque", m.name()));
     }
-    let map = frame.light_depth_map(m.map().map_res, rec);
+    let map = frame.light_depth_map(m.map().map_res, m.map().frustum, rec);
     let (near, _) = frame.light_depth_bounds(&map.projector);
     let range = frame.light_depth_range(&map.projector);
     let res = map.res as usize;

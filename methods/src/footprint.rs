@@ -31,10 +31,11 @@
 //!   largest and median `r`, the cause, and what to change: the `--map-res` that brings the
 //!   share under the limit (texel widths scale as `1 / R`), if one up to 16384 does. The cause
 //!   is the first of:
-//!   1. *a far object*: a directional light's frustum is fitted to the scene's bounds, so one
-//!      object far from the rest stretches it; named when it lies apart from what the frame
-//!      sees (its bounds miss the visible samples' bounds) and the frustum fitted without it
-//!      would have texels narrow enough (its removal alone brings the share under the limit);
+//!   1. *a far object*: a directional light's frustum fitted to the scene's bounds (`--frustum
+//!      scene`, [`crate::light_fit`]) is stretched by one object far from the rest; named when
+//!      the map is so fitted, the object lies apart from what the frame sees (its bounds miss
+//!      the visible samples' bounds) and the frustum fitted without it would have texels
+//!      narrow enough (its removal alone brings the share under the limit);
 //!   2. *a degenerate camera*: the median texel is wider than the whole frame (the camera sees
 //!      less than one texel of the scene), as with a field of view of 1e-12 degrees; the fix is
 //!      the field of view (or orthographic height) that brings the share under the limit;
@@ -58,7 +59,7 @@
 //!   centre in a 161 x 121 frame gives the same 1; `--map-res 2048` gives 0), so the run
 //!   warns instead of changing it.
 
-use crate::frame::Frame;
+use crate::{frame::Frame, light_fit::LightFit};
 use glam::DVec3;
 use rayon::prelude::*;
 use scenes::projection::{ProjectionKind, Projector};
@@ -214,6 +215,9 @@ pub struct Footprint {
     pub max_off_axis_tan: f64,
     /// Bounds of the visible samples.
     pub visible_bounds: (DVec3, DVec3),
+    /// Whether the light's projector is fitted to the scene's bounds (`--frustum scene`), so
+    /// that an object far from the rest stretches a directional light's texels.
+    pub scene_fitted: bool,
     bins: Box<[u64; BINS]>,
 }
 
@@ -289,6 +293,7 @@ impl Footprint {
             max_light_angle_over_deg: t.max_light_angle_over,
             max_off_axis_tan: t.max_off_axis_tan,
             visible_bounds: (t.lo, t.hi),
+            scene_fitted: *projector == frame.light_projector(map_res, LightFit::Scene),
             bins: t.bins,
         }
     }
@@ -337,9 +342,11 @@ impl Footprint {
         let median = self.ratio_exceeded_by(0.5);
         let (w, h) = (frame.width(), frame.height());
         let mut fixes = Vec::new();
-        let cause = if let Some((name, narrower)) =
-            stretching_object(frame, self.map_res, self.visible_bounds)
-                .filter(|(_, f)| *f >= factor)
+        let cause = if let Some((name, narrower)) = self
+            .scene_fitted
+            .then(|| stretching_object(frame, self.map_res, self.visible_bounds))
+            .flatten()
+            .filter(|(_, f)| *f >= factor)
         {
             fixes.push(format!("move object '{name}' nearer the rest or remove it"));
             let (lo, hi) = frame.scene.bounds();

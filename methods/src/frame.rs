@@ -1,7 +1,11 @@
 //! A frame: a scene prepared at one resolution, with its camera G-buffer. Methods read the
 //! frame; the light depth map is rendered only when a method asks for it.
 
-use crate::{depth_map::LightDepthMap, gbuffer::render_gbuffer, gbuffer::GBuffer};
+use crate::{
+    depth_map::LightDepthMap,
+    gbuffer::{render_gbuffer, GBuffer},
+    light_fit::{self, LightFit},
+};
 use glam::DVec2;
 use instrumentation::Recorder;
 use scenes::{Effects, Geometry, Projector, Scene};
@@ -64,13 +68,16 @@ impl<'s> Frame<'s> {
         self.casters[o]
     }
 
-    /// The light's projector onto a `res x res` map fitted to the scene.
-    pub fn light_projector(&self, res: u32) -> Projector {
-        self.scene.light.projector(self.scene.bounds(), res)
+    /// The light's projector onto a `res x res` map, its frustum fitted as `fit` says
+    /// ([`crate::light_fit`]: to the scene's bounds, or to this frame's visible samples).
+    pub fn light_projector(&self, res: u32, fit: LightFit) -> Projector {
+        light_fit::fit(self.scene, &self.gbuffer, res, fit)
     }
 
     /// The span of light-space depths the scene occupies (far minus near of the fitted
-    /// frustum), the unit of constant depth biases.
+    /// frustum), the unit of constant depth biases. Every [`LightFit`] keeps the scene fit's
+    /// depths (the view fits move the origin across the light's rays only), so a bias means the
+    /// same under every policy (up to rounding).
     pub fn light_depth_range(&self, light: &Projector) -> f64 {
         let (near, far) = self.light_depth_bounds(light);
         (far - near).max(f64::MIN_POSITIVE)
@@ -88,21 +95,24 @@ impl<'s> Frame<'s> {
         (a, b)
     }
 
-    /// Renders the light depth map of the casters at `res x res`, as a timed stage.
-    pub fn light_depth_map(&self, res: u32, rec: &mut Recorder) -> LightDepthMap {
-        self.jittered_light_depth_map(res, DVec2::ZERO, STAGE_LIGHT_DEPTH_MAP, rec)
+    /// Renders the light depth map of the casters at `res x res` through the frustum `fit`
+    /// gives, as a timed stage.
+    pub fn light_depth_map(&self, res: u32, fit: LightFit, rec: &mut Recorder) -> LightDepthMap {
+        self.jittered_light_depth_map(res, fit, DVec2::ZERO, STAGE_LIGHT_DEPTH_MAP, rec)
     }
 
-    /// Renders the light depth map of the casters at `res x res` with its sample points moved
-    /// by `shift` texels (a jittered image plane), as a stage timed under `stage`.
+    /// Renders the light depth map of the casters at `res x res` through the frustum `fit`
+    /// gives, with its sample points moved by `shift` texels (a jittered image plane), as a
+    /// stage timed under `stage`.
     pub fn jittered_light_depth_map(
         &self,
         res: u32,
+        fit: LightFit,
         shift: DVec2,
         stage: &str,
         rec: &mut Recorder,
     ) -> LightDepthMap {
-        let projector = self.light_projector(res);
+        let projector = self.light_projector(res, fit);
         rec.stages.time(stage, || {
             LightDepthMap::render(
                 &self.geometry,

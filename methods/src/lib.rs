@@ -4,7 +4,8 @@
 //! (light depth map), [`depth_test`] (map lookups, bias, depth quantization), [`footprint`]
 //! (whether a light map resolves the frame, and its warnings), [`filtered_map`] (the box filter
 //! of the filtered shadow maps), [`pattern`] (sub-pixel sample
-//! patterns), [`frame`] (a scene at one resolution). Techniques, one module
+//! patterns), [`frame`] (a scene at one resolution), [`light_fit`] (the light frustum a map is
+//! rendered through: the scene's bounds or the camera's view, `--frustum`). Techniques, one module
 //! each: [`sm`] (standard shadow map), [`pcf_reeves`] (Reeves et al.'s stochastic PCF),
 //! [`pcf_bs`] (Brabec and Seidel's packed PCF), [`pcf_gems`] (GPU Gems' 4x4-region PCF),
 //! [`afsm`] (alias-free shadow maps, `afsm` and `afsm-ss`), [`pan09`] (Pan et al.'s fast
@@ -21,6 +22,7 @@ pub mod frame;
 pub mod gbuffer;
 #[cfg(feature = "gpu")]
 pub mod gpu;
+pub mod light_fit;
 pub mod method;
 pub mod pan09;
 pub mod params;
@@ -36,5 +38,6 @@ pub mod sm;
 pub mod spsm;
 
 pub use frame::Frame;
+pub use light_fit::LightFit;
 pub use method::{MethodError, ShadowMethod, Visibility};
 pub use registry::{method, MethodOptions, METHODS};

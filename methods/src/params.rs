@@ -12,7 +12,7 @@
 //! [`MethodOptions::get`] and [`MethodOptions::set`] reach both by key, for the command line,
 //! the suites and the reports.
 
-use crate::{pan09::VisibilityMode, pattern::PatternKind};
+use crate::{light_fit::LightFit, pan09::VisibilityMode, pattern::PatternKind};
 use std::collections::BTreeMap;
 
 /// The kind of value a parameter takes; the method checks its range.
@@ -254,6 +254,29 @@ pub static MASKS: Param = Param {
     ]),
 };
 
+/// The light frustum a shadow map is rendered through.
+pub static FRUSTUM: Param = Param {
+    key: "frustum",
+    flag: "--frustum",
+    value_name: "FIT",
+    help: "Light frustum of the shadow map (directional lights; a spot's map is its cone under \
+           every choice); default scene.",
+    kind: Kind::Choice(&[
+        ("scene", "Fitted to the scene's bounds, the same map every frame."),
+        (
+            "view",
+            "Fitted each frame to the light-space rectangle of the camera's visible samples \
+             (1 % margin), depth range the scene's: smaller texels, moving with the camera.",
+        ),
+        (
+            "view-snapped",
+            "`view` with its size rounded up to a power of two times the scene fit's and its \
+             centre snapped to whole texels of a grid anchored at the world origin: a camera \
+             motion moves the map by whole texels.",
+        ),
+    ]),
+};
+
 /// The parameters the published techniques share, with typed fields in [`MethodOptions`].
 pub static SHARED: &[&Param] = &[
     &MAP_RES,
@@ -266,10 +289,12 @@ pub static SHARED: &[&Param] = &[
     &SEED,
     &DERIVATIVE_POWER,
     &MASKS,
+    &FRUSTUM,
 ];
 
-/// The parameters of a shadow map's depth test (`map_res` and the biases).
-pub static MAP: &[&Param] = &[&MAP_RES, &CONSTANT_BIAS, &SLOPE_BIAS, &MAX_SLOPE];
+/// The parameters of a shadow map and its depth test (`map_res`, the biases and the light
+/// frustum).
+pub static MAP: &[&Param] = &[&MAP_RES, &CONSTANT_BIAS, &SLOPE_BIAS, &MAX_SLOPE, &FRUSTUM];
 
 /// Where a method runs (`--device`).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -317,6 +342,8 @@ pub struct MethodOptions {
     pub derivative_power: Option<u32>,
     /// How `pan09` turns half-planes into sub-sample masks (`--masks`).
     pub visibility: Option<VisibilityMode>,
+    /// The light frustum of shadow maps (`--frustum`).
+    pub frustum: Option<LightFit>,
     /// The values of parameters methods declare in their own modules, by key.
     pub own: BTreeMap<&'static str, Value>,
     /// Where the method runs (`--device`); default the CPU.
@@ -337,6 +364,7 @@ impl MethodOptions {
             "seed" => self.seed.map(Value::Seed),
             "derivative_power" => self.derivative_power.map(Value::Count),
             "masks" => self.visibility.map(|v| Value::Choice(v.name())),
+            "frustum" => self.frustum.map(|f| Value::Choice(f.as_str())),
             _ => self.own.get(key).copied(),
         }
     }
@@ -360,6 +388,7 @@ impl MethodOptions {
                 self.visibility =
                     Some(if v == "exact" { VisibilityMode::Exact } else { VisibilityMode::Table });
             }
+            ("frustum", Value::Choice(v)) => self.frustum = v.parse().ok(),
             (key, value) => {
                 self.own.insert(key, value);
             }
@@ -417,6 +446,7 @@ mod tests {
             (&SEED, "18446744073709551615"),
             (&DERIVATIVE_POWER, "3"),
             (&MASKS, "exact"),
+            (&FRUSTUM, "view-snapped"),
         ];
         assert_eq!(values.len(), SHARED.len());
         for (p, text) in values {
@@ -428,6 +458,7 @@ mod tests {
         assert!(o.own.is_empty());
         assert_eq!(o.pattern, Some(PatternKind::Rotated));
         assert_eq!(o.visibility, Some(VisibilityMode::Exact));
+        assert_eq!(o.frustum, Some(LightFit::ViewSnapped));
         static OWN: Param = Param {
             key: "width_x",
             flag: "--width-x",
@@ -449,5 +480,21 @@ mod tests {
         assert!(MAP_RES.from_integer(-1).is_err());
         assert!(MAP_RES.from_float(0.5).is_err());
         assert_eq!(SLOPE_BIAS.from_integer(2), Ok(Value::Real(2.0)));
+        let e = FRUSTUM.parse("tight").expect_err("unknown");
+        assert!(e.contains("scene, view, view-snapped"), "{e}");
+    }
+
+    /// `--frustum` lists exactly the light-frustum policies, in their order and by their names.
+    #[test]
+    fn frustum_choices_are_the_policies() {
+        let Kind::Choice(names) = FRUSTUM.kind else { panic!("a choice") };
+        let listed: Vec<&str> = names.iter().map(|(n, _)| *n).collect();
+        let policies: Vec<&str> = LightFit::ALL.iter().map(|f| f.as_str()).collect();
+        assert_eq!(listed, policies);
+        for f in LightFit::ALL {
+            let mut o = MethodOptions::default();
+            o.set(&FRUSTUM, FRUSTUM.parse(f.as_str()).expect("listed"));
+            assert_eq!(o.frustum, Some(f));
+        }
     }
 }

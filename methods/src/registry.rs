@@ -101,6 +101,7 @@ pub static METHODS: &[MethodEntry] = &[
             &params::CONSTANT_BIAS,
             &params::SLOPE_BIAS,
             &params::MAX_SLOPE,
+            &params::FRUSTUM,
             &params::RATE,
             &params::SEED,
         ],
@@ -191,6 +192,7 @@ pub static METHODS: &[MethodEntry] = &[
         params: &[
             &params::MAP_RES,
             &params::CONSTANT_BIAS,
+            &params::FRUSTUM,
             &params::DERIVATIVE_POWER,
             &params::RATE,
             &params::PATTERN,
@@ -205,7 +207,13 @@ pub static METHODS: &[MethodEntry] = &[
         name: "spsm-f32",
         description: "sub-pixel shadow map with unpacked f32 texels (Lecocq et al. 2014)",
         rates: Rates::Masks,
-        params: &[&params::MAP_RES, &params::CONSTANT_BIAS, &params::RATE, &params::PATTERN],
+        params: &[
+            &params::MAP_RES,
+            &params::CONSTANT_BIAS,
+            &params::FRUSTUM,
+            &params::RATE,
+            &params::PATTERN,
+        ],
         stores_samples: None,
         cpu: |o| Ok(Box::new(Spsm { options: spsm_options(TexelFormat::F32, o)? })),
         gpu: gpu!(|o| Ok(Box::new(crate::gpu::spsm::GpuSpsm {
@@ -223,6 +231,7 @@ pub static METHODS: &[MethodEntry] = &[
             &params::CONSTANT_BIAS,
             &params::SLOPE_BIAS,
             &params::MAX_SLOPE,
+            &params::FRUSTUM,
             &params::RATE,
             &params::PATTERN,
             &params::MASKS,
@@ -242,6 +251,7 @@ static BS: &[&Param] = &[
     &params::CONSTANT_BIAS,
     &params::SLOPE_BIAS,
     &params::MAX_SLOPE,
+    &params::FRUSTUM,
     &params::DEPTH_BITS,
 ];
 
@@ -273,6 +283,7 @@ fn map_options(options: &MethodOptions, d: MapOptions) -> Result<MapOptions, Met
         constant_bias: options.constant_bias.unwrap_or(d.constant_bias),
         slope_bias: options.slope_bias.unwrap_or(d.slope_bias),
         max_slope: options.max_slope.unwrap_or(d.max_slope),
+        frustum: options.frustum.unwrap_or(d.frustum),
     };
     o.validate()?;
     Ok(o)

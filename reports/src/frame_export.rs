@@ -271,7 +271,7 @@ pub fn frame_record(frame: &Frame<'_>) -> FrameRecord {
         },
     };
     // The frustum's matrices do not depend on the resolution (it only maps NDC to texels).
-    let frustum = frame.light_projector(1);
+    let frustum = frame.light_projector(1, methods::LightFit::Scene);
     let (near, far) = frame.light_depth_bounds(&frustum);
     let (kind, position, target, fov_deg) = match &scene.light {
         Light::Directional { .. } => ("directional", None, None, None),

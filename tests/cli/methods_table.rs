@@ -1,7 +1,7 @@
 //! The registry's table reaches the command line: a method declared there alone (`vsm`) runs
 //! through `render` and `compare` with its own flags, which `--help` lists with the methods
 //! that use them; its bad values exit 2 naming the flag, and a flag it does not declare is
-//! noted and ignored.
+//! noted and ignored. The shared `--frustum` reaches every shadow-map method and its run record.
 
 use crate::common::{shadowbench, stderr};
 
@@ -67,4 +67,42 @@ fn its_flags_are_checked_listed_and_noted() {
     assert!(text.contains("--filter <K>") && text.contains("Used by: vsm."), "{text}");
     let compare = shadowbench(&["compare", "--help"]);
     assert!(String::from_utf8_lossy(&compare.stdout).contains("--min-variance <V>"));
+}
+
+/// `--frustum`, a parameter every shadow-map method declares: listed by `--help` with its
+/// choices, recorded by the run, and a value outside its choices exits 2 naming it.
+#[test]
+fn the_light_frustum_is_a_flag_recorded_by_the_run() {
+    let help = shadowbench(&["render", "--help"]);
+    let text = String::from_utf8_lossy(&help.stdout);
+    assert!(text.contains("--frustum <FIT>") && text.contains("view-snapped"), "{text}");
+
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("view");
+    let o = shadowbench(&[
+        "render",
+        "--scene",
+        "cage",
+        "--method",
+        "sm",
+        "--frustum",
+        "view",
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--out",
+        out.to_str().expect("utf-8"),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let run: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).expect("run.json"))
+            .expect("JSON");
+    assert_eq!(run["params"]["frustum"], "view");
+
+    let out = dir.path().join("bad");
+    let o = small(&["render", "--method", "sm", "--frustum", "tight"], &out);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--frustum"), "{}", stderr(&o));
+    assert!(!out.exists(), "a refused run writes nothing");
 }

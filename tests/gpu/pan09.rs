@@ -53,7 +53,7 @@ fn parity(scene: &str, rate: u32, map_res: u32, visibility: VisibilityMode) -> O
     let mut cpu_rec = Recorder::default();
     let (cpu_v, cpu_m) =
         Pan09::new(o).expect("valid").run_masks(&frame, &mut cpu_rec).expect("cpu runs");
-    let map = frame.light_depth_map(map_res, &mut Recorder::default());
+    let map = frame.light_depth_map(map_res, o.map.frustum, &mut Recorder::default());
     let gframe = GpuFrame::upload(ctx, &frame, &frame.gbuffer);
     let gmap = GpuDepthMap::upload(ctx, &map);
     // Stage by stage first, so that a drift shows where it starts.

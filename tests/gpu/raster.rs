@@ -6,7 +6,7 @@ use crate::common::load_builtin;
 use glam::DVec2;
 use instrumentation::Recorder;
 use methods::gpu::{GpuContext, GpuDepthMap, GpuFrame};
-use methods::Frame;
+use methods::{Frame, LightFit};
 
 /// Differing ids, and bitwise mismatches among equal ids, of two rasterizations.
 fn compare(cpu_tri: &[u32], gpu_tri: &[u32], same_bits: impl Fn(usize) -> bool) -> (usize, usize) {
@@ -45,17 +45,24 @@ fn gpu_parity_raster_gbuffer_and_depth_map_equal_the_cpu_where_the_triangle_is_t
         assert_eq!(mismatched, 0, "{name}: G-buffer attributes differ for the same triangle");
         assert!(other * 100 < n, "{name}: {other} of {n} pixels keep another triangle");
 
-        for (res, shift) in [(256, DVec2::ZERO), (512, DVec2::new(0.25, -0.25))] {
-            let cpu = frame.jittered_light_depth_map(res, shift, "map", &mut Recorder::default());
-            let gpu = GpuDepthMap::for_run(ctx, &frame, res, shift, "map", &mut rec)
+        for (res, fit, shift) in [
+            (256, LightFit::Scene, DVec2::ZERO),
+            (512, LightFit::Scene, DVec2::new(0.25, -0.25)),
+            (256, LightFit::ViewSnapped, DVec2::ZERO),
+        ] {
+            let cpu =
+                frame.jittered_light_depth_map(res, fit, shift, "map", &mut Recorder::default());
+            let gpu = GpuDepthMap::for_run(ctx, &frame, res, fit, shift, "map", &mut rec)
                 .and_then(|m| m.read(ctx))
                 .expect("depth map on the GPU");
             let (other, mismatched) = compare(&cpu.triangle, &gpu.triangle, |k| {
                 cpu.depth[k].to_bits() == gpu.depth[k].to_bits()
             });
             let n = cpu.triangle.len();
+            let fit = fit.as_str();
             eprintln!(
-                "{name}: map {res} shift {shift}: {other} of {n} texels keep another triangle"
+                "{name}: map {res} {fit} shift {shift}: {other} of {n} texels keep another \
+                 triangle"
             );
             assert_eq!(mismatched, 0, "{name}: map depth differs for the same triangle");
             assert!(other * 100 < n, "{name}: {other} of {n} texels keep another triangle");

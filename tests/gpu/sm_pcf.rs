@@ -15,7 +15,7 @@ use methods::{
     pcf_gems::{GemsPcf, GemsSamples},
     pcf_reeves::{ReevesOptions, ReevesPcf},
     sm::StandardShadowMap,
-    Frame, ShadowMethod, Visibility,
+    Frame, LightFit, ShadowMethod, Visibility,
 };
 
 const SCENES: [&str; 5] = ["plane-square", "cage", "random-10k", "bumpy", "spot-spheres"];
@@ -71,7 +71,7 @@ fn map_options(map_res: u32) -> MapOptions {
 
 /// The CPU's map, the tester the CPU method builds for it, and both uploaded.
 fn uploaded(frame: &Frame<'_>, options: &MapOptions) -> (GpuFrame, GpuDepthMap, DepthTester) {
-    let map = frame.light_depth_map(options.map_res, &mut Recorder::default());
+    let map = frame.light_depth_map(options.map_res, options.frustum, &mut Recorder::default());
     let tester = DepthTester::new(options, map.projector, frame.light_depth_range(&map.projector));
     (GpuFrame::upload(ctx(), frame, &frame.gbuffer), GpuDepthMap::upload(ctx(), &map), tester)
 }
@@ -79,15 +79,17 @@ fn uploaded(frame: &Frame<'_>, options: &MapOptions) -> (GpuFrame, GpuDepthMap, 
 #[test]
 fn gpu_parity_sm_equals_the_cpu_per_pixel() {
     for_each_frame(|frame| {
-        for map_res in [256, 512] {
-            let options = map_options(map_res);
+        for (map_res, frustum) in
+            [(256, LightFit::Scene), (512, LightFit::Scene), (256, LightFit::ViewSnapped)]
+        {
+            let options = MapOptions { frustum, ..map_options(map_res) };
             let (cpu, cpu_counters) = cpu_run(&StandardShadowMap { options }, frame);
             let (gframe, map, tester) = uploaded(frame, &options);
             let mut rec = Recorder::default();
             let (lit, counters) =
                 gpu_sm::depth_test(ctx(), &gframe, &map, &tester, &mut rec).expect("kernel runs");
             let (differ, _) = compare(&cpu.lit, &lit);
-            let what = format!("{} sm map {map_res}", frame.scene.name);
+            let what = format!("{} sm map {map_res} {}", frame.scene.name, frustum.as_str());
             eprintln!("{what}: {differ} pixels differ, {} compares", counters.shadow_map_lookups);
             assert_eq!(differ, 0, "{what}");
             assert_counters(&what, &cpu_counters, &counters);
@@ -139,7 +141,7 @@ fn gpu_parity_pcf_bs_matches_the_cpu_per_pixel() {
                 options.map.map_res = 256;
                 let twin = BrabecSeidelPcf { options, variant };
                 let (cpu, cpu_counters) = cpu_run(&twin, frame);
-                let projector = frame.light_projector(256);
+                let projector = frame.light_projector(256, options.map.frustum);
                 let (near, far) = frame.light_depth_bounds(&projector);
                 let code = GpuDepthCode::new(depth_bits, near, far).expect("valid bits");
                 let tester =
@@ -148,14 +150,15 @@ fn gpu_parity_pcf_bs_matches_the_cpu_per_pixel() {
                 let mut rec = Recorder::default();
                 let (lit, counters) = if variant == Variant::Stratified2x2 {
                     let maps = JITTERS.map(|shift| {
-                        let m = frame.jittered_light_depth_map(256, shift, "map", &mut rec);
+                        let fit = options.map.frustum;
+                        let m = frame.jittered_light_depth_map(256, fit, shift, "map", &mut rec);
                         GpuDepthMap::upload(ctx(), &m)
                     });
                     let maps = [&maps[0], &maps[1], &maps[2], &maps[3]];
                     gpu_pcf::bs_stratified(ctx(), &gframe, maps, &tester, &code, &mut rec)
                         .expect("kernels run")
                 } else {
-                    let m = frame.light_depth_map(256, &mut rec);
+                    let m = frame.light_depth_map(256, options.map.frustum, &mut rec);
                     let map = GpuDepthMap::upload(ctx(), &m);
                     gpu_pcf::bs_fast(ctx(), &gframe, &map, &tester, &code, variant, &mut rec)
                         .expect("kernels run")
@@ -176,8 +179,10 @@ fn gpu_methods_run_end_to_end_with_the_twins_stages() {
     let map = map_options(256);
     type Pair = (Box<dyn ShadowMethod>, Box<dyn ShadowMethod>);
     let reeves = ReevesOptions { map, ..Default::default() };
+    let view = MapOptions { frustum: LightFit::View, ..map };
     let mut methods: Vec<Pair> = vec![
         (Box::new(GpuShadowMap { options: map }), Box::new(StandardShadowMap { options: map })),
+        (Box::new(GpuShadowMap { options: view }), Box::new(StandardShadowMap { options: view })),
         (Box::new(GpuPcf::Reeves { options: reeves }), Box::new(ReevesPcf { options: reeves })),
     ];
     for samples in [GemsSamples::Sixteen, GemsSamples::FourDithered] {

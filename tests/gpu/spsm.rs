@@ -6,7 +6,7 @@ use instrumentation::Recorder;
 use methods::{
     gpu::{spsm as gpu_spsm, GpuContext, GpuFrame},
     spsm::{Spsm, SpsmOptions, TexelFormat},
-    Frame, ShadowMethod,
+    Frame, LightFit, ShadowMethod,
 };
 
 fn options(texel: TexelFormat, rate: u32) -> SpsmOptions {
@@ -157,7 +157,7 @@ fn gpu_parity_conservative_rasterization_texel_for_texel() {
         let Some(scene) = load_builtin(name) else { continue };
         let frame = Frame::new(&scene, 64, 48, &mut Recorder::default());
         for res in [256, 1024] {
-            let light = frame.light_projector(res);
+            let light = frame.light_projector(res, LightFit::Scene);
             let space = LightSpace::new(&light, frame.light_depth_bounds(&light));
             let caster = |t| frame.is_caster(t);
             let mut cpu_counters = Default::default();
@@ -233,7 +233,7 @@ fn gpu_parity_packing_texel_for_texel() {
         let Some(scene) = load_builtin(name) else { continue };
         let frame = Frame::new(&scene, 64, 48, &mut Recorder::default());
         for res in [256, 1024] {
-            let light = frame.light_projector(res);
+            let light = frame.light_projector(res, LightFit::Scene);
             let space = texel::LightSpace::new(&light, frame.light_depth_bounds(&light));
             let caster = |t| frame.is_caster(t);
             let map = raster::rasterize_conservative(

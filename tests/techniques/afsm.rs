@@ -15,7 +15,7 @@ use methods::{
 use methods::{
     pattern::{PatternKind, SamplePattern},
     raster::NO_TRIANGLE,
-    Frame,
+    Frame, LightFit,
 };
 use robust::{orient2d, Coord};
 use scenes::registry::BUILTINS;
@@ -41,7 +41,7 @@ fn xy(p: DVec2) -> Coord<f64> {
 /// caster triangles share, inside the closed projection of one of them: the only place
 /// where `afsm` and `raytrace` may break a tie differently.
 fn on_shared_caster_edge(frame: &Frame<'_>, k: usize) -> bool {
-    let light = frame.light_projector(afsm::LIGHT_IMAGE_RES);
+    let light = frame.light_projector(afsm::LIGHT_IMAGE_RES, LightFit::Scene);
     let own = frame.gbuffer.triangle[k];
     let Some((p, _)) = light.project(frame.gbuffer.position[k]) else { return false };
     let g = &frame.geometry;

@@ -2,7 +2,7 @@
 
 use glam::{DVec2, DVec3};
 use instrumentation::Recorder;
-use methods::{raster::NO_TRIANGLE, Frame};
+use methods::{raster::NO_TRIANGLE, Frame, LightFit};
 use scenes::{
     generators::SpheresParams,
     scene_file::{ObjectDesc, SceneDesc, Shape, Transform},
@@ -130,7 +130,7 @@ fn exact_light_depth_map_of_plane_square_matches_the_analytic_depth() {
     let scene = scenes::load("plane-square").expect("built-in");
     let mut rec = Recorder::default();
     let frame = Frame::new(&scene, 64, 48, &mut rec);
-    let map = frame.light_depth_map(256, &mut rec);
+    let map = frame.light_depth_map(256, LightFit::Scene, &mut rec);
     // Each object is one planar quad of two triangles: its plane and its corners.
     let quads: Vec<_> =
         scene.objects.iter().map(|o| (o.mesh.plane().expect("planar"), o.mesh.clone())).collect();

@@ -12,6 +12,7 @@ mod far_objects;
 mod frame;
 mod ground_truth;
 mod hard_cases;
+mod light_fit;
 mod modules;
 mod motion;
 mod msm;

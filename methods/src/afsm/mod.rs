@@ -51,6 +51,8 @@
 //!
 //! - **Light image.** The light's projector fitted to the scene ([`Frame::light_projector`]) at
 //!   [`LIGHT_IMAGE_RES`]; the resolution only scales coordinates, nothing is discretised.
+//!   `--frustum` is not declared: the light image only bins the samples, so a view-fitted
+//!   frustum would change the cost, never the result.
 //!   Samples outside that image are kept (the reference ignores the spot's cone). A spot light
 //!   projects only points beyond its `near` plane: casters are clipped there, and surface
 //!   points nearer than it are lit. The fitted frustum's `near` is the nearest depth of the
@@ -110,6 +112,7 @@ pub mod samples;
 
 use crate::{
     frame::Frame,
+    light_fit::LightFit,
     method::{MethodError, ShadowMethod, Visibility},
     pattern::{PatternKind, SamplePattern},
     raster::rasterize_nearest_at,
@@ -267,7 +270,7 @@ impl AliasFreeShadowMap {
 /// lie. Spot: `near` no larger than [`SHADOW_OFFSET`] times the magnitude of the light's
 /// position plus its distance to the farthest of those points (max norm), never zero.
 pub fn light_projector(frame: &Frame<'_>) -> Projector {
-    let mut light = frame.light_projector(LIGHT_IMAGE_RES);
+    let mut light = frame.light_projector(LIGHT_IMAGE_RES, LightFit::Scene);
     let g = &frame.gbuffer;
     let visible = || (0..g.triangle.len()).filter(|&k| g.covered(k)).map(|k| g.position[k]);
     match light.kind {

@@ -160,12 +160,13 @@ impl GpuDepthMap {
         }
     }
 
-    /// The light depth map for a GPU run (texel centres moved by `shift` texels, zero for the
-    /// plain map), made on the GPU as the stage `stage`.
+    /// The light depth map for a GPU run through the frustum `fit` gives (texel centres moved
+    /// by `shift` texels, zero for the plain map), made on the GPU as the stage `stage`.
     pub fn for_run(
         ctx: &GpuContext,
         frame: &Frame<'_>,
         res: u32,
+        fit: crate::light_fit::LightFit,
         shift: glam::DVec2,
         stage: &str,
         rec: &mut instrumentation::Recorder,
@@ -174,7 +175,7 @@ impl GpuDepthMap {
         let casters: Vec<u32> = (0..n).map(|t| u32::from(frame.is_caster(t))).collect();
         let corners = ctx.upload("corners", &corner_data(frame));
         let casters = ctx.upload("casters", &casters);
-        let projector = frame.light_projector(res);
+        let projector = frame.light_projector(res, fit);
         let job = RasterJob { projector: &projector, casters_only: true, shift, gbuffer: false };
         let r = rasterize(ctx, frame, &corners, &casters, job, stage, rec)?;
         Ok(Self {

@@ -432,9 +432,10 @@ impl ShadowMethod for GpuPcf {
         let gframe = GpuFrame::for_run(ctx, frame, rec)?;
         let o = *self.map_options();
         let plain_map = |rec: &mut Recorder| {
-            GpuDepthMap::for_run(ctx, frame, o.map_res, DVec2::ZERO, STAGE_LIGHT_DEPTH_MAP, rec)
+            let (res, fit) = (o.map_res, o.frustum);
+            GpuDepthMap::for_run(ctx, frame, res, fit, DVec2::ZERO, STAGE_LIGHT_DEPTH_MAP, rec)
         };
-        let projector = frame.light_projector(o.map_res);
+        let projector = frame.light_projector(o.map_res, o.frustum);
         let tester = DepthTester::new(&o, projector, frame.light_depth_range(&projector));
         rec.warnings.extend(tester.warnings(self.name(), frame, self.sampling()));
         let (lit, counters) = match *self {
@@ -453,7 +454,9 @@ impl ShadowMethod for GpuPcf {
                     let mut maps = Vec::with_capacity(4);
                     for (j, &shift) in JITTERS.iter().enumerate() {
                         let stage = format!("light depth map (jitter {})", j + 1);
-                        maps.push(GpuDepthMap::for_run(ctx, frame, o.map_res, shift, &stage, rec)?);
+                        maps.push(GpuDepthMap::for_run(
+                            ctx, frame, o.map_res, o.frustum, shift, &stage, rec,
+                        )?);
                     }
                     let maps = [&maps[0], &maps[1], &maps[2], &maps[3]];
                     bs_stratified(ctx, &gframe, maps, &tester, &code, rec)?

@@ -215,6 +215,7 @@ impl ShadowMethod for GpuShadowMap {
             ctx,
             frame,
             self.options.map_res,
+            self.options.frustum,
             glam::DVec2::ZERO,
             STAGE_LIGHT_DEPTH_MAP,
             rec,

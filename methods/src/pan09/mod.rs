@@ -466,7 +466,7 @@ impl Pan09 {
         probe: Option<&mut StageOutputs>,
     ) -> Prepared {
         let res = self.options.map.map_res;
-        let map = frame.light_depth_map(res, rec);
+        let map = frame.light_depth_map(res, self.options.map.frustum, rec);
         let light = map.projector;
         let tester = DepthTester::new(&self.options.map, light, frame.light_depth_range(&light));
         rec.warnings.extend(tester.warnings("pan09", frame, Sampling::PixelArea));
@@ -539,7 +539,7 @@ impl Pan09 {
         keep: bool,
     ) -> (Visibility, Option<SubsampleMasks>) {
         let Prepared { facets, pt, tt, mut lit } = prepared;
-        let light = frame.light_projector(self.options.map.map_res);
+        let light = frame.light_projector(self.options.map.map_res, self.options.map.frustum);
         let camera = CameraBasis::new(&frame.camera);
         let scene = visibility::Scene {
             geometry: &frame.geometry,

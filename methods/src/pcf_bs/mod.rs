@@ -291,7 +291,7 @@ impl ShadowMethod for BrabecSeidelPcf {
         if frame.effects.transparency {
             rec.notes.push(format!("{} treats semi-transparent casters as opaque", self.name()));
         }
-        let projector = frame.light_projector(o.map.map_res);
+        let projector = frame.light_projector(o.map.map_res, o.map.frustum);
         let (near, far) = frame.light_depth_bounds(&projector);
         let code = DepthCode::new(o.depth_bits, near, far - near)?;
         let tester = DepthTester::new(&o.map, projector, frame.light_depth_range(&projector));
@@ -302,7 +302,13 @@ impl ShadowMethod for BrabecSeidelPcf {
             Variant::Stratified2x2 => {
                 let maps = [0, 1, 2, 3].map(|j| {
                     let stage = format!("light depth map (jitter {})", j + 1);
-                    frame.jittered_light_depth_map(o.map.map_res, JITTERS[j], &stage, rec)
+                    frame.jittered_light_depth_map(
+                        o.map.map_res,
+                        o.map.frustum,
+                        JITTERS[j],
+                        &stage,
+                        rec,
+                    )
                 });
                 let packed = rec.stages.time("texel packing", || pack_stratified(&maps, &code));
                 compares += rec.stages.time("depth test", || {
@@ -310,7 +316,7 @@ impl ShadowMethod for BrabecSeidelPcf {
                 });
             }
             Variant::Fast2x2 => {
-                let map = frame.light_depth_map(o.map.map_res, rec);
+                let map = frame.light_depth_map(o.map.map_res, o.map.frustum, rec);
                 let codes = rec.stages.time("depth encoding", || encode_map(&map, &code));
                 let packed = rec.stages.time("texel packing", || {
                     pack_neighbourhood(&codes, map.res, code.max_code(), (0, 0))
@@ -320,7 +326,7 @@ impl ShadowMethod for BrabecSeidelPcf {
                 });
             }
             Variant::Fast4x4 => {
-                let map = frame.light_depth_map(o.map.map_res, rec);
+                let map = frame.light_depth_map(o.map.map_res, o.map.frustum, rec);
                 let codes = rec.stages.time("depth encoding", || encode_map(&map, &code));
                 for (pass, &quadrant) in QUADRANTS.iter().enumerate() {
                     let packed =

@@ -166,7 +166,7 @@ impl ShadowMethod for GemsPcf {
         if frame.effects.transparency {
             rec.notes.push(format!("{} treats semi-transparent casters as opaque", self.name()));
         }
-        let map = frame.light_depth_map(self.options.map_res, rec);
+        let map = frame.light_depth_map(self.options.map_res, self.options.frustum, rec);
         let tester =
             DepthTester::new(&self.options, map.projector, frame.light_depth_range(&map.projector));
         rec.warnings.extend(tester.warnings(self.name(), frame, Sampling::PixelCentre));

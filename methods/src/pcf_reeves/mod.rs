@@ -196,7 +196,7 @@ impl ShadowMethod for ReevesPcf {
         if frame.effects.transparency {
             rec.notes.push("pcf-reeves treats semi-transparent casters as opaque".into());
         }
-        let map = frame.light_depth_map(o.map.map_res, rec);
+        let map = frame.light_depth_map(o.map.map_res, o.map.frustum, rec);
         let tester =
             DepthTester::new(&o.map, map.projector, frame.light_depth_range(&map.projector));
         rec.warnings.extend(tester.warnings(self.name(), frame, Sampling::PixelArea));

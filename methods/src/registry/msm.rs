@@ -57,6 +57,7 @@ pub const ENTRY: MethodEntry = MethodEntry {
         &params::CONSTANT_BIAS,
         &params::SLOPE_BIAS,
         &params::MAX_SLOPE,
+        &params::FRUSTUM,
         &FILTER,
         &MOMENT_BIAS,
     ],

@@ -56,6 +56,7 @@ pub const ENTRY: MethodEntry = MethodEntry {
         &params::CONSTANT_BIAS,
         &params::SLOPE_BIAS,
         &params::MAX_SLOPE,
+        &params::FRUSTUM,
         &FILTER,
         &MIN_VARIANCE,
     ],

@@ -69,7 +69,7 @@ impl ShadowMethod for StandardShadowMap {
         if frame.effects.transparency {
             rec.notes.push("sm treats semi-transparent casters as opaque".into());
         }
-        let map = frame.light_depth_map(self.options.map_res, rec);
+        let map = frame.light_depth_map(self.options.map_res, self.options.frustum, rec);
         let tester =
             DepthTester::new(&self.options, map.projector, frame.light_depth_range(&map.projector));
         rec.warnings.extend(tester.warnings(self.name(), frame, Sampling::PixelCentre));

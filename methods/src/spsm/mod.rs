@@ -228,7 +228,7 @@ pub(crate) fn map_frame(
     o: &SpsmOptions,
     frame: &Frame<'_>,
 ) -> (scenes::Projector, texel::LightSpace, DepthTester) {
-    let projector = frame.light_projector(o.map.map_res);
+    let projector = frame.light_projector(o.map.map_res, o.map.frustum);
     let space = texel::LightSpace::new(&projector, frame.light_depth_bounds(&projector));
     let tester = DepthTester::new(&o.map, projector, frame.light_depth_range(&projector));
     (projector, space, tester)
@@ -357,6 +357,7 @@ impl ShadowMethod for Spsm {
         let mut m = serde_json::Map::new();
         m.insert("map_res".into(), o.map.map_res.into());
         m.insert("constant_bias".into(), o.map.constant_bias.into());
+        m.insert("frustum".into(), o.map.frustum.as_str().into());
         m.insert("texel".into(), o.texel.name().into());
         if o.texel == TexelFormat::Packed {
             m.insert("derivative_power".into(), o.derivative_power.into());

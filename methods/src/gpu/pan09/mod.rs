@@ -236,8 +236,16 @@ impl GpuPan09 {
         ctx.describe(rec);
         let gframe = GpuFrame::for_run(ctx, frame, rec)?;
         let res = self.options.map.map_res;
-        let map =
-            GpuDepthMap::for_run(ctx, frame, res, glam::DVec2::ZERO, STAGE_LIGHT_DEPTH_MAP, rec)?;
+        let fit = self.options.map.frustum;
+        let map = GpuDepthMap::for_run(
+            ctx,
+            frame,
+            res,
+            fit,
+            glam::DVec2::ZERO,
+            STAGE_LIGHT_DEPTH_MAP,
+            rec,
+        )?;
         self.run_kernels(ctx, frame, &gframe, &map, rec)
     }
 
