@@ -197,34 +197,29 @@ fn light_track(keys: &[LightKey], rest: &Light) -> Result<Vec<Key<Light>>, Anima
                 false => invalid(name(field), message),
             }
         })?;
+        // Every key of the track is of the scene's kind.
         let previous = track.last().map(|p| &p.value);
-        match (&value, previous) {
-            (Light::Directional { direction }, previous) => {
-                let previous = match previous {
-                    Some(Light::Directional { direction }) => Some(*direction),
-                    _ => None,
-                };
-                check_turn(name("direction"), previous, *direction, "direction", (TRACK, k))?;
+        match value {
+            Light::Directional { direction } => {
+                let previous = previous.and_then(|p| match *p {
+                    Light::Directional { direction } => Some(direction),
+                    Light::Spot { .. } => None,
+                });
+                check_turn(name("direction"), previous, direction, "direction", (TRACK, k))?;
             }
-            (Light::Spot { position, target, .. }, previous) => {
-                check_point(name("position"), *position)?;
-                check_point(name("target"), *target)?;
-                let previous = match previous {
-                    Some(Light::Spot { position, target, .. }) => Some((*position, *target)),
-                    _ => None,
+            Light::Spot { position, target, .. } => {
+                check_point(name("position"), position)?;
+                check_point(name("target"), target)?;
+                let previous = previous.and_then(|p| match *p {
+                    Light::Spot { position, target, .. } => Some((position, target)),
+                    Light::Directional { .. } => None,
+                });
+                let moved = match key.target.is_none() && key.position.is_some() {
+                    true => "position",
+                    false => "target",
                 };
-                let moved = if key.target.is_none() && key.position.is_some() {
-                    "position"
-                } else {
-                    "target"
-                };
-                check_view(
-                    name(moved),
-                    previous,
-                    (*position, *target),
-                    ("position", "target"),
-                    (TRACK, k),
-                )?;
+                let view = (position, target);
+                check_view(name(moved), previous, view, ("position", "target"), (TRACK, k))?;
             }
         }
         track.push(Key { time: key.time, value: value.normalized() });
