@@ -1,5 +1,5 @@
 //! Scenes for the shadow workbench: meshes, materials, lights, cameras, scene files,
-//! procedural generators, mesh loaders, and the effects a scene calls for.
+//! procedural generators, mesh loaders, the effects a scene calls for, and how a scene moves.
 
 pub mod animation;
 mod arrays;

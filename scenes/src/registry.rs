@@ -1,8 +1,16 @@
 //! Built-in scenes, and loading a scene by name or path.
 //!
 //! Every built-in is a [`SceneDesc`], so it can be written out as a scene file and edited
-//! (`shadowbench scenes --toml NAME`). Models (`bunny-plane`) are read from the models folder
-//! ([`crate::models`]).
+//! (`shadowbench scenes --toml NAME`). Models (`bunny-plane`, `bunny-dolly`) are read from the
+//! models folder ([`crate::models`]). Five built-ins move ([`crate::animation`]), each a still
+//! built-in with an `[animation]` of 24 frames, small enough to be measured frame by frame at
+//! 64 x 48: `bumpy-orbit` (the light orbiting the vertical 55 degrees above the horizon, a full
+//! turn in keys 30 degrees apart, over `bumpy`'s spheres and a 128-quad heightfield: a curved
+//! receiver and self-shadowing, cheap for the exact reference), `cage-sweep` (`cage`, its
+//! light swept through 30 degrees along one great circle), `bunny-dolly` (`bunny-plane`, the
+//! eye moved a quarter of the way towards its target), `square-slide` (`plane-square`, the
+//! square moved 5 units across the ground, light and camera fixed) and `cage-ramp` (`cage`,
+//! still, the shadow map's resolution factor ramping from 0.25 to 1).
 //!
 //! Loading is two steps, so that a scene can be measured before it is built: [`describe`]
 //! finds the built-in, reads and parses the scene file, or makes the scene around a mesh file,
@@ -386,6 +394,15 @@ impl Described {
         }
     }
 
+    /// The frames the scene's animation is sampled at by default (`[animation] frames`; 1
+    /// for a still scene and for a glTF scene, whose animations are not read).
+    pub fn frames(&self) -> u32 {
+        match &self.source {
+            Source::Desc { desc, .. } => desc.animation.frames,
+            Source::Gltf(_) => 1,
+        }
+    }
+
     /// What a glTF scene holds that the workbench leaves out (ignored primitives, lights,
     /// cameras, textures, extensions), a sentence each, for the user to be told; empty for
     /// other scenes.
@@ -609,6 +626,7 @@ mod tests {
             match described.resolve() {
                 Ok(scene) => {
                     assert_eq!(described.resolution(), [scene.width, scene.height], "{name}");
+                    assert_eq!(described.frames(), scene.animation.frames(), "{name}");
                     let triangles = triangles.unwrap_or_else(|e| panic!("{name}: {e}"));
                     let real = scene.triangle_count() as u64;
                     // Exact for generated scenes; a bound for one with a mesh file (the

@@ -18,6 +18,11 @@
 //! shape.file = { path = "bunny00.off" }   # beside this file, else in the models folder
 //! transform = { fit_size = 4.0, on_ground = true, rotate_deg = [0.0, 30.0, 0.0] }
 //! material = { color = [0.9, 0.6, 0.3], opacity = 1.0 }
+//! [animation]                       # optional: how the scene moves (see `crate::animation`)
+//! frames = 24
+//! [[animation.light]]
+//! time = 0.0
+//! direction = [-1.0, -2.0, 0.5]
 //! ```
 //!
 //! Camera, light and shape are tables named after their kind (serde's external tagging), so
@@ -37,6 +42,9 @@
 //! a resolved vertex with a coordinate beyond `MAX_COORDINATE`, or geometry whose bounding box
 //! has a diagonal under `MIN_EXTENT`; the message gives the value with as many digits as it
 //! takes to differ from the bound. A resolved scene's directional light has a unit direction.
+//! The `[animation]` table is resolved last, against the built scene
+//! ([`crate::animation::Animation::resolve`]); its errors name the key as written
+//! (`animation.light[2].time`) and its line, as the others do.
 //!
 //! Before any mesh is built, resolution checks every object's parameters and mesh file and
 //! bounds the scene's triangles ([`SceneDesc::triangles`]: generators count theirs from their

@@ -112,6 +112,12 @@ fn bad_animations_are_refused_naming_the_line_and_key() {
         ),
         (
             SPOT,
+            "[[animation.light]]\ntime = 0.0\nposition = [0.0, 0.0, 0.0] # <-\n",
+            "animation.light[0].position",
+            "must differ from the target",
+        ),
+        (
+            SPOT,
             "[[animation.light]]\ntime = 0.0\nposition = [2e15, 9.0, 2.0] # <-\n",
             "animation.light[0].position",
             "beyond the supported range",
@@ -126,7 +132,7 @@ fn bad_animations_are_refused_naming_the_line_and_key() {
             DIRECTIONAL,
             "[[animation.camera]]\ntime = 0.0\neye = [0.0, 0.0, 0.0] # <-\n",
             "animation.camera[0].eye",
-            "differ from eye",
+            "must differ from the target",
         ),
         (
             DIRECTIONAL,

@@ -13,7 +13,7 @@ use std::f64::consts::PI;
 /// the turn between them has no unique path (exactly opposite), or one that rounding decides
 /// (nearly so: slerp divides by the sine of the angle). Consecutive keys of a direction, and
 /// consecutive views of a camera or a spot light, must turn by less.
-pub(crate) const OPPOSITE_TOLERANCE: f64 = 1e-6;
+pub const OPPOSITE_TOLERANCE: f64 = 1e-6;
 
 /// Below this angle (radians) two directions are interpolated linearly and normalised, which
 /// agrees with slerp to rounding there and never divides by a vanishing sine.

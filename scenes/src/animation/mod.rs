@@ -62,11 +62,12 @@
 //! key of another kind than the scene's, a light or camera key making an invalid light or
 //! camera ([`crate::Light::validate`], [`crate::Camera::validate`]), consecutive directions
 //! or up hints opposite to each other, or consecutive views (target - eye, target - position)
-//! opposite, within 1e-6 radians (no unique path between them: between the keys, the eye
-//! would meet the target), an object name that names no object or several, a second track
-//! for one object, a track without keys, a non-finite translation or rotation, a map scale
-//! not positive and finite, and a motion that could put geometry, a camera or a spot light
-//! beyond [`crate::limits`] at any time, not only at the frames sampled (see [`resolve`]).
+//! opposite, within [`OPPOSITE_TOLERANCE`] (1e-6) radians (no unique path between them;
+//! between the keys, the eye would meet the target), an object name that names no object or
+//! several, a second track for one object, a track without keys, a non-finite translation or
+//! rotation, a map scale not positive and finite, and a motion that could put geometry, a
+//! camera or a spot light beyond [`crate::limits`] at any time, not only at the frames
+//! sampled (see [`Animation::resolve`]).
 
 mod desc;
 mod error;
@@ -77,4 +78,5 @@ mod timeline;
 
 pub use desc::{AnimationDesc, CameraKey, LightKey, ObjectKey, ObjectTrack, ScaleKey};
 pub use error::AnimationError;
+pub use interpolate::OPPOSITE_TOLERANCE;
 pub use timeline::{Animation, MAX_FRAMES};

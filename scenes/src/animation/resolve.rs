@@ -103,46 +103,54 @@ fn refuse_given(
     }
 }
 
-/// Refuses a view from `from` to `to` that points opposite to the previous key's, at `key`:
-/// the position and the target, interpolated linearly, would meet between the keys.
+/// The key before key `k` (at least 1) of the track `track`, as written.
+fn before(track: &str, k: usize) -> String {
+    format!("{track}[{}]", k.saturating_sub(1))
+}
+
+/// Refuses a view from `from` to `to` (points named `names`, e.g. `("eye", "target")`) that
+/// points opposite to the previous key's, at `key`: interpolated linearly, the two points
+/// would meet between the keys.
 fn check_view(
     key: String,
     previous: Option<(DVec3, DVec3)>,
-    from: DVec3,
-    to: DVec3,
-    track: &str,
-    k: usize,
+    (from, to): (DVec3, DVec3),
+    names: (&str, &str),
+    (track, k): (&str, usize),
 ) -> Result<(), AnimationError> {
     let Some((p, q)) = previous else { return Ok(()) };
     match (direction_between(p, q), direction_between(from, to)) {
         (Some(a), Some(b)) if opposite(a, b) => Err(invalid(
             key,
             format!(
-                "the view points opposite to `{track}[{}]`'s (within {OPPOSITE_TOLERANCE:e} \
-                 radians): between the keys the two points would meet",
-                k - 1
+                "turns the view ({1} - {0}) opposite to that of `{2}` (within \
+                 {OPPOSITE_TOLERANCE:e} radians): between the keys the {0} would meet the {1}",
+                names.0,
+                names.1,
+                before(track, k)
             ),
         )),
         _ => Ok(()),
     }
 }
 
-/// Refuses a direction opposite to the previous key's, at `key`: no unique turn between them.
+/// Refuses a direction (`name`: `direction`, `up`) opposite to the previous key's, at `key`:
+/// no unique turn between them.
 fn check_turn(
     key: String,
     previous: Option<DVec3>,
     direction: DVec3,
-    track: &str,
-    k: usize,
+    name: &str,
+    (track, k): (&str, usize),
 ) -> Result<(), AnimationError> {
     let Some(p) = previous else { return Ok(()) };
     match (crate::direction::unit(p), crate::direction::unit(direction)) {
         (Some(a), Some(b)) if opposite(a, b) => Err(invalid(
             key,
             format!(
-                "is opposite to `{track}[{}]`'s (within {OPPOSITE_TOLERANCE:e} radians): the turn \
-                 between them has no unique path",
-                k - 1
+                "is opposite to the {name} of `{}` (within {OPPOSITE_TOLERANCE:e} radians): the \
+                 turn between them has no unique path",
+                before(track, k)
             ),
         )),
         _ => Ok(()),
@@ -184,31 +192,34 @@ fn light_track(keys: &[LightKey], rest: &Light) -> Result<Vec<Key<Light>>, Anima
         };
         value.validate().map_err(|(field, message)| {
             // A target that meets the position the key moved names the position.
-            let moved = field == "target" && key.target.is_none() && key.position.is_some();
-            invalid(name(if moved { "position" } else { field }), message)
-        })?;
-        let previous = track.last().map(|p| &p.value);
-        match (&value, previous) {
-            (Light::Directional { direction }, previous) => {
-                let previous = match previous {
-                    Some(Light::Directional { direction }) => Some(*direction),
-                    _ => None,
-                };
-                check_turn(name("direction"), previous, *direction, TRACK, k)?;
+            match field == "target" && key.target.is_none() && key.position.is_some() {
+                true => invalid(name("position"), "must differ from the target"),
+                false => invalid(name(field), message),
             }
-            (Light::Spot { position, target, .. }, previous) => {
-                check_point(name("position"), *position)?;
-                check_point(name("target"), *target)?;
-                let previous = match previous {
-                    Some(Light::Spot { position, target, .. }) => Some((*position, *target)),
-                    _ => None,
+        })?;
+        // Every key of the track is of the scene's kind.
+        let previous = track.last().map(|p| &p.value);
+        match value {
+            Light::Directional { direction } => {
+                let previous = previous.and_then(|p| match *p {
+                    Light::Directional { direction } => Some(direction),
+                    Light::Spot { .. } => None,
+                });
+                check_turn(name("direction"), previous, direction, "direction", (TRACK, k))?;
+            }
+            Light::Spot { position, target, .. } => {
+                check_point(name("position"), position)?;
+                check_point(name("target"), target)?;
+                let previous = previous.and_then(|p| match *p {
+                    Light::Spot { position, target, .. } => Some((position, target)),
+                    Light::Directional { .. } => None,
+                });
+                let moved = match key.target.is_none() && key.position.is_some() {
+                    true => "position",
+                    false => "target",
                 };
-                let moved = if key.target.is_none() && key.position.is_some() {
-                    "position"
-                } else {
-                    "target"
-                };
-                check_view(name(moved), previous, *position, *target, TRACK, k)?;
+                let view = (position, target);
+                check_view(name(moved), previous, view, ("position", "target"), (TRACK, k))?;
             }
         }
         track.push(Key { time: key.time, value: value.normalized() });
@@ -256,16 +267,19 @@ fn camera_track(keys: &[CameraKey], rest: &Camera) -> Result<Vec<Key<Camera>>, A
         };
         value.validate().map_err(|(field, message)| {
             // A target that meets the eye the key moved names the eye.
-            let moved = field == "target" && key.target.is_none() && key.eye.is_some();
-            invalid(name(if moved { "eye" } else { field }), message)
+            match field == "target" && key.target.is_none() && key.eye.is_some() {
+                true => invalid(name("eye"), "must differ from the target"),
+                false => invalid(name(field), message),
+            }
         })?;
         let (eye, target) = (value.eye(), value.target());
         check_point(name("eye"), eye)?;
         check_point(name("target"), target)?;
         let previous = track.last().map(|p| &p.value);
         let moved = if key.target.is_none() && key.eye.is_some() { "eye" } else { "target" };
-        check_view(name(moved), previous.map(|p| (p.eye(), p.target())), eye, target, TRACK, k)?;
-        check_turn(name("up"), previous.map(up_of), up_of(&value), TRACK, k)?;
+        let previous_view = previous.map(|p| (p.eye(), p.target()));
+        check_view(name(moved), previous_view, (eye, target), ("eye", "target"), (TRACK, k))?;
+        check_turn(name("up"), previous.map(up_of), up_of(&value), "up", (TRACK, k))?;
         track.push(Key { time: key.time, value });
     }
     Ok(track)

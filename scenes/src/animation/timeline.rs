@@ -1,7 +1,7 @@
 //! [`Animation`], the resolved animation a [`crate::Scene`] carries: the frame count and the
 //! checked tracks, the times of the frames and the shadow-map resolution factor at each.
-//! Posing a scene at a frame is [`super::pose`]'s; building one from a scene file,
-//! [`super::resolve`]'s.
+//! Posing a scene at a frame is [`Animation::pose`]'s; building one from a scene file,
+//! [`Animation::resolve`]'s.
 
 use super::error::AnimationError;
 use super::interpolate::{sample, Key, Rigid};
