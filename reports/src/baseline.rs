@@ -234,10 +234,12 @@ pub fn load_baseline(dir: &Path) -> Result<Report, BaselineError> {
     Ok(report)
 }
 
-/// The key a run is matched by.
+/// The key a run is matched by: its scene, method, frame and the parameters its label names
+/// (`crate::model::param_label`: the labelled ones and every other one not at its method's
+/// default), so that a run recorded before a parameter was added (which its method then took
+/// at its default) matches the same run recorded after.
 fn key(r: &Row) -> (String, String, u32, u32, String) {
-    let params = serde_json::Value::Object(r.params.clone()).to_string();
-    (r.scene.clone(), r.method.clone(), r.width, r.height, params)
+    (r.scene.clone(), r.method.clone(), r.width, r.height, crate::model::param_label(r))
 }
 
 /// The parameters of a row, as `map_res=1024 rate=16`.
@@ -518,6 +520,22 @@ mod tests {
         let c = compare(&slowed, &report, dir, BaselineOptions::default());
         assert_eq!((c.runs[0].wall_ratio, c.runs[0].contended), (None, true));
         assert!(markdown(&c).contains("| contended |"));
+    }
+
+    #[test]
+    fn a_run_recorded_before_a_parameter_existed_matches_the_same_run_at_its_default() {
+        let report = small_report();
+        let mut earlier = report.clone();
+        for r in &mut earlier.rows {
+            assert_eq!(r.params.remove("frustum"), Some("scene".into()), "{}", r.method);
+        }
+        let c = compare(&report, &earlier, Path::new("earlier"), BaselineOptions::default());
+        assert_eq!((c.runs.len(), c.new_runs, c.dropped_runs), (report.rows.len(), 0, 0));
+        // A value other than the default is another run.
+        let mut other = report.clone();
+        other.rows[0].params.insert("frustum".into(), "view".into());
+        let c = compare(&other, &report, Path::new("earlier"), BaselineOptions::default());
+        assert_eq!((c.new_runs, c.dropped_runs), (1, 1));
     }
 
     #[test]
