@@ -103,7 +103,7 @@ impl<'s> Frame<'s> {
 
     /// Renders the light depth map of the casters at `res x res` through the frustum `fit`
     /// gives, with its sample points moved by `shift` texels (a jittered image plane), as a
-    /// stage timed under `stage`.
+    /// stage timed under `stage`; the frustum's fitting is part of the stage.
     pub fn jittered_light_depth_map(
         &self,
         res: u32,
@@ -112,8 +112,9 @@ impl<'s> Frame<'s> {
         stage: &str,
         rec: &mut Recorder,
     ) -> LightDepthMap {
-        let projector = self.light_projector(res, fit);
+        // The frustum is fitted inside the stage: a view fit reads every pixel of the frame.
         rec.stages.time(stage, || {
+            let projector = self.light_projector(res, fit);
             LightDepthMap::render(
                 &self.geometry,
                 |t| self.is_caster(t),
