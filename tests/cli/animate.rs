@@ -131,3 +131,38 @@ fn bad_frame_counts_are_refused_naming_the_flag_and_nothing_is_written() {
         assert!(!out.exists(), "a refused command writes nothing");
     }
 }
+
+#[test]
+fn a_bad_animation_is_refused_naming_its_key_and_line() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene = r#"
+[camera.perspective]
+eye = [0.0, 5.0, 8.0]
+target = [0.0, 0.0, 0.0]
+fov_y_deg = 45.0
+
+[light.directional]
+direction = [-0.5, -1.0, -0.4]
+
+[[object]]
+shape.plane = { size = 8.0 }
+
+[animation]
+frames = 4
+
+[[animation.light]]
+time = 1.0
+direction = [-0.5, -1.0, -0.4]
+
+[[animation.light]]
+time = 0.5
+direction = [0.5, -1.0, -0.4]
+"#;
+    let file = crate::common::write(dir.path(), "bad.toml", scene);
+    let out = dir.path().join("out");
+    let o = shadowbench(&["animate", "--scene", &file, "--method", "sm", "--out", path(&out)]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("line 21") && err.contains("animation.light[1].time"), "{err}");
+    assert!(!out.exists());
+}
