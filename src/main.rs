@@ -582,12 +582,12 @@ fn describe_scene(name: &str) -> Result<scenes::Described, Failure> {
     Ok(described)
 }
 
+/// A technique, and the reference it wraps when it is one.
+type Techniques = (Box<dyn ShadowMethod>, Option<Box<dyn Reference>>);
+
 /// The technique `method` with `options`, and the reference it wraps when it is one (with
 /// `registry::technique`'s rate and pattern), so that its pixel classes come with its values.
-fn techniques(
-    method: &str,
-    options: &MethodOptions,
-) -> Result<(Box<dyn ShadowMethod>, Option<Box<dyn Reference>>), Failure> {
+fn techniques(method: &str, options: &MethodOptions) -> Result<Techniques, Failure> {
     let technique = analysis::registry::technique(method, options).map_err(method_failure)?;
     let reference = if analysis::registry::REFERENCES.iter().any(|(n, _)| *n == method) {
         let rate = options.rate.unwrap_or(1);
