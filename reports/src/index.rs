@@ -727,47 +727,6 @@ mod tests {
     use crate::motion_charts::fixture::report_in_motion;
 
     #[test]
-    fn only_a_scene_with_runs_in_motion_has_an_in_motion_section() {
-        let (report, images) = report_in_motion();
-        let dir = tempfile::tempdir().expect("tempdir");
-        crate::write::write_report(dir.path(), &report, &images, None).expect("written");
-        let html = std::fs::read_to_string(dir.path().join("index.html")).expect("index");
-        assert_eq!(html.matches("id=\"scene-plane-square-motion\"").count(), 1);
-        assert!(html.contains("href=\"#scene-plane-square-motion\""), "in the contents");
-        // Its table has the run in motion only, linked to its players.
-        let stem = row_stem(&report.rows[0]);
-        assert!(html.contains(&format!("runs/{stem}.html#motion")), "{html}");
-        assert!(!html.contains(&format!("runs/{}.html#motion", row_stem(&report.rows[1]))));
-        assert!(html.contains("<th class=\"num\">temporal error</th>"), "{html}");
-        // Its three charts, there and nowhere else.
-        for kind in ["temporal-vs-time", "temporal-vs-error", "temporal-per-frame"] {
-            let png = format!("plots/{kind}-plane-square.png");
-            assert_eq!(html.matches(&format!("src=\"{png}\"")).count(), 1, "{png}");
-            assert!(dir.path().join(&png).is_file(), "{png}");
-        }
-        for term in ["temporal error", "boundary temporal error", "pixel pairs", "reprojection"] {
-            assert!(html.contains(&format!("<dt>{term}</dt>")), "glossary lacks {term}");
-        }
-        assert!(html.contains("<dt>light-frustum policy</dt>"));
-        let md = std::fs::read_to_string(dir.path().join("report.md")).expect("report.md");
-        assert_eq!(md.matches("### In motion on plane-square").count(), 1, "{md}");
-        assert!(md.contains("| temporal error |"), "{md}");
-        assert!(md.contains("![plane-square: temporal error per frame"), "{md}");
-
-        // The same report still: no section, no chart.
-        let mut still = report.clone();
-        still.rows.iter_mut().for_each(|r| {
-            r.temporal = None;
-            r.per_frame.clear();
-        });
-        let plots = crate::motion_charts::write_plots(dir.path(), &still).expect("none");
-        assert!(plots.is_empty());
-        let page = index_page(&still, &plots, None);
-        assert!(page.scenes.iter().all(|s| s.motion.is_none()));
-        assert!(!crate::write::markdown(&still, &plots).contains("In motion"));
-    }
-
-    #[test]
     fn the_motion_table_gives_the_frustum_policy_a_column_only_where_it_varies() {
         let (report, _) = report_in_motion();
         // A run whose temporal error, mean error and pixel pairs follow `error` (pixel pairs

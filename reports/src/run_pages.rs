@@ -631,7 +631,8 @@ mod tests {
         use crate::motion_charts::fixture::{report_in_motion, FRAMES, FRAME_MS};
         let (report, images) = report_in_motion();
         let dir = tempfile::tempdir().expect("tempdir");
-        crate::write::write_report(dir.path(), &report, &images, None).expect("written");
+        run_files(dir.path(), &report, &images).expect("files written");
+        write_run_pages(dir.path(), &report).expect("pages written");
         let runs = dir.path().join("runs");
         let stem = row_stem(&report.rows[0]);
         // Each kind's frames as the sweep encoded them, numbered from 0000, and no more.
