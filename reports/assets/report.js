@@ -3,6 +3,9 @@
 // filtered by a text box. Run pages: a comparison view with zoom (wheel, + and -), pan (drag)
 // and flipping between images (buttons, arrows or n/p, f flips back to this run), or swiping
 // between this run and another (s: this run left of the pointer, the other right of it).
+// A run in motion's page also has three players (method, reference, error map) driven by one
+// play/pause button and one frame slider, always on the same frame; playing advances a frame
+// every frame delay and loops.
 // Every page marks each image's data-loaded attribute (yes or no) once loaded; opened with
 // #selftest it exercises itself and writes what it found into a pre element of id selftest,
 // one "key: value" line each, for a headless browser's --dump-dom. On index.html the
@@ -179,6 +182,118 @@
     return {state: st, views: views, fit: fit, viewer: viewer};
   }
 
+  // The players of a run in motion: every image of #players shows frame k of its kind
+  // (data-kind) as BASE + KIND-NNNN.png; the slider sets k, playing advances it every
+  // data-frame-ms milliseconds, from the last frame back to the first. Each frame's three
+  // images are fetched ahead of it while playing.
+  function frameName(base, kind, k) {
+    var s = String(k);
+    while (s.length < 4) s = '0' + s;
+    return base + kind + '-' + s + '.png';
+  }
+
+  function frameOf(src) {
+    var m = /-(\d{4,})\.png$/.exec(src || '');
+    return m ? parseInt(m[1], 10) : -1;
+  }
+
+  function setupPlayers() {
+    var box = document.getElementById('players');
+    if (!box) return null;
+    var imgs = Array.prototype.slice.call(box.querySelectorAll('img.player'));
+    var n = Math.max(1, parseInt(box.getAttribute('data-frames'), 10) || 1);
+    var delay = Math.max(10, parseInt(box.getAttribute('data-frame-ms'), 10) || 100);
+    var base = box.getAttribute('data-base');
+    var times = (box.getAttribute('data-times') || '').split(' ');
+    var slider = document.getElementById('frame-slider');
+    var counter = document.getElementById('frame-counter');
+    var button = document.getElementById('play');
+    var rows = Array.prototype.slice.call(document.querySelectorAll('#frame-table tbody tr'));
+    var st = {frame: 0, timer: null};
+    var ahead = [];
+    function show(k) {
+      k = ((k % n) + n) % n;
+      st.frame = k;
+      imgs.forEach(function (img) {
+        img.setAttribute('src', frameName(base, img.getAttribute('data-kind'), k));
+      });
+      slider.value = String(k);
+      counter.textContent = 'frame ' + k + ' / ' + n + (times[k] ? ', t = ' + times[k] : '');
+      rows.forEach(function (r) {
+        r.classList.toggle('current', r.getAttribute('data-frame') === String(k));
+      });
+      if (st.timer !== null) {
+        ahead = imgs.map(function (img) {
+          var next = new Image();
+          next.src = frameName(base, img.getAttribute('data-kind'), (k + 1) % n);
+          return next;
+        });
+      }
+    }
+    function play() {
+      if (st.timer !== null) return;
+      st.timer = setInterval(function () { show(st.frame + 1); }, delay);
+      button.textContent = 'pause';
+    }
+    function pause() {
+      if (st.timer === null) return;
+      clearInterval(st.timer);
+      st.timer = null;
+      button.textContent = 'play';
+    }
+    button.addEventListener('click', function () {
+      if (st.timer === null) play(); else pause();
+    });
+    slider.addEventListener('input', function () { show(parseInt(slider.value, 10)); });
+    show(0);
+    return {state: st, imgs: imgs, slider: slider, button: button, frames: n, delay: delay,
+      ahead: function () { return ahead.length; }};
+  }
+
+  // The players' findings: the slider moves all three images to its frame; playing advances
+  // them, in step; playing on from the last frame loops back to the first. Calls done when
+  // it has written them into out.
+  function playersTest(p, out, done) {
+    function shown() {
+      return p.imgs.map(function (i) { return frameOf(i.getAttribute('src')); });
+    }
+    function same(k) {
+      return p.imgs.length === 3 && shown().every(function (f) { return f === k; }) &&
+        parseInt(p.slider.value, 10) === k && p.state.frame === k;
+    }
+    function slide(k) {
+      p.slider.value = String(k);
+      p.slider.dispatchEvent(new Event('input', {bubbles: true}));
+    }
+    var target = Math.min(3, p.frames - 1);
+    slide(target);
+    out.push('players: slider ' + target + ' -> ' + shown().join(' ') + ' ' +
+      (same(target) ? 'ok' : 'FAILED'));
+    if (p.frames < 2) {
+      out.push('players: one frame, nothing to play');
+      done();
+      return;
+    }
+    slide(0);
+    p.button.click();
+    setTimeout(function () {
+      var playing = p.button.textContent === 'pause';
+      p.button.click();
+      var k = p.state.frame, sync = same(k);
+      out.push('players: play advanced 0 -> ' + k + ', ' + (sync ? 'in sync' : 'out of sync: ' +
+        shown().join(' ')) + (playing && k !== 0 && sync && p.ahead() === 3 ? ' ok' : ' FAILED'));
+      var last = p.frames - 1;
+      slide(last);
+      p.button.click();
+      setTimeout(function () {
+        p.button.click();
+        var j = p.state.frame;
+        out.push('players: loop ' + last + ' -> ' + j + ' ' + (j < last && same(j) ? 'ok' : 'FAILED'));
+        done();
+      }, 1.5 * p.delay);
+    }, 3.5 * p.delay);
+  }
+
   // The layout findings of index.html: "first screen" and "runs tables", each "ok" or
   // "FAILED" with what was measured.
   var SCREEN = {width: 1400, height: 1000};
@@ -229,7 +344,7 @@
       (wide.length ? '; wider than their container: ' + wide.join(', ') : '') + ')');
   }
 
-  function selftest(v) {
+  function selftest(v, players) {
     var out = [];
     layout(out);
     var images = Array.prototype.slice.call(document.images);
@@ -303,10 +418,13 @@
       var h = l.getAttribute('href');
       if (!/^(#|[a-z]+:)/i.test(h)) out.push('link: ' + h.split('#')[0]);
     });
-    var pre = document.createElement('pre');
-    pre.id = 'selftest';
-    pre.textContent = out.join('\n');
-    document.body.appendChild(pre);
+    function write() {
+      var pre = document.createElement('pre');
+      pre.id = 'selftest';
+      pre.textContent = out.join('\n');
+      document.body.appendChild(pre);
+    }
+    if (players) playersTest(players, out, write); else write();
   }
 
   window.addEventListener('load', function () {
@@ -317,7 +435,8 @@
     setupTables();
     var v = setupViewer();
     if (v) v.fit();
-    if (location.hash === '#selftest') selftest(v);
+    var players = setupPlayers();
+    if (location.hash === '#selftest') selftest(v, players);
     document.body.setAttribute('data-checked', 'yes');
   });
 })();

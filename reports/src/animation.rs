@@ -3,9 +3,10 @@
 //! current browser plays in an `<img>`) by [`Apng`], frame by frame, so that an animation of
 //! many frames never holds more than one in memory.
 //!
-//! The records of a run in motion: [`FrameRecord`], one per frame (`frames.csv`), and
-//! [`AnimationRecord`], the whole run with its temporal metrics (`temporal.json`), written by
-//! `animate` and by a report's runs over animated scenes.
+//! The records of a run in motion: [`FrameRecord`], one per frame (`frames.csv`,
+//! [`write_frames_csv`]), and [`AnimationRecord`], the whole run with its temporal metrics
+//! (`temporal.json`), written by `animate` and by a report's runs over animated scenes.
+//! [`frame_delay_ms`] reads an animation's frame delay back, for the players of a run's page.
 //!
 //! APNG through the `png` crate (the encoder `image` uses for still PNGs): its `fcTL`/`fdAT`
 //! chunks are written by the crate; the frame count is declared up front, and a writer that
@@ -42,6 +43,17 @@ pub enum AnimationError {
         /// What was wrong.
         message: String,
     },
+}
+
+impl From<AnimationError> for crate::output::OutputError {
+    /// The same file and message, as the writers of a report's files give them.
+    fn from(e: AnimationError) -> Self {
+        match e {
+            AnimationError::Write { path, message } | AnimationError::Frames { path, message } => {
+                Self::Write { path, message }
+            }
+        }
+    }
 }
 
 /// The panels of one frame placed left to right on a dark background, top-aligned, with a
@@ -201,17 +213,9 @@ pub struct AnimationRecord {
 }
 
 impl AnimationRecord {
-    /// Writes `per_frame` as CSV, a header and a row per frame (empty cells for `None`).
+    /// Writes `per_frame` as CSV ([`write_frames_csv`]).
     pub fn write_frames_csv(&self, path: &Path) -> Result<(), AnimationError> {
-        let err = |e: &dyn std::fmt::Display| AnimationError::Write {
-            path: path.to_owned(),
-            message: e.to_string(),
-        };
-        let mut w = csv::Writer::from_path(path).map_err(|e| err(&e))?;
-        for r in &self.per_frame {
-            w.serialize(r).map_err(|e| err(&e))?;
-        }
-        w.flush().map_err(|e| err(&e))
+        write_frames_csv(path, &self.per_frame)
     }
 
     /// Writes the record as pretty JSON.
@@ -223,6 +227,32 @@ impl AnimationRecord {
         let text = serde_json::to_string_pretty(self).map_err(|e| err(&e))?;
         std::fs::write(path, format!("{text}\n")).map_err(|e| err(&e))
     }
+}
+
+/// Writes `frames` as CSV (`frames.csv`), a header and a row per frame, the columns the
+/// fields of [`FrameRecord`] (empty cells for `None`); no frame, an empty file.
+pub fn write_frames_csv(path: &Path, frames: &[FrameRecord]) -> Result<(), AnimationError> {
+    let err = |e: &dyn std::fmt::Display| AnimationError::Write {
+        path: path.to_owned(),
+        message: e.to_string(),
+    };
+    let mut w = csv::Writer::from_path(path).map_err(|e| err(&e))?;
+    for r in frames {
+        w.serialize(r).map_err(|e| err(&e))?;
+    }
+    w.flush().map_err(|e| err(&e))
+}
+
+/// How long the animated PNG at `path` shows its first frame, in milliseconds (rounded; a
+/// zero denominator is 1/100 s, as the APNG specification has it); `None` for a file that
+/// cannot be read, a still PNG or a delay beyond `u16`.
+pub fn frame_delay_ms(path: &Path) -> Option<u16> {
+    let file = File::open(path).ok()?;
+    let reader = png::Decoder::new(std::io::BufReader::new(file)).read_info().ok()?;
+    let control = reader.info().frame_control?;
+    let den = if control.delay_den == 0 { 100 } else { u32::from(control.delay_den) };
+    let ms = (1000 * u32::from(control.delay_num) + den / 2) / den;
+    u16::try_from(ms).ok()
 }
 
 /// The mean of the values that are there; `None` when none is.
@@ -271,6 +301,11 @@ mod tests {
             firsts.push(buf[0]);
         }
         assert_eq!(firsts, [0, 128, 255]);
+        assert_eq!(frame_delay_ms(&path), Some(100), "the delay reads back");
+        assert_eq!(frame_delay_ms(&dir.path().join("none.png")), None);
+        let still = dir.path().join("still.png");
+        plain(2, 2, 0).save(&still).expect("a still PNG");
+        assert_eq!(frame_delay_ms(&still), None);
     }
 
     #[test]

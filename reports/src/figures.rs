@@ -10,7 +10,8 @@
 //! more charts, a method's series kept together where they fit on one.
 //!
 //! Per scene and family:
-//! - **error against time**: one series per method, device and fixed parameters, its points
+//! - **error against time**: one series per method, device and fixed parameters (the
+//!   light-frustum policy `frustum` among them where it varies, never swept), its points
 //!   joined in the order of the parameter the series sweeps (the one with the most values
 //!   among that method's runs) and labelled with its value (`512`, `32x`; labels that would
 //!   collide are left out); a horizontal bar spans each run's [min, max] time; the scene's
@@ -54,6 +55,11 @@ pub const BUDGETS_MS: [f64; 4] = [10.0, 30.0, 100.0, 300.0];
 
 /// The parameters a series may sweep or hold fixed, in the order they are named.
 const PARAMS: [&str; 4] = ["map_res", "rate", "depth_bits", "pattern"];
+
+/// Parameters that name a series (and a run in [`params_text`]) where they vary but are never
+/// swept along one, their values having no order: the light-frustum policy of the shadow-map
+/// methods.
+const NAMING: [&str; 1] = ["frustum"];
 
 /// A clock's name in an axis, a column or a sentence: `CPU` or `wall`.
 pub fn clock_name(clock: Clock) -> &'static str {
@@ -105,6 +111,9 @@ pub struct PlotFile {
     pub title: String,
     /// File name of the PNG, relative to the report folder (the SVG is beside it).
     pub png: String,
+    /// Whether it draws the scene's runs in motion (`crate::motion_charts`), shown in the
+    /// scene's "In motion" section rather than with its other charts.
+    pub motion: bool,
 }
 
 impl PlotFile {
@@ -123,6 +132,9 @@ pub struct SceneChart {
     pub stem: String,
     /// What to draw.
     pub chart: Chart,
+    /// Said after the title in the figure's caption (the runs a chart leaves out); empty for
+    /// nothing.
+    pub note: String,
 }
 
 /// A run on the Pareto front.
@@ -151,6 +163,9 @@ pub enum Measure {
     Time(Clock),
     /// A parameter of the method (`map_res`, `rate`).
     Param(&'static str),
+    /// A run in motion's temporal error: the mean over its pixel pairs
+    /// (`analysis::temporal`); none for a still scene's run.
+    TemporalError,
 }
 
 impl Measure {
@@ -160,6 +175,7 @@ impl Measure {
             Measure::MeanError => Some(row.metrics.mean_abs_error),
             Measure::Time(clock) => Some(row.time(clock).median),
             Measure::Param(key) => row.params.get(key).and_then(serde_json::Value::as_f64),
+            Measure::TemporalError => row.temporal.as_ref().and_then(|t| t.mean),
         }
     }
 
@@ -173,6 +189,9 @@ impl Measure {
             Measure::Param("map_res") => "shadow map resolution (texels per side)".into(),
             Measure::Param("rate") => "samples per pixel".into(),
             Measure::Param(k) => k.into(),
+            Measure::TemporalError => {
+                "temporal error, mean over pixel pairs (change of lit fraction)".into()
+            }
         }
     }
 }
@@ -245,6 +264,7 @@ pub fn series(rows: &[&Row], x: Measure, y: Measure, adapter: Option<&str>) -> V
         // Parameters with one value over the method's runs are left out of the name.
         let fixed: Vec<String> = PARAMS
             .iter()
+            .chain(&NAMING)
             .filter(|&&k| Some(k) != sweep && !r.param(k).is_empty() && varies(rows, &r.method, k))
             .map(|k| format!("{k}={}", r.param(k)))
             .collect();
@@ -338,10 +358,14 @@ pub fn pareto_rows<'a>(rows: &[&'a Row], clock: Clock) -> Vec<&'a Row> {
         .collect()
 }
 
-/// A row's swept parameters and device, as `map_res=1024 rate=16 device=gpu`.
+/// A row's swept parameters, its light-frustum policy where it is not the method's default,
+/// and its device, as `map_res=1024 rate=16 frustum=view device=gpu`.
 pub fn params_text(r: &Row) -> String {
+    let others = crate::model::other_params(r);
+    let naming = NAMING.iter().filter(|k| others.contains(*k));
     PARAMS
         .iter()
+        .chain(naming)
         .chain(&["device"])
         .filter(|k| !r.param(k).is_empty())
         .map(|k| format!("{k}={}", r.param(k)))
@@ -528,7 +552,9 @@ pub fn charts(report: &Report) -> Vec<SceneChart> {
                             y_label: y.label(),
                             series: lines,
                             pareto,
+                            linear_x: false,
                         },
+                        note: String::new(),
                     });
                 }
             }
@@ -577,7 +603,9 @@ pub fn distribution_chart(report: &Report, scene: &str) -> Option<SceneChart> {
             y_label: "share of compared pixels with |error| > x".into(),
             series: lines,
             pareto: false,
+            linear_x: false,
         },
+        note: String::new(),
     })
 }
 
@@ -599,6 +627,7 @@ pub fn write_plots(dir: &Path, report: &Report) -> Result<Vec<PlotFile>, OutputE
                 scene: c.scene.clone(),
                 title: c.chart.title.clone(),
                 png: format!("plots/{}.png", c.stem),
+                motion: false,
             });
         }
     }
@@ -611,6 +640,7 @@ pub fn write_plots(dir: &Path, report: &Report) -> Result<Vec<PlotFile>, OutputE
                 clock_name(report.clock)
             ),
             png: format!("plots/{BUDGET_STEM}.png"),
+            motion: false,
         });
     }
     // The cost-against-work tables' charts, shown under their tables.

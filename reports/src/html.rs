@@ -216,8 +216,9 @@ pub fn metric_cells(r: &Row) -> Vec<Cell> {
     ]
 }
 
-/// Parameters given a column of their own when they vary over a table (the ones suites sweep).
-const COLUMN_KEYS: [&str; 5] = ["map_res", "rate", "depth_bits", "pattern", "device"];
+/// Parameters given a column of their own when they vary over a table (the ones suites sweep,
+/// and the light-frustum policy of the shadow-map methods).
+const COLUMN_KEYS: [&str; 6] = ["map_res", "rate", "depth_bits", "pattern", "device", "frustum"];
 
 /// Where each parameter of a table's rows is stated.
 #[derive(Debug, Clone, PartialEq, Default)]

@@ -10,7 +10,8 @@
 //! provenance, the contents list, the comparison with a baseline, the scenes, the best error
 //! within each time budget (figure and table), per scene its image grids, its whole front, its
 //! charts and its table of runs (each run linked to its page, `runs/ID.html`,
-//! [`crate::run_pages`]), CPU and GPU side by side, the papers' tables, a glossary of the
+//! [`crate::run_pages`]) and, for a scene with an animation, its section "In motion"
+//! ([`motion_table`], the charts of [`crate::motion_charts`]), CPU and GPU side by side, the papers' tables, a glossary of the
 //! metrics, and what did not run. Images are files beside the page (`plots/*.png`, with the
 //! SVG linked).
 //!
@@ -20,6 +21,13 @@
 //! error metrics, the time on the report's clock (median and its interval, or "no interval"),
 //! the wall time and whether the run was contended. Counts and the other metrics are on the
 //! run pages.
+//!
+//! An "In motion" table has a row per run over the animated scene: the method (linked to the
+//! players of its page), the parameters as in a runs table (the light-frustum policy
+//! `frustum` a column of its own where it varies within a method), the mean error over the
+//! frames, the temporal error, its boundary mean and 95th percentile, the time per frame on
+//! the report's clock and the pixel pairs compared; a column that reads the same in every row
+//! is stated once above the table.
 //!
 //! The style and the script are embedded in the page (`reports/assets/report.css` and
 //! `report.js`): tables sort by clicking a header (numbers as numbers, `n/a` last) and filter
@@ -36,6 +44,7 @@ use crate::html::{
     RUN_TABLE_METRICS,
 };
 use crate::model::{method_label, params_of, row_stem, Report, Row};
+use crate::motion_charts::{frame_count, motion_rows};
 use crate::summary::{
     budget_table, error_text, fronts, measured, ms_text, time_text, verdicts, Front, Measured,
     Verdict,
@@ -118,6 +127,21 @@ pub struct SceneSection {
     pub runs_about: String,
     /// Its runs.
     pub runs: Option<TableView>,
+    /// Its runs in motion, for a scene with an animation.
+    pub motion: Option<MotionSection>,
+}
+
+/// The section "In motion" of an animated scene.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MotionSection {
+    /// Its anchor, `scene-cage-motion`.
+    pub id: String,
+    /// What holds for its table: frames, reference, what the columns measure.
+    pub about: String,
+    /// A row per run in motion.
+    pub table: TableView,
+    /// Its charts.
+    pub plots: Vec<Figure>,
 }
 
 /// CPU and GPU side by side.
@@ -219,7 +243,7 @@ pub fn runs_table(rows: &[&Row], report: &Report) -> TableView {
     let split = ParamSplit::of(rows);
     let mut heads = vec![Head::text("method")];
     heads.extend(split.columns.iter().map(|c| {
-        if matches!(*c, "pattern" | "device") {
+        if matches!(*c, "pattern" | "device" | "frustum") {
             Head::text(*c)
         } else {
             Head::num(*c)
@@ -265,6 +289,106 @@ pub fn runs_table(rows: &[&Row], report: &Report) -> TableView {
     table.notes = split.notes();
     table.state_constant_columns(&constant_candidates());
     table
+}
+
+/// Heads of an "In motion" table's errors, after the parameters; the time per frame
+/// ([`motion_time_head`]) and `pixel pairs` follow them.
+pub const MOTION_COLUMNS: [&str; 4] =
+    ["mean abs error", "temporal error", "boundary temporal error", "temporal p95"];
+
+/// The head of an "In motion" table's time column on `clock`.
+pub fn motion_time_head(clock: &str) -> String {
+    format!("{clock} ms per frame")
+}
+
+/// The table of one scene's runs in motion (see the module documentation).
+pub fn motion_table(rows: &[&Row], report: &Report) -> TableView {
+    let clock = report.clock;
+    let split = ParamSplit::of(rows);
+    let mut heads = vec![Head::text("method")];
+    heads.extend(split.columns.iter().map(|c| {
+        if matches!(*c, "pattern" | "device" | "frustum") {
+            Head::text(*c)
+        } else {
+            Head::num(*c)
+        }
+    }));
+    if split.others {
+        heads.push(Head::text("other"));
+    }
+    heads.extend(MOTION_COLUMNS.iter().map(|&c| Head::num(c)));
+    heads.push(Head::num(motion_time_head(clock_name(clock))));
+    heads.push(Head::num("pixel pairs"));
+    let body: Vec<Vec<Cell>> = rows
+        .iter()
+        .map(|r| {
+            let p = params_of(r);
+            let mut cells =
+                vec![Cell::text(method_label(r)).link(format!("runs/{}.html#motion", row_stem(r)))];
+            cells.extend(
+                split.columns.iter().map(|c| Cell::parsed(p.get(*c).cloned().unwrap_or_default())),
+            );
+            if split.others {
+                cells.push(Cell::text(split.other_params(r)));
+            }
+            let or_na = |v: Option<f64>| v.map_or_else(Cell::na, |v| Cell::num(v, 5));
+            let t = r.temporal.as_ref();
+            let t_of = |f: fn(&analysis::temporal::TemporalMetrics) -> Option<f64>| t.and_then(f);
+            cells.push(if r.metrics.evaluated_pixels == 0 {
+                Cell::na()
+            } else {
+                Cell::num(r.metrics.mean_abs_error, 5)
+            });
+            cells.push(or_na(t_of(|t| t.mean)));
+            cells.push(or_na(t_of(|t| t.boundary_mean)));
+            cells.push(or_na(t_of(|t| t.p95)));
+            let tm = r.time(clock);
+            cells.push(Cell::sorted(time_text(tm), tm.median));
+            cells.push(t.map_or_else(Cell::na, |t| Cell::num(t.pixel_pairs as f64, 0)));
+            cells
+        })
+        .collect();
+    let mut table = TableView::new("runs motion", heads, body);
+    table.notes = split.notes();
+    // The time stays in its column even where the runs tie.
+    let mut constant = MOTION_COLUMNS.to_vec();
+    constant.push("pixel pairs");
+    table.state_constant_columns(&constant);
+    table
+}
+
+/// The section "In motion" of the scene `sc`, whose anchors start with `id`, when it has runs
+/// in motion: its sentence, its table and its charts among `plots`.
+pub fn motion_section(
+    report: &Report,
+    sc: &crate::model::SceneInfo,
+    id: &str,
+    plots: &[PlotFile],
+) -> Option<MotionSection> {
+    let rows = motion_rows(report, &sc.scene);
+    let frames = rows.iter().map(|r| frame_count(r)).max()?;
+    let clock = clock_name(report.clock);
+    let id = format!("{id}-motion");
+    Some(MotionSection {
+        about: format!(
+            "{frames} frames at {}x{} against {}. Mean abs error: over the shadow-only pixels of \
+             every frame; temporal error: the change from one frame to the next that the \
+             reference does not have, |(m_t - m_t-1) - (e_t - e_t-1)|, mean over the pixel \
+             pairs of every pair of consecutive frames, on the boundary pairs, and its 95th \
+             percentile (see the glossary); time: the method's own stages per frame on the \
+             {clock} clock, the median over the frames. Each method links to its run's page, \
+             which plays the run, the reference and the error map frame by frame.",
+            sc.width, sc.height, sc.reference
+        ),
+        table: motion_table(&rows, report),
+        plots: plots
+            .iter()
+            .filter(|p| p.motion && p.scene == sc.scene)
+            .enumerate()
+            .map(|(k, p)| figure(format!("{id}-plot-{k}"), p))
+            .collect(),
+        id,
+    })
 }
 
 /// A scene's whole Pareto front as a table: method, parameters, error, time on the clock with
@@ -387,7 +511,7 @@ pub fn index_page(report: &Report, plots: &[PlotFile], baseline: Option<&Compari
                 front: fronts.iter().find(|f| f.scene == sc.scene).map(|f| front_table(f, &clock)),
                 plots: plots
                     .iter()
-                    .filter(|p| p.scene == sc.scene)
+                    .filter(|p| p.scene == sc.scene && !p.motion)
                     .enumerate()
                     .map(|(k, p)| figure(format!("{id}-plot-{k}"), p))
                     .collect(),
@@ -409,6 +533,7 @@ pub fn index_page(report: &Report, plots: &[PlotFile], baseline: Option<&Compari
                     },
                 ),
                 runs: (!rows.is_empty()).then(|| runs_table(&rows, report)),
+                motion: motion_section(report, sc, &id, plots),
                 name: sc.scene.clone(),
                 id,
             }
@@ -501,6 +626,10 @@ fn contents(
         }
         l.children.extend(s.plots.iter().map(|p| Link::to(&p.id, &p.title)));
         l.children.push(Link::to(&format!("{}-runs", s.id), "runs"));
+        if let Some(m) = &s.motion {
+            l.children.push(Link::to(&m.id, "In motion"));
+            l.children.extend(m.plots.iter().map(|p| Link::to(&p.id, &p.title)));
+        }
         c.push(l);
     }
     if !crate::devices::pairs(&report.rows).is_empty() {
@@ -590,4 +719,79 @@ fn devices_view(report: &Report) -> Option<DevicesView> {
             .is_some_and(crate::devices::is_software_adapter),
         table,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motion_charts::fixture::report_in_motion;
+
+    #[test]
+    fn the_motion_table_gives_the_frustum_policy_a_column_only_where_it_varies() {
+        let (report, _) = report_in_motion();
+        // A run whose temporal error, mean error and pixel pairs follow `error` (pixel pairs
+        // 300 at 0.01).
+        let run = |method: &str, frustum: Option<&str>, error: f64| {
+            let mut r = report.rows[0].clone();
+            r.method = method.into();
+            r.params.remove("frustum");
+            if let Some(f) = frustum {
+                r.params.insert("frustum".into(), f.into());
+            }
+            r.metrics.mean_abs_error = 0.1 + error;
+            crate::motion_charts::fixture::put_in_motion(&mut r, error, 4);
+            if let Some(t) = r.temporal.as_mut() {
+                t.pixel_pairs = (30_000.0 * error).round() as u64;
+            }
+            r
+        };
+        let heads = |t: &TableView| t.heads.iter().map(|h| h.text.clone()).collect::<Vec<_>>();
+        let rows = [
+            run("sm", Some("scene"), 0.01),
+            run("sm", Some("view"), 0.03),
+            run("sm", Some("view-snapped"), 0.02),
+            run("pcf-gems4", Some("scene"), 0.005),
+            run("afsm", None, 0.0),
+        ];
+        let refs: Vec<&Row> = rows.iter().collect();
+        let t = motion_table(&refs, &report);
+        let h = heads(&t);
+        assert_eq!(h[..2], ["method", "frustum"], "{h:?}");
+        assert_eq!(
+            h[h.len() - 6..],
+            [
+                "mean abs error",
+                "temporal error",
+                "boundary temporal error",
+                "temporal p95",
+                "CPU ms per frame",
+                "pixel pairs"
+            ]
+            .map(String::from),
+            "{h:?}"
+        );
+        let column: Vec<&str> = t.rows.iter().map(|r| r[1].text.as_str()).collect();
+        assert_eq!(column, ["scene", "view", "view-snapped", "scene", ""]);
+        let temporal: Vec<Option<f64>> = t.rows.iter().map(|r| r[h.len() - 5].value).collect();
+        assert_eq!(temporal, [Some(0.01), Some(0.03), Some(0.02), Some(0.005), Some(0.0)]);
+        assert!(t.rows[1][0].href.as_deref().is_some_and(|h| h.ends_with(".html#motion")));
+        // One policy for sm, none elsewhere: no column, sm's policy stated above the table.
+        let same = [run("sm", Some("scene"), 0.01), run("afsm", None, 0.0)];
+        let refs: Vec<&Row> = same.iter().collect();
+        let t = motion_table(&refs, &report);
+        assert!(!heads(&t).contains(&"frustum".to_owned()), "{:?}", heads(&t));
+        assert!(t
+            .notes
+            .iter()
+            .any(|n| n.code.as_deref() == Some("sm") && n.text.contains("frustum=scene")));
+        // No policy anywhere: no column, no mention.
+        let none = [run("sm", None, 0.01), run("sm", None, 0.01)];
+        let refs: Vec<&Row> = none.iter().collect();
+        let t = motion_table(&refs, &report);
+        assert!(!heads(&t).contains(&"frustum".to_owned()));
+        assert!(t.notes.iter().all(|n| !n.text.contains("frustum")));
+        // The pixel pairs, the same for every run, are stated once above the table.
+        assert!(!heads(&t).contains(&"pixel pairs".to_owned()));
+        assert!(t.notes.iter().any(|n| n.text.contains("pixel pairs: 300")), "{:?}", t.notes);
+    }
 }

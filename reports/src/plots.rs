@@ -1,5 +1,6 @@
-//! Plots of a report (plotters, PNG and SVG): log-log charts of one measure against another,
-//! what to draw given by the caller (the report's charts: `figures`). Each series is a line
+//! Plots of a report (plotters, PNG and SVG): log-log charts of one measure against another
+//! (or, along frames, a linear x axis against a log y axis: [`Chart::linear_x`]), what to draw
+//! given by the caller (the report's charts: `figures`, `motion_charts`). Each series is a line
 //! through its points in the order of the parameter it sweeps, each point may carry a label
 //! (the parameter's value) and a horizontal bar (the spread of a time), CPU runs are marked
 //! with circles and GPU runs with triangles, and a chart may set its series against the
@@ -17,6 +18,7 @@
 //! drawn at [`LOG_FLOOR`] and the chart says so in its caption.
 
 use crate::output::OutputError;
+use plotters::coord::ranged1d::ValueFormatter;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;
@@ -97,6 +99,8 @@ pub struct Chart {
     pub series: Vec<Series>,
     /// Draw the Pareto front of all points (minimise both x and y).
     pub pareto: bool,
+    /// A linear x axis (frame numbers) instead of a logarithmic one; y is always logarithmic.
+    pub linear_x: bool,
 }
 
 /// The Pareto front of `points` (minimising both coordinates), sorted by x.
@@ -322,13 +326,14 @@ fn text_width(font: &FontDesc<'_>, text: &str) -> u32 {
 fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, chart: &Chart) -> Result<(), String> {
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
     root.fill(&WHITE).map_err(e)?;
-    let floor = |v: f64| v.max(LOG_FLOOR);
     let points = || chart.series.iter().flat_map(|s| &s.points);
-    let floored = points().any(|p| p.x <= 0.0 || p.y <= 0.0);
-    let (x0, x1) = log_range(points().flat_map(|p| {
-        let (a, b) = p.x_span.unwrap_or((p.x, p.x));
-        [p.x, a, b]
-    }));
+    let xs = || {
+        points().flat_map(|p| {
+            let (a, b) = p.x_span.unwrap_or((p.x, p.x));
+            [p.x, a, b]
+        })
+    };
+    let floored = points().any(|p| (!chart.linear_x && p.x <= 0.0) || p.y <= 0.0);
     let (y0, y1) = log_range(points().map(|p| p.y));
     let caption = if floored {
         format!("{} (values <= 0 drawn at {LOG_FLOOR:e})", chart.title)
@@ -337,24 +342,81 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, chart: &Chart) -> Resu
     };
     let (w, _) = root.dim_in_pixel();
     let (plot_area, legend_area) = root.split_horizontally(w.saturating_sub(LEGEND_WIDTH));
-    let (xb, xl) = log_ticks(x0, x1);
     let (yb, yl) = log_ticks(y0, y1);
-    let mut c = ChartBuilder::on(&plot_area)
+    let y = (y0..y1).log_scale().with_key_points(yb).with_light_points(yl);
+    let mut builder = ChartBuilder::on(&plot_area);
+    builder
         .margin(12)
         .caption(caption, ("sans-serif", 18))
         .x_label_area_size(50)
-        .y_label_area_size(80)
-        .build_cartesian_2d(
-            (x0..x1).log_scale().with_key_points(xb).with_light_points(xl),
-            (y0..y1).log_scale().with_key_points(yb).with_light_points(yl),
-        )
-        .map_err(e)?;
+        .y_label_area_size(80);
+    let areas = Areas { root: &root, legend: &legend_area };
+    if chart.linear_x {
+        let (x0, x1) = linear_range(xs());
+        let c = builder.build_cartesian_2d(x0..x1, y).map_err(e)?;
+        plot(&areas, c, chart, |v| v, linear_tick)
+    } else {
+        let (x0, x1) = log_range(xs());
+        let (xb, xl) = log_ticks(x0, x1);
+        let x = (x0..x1).log_scale().with_key_points(xb).with_light_points(xl);
+        let c = builder.build_cartesian_2d(x, y).map_err(e)?;
+        plot(&areas, c, chart, |v| v.max(LOG_FLOOR), |v| tick(*v))
+    }
+}
+
+/// The range a linear axis gives `values`, with a margin of 3 % of the span on each side
+/// (half a unit when all values are equal).
+fn linear_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (lo, hi) =
+        values.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x)));
+    if !lo.is_finite() {
+        return (0.0, 1.0);
+    }
+    let margin = if hi > lo { 0.03 * (hi - lo) } else { 0.5 };
+    (lo - margin, hi + margin)
+}
+
+/// A tick label of a linear axis: whole numbers without decimals, others with up to two.
+fn linear_tick(v: &f64) -> String {
+    if (v - v.round()).abs() < 1e-9 {
+        format!("{v:.0}")
+    } else {
+        let s = format!("{v:.2}");
+        s.trim_end_matches('0').trim_end_matches('.').to_owned()
+    }
+}
+
+/// The drawing areas of a chart: the whole image (for the point labels) and the legend's.
+struct Areas<'a, DB: DrawingBackend> {
+    root: &'a DrawingArea<DB, Shift>,
+    legend: &'a DrawingArea<DB, Shift>,
+}
+
+/// Draws the mesh, the series, the Pareto front, the point labels and the legend into the
+/// chart `c`, its x axis linear or logarithmic: `fx` places an x value on it (the floor of a
+/// log axis) and `x_tick` labels its ticks. The y axis is logarithmic.
+fn plot<DB, X, Y>(
+    areas: &Areas<'_, DB>,
+    mut c: ChartContext<'_, DB, Cartesian2d<X, Y>>,
+    chart: &Chart,
+    fx: fn(f64) -> f64,
+    x_tick: fn(&f64) -> String,
+) -> Result<(), String>
+where
+    DB: DrawingBackend,
+    X: Ranged<ValueType = f64> + ValueFormatter<f64>,
+    Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    let fy = |v: f64| v.max(LOG_FLOOR);
+    let at = |x: f64, y: f64| (fx(x), fy(y));
+    let points = || chart.series.iter().flat_map(|s| &s.points);
     c.configure_mesh()
         .x_desc(chart.x_label.as_str())
         .y_desc(chart.y_label.as_str())
         .label_style(("sans-serif", 13))
         .axis_desc_style(("sans-serif", 15))
-        .x_label_formatter(&|v| tick(*v))
+        .x_label_formatter(&x_tick)
         .y_label_formatter(&|v| tick(*v))
         .draw()
         .map_err(e)?;
@@ -369,7 +431,7 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, chart: &Chart) -> Resu
         .chain(chart.series.iter().zip(&colours).filter(|(s, _)| s.marker != Marker::Context));
     let mut front_drawn = false;
     for (s, &colour) in order {
-        let pts: Vec<(f64, f64)> = s.points.iter().map(|p| (floor(p.x), floor(p.y))).collect();
+        let pts: Vec<(f64, f64)> = s.points.iter().map(|p| at(p.x, p.y)).collect();
         if s.marker == Marker::Context {
             c.draw_series(pts.iter().map(|&p| Circle::new(p, 3, colour.filled()))).map_err(e)?;
             legend.push((s.label.clone(), colour, Some(Marker::Context)));
@@ -377,7 +439,7 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, chart: &Chart) -> Resu
         }
         // The front over the context and under the coloured series, whose points stay in view.
         if chart.pareto && !front_drawn {
-            let all: Vec<(f64, f64)> = points().map(|p| (floor(p.x), floor(p.y))).collect();
+            let all: Vec<(f64, f64)> = points().map(|p| at(p.x, p.y)).collect();
             c.draw_series(LineSeries::new(pareto_front(&all), BLACK.mix(0.8).stroke_width(3)))
                 .map_err(e)?;
             front_drawn = true;
@@ -385,9 +447,9 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, chart: &Chart) -> Resu
         c.draw_series(LineSeries::new(pts.clone(), colour.stroke_width(2))).map_err(e)?;
         for p in &s.points {
             if let Some((a, b)) = p.x_span {
-                let y = floor(p.y);
+                let y = fy(p.y);
                 c.draw_series(std::iter::once(PathElement::new(
-                    vec![(floor(a), y), (floor(b), y)],
+                    vec![(fx(a), y), (fx(b), y)],
                     colour.stroke_width(1),
                 )))
                 .map_err(e)?;
@@ -406,13 +468,13 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, chart: &Chart) -> Resu
         legend.push((s.label.clone(), colour, Some(s.marker)));
     }
     if chart.pareto && !front_drawn {
-        let all: Vec<(f64, f64)> = points().map(|p| (floor(p.x), floor(p.y))).collect();
+        let all: Vec<(f64, f64)> = points().map(|p| at(p.x, p.y)).collect();
         c.draw_series(LineSeries::new(pareto_front(&all), BLACK.mix(0.8).stroke_width(3)))
             .map_err(e)?;
     }
     // Point labels where they overlap neither another label nor a point.
     let font = ("sans-serif", 11).into_font();
-    let pixel = |p: &Point| c.backend_coord(&(floor(p.x), floor(p.y)));
+    let pixel = |p: &Point| c.backend_coord(&at(p.x, p.y));
     let markers: Vec<(i32, i32)> = points().map(pixel).collect();
     let labelled: Vec<(&Point, RGBAColor)> = chart
         .series
@@ -434,18 +496,14 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, chart: &Chart) -> Resu
     {
         if let Some(r) = place {
             let style = font.clone().color(&colour.mix(0.9));
-            root.draw(&Text::new(p.label.clone(), (r.x0, r.y0), style)).map_err(e)?;
+            areas.root.draw(&Text::new(p.label.clone(), (r.x0, r.y0), style)).map_err(e)?;
         }
     }
     if chart.pareto {
-        legend.push((
-            "Pareto front (no run is both faster and more accurate)".into(),
-            BLACK.into(),
-            None,
-        ));
+        legend.push(("Pareto front (no run is better on both axes)".into(), BLACK.into(), None));
     }
-    draw_legend(&legend_area, &legend).map_err(e)?;
-    root.present().map_err(e)
+    draw_legend(areas.legend, &legend).map_err(e)?;
+    areas.root.present().map_err(e)
 }
 
 /// The legend, one entry per series, in its own area beside the plot (never over the data);
@@ -578,6 +636,7 @@ mod tests {
             y_label: "y".into(),
             series: list,
             pareto: true,
+            linear_x: false,
         };
         let colours = series_colours(&chart);
         assert_eq!(colours[3], CONTEXT_GREY.to_rgba());
@@ -591,6 +650,36 @@ mod tests {
         coloured.dedup();
         assert_eq!(coloured.len(), MAX_SERIES, "no colour twice");
         assert!(!coloured.contains(&(190, 190, 190)) && !coloured.contains(&(0, 0, 0)));
+    }
+
+    #[test]
+    fn a_frame_axis_is_linear_and_labelled_with_whole_numbers() {
+        assert_eq!(linear_range([1.0, 3.0, 2.0].into_iter()), (0.94, 3.06));
+        assert_eq!(linear_range([2.0].into_iter()), (1.5, 2.5));
+        assert_eq!(linear_range(std::iter::empty()), (0.0, 1.0));
+        assert_eq!(
+            (linear_tick(&0.0), linear_tick(&12.0), linear_tick(&2.5)),
+            ("0".to_owned(), "12".to_owned(), "2.5".to_owned())
+        );
+        let dir = tempfile::tempdir().expect("tempdir");
+        let chart = Chart {
+            title: "per frame".into(),
+            x_label: "frame".into(),
+            y_label: "temporal error".into(),
+            series: vec![Series {
+                label: "sm".into(),
+                marker: Marker::Circle,
+                points: (1..6).map(|k| Point::at(f64::from(k), 0.01 * f64::from(k))).collect(),
+            }],
+            pareto: false,
+            linear_x: true,
+        };
+        write_chart(&dir.path().join("f"), &chart).expect("writes");
+        let svg = std::fs::read_to_string(dir.path().join("f.svg")).expect("an SVG");
+        // A log axis labels 1, 2 and 5 only; the frame axis labels every frame.
+        let labels: Vec<&str> = svg.lines().map(str::trim).collect();
+        assert!(["1", "2", "3", "4", "5"].iter().all(|t| labels.contains(t)), "linear ticks");
+        assert!(!svg.contains("drawn at"), "no value is floored");
     }
 
     #[test]
@@ -619,6 +708,7 @@ mod tests {
                 },
             ],
             pareto: true,
+            linear_x: false,
         };
         write_chart(&dir.path().join("c"), &chart).expect("writes");
         let png = image::open(dir.path().join("c.png")).expect("a PNG");

@@ -14,6 +14,18 @@
 //! fraction (`scenes/SCENE.reference.png`, and `.exr`) and the pixel classes
 //! (`scenes/SCENE.classes.png`).
 //!
+//! A run in motion (over an animated scene, [`crate::motion_charts::in_motion`]) also has
+//! ([`motion_files`]):
+//!
+//! - `runs/ID/frames/method-NNNN.png`, `runs/ID/frames/reference-NNNN.png` and
+//!   `runs/ID/frames/error-NNNN.png` (NNNN the frame from 0000): each frame's shaded method
+//!   image, shaded reference and error map, as the sweep encoded them ([`MotionFrames`]);
+//! - `runs/ID.animation.png`: the three side by side, animated (APNG,
+//!   [`crate::animation::Apng`]), each frame shown for the sweep's frame delay;
+//! - `runs/ID.frames.csv`: a row per frame ([`crate::animation::FrameRecord`]: errors, the
+//!   temporal error of the pair ending there, times);
+//! - `runs/ID.temporal.json`: its temporal metrics (`analysis::temporal::TemporalMetrics`).
+//!
 //! A page is rendered by the `run.html` template (`reports/templates/`, [`crate::templates`])
 //! from a [`RunPage`] built from the report. It shows the run's parameters, metrics (the
 //! headline and each pixel class, every count), its times on both clocks (median, interval
@@ -27,10 +39,25 @@
 //! right of it). `ID.html#view=N` opens the page on view N (1 the reference, 2 the error
 //! map, 3 the class map). Opened as `ID.html#selftest`, the page flips, zooms, pans and swipes itself
 //! and writes what it found into `<pre id="selftest">`.
+//!
+//! A run in motion's page has a section "In motion" (`#motion`): three players side by side,
+//! the method, the reference and the error map, each an `<img>` showing
+//! `ID/frames/KIND-NNNN.png`, driven together by one play/pause button and one frame slider
+//! so that all three always show the same frame; playing advances a frame every frame delay
+//! (the delay of `ID.animation.png`, read when the page is written; [`DEFAULT_FRAME_MS`]
+//! without it) and loops. A counter says `frame i / N` (frames numbered from 0) and the
+//! frame's time; its temporal metrics and a table of its frames follow, the frame shown
+//! highlighted. The self-test sets the slider and checks that the three images name that
+//! frame, then plays and checks that the frame advanced, the three in step, and that playing
+//! on from the last frame comes back to the first.
 
+use crate::animation::{frame_delay_ms, side_by_side, write_frames_csv, Apng};
 use crate::figures::clock_name;
 use crate::html::{anchor, metric_cells, Cell, METRIC_COLUMNS};
-use crate::model::{param_label, params_of, row_stem, scene_stem, Images, Report, Row};
+use crate::model::{
+    param_label, params_of, row_stem, scene_stem, Images, MotionFrames, Report, Row,
+};
+use crate::motion_charts::{frame_count, in_motion};
 use crate::output::{write_run_json, write_visibility_exr, OutputError};
 use crate::summary::{full_time_text, ms_text};
 use crate::templates::{Pages, TemplateError};
@@ -162,6 +189,55 @@ pub struct RunPage {
     pub counters: Vec<(String, Cell)>,
     /// The method's notes.
     pub notes: Vec<String>,
+    /// A run in motion's players, temporal metrics and frames; `None` for a still run.
+    pub motion: Option<MotionView>,
+}
+
+/// How long a player shows each frame when the run's animation does not say, milliseconds
+/// (`animate`'s default).
+pub const DEFAULT_FRAME_MS: u16 = 100;
+
+/// The kinds of a run in motion's frames, in the order the players show them.
+pub const FRAME_KINDS: [&str; 3] = ["method", "reference", "error"];
+
+/// The file of frame `k` of kind `kind` (one of [`FRAME_KINDS`]) of the run `stem`, relative
+/// to `runs/`: `ID/frames/KIND-NNNN.png`.
+pub fn frame_file(stem: &str, kind: &str, k: usize) -> String {
+    format!("{stem}/frames/{kind}-{k:04}.png")
+}
+
+/// One player of a run in motion.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Player {
+    /// What it shows: `method`, `reference` or `error` ([`FRAME_KINDS`]).
+    pub kind: &'static str,
+    /// Its first frame, relative to the page.
+    pub src: String,
+    /// What it is.
+    pub label: String,
+}
+
+/// A run in motion on its page: the players, the temporal metrics and the frames.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MotionView {
+    /// Frames.
+    pub frames: usize,
+    /// The last frame's number, the slider's maximum.
+    pub last: usize,
+    /// How long a player shows each frame, milliseconds.
+    pub frame_ms: u16,
+    /// The frames' folder relative to the page, `ID/frames/`.
+    pub base: String,
+    /// Method, reference and error map.
+    pub players: Vec<Player>,
+    /// Each frame's time in the animation, separated by spaces, for the frame counter.
+    pub times: String,
+    /// The temporal metrics, every count included.
+    pub metrics: Vec<(String, Cell)>,
+    /// The frame table's heads after `frame`.
+    pub heads: Vec<String>,
+    /// A row per frame, named with its number.
+    pub rows: Vec<NamedRow>,
 }
 
 /// A time in milliseconds as a cell.
@@ -272,7 +348,110 @@ pub fn run_page_model(report: &Report, row: usize) -> RunPage {
             .map(|(k, v)| (k.to_owned(), Cell::num(v as f64, 0)))
             .collect(),
         notes: r.notes.clone(),
+        motion: motion_view(r),
     }
+}
+
+/// A number to `decimals` decimals, trailing zeros dropped (`0.125`, `2`).
+fn short(v: f64, decimals: usize) -> String {
+    let s = format!("{v:.decimals$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_owned()
+    } else {
+        s
+    }
+}
+
+/// A run in motion's part of its page ([`DEFAULT_FRAME_MS`] its delay); `None` for a still
+/// run or one without frames.
+fn motion_view(r: &Row) -> Option<MotionView> {
+    let t = r.temporal.as_ref().filter(|_| in_motion(r))?;
+    let frames = frame_count(r);
+    if frames == 0 {
+        return None;
+    }
+    let stem = row_stem(r);
+    let labels = [
+        "this run".to_owned(),
+        format!("reference ({})", reference_text(r)),
+        format!("|error|, 0 to {} (magma)", analysis::error_map::DEFAULT_MAX_ERROR),
+    ];
+    let players = FRAME_KINDS
+        .iter()
+        .zip(labels)
+        .map(|(&kind, label)| Player { kind, src: frame_file(&stem, kind, 0), label })
+        .collect();
+    let or_na = |v: Option<f64>| v.map_or_else(Cell::na, |v| Cell::num(v, 5));
+    let mut metrics = vec![
+        ("frames".to_owned(), Cell::num(frames as f64, 0)),
+        ("pixel pairs".to_owned(), Cell::num(t.pixel_pairs as f64, 0)),
+        ("temporal error".to_owned(), or_na(t.mean)),
+        ("temporal p95".to_owned(), or_na(t.p95)),
+        ("boundary pixel pairs".to_owned(), Cell::num(t.boundary_pairs as f64, 0)),
+        ("boundary temporal error".to_owned(), or_na(t.boundary_mean)),
+        ("boundary temporal p95".to_owned(), or_na(t.boundary_p95)),
+    ];
+    metrics.extend(t.per_class.iter().map(|(class, c)| {
+        let text = c.mean.map_or_else(|| "n/a".to_owned(), |m| format!("{m:.5}"));
+        (
+            format!("{class} temporal error"),
+            Cell { text: format!("{text} over {} pairs", c.pairs), value: c.mean, href: None },
+        )
+    }));
+    metrics.push((
+        "pixel pairing".to_owned(),
+        Cell::text(if t.reprojected {
+            "reprojected (the camera or the geometry moved)"
+        } else {
+            "each pixel with itself"
+        }),
+    ));
+    let maps: Vec<Option<u32>> = r.per_frame.iter().map(|f| f.map_res).collect();
+    let map_varies = maps.iter().any(|m| *m != maps[0]);
+    let cpu = r.per_frame.iter().any(|f| f.method_cpu_ms.is_some());
+    let mut heads = vec!["time".to_owned()];
+    if map_varies {
+        heads.push("map_res".into());
+    }
+    heads.extend(
+        ["mean abs error", "boundary error", "temporal error", "pixel pairs", "wall ms"]
+            .map(String::from),
+    );
+    if cpu {
+        heads.push("CPU ms".into());
+    }
+    let rows = r
+        .per_frame
+        .iter()
+        .map(|f| {
+            let mut cells = vec![Cell::sorted(short(f.time, 4), f.time)];
+            if map_varies {
+                cells.push(f.map_res.map_or_else(Cell::na, |m| Cell::num(f64::from(m), 0)));
+            }
+            cells.extend([
+                or_na(f.mean_abs_error),
+                or_na(f.boundary_mean_abs_error),
+                or_na(f.temporal_error),
+                Cell::num(f.temporal_pairs as f64, 0),
+                ms(f.method_ms),
+            ]);
+            if cpu {
+                cells.push(f.method_cpu_ms.map_or_else(Cell::na, ms));
+            }
+            NamedRow { name: f.frame.to_string(), cells }
+        })
+        .collect();
+    Some(MotionView {
+        frames,
+        last: frames - 1,
+        frame_ms: DEFAULT_FRAME_MS,
+        base: format!("{stem}/frames/"),
+        players,
+        times: r.per_frame.iter().map(|f| short(f.time, 4)).collect::<Vec<_>>().join(" "),
+        metrics,
+        heads,
+        rows,
+    })
 }
 
 /// The page of the run `report.rows[row]`, rendered.
@@ -347,21 +526,84 @@ pub fn run_files(dir: &Path, report: &Report, images: &Images) -> Result<(), Out
         let path = runs.join(format!("{stem}.metrics.json"));
         let text = serde_json::to_string_pretty(&p.metrics).map_err(|e| write_err(&path, &e))?;
         std::fs::write(&path, text + "\n").map_err(|e| write_err(&path, &e))?;
+        if let Some(m) = &p.motion {
+            motion_files(&runs, &report.rows[p.row], m)?;
+        }
+    }
+    Ok(())
+}
+
+/// Writes a run in motion's files into `runs` (see the module documentation): its frames,
+/// its animation, `ID.frames.csv` from the row's per-frame records and `ID.temporal.json`
+/// from its temporal metrics (when it has them). The three kinds must have as many frames
+/// each, and each kind's frames one size.
+pub fn motion_files(runs: &Path, row: &Row, motion: &MotionFrames) -> Result<(), OutputError> {
+    let stem = row_stem(row);
+    let frames_dir = runs.join(&stem).join("frames");
+    let n = motion.method.len();
+    if motion.reference.len() != n || motion.error.len() != n {
+        return Err(write_err(
+            &frames_dir,
+            &format!(
+                "{n} method frames, {} reference frames and {} error frames: not one of each a \
+                 frame",
+                motion.reference.len(),
+                motion.error.len()
+            ),
+        ));
+    }
+    std::fs::create_dir_all(&frames_dir).map_err(|e| write_err(&frames_dir, &e))?;
+    let kinds = [&motion.method, &motion.reference, &motion.error];
+    let animation = runs.join(format!("{stem}.animation.png"));
+    let mut apng: Option<Apng> = None;
+    for k in 0..n {
+        let mut panels = Vec::with_capacity(kinds.len());
+        for (kind, frames) in FRAME_KINDS.iter().zip(kinds) {
+            let path = runs.join(frame_file(&stem, kind, k));
+            std::fs::write(&path, &frames[k]).map_err(|e| write_err(&path, &e))?;
+            let image = image::load_from_memory(&frames[k])
+                .map_err(|e| write_err(&path, &format!("not a PNG the sweep encoded: {e}")))?;
+            panels.push(image.to_rgb8());
+        }
+        let frame = side_by_side(&[&panels[0], &panels[1], &panels[2]]);
+        if apng.is_none() {
+            let (w, h) = frame.dimensions();
+            apng = Some(Apng::create(&animation, w, h, n as u32, motion.frame_ms)?);
+        }
+        if let Some(writer) = apng.as_mut() {
+            writer.push(&frame)?;
+        }
+    }
+    if let Some(writer) = apng {
+        writer.finish()?;
+    }
+    write_frames_csv(&runs.join(format!("{stem}.frames.csv")), &row.per_frame)?;
+    if let Some(t) = &row.temporal {
+        let path = runs.join(format!("{stem}.temporal.json"));
+        let text = serde_json::to_string_pretty(t).map_err(|e| write_err(&path, &e))?;
+        std::fs::write(&path, text + "\n").map_err(|e| write_err(&path, &e))?;
     }
     Ok(())
 }
 
 /// Writes every run's page, `dir/runs/ID.html` (its files are to be there or to follow:
-/// [`run_files`]). Returns the pages' paths relative to `dir`, in report order.
+/// [`run_files`]; a run in motion's players take their frame delay from its animation when it
+/// is there). Returns the pages' paths relative to `dir`, in report order.
 pub fn write_run_pages(dir: &Path, report: &Report) -> Result<Vec<String>, OutputError> {
     let runs = dir.join("runs");
     std::fs::create_dir_all(&runs).map_err(|e| write_err(&runs, &e))?;
     let templates = Pages::new().map_err(|e| write_err(&runs, &e))?;
     let mut pages = Vec::with_capacity(report.rows.len());
     for row in 0..report.rows.len() {
-        let name = format!("runs/{}.html", row_stem(&report.rows[row]));
+        let stem = row_stem(&report.rows[row]);
+        let name = format!("runs/{stem}.html");
         let path = dir.join(&name);
-        let html = run_page(&templates, report, row).map_err(|e| write_err(&path, &e))?;
+        let mut model = run_page_model(report, row);
+        if let Some(m) = model.motion.as_mut() {
+            let animation = runs.join(format!("{stem}.animation.png"));
+            m.frame_ms = frame_delay_ms(&animation).unwrap_or(DEFAULT_FRAME_MS);
+        }
+        let html = templates.render("run.html", &model).map_err(|e| write_err(&path, &e))?;
         std::fs::write(&path, html).map_err(|e| write_err(&path, &e))?;
         pages.push(name);
     }
@@ -382,5 +624,97 @@ mod tests {
         let v = Visibility { width: 3, height: 1, lit: vec![0.0, 0.5, 1.0], transmittance: None };
         let g = lit_image(&v);
         assert_eq!(g.as_raw(), &[0, 128, 255]);
+    }
+
+    #[test]
+    fn a_run_in_motion_has_its_frames_animation_and_records_and_its_page_the_players() {
+        use crate::motion_charts::fixture::{report_in_motion, FRAMES, FRAME_MS};
+        let (report, images) = report_in_motion();
+        let dir = tempfile::tempdir().expect("tempdir");
+        run_files(dir.path(), &report, &images).expect("files written");
+        write_run_pages(dir.path(), &report).expect("pages written");
+        let runs = dir.path().join("runs");
+        let stem = row_stem(&report.rows[0]);
+        // Each kind's frames as the sweep encoded them, numbered from 0000, and no more.
+        for (offset, kind) in FRAME_KINDS.iter().enumerate() {
+            for k in 0..FRAMES as usize {
+                let path = runs.join(frame_file(&stem, kind, k));
+                let image = image::open(&path).expect("a frame").to_rgb8();
+                assert_eq!(image.get_pixel(0, 0).0[0] as usize, 10 * k + offset, "{kind} {k}");
+            }
+            assert!(!runs.join(frame_file(&stem, kind, FRAMES as usize)).exists());
+        }
+        assert_eq!(frame_file("a", "error", 12), "a/frames/error-0012.png");
+        // The animation: the three side by side (the error map a row taller), every frame.
+        let animation = runs.join(format!("{stem}.animation.png"));
+        let decoder = png::Decoder::new(std::io::BufReader::new(
+            std::fs::File::open(&animation).expect("animation.png"),
+        ));
+        let mut reader = decoder.read_info().expect("a PNG");
+        let control = reader.info().animation_control().copied().expect("animated");
+        assert_eq!((control.num_frames, control.num_plays), (FRAMES, 0));
+        let (w, h) = (reader.info().width, reader.info().height);
+        assert_eq!((w, h), (3 * 32 + 2 * 4, 25));
+        let mut buf = vec![0; reader.output_buffer_size().expect("size")];
+        let mut firsts = Vec::new();
+        for _ in 0..FRAMES {
+            reader.next_frame(&mut buf).expect("a frame");
+            firsts.push(buf[0]);
+        }
+        assert_eq!(firsts, [0, 10, 20, 30], "the method's frames in order, leftmost");
+        assert_eq!(frame_delay_ms(&animation), Some(FRAME_MS));
+        // The records: a CSV row per frame, the temporal metrics as they are.
+        let csv = std::fs::read_to_string(runs.join(format!("{stem}.frames.csv"))).expect("csv");
+        assert_eq!(csv.lines().count(), 1 + FRAMES as usize, "{csv}");
+        assert!(csv.starts_with("frame,time,map_res,mean_abs_error,"), "{csv}");
+        let json = std::fs::read_to_string(runs.join(format!("{stem}.temporal.json")))
+            .expect("temporal.json");
+        let back: analysis::temporal::TemporalMetrics =
+            serde_json::from_str(&json).expect("parses");
+        assert_eq!(Some(back), report.rows[0].temporal);
+        // The still run has none of them.
+        let still = row_stem(&report.rows[1]);
+        assert!(!runs.join(&still).exists());
+        for ext in ["animation.png", "frames.csv", "temporal.json"] {
+            assert!(!runs.join(format!("{still}.{ext}")).exists(), "{ext}");
+        }
+
+        // The page of the run in motion has the players, on frame 0, at the animation's
+        // delay, and a row per frame; the still run's page has none.
+        let page = std::fs::read_to_string(runs.join(format!("{stem}.html"))).expect("page");
+        assert!(page.contains("<h2 id=\"motion\">In motion</h2>"), "{page}");
+        assert!(page.contains(&format!("data-frame-ms=\"{FRAME_MS}\"")), "{page}");
+        assert!(page.contains(&format!("data-frames=\"{FRAMES}\"")), "{page}");
+        for kind in FRAME_KINDS {
+            let img = format!("data-kind=\"{kind}\" src=\"{}\"", frame_file(&stem, kind, 0));
+            assert!(page.contains(&img), "{img}");
+        }
+        assert_eq!(page.matches("<tr data-frame=").count(), FRAMES as usize);
+        assert!(page.contains("type=\"range\"") && page.contains("id=\"play\""));
+        let still_page =
+            std::fs::read_to_string(runs.join(format!("{still}.html"))).expect("still page");
+        assert!(!still_page.contains("id=\"motion\"") && !still_page.contains("class=\"players"));
+        // Without its animation the page plays at the default delay.
+        let mut model = run_page_model(&report, 0);
+        let view = model.motion.take().expect("in motion");
+        assert_eq!((view.frame_ms, view.frames, view.last), (DEFAULT_FRAME_MS, 4, 3));
+        assert_eq!(view.times, "0 0.1 0.2 0.3");
+        assert!(run_page_model(&report, 1).motion.is_none());
+    }
+
+    #[test]
+    fn frames_that_do_not_match_are_refused_naming_the_folder() {
+        let (report, mut images) = crate::motion_charts::fixture::report_in_motion();
+        let dir = tempfile::tempdir().expect("tempdir");
+        let motion = images.runs.iter_mut().find_map(|p| p.motion.as_mut()).expect("motion");
+        motion.reference.pop();
+        let e = motion_files(dir.path(), &report.rows[0], motion).expect_err("refused");
+        let text = e.to_string();
+        assert!(text.contains("frames") && text.contains("4 method frames, 3 reference"), "{text}");
+        // A frame that is not a PNG is refused naming its file.
+        let mut motion = crate::motion_charts::fixture::motion_frames(4, 3, 2, 100);
+        motion.error[1] = b"not a png".to_vec();
+        let e = motion_files(dir.path(), &report.rows[0], &motion).expect_err("refused");
+        assert!(e.to_string().contains("error-0001.png"), "{e}");
     }
 }

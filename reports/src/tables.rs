@@ -783,6 +783,7 @@ pub fn chart(t: &Table) -> Option<crate::plots::Chart> {
         y_label: "time (ms), median".to_owned(),
         series,
         pareto: false,
+        linear_x: false,
     })
 }
 

@@ -1,8 +1,9 @@
 //! A report's files: `runs.json` (everything), `runs.csv` (one line per run: parameters,
 //! metrics, times, counters), `report.md` (the report in Markdown: the machine and the load,
 //! per scene its Pareto front and what the runs say of each method, the scenes, the budget
-//! figure and table, per scene its grids and charts as images and its table of runs, CPU and
-//! GPU side by side, the papers' tables), the pages (`index.html`, `runs/ID.html`), the
+//! figure and table, per scene its grids and charts as images, its table of runs and, for an
+//! animated scene, its runs in motion (the index's "In motion" table and charts), CPU and GPU
+//! side by side, the papers' tables), the pages (`index.html`, `runs/ID.html`), the
 //! charts (`plots/`), and `visibility/*.exr` (every visibility buffer).
 //!
 //! Every function here writes into the folder it is given, which is the staging folder of
@@ -195,6 +196,24 @@ pub fn run_cells(r: &Row, clock: instrumentation::measure::Clock) -> [String; 9]
     ]
 }
 
+/// A page's table in Markdown: the lines stated above it, then its heads and cells as text.
+fn md_table_view(s: &mut String, t: &crate::html::TableView) {
+    for n in &t.notes {
+        match &n.code {
+            Some(code) => {
+                let _ = writeln!(s, "`{code}`: {}\n", n.text);
+            }
+            None => {
+                let _ = writeln!(s, "{}\n", n.text);
+            }
+        }
+    }
+    let heads: Vec<String> = t.heads.iter().map(|h| h.text.clone()).collect();
+    let rows: Vec<Vec<String>> =
+        t.rows.iter().map(|r| r.iter().map(|c| c.text.clone()).collect()).collect();
+    md_table(s, &heads, &rows);
+}
+
 /// A Markdown table of `heads` and `rows`.
 fn md_table(s: &mut String, heads: &[String], rows: &[Vec<String>]) {
     let _ = writeln!(s, "| {} |", heads.join(" | "));
@@ -207,8 +226,9 @@ fn md_table(s: &mut String, heads: &[String], rows: &[Vec<String>]) {
 /// `report.md`: the machine and the load; per scene its Pareto front and, per method, what
 /// the runs say of it; the scenes; the best error within each time budget (the figure and
 /// the table); per scene its grids and charts as images (`plots/*.png`) and a table of every
-/// run; CPU and GPU side by side; the papers' tables; what did not run. `plots` are the
-/// charts [`write_plots`] wrote.
+/// run, and for an animated scene its runs in motion (sentence, charts, table); CPU and GPU
+/// side by side; the papers' tables; what did not run. `plots` are the charts [`write_plots`]
+/// and [`crate::motion_charts::write_plots`] wrote.
 pub fn markdown(report: &Report, plots: &[PlotFile]) -> String {
     let mut s = String::new();
     let clock = clock_name(report.clock);
@@ -342,7 +362,7 @@ pub fn markdown(report: &Report, plots: &[PlotFile]) -> String {
         for g in report.grids.iter().filter(|g| g.scene == sc.scene) {
             let _ = writeln!(s, "![{}]({})\n", g.title, g.png);
         }
-        for p in plots.iter().filter(|p| p.scene == sc.scene) {
+        for p in plots.iter().filter(|p| p.scene == sc.scene && !p.motion) {
             let _ = writeln!(s, "![{}]({})\n", p.title, p.png);
         }
         let _ = writeln!(s, "### Runs on {}\n", sc.scene);
@@ -356,6 +376,14 @@ pub fn markdown(report: &Report, plots: &[PlotFile]) -> String {
             .map(|r| run_cells(r, report.clock).to_vec())
             .collect();
         md_table(&mut s, &heads, &rows);
+        let id = format!("scene-{}", crate::html::anchor(&sc.scene));
+        if let Some(m) = crate::index::motion_section(report, sc, &id, plots) {
+            let _ = writeln!(s, "\n### In motion on {}\n\n{}\n", sc.scene, m.about);
+            for p in &m.plots {
+                let _ = writeln!(s, "![{}]({})\n", p.title, p.png);
+            }
+            md_table_view(&mut s, &m.table);
+        }
     }
     let side_by_side = crate::devices::markdown(&report.rows);
     if !side_by_side.is_empty() {
@@ -410,8 +438,9 @@ pub fn write_shard(dir: &Path, report: &Report, images: &Images) -> Result<(), O
 }
 
 /// The files made from a sweep's images: `visibility/ID.exr`, `grids/*.png`, `scenes/*` and
-/// `runs/ID.{png,error.png,run.json,metrics.json}` (a merged report copies them from its
-/// shards).
+/// `runs/ID.{png,error.png,run.json,metrics.json}`, and for a run in motion `runs/ID/frames/*`
+/// and `runs/ID.{animation.png,frames.csv,temporal.json}` (a merged report copies them from
+/// its shards).
 pub fn write_run_files(dir: &Path, report: &Report, images: &Images) -> Result<(), OutputError> {
     let err = |path: &Path, e: &dyn std::fmt::Display| OutputError::Write {
         path: path.to_owned(),
@@ -444,7 +473,8 @@ pub fn write_summary(
         message: e.to_string(),
     };
     let json = serde_json::to_string_pretty(report).map_err(|e| err(dir, &e))?;
-    let plots = write_plots(dir, report)?;
+    let mut plots = write_plots(dir, report)?;
+    plots.extend(crate::motion_charts::write_plots(dir, report)?);
     let pages = crate::templates::Pages::new().map_err(|e| err(dir, &e))?;
     let index = dir.join("index.html");
     let html =
@@ -552,5 +582,49 @@ mod tests {
         let outside = series.iter().find(|s| s.label == "mine (external)").expect("drawn");
         assert_eq!(outside.points[0].x, 2.5);
         assert!(series.iter().all(|s| !s.label.contains("untimed")));
+    }
+
+    /// The index and report.md of a report with a run in motion: the scene's section "In
+    /// motion" with its table and charts; the same report still has none.
+    #[test]
+    fn only_a_scene_with_runs_in_motion_has_an_in_motion_section() {
+        let (report, images) = crate::motion_charts::fixture::report_in_motion();
+        let dir = tempfile::tempdir().expect("tempdir");
+        super::write_report(dir.path(), &report, &images, None).expect("written");
+        let html = std::fs::read_to_string(dir.path().join("index.html")).expect("index");
+        assert_eq!(html.matches("id=\"scene-plane-square-motion\"").count(), 1);
+        assert!(html.contains("href=\"#scene-plane-square-motion\""), "in the contents");
+        // Its table has the run in motion only, linked to its players.
+        let stem = crate::model::row_stem(&report.rows[0]);
+        assert!(html.contains(&format!("runs/{stem}.html#motion")), "{html}");
+        assert!(!html
+            .contains(&format!("runs/{}.html#motion", crate::model::row_stem(&report.rows[1]))));
+        assert!(html.contains("<th class=\"num\">temporal error</th>"), "{html}");
+        // Its three charts, there and nowhere else.
+        for kind in ["temporal-vs-time", "temporal-vs-error", "temporal-per-frame"] {
+            let png = format!("plots/{kind}-plane-square.png");
+            assert_eq!(html.matches(&format!("src=\"{png}\"")).count(), 1, "{png}");
+            assert!(dir.path().join(&png).is_file(), "{png}");
+        }
+        for term in ["temporal error", "boundary temporal error", "pixel pairs", "reprojection"] {
+            assert!(html.contains(&format!("<dt>{term}</dt>")), "glossary lacks {term}");
+        }
+        assert!(html.contains("<dt>light-frustum policy</dt>"));
+        let md = std::fs::read_to_string(dir.path().join("report.md")).expect("report.md");
+        assert_eq!(md.matches("### In motion on plane-square").count(), 1, "{md}");
+        assert!(md.contains("| temporal error |"), "{md}");
+        assert!(md.contains("![plane-square: temporal error per frame"), "{md}");
+
+        // The same report still: no section, no chart.
+        let mut still = report.clone();
+        still.rows.iter_mut().for_each(|r| {
+            r.temporal = None;
+            r.per_frame.clear();
+        });
+        let plots = crate::motion_charts::write_plots(dir.path(), &still).expect("none");
+        assert!(plots.is_empty());
+        let page = crate::index::index_page(&still, &plots, None);
+        assert!(page.scenes.iter().all(|s| s.motion.is_none()));
+        assert!(!super::markdown(&still, &plots).contains("In motion"));
     }
 }

@@ -6,10 +6,17 @@
 //! (the top 1000 pixels, nothing scrolled) holds the Pareto summary and the machine line, and
 //! no table of runs is wider than the window, its time column in view.
 //!
+//! A run in motion (its temporal metrics, per-frame records and frames made by hand) has an
+//! "In motion" section on the index and players on its page: the slider moves the three
+//! players (method, reference, error map) to one frame, and playing advances them in step and
+//! loops.
+//!
 //! The pages test themselves when opened with `#selftest` (`reports/assets/report.js`) and
 //! write what they found into `<pre id="selftest">`, which `--dump-dom` prints. Chromium must
 //! be installed (`scripts/install-chromium`); without it the test fails.
 
+use reports::animation::FrameRecord;
+use reports::model::MotionFrames;
 use reports::{run_pages::write_run_pages, run_suite, write_report, Suite};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -184,4 +191,119 @@ fn index_and_run_pages_work_in_headless_chromium() {
         Path::new(&pages[0]).with_extension("exr").file_name().expect("name").to_string_lossy()
     );
     assert!(lines.contains(&exr), "the page does not link its EXR: {lines:#?}");
+}
+
+/// Frames of the run in motion.
+const FRAMES: u32 = 8;
+
+/// How long each is shown, milliseconds.
+const FRAME_MS: u16 = 50;
+
+/// `img` as PNG bytes.
+fn png(img: &image::RgbImage) -> Vec<u8> {
+    let mut bytes = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png).expect("encodes");
+    bytes
+}
+
+/// A frame of `w x h`: grey `level` with a white bar at column `x` (a moving edge).
+fn bar(w: u32, h: u32, level: u8, x: u32) -> image::RgbImage {
+    image::RgbImage::from_fn(w, h, |i, _| {
+        image::Rgb(if i == x % w { [255; 3] } else { [level; 3] })
+    })
+}
+
+#[test]
+fn a_run_in_motion_plays_its_three_players_in_step_in_headless_chromium() {
+    let _machine = crate::common::machine_shared();
+    let dir = tempfile::tempdir().expect("tempdir");
+    let suite = Suite::parse(
+        "name = \"motion\"\nwidth = 48\nheight = 36\nwarmup = 0\nrepeats = 1\n\
+         scenes = [\"plane-square\"]\n[[run]]\nmethod = \"sm\"\nmap_res = [64, 128]\n",
+        Path::new("motion.toml"),
+    )
+    .expect("suite");
+    let (mut report, mut images) = run_suite(&suite, |_| {});
+    assert_eq!(report.rows.len(), 2, "{:?}", report.skipped);
+    // The first run in motion, by hand: temporal error 0.01 on every pair of frames.
+    let (w, h) = (report.rows[0].width, report.rows[0].height);
+    let pairs = 100 * u64::from(FRAMES - 1);
+    let class = analysis::temporal::ClassTemporal { pairs, mean: Some(0.01) };
+    let row = &mut report.rows[0];
+    row.temporal = Some(analysis::temporal::TemporalMetrics {
+        frames: FRAMES,
+        reprojected: false,
+        pixel_pairs: pairs,
+        mean: Some(0.01),
+        p95: Some(0.02),
+        boundary_pairs: pairs / 2,
+        boundary_mean: Some(0.03),
+        boundary_p95: Some(0.05),
+        per_class: [("planar".to_owned(), class), ("surface".to_owned(), class)]
+            .into_iter()
+            .collect(),
+        per_frame: vec![Some(0.01); FRAMES as usize - 1],
+    });
+    row.per_frame = (0..FRAMES)
+        .map(|k| FrameRecord {
+            frame: k,
+            time: f64::from(k) / f64::from(FRAMES - 1),
+            map_res: Some(64),
+            mean_abs_error: Some(row.metrics.mean_abs_error),
+            boundary_mean_abs_error: Some(0.1),
+            boundary_p95_abs_error: Some(0.2),
+            temporal_error: (k > 0).then_some(0.01),
+            temporal_pairs: if k > 0 { 100 } else { 0 },
+            method_ms: 1.0,
+            method_cpu_ms: Some(1.0),
+            reference_ms: 3.0,
+            reference_cached: false,
+        })
+        .collect();
+    let produced = images.runs.iter_mut().find(|p| p.row == 0).expect("the first run's");
+    produced.motion = Some(MotionFrames {
+        method: (0..FRAMES).map(|k| png(&bar(w, h, 40, 4 * k))).collect(),
+        reference: (0..FRAMES).map(|k| png(&bar(w, h, 80, 4 * k + 1))).collect(),
+        error: (0..FRAMES).map(|k| png(&bar(w, h + 10, 0, 4 * k))).collect(),
+        frame_ms: FRAME_MS,
+    });
+    let out = dir.path();
+    write_report(out, &report, &images, None).expect("report written");
+    let stem = reports::model::row_stem(&report.rows[0]);
+
+    // The index: the section with its charts, all loaded, its table within the window.
+    let index = out.join("index.html");
+    let html = std::fs::read_to_string(&index).expect("index.html");
+    assert!(html.contains("id=\"scene-plane-square-motion\""), "{html}");
+    let lines = selftest(&index);
+    images_and_links(&index, &lines);
+    assert!(finding(&lines, "runs tables").starts_with("ok"), "{lines:#?}");
+    assert!(lines.contains(&format!("link: runs/{stem}.html")), "{lines:#?}");
+
+    // The run page: the players start on frame 0, the slider moves all three, playing
+    // advances them in step and loops back to the first frame.
+    let page = out.join("runs").join(format!("{stem}.html"));
+    let lines = selftest(&page);
+    images_and_links(&page, &lines);
+    for file in [
+        format!("{stem}.animation.png"),
+        format!("{stem}.frames.csv"),
+        format!("{stem}.temporal.json"),
+    ] {
+        assert!(lines.contains(&format!("link: {file}")), "no link to {file}: {lines:#?}");
+    }
+    let players: Vec<&str> = lines.iter().filter_map(|l| l.strip_prefix("players: ")).collect();
+    assert_eq!(players.len(), 3, "{lines:#?}");
+    assert_eq!(players[0], "slider 3 -> 3 3 3 ok", "{lines:#?}");
+    let play = players[1].strip_prefix("play advanced 0 -> ").expect("play");
+    let (k, rest) = play.split_once(", ").expect("frame, then the rest");
+    let k: u32 = k.parse().expect("a frame");
+    assert!((1..FRAMES).contains(&k), "{play}");
+    assert_eq!(rest, "in sync ok", "{lines:#?}");
+    assert_eq!(players[2], format!("loop {} -> 0 ok", FRAMES - 1), "{lines:#?}");
+    // The still run's page has no players.
+    let still =
+        out.join("runs").join(format!("{}.html", reports::model::row_stem(&report.rows[1])));
+    let lines = selftest(&still);
+    assert!(lines.iter().all(|l| !l.starts_with("players:")), "{lines:#?}");
 }
