@@ -811,8 +811,8 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
         }
         None => format!("suite {}", suite.name),
     };
-    let measured = report.rows.len() + report.untimed.len() + report.table_runs.len();
-    let not_run = match runs_planned.saturating_sub(measured as u64) {
+    let measured = reports::sweep::measured_run_count(&report);
+    let not_run = match runs_planned.saturating_sub(measured) {
         0 => String::new(),
         n => format!(" ({n} not run, see the notes above)"),
     };
