@@ -9,6 +9,11 @@
 //! - `runs/ID.metrics.json`: its comparison with the reference, per pixel class, as `compare`
 //!   writes `metrics.json`;
 //! - `visibility/ID.exr`: its visibility buffer;
+//! - for a run in motion (its scene animated, `crate::motion`): `runs/ID/frames/method-NNNN.png`,
+//!   `reference-NNNN.png` and `error-NNNN.png` (NNNN the frame from 0000: the method's shaded
+//!   image, the reference's and the error map), `runs/ID.frames.csv` (a row per frame, the
+//!   columns of `animate`'s `frames.csv`, `crate::animation::FrameRecord`) and
+//!   `runs/ID.temporal.json` (its temporal metrics, `analysis::temporal::TemporalMetrics`);
 //!
 //! and its scene's, shared by the scene's runs ([`scene_files`]): the reference's lit
 //! fraction (`scenes/SCENE.reference.png`, and `.exr`) and the pixel classes
@@ -30,7 +35,9 @@
 
 use crate::figures::clock_name;
 use crate::html::{anchor, metric_cells, Cell, METRIC_COLUMNS};
-use crate::model::{param_label, params_of, row_stem, scene_stem, Images, Report, Row};
+use crate::model::{
+    param_label, params_of, row_stem, scene_stem, Images, MotionFrames, Report, Row,
+};
 use crate::output::{write_run_json, write_visibility_exr, OutputError};
 use crate::summary::{full_time_text, ms_text};
 use crate::templates::{Pages, TemplateError};
@@ -328,7 +335,8 @@ pub fn scene_files(dir: &Path, report: &Report, images: &Images) -> Result<(), O
 }
 
 /// Writes, for every produced run, into `dir/runs/`: `ID.png` (its lit fraction),
-/// `ID.error.png` (its error map), `ID.run.json` and `ID.metrics.json`.
+/// `ID.error.png` (its error map), `ID.run.json` and `ID.metrics.json`; for a run in motion
+/// also its frames, `ID.frames.csv` and `ID.temporal.json` ([`motion_files`]).
 pub fn run_files(dir: &Path, report: &Report, images: &Images) -> Result<(), OutputError> {
     let runs = dir.join("runs");
     std::fs::create_dir_all(&runs).map_err(|e| write_err(&runs, &e))?;
@@ -347,8 +355,42 @@ pub fn run_files(dir: &Path, report: &Report, images: &Images) -> Result<(), Out
         let path = runs.join(format!("{stem}.metrics.json"));
         let text = serde_json::to_string_pretty(&p.metrics).map_err(|e| write_err(&path, &e))?;
         std::fs::write(&path, text + "\n").map_err(|e| write_err(&path, &e))?;
+        if let Some(motion) = &p.motion {
+            motion_files(&runs, &stem, &report.rows[p.row], motion)?;
+        }
     }
     Ok(())
+}
+
+/// Writes a run in motion's files into `runs` (the report's `runs/`): `STEM/frames/KIND-NNNN.png`
+/// for each kind (`method`, `reference`, `error`) and frame, `STEM.frames.csv` (the row's
+/// frames) and `STEM.temporal.json` (its temporal metrics, `null` for a row without).
+fn motion_files(
+    runs: &Path,
+    stem: &str,
+    row: &Row,
+    motion: &MotionFrames,
+) -> Result<(), OutputError> {
+    let frames = runs.join(stem).join("frames");
+    std::fs::create_dir_all(&frames).map_err(|e| write_err(&frames, &e))?;
+    for (kind, pngs) in
+        [("method", &motion.method), ("reference", &motion.reference), ("error", &motion.error)]
+    {
+        for (i, bytes) in pngs.iter().enumerate() {
+            let path = frames.join(format!("{kind}-{i:04}.png"));
+            std::fs::write(&path, bytes).map_err(|e| write_err(&path, &e))?;
+        }
+    }
+    let path = runs.join(format!("{stem}.frames.csv"));
+    let mut w = csv::Writer::from_writer(Vec::new());
+    for f in &row.per_frame {
+        w.serialize(f).map_err(|e| write_err(&path, &e))?;
+    }
+    let bytes = w.into_inner().map_err(|e| write_err(&path, &e))?;
+    std::fs::write(&path, bytes).map_err(|e| write_err(&path, &e))?;
+    let path = runs.join(format!("{stem}.temporal.json"));
+    let text = serde_json::to_string_pretty(&row.temporal).map_err(|e| write_err(&path, &e))?;
+    std::fs::write(&path, text + "\n").map_err(|e| write_err(&path, &e))
 }
 
 /// Writes every run's page, `dir/runs/ID.html` (its files are to be there or to follow:
