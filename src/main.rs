@@ -92,8 +92,9 @@ struct ReportArgs {
     #[command(subcommand)]
     action: Option<ReportAction>,
     /// A built-in suite (`quick`: every method on small frames, a few minutes; `papers`: the
-    /// papers' frame and map sizes; `full`: every scene and parameter) or a suite file
-    /// (.toml; copy one from reports/suites/ and edit it).
+    /// papers' frame and map sizes; `full`: every scene and parameter; `temporal`: the
+    /// animated scenes in motion) or a suite file (.toml; copy one from reports/suites/ and
+    /// edit it).
     #[arg(long, default_value = "quick", value_name = "SUITE")]
     suite: String,
     /// Output folder; default `shadowbench-out/report-SUITE`. It must be empty or hold an

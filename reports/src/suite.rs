@@ -586,6 +586,7 @@ pub const BUILTIN_SUITES: &[(&str, &str)] = &[
     ("quick", include_str!("../suites/quick.toml")),
     ("papers", include_str!("../suites/papers.toml")),
     ("full", include_str!("../suites/full.toml")),
+    ("temporal", include_str!("../suites/temporal.toml")),
 ];
 
 impl Suite {
