@@ -92,8 +92,9 @@ struct ReportArgs {
     #[command(subcommand)]
     action: Option<ReportAction>,
     /// A built-in suite (`quick`: every method on small frames, a few minutes; `papers`: the
-    /// papers' frame and map sizes; `full`: every scene and parameter) or a suite file
-    /// (.toml; copy one from reports/suites/ and edit it).
+    /// papers' frame and map sizes; `full`: every scene and parameter; `temporal`: the
+    /// animated scenes in motion) or a suite file (.toml; copy one from reports/suites/ and
+    /// edit it).
     #[arg(long, default_value = "quick", value_name = "SUITE")]
     suite: String,
     /// Output folder; default `shadowbench-out/report-SUITE`. It must be empty or hold an
@@ -811,8 +812,8 @@ fn report(a: ReportArgs) -> Result<(), Failure> {
         }
         None => format!("suite {}", suite.name),
     };
-    let measured = report.rows.len() + report.untimed.len() + report.table_runs.len();
-    let not_run = match runs_planned.saturating_sub(measured as u64) {
+    let measured = reports::sweep::measured_run_count(&report);
+    let not_run = match runs_planned.saturating_sub(measured) {
         0 => String::new(),
         n => format!(" ({n} not run, see the notes above)"),
     };

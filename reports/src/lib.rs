@@ -22,6 +22,7 @@ pub mod html;
 pub mod index;
 pub mod merge;
 pub mod model;
+pub mod motion;
 pub mod motion_charts;
 pub mod output;
 pub mod plan;

@@ -20,6 +20,12 @@
 //! plus the scene's triangles; a grid counts one run per panel. It orders items and weighs the
 //! progress of a sweep ([`run_cost`]); it does not predict seconds.
 //!
+//! A scene whose animation is not still ([`animation_of`]) runs its `[[run]]` items in motion,
+//! every run once per frame (`crate::motion`): such an item's [`WorkItem::frames`] is the
+//! animation's frame count (the suite's `frames` when it sets one) and its cost is that many
+//! times a still item's. Its grids, outside results and tables' runs are of frame 0 only, one
+//! frame each.
+//!
 //! Shards take items by longest processing time first ([`assign`]): items sorted by falling
 //! cost (ties by their index), each given to the shard with the least cost so far (ties to the
 //! lowest shard). The same plan and shard count always give the same split. Within a shard,
@@ -89,6 +95,10 @@ pub struct WorkItem {
     /// What it runs.
     #[serde(flatten)]
     pub work: Work,
+    /// The frames each of its runs runs on: the animation's frame count for the `[[run]]`
+    /// items of an animated scene, 1 otherwise (see the module documentation).
+    #[serde(default = "one_frame")]
+    pub frames: u32,
     /// The estimated cost (see the module documentation).
     pub cost: f64,
     /// The estimated peak memory of its heaviest run with its reference, bytes
@@ -96,6 +106,22 @@ pub struct WorkItem {
     /// which runs nothing, and for a scene that cannot be loaded).
     #[serde(default)]
     pub memory: u64,
+}
+
+fn one_frame() -> u32 {
+    1
+}
+
+/// The animation a suite runs `scene` in: `None` for a still scene (no track: it runs as a
+/// still frame), else the scene's animation sampled at the suite's `frames` when it sets one
+/// (a count outside `1..=scenes::MAX_FRAMES`, which reading the suite refuses, leaves the
+/// scene's own).
+pub fn animation_of(scene: &scenes::Scene, frames: Option<u32>) -> Option<scenes::Animation> {
+    let a = &scene.animation;
+    if a.is_still() {
+        return None;
+    }
+    Some(frames.and_then(|n| a.with_frames(n).ok()).unwrap_or_else(|| a.clone()))
 }
 
 /// The estimated peak memory of the runs `runs` (method and options) on `triangles` at
@@ -128,6 +154,8 @@ struct SceneFacts {
     height: u32,
     triangles: f64,
     transparency: bool,
+    /// Frames its runs run on (1 for a still scene).
+    frames: u32,
 }
 
 fn facts(suite: &Suite, name: &str) -> Option<SceneFacts> {
@@ -139,6 +167,7 @@ fn facts(suite: &Suite, name: &str) -> Option<SceneFacts> {
         height,
         triangles: scene.triangle_count() as f64,
         transparency: scene.effects().transparency,
+        frames: animation_of(&scene, suite.frames).map_or(1, |a| a.frames()),
     })
 }
 
@@ -187,19 +216,25 @@ pub fn plan(suite: &Suite) -> Vec<WorkItem> {
         };
         let budget_reference =
             reference.as_deref().map(|r| (r, ref_rate.unwrap_or(suite.ref_rate)));
-        let item =
-            |work: Work, (width, height), cost: f64, memory: u64, items: &Vec<WorkItem>| WorkItem {
-                item: items.len(),
-                scene: Some(name.clone()),
-                scene_index: Some(scene_index),
-                width,
-                height,
-                reference: reference.clone(),
-                ref_rate,
-                work,
-                cost,
-                memory,
-            };
+        let frames = f.as_ref().map_or(1, |f| f.frames);
+        let item = |work: Work,
+                    (width, height),
+                    frames: u32,
+                    cost: f64,
+                    memory: u64,
+                    items: &Vec<WorkItem>| WorkItem {
+            item: items.len(),
+            scene: Some(name.clone()),
+            scene_index: Some(scene_index),
+            width,
+            height,
+            reference: reference.clone(),
+            ref_rate,
+            work,
+            frames,
+            cost,
+            memory,
+        };
         // One frame after another: the scene's own with its runs and grids, then each frame
         // size the runs add, with the runs that ask for it.
         for (n, size) in frame_sizes(suite, scene_size).into_iter().enumerate() {
@@ -213,10 +248,11 @@ pub fn plan(suite: &Suite) -> Vec<WorkItem> {
                     continue;
                 }
                 let combos = spec.expand();
-                let cost = combos
-                    .iter()
-                    .map(|o| runs_per * run_cost(pixels, triangles, o.rate, o.map_res))
-                    .sum();
+                let cost = f64::from(frames)
+                    * combos
+                        .iter()
+                        .map(|o| runs_per * run_cost(pixels, triangles, o.rate, o.map_res))
+                        .sum::<f64>();
                 let memory = if f.is_some() {
                     let runs = combos.iter().map(|o| (spec.method.as_str(), o));
                     peak_memory(runs, triangles, size, budget_reference)
@@ -225,7 +261,7 @@ pub fn plan(suite: &Suite) -> Vec<WorkItem> {
                 };
                 let runs = combos.iter().map(combo_label).collect();
                 let work = Work::Runs { spec: k, method: spec.method.clone(), runs };
-                let it = item(work, size, cost, memory, &items);
+                let it = item(work, size, frames, cost, memory, &items);
                 items.push(it);
             }
             if n > 0 {
@@ -234,7 +270,7 @@ pub fn plan(suite: &Suite) -> Vec<WorkItem> {
             for (k, e) in suite.externals.iter().enumerate() {
                 if e.files.contains_key(name) {
                     let work = Work::External { external: k, name: e.name.clone() };
-                    let it = item(work, size, pixels, 0, &items);
+                    let it = item(work, size, 1, pixels, 0, &items);
                     items.push(it);
                 }
             }
@@ -246,7 +282,7 @@ pub fn plan(suite: &Suite) -> Vec<WorkItem> {
                     .map(|o| run_cost(pixels, triangles, o.rate, o.map_res))
                     .sum();
                 let work = Work::Grid { grid: k, title: grid.title.clone() };
-                let it = item(work, size, cost, 0, &items);
+                let it = item(work, size, 1, cost, 0, &items);
                 items.push(it);
             }
         }
@@ -287,6 +323,7 @@ pub fn plan(suite: &Suite) -> Vec<WorkItem> {
                 reference,
                 ref_rate,
                 work,
+                frames: 1,
                 cost,
                 memory,
             };
@@ -393,6 +430,7 @@ mod tests {
             reference: None,
             ref_rate: None,
             work: Work::Table { table: k, paper: String::new(), runs: Vec::new() },
+            frames: 1,
             cost,
             memory: 0,
         }
@@ -432,6 +470,36 @@ mod tests {
             assert!(bad.parse::<Shard>().is_err(), "{bad}");
         }
         assert_eq!(Shard { index: 0, count: 4 }.to_string(), "0/4");
+    }
+
+    /// An animated scene's `[[run]]` items run every frame, the suite's `frames` when it sets
+    /// one, and cost as many frames; its grid and a still scene's runs are one frame.
+    #[test]
+    fn an_animated_scene_s_runs_cost_every_frame() {
+        let text = |frames: &str| {
+            format!(
+                "name = \"m\"\nwidth = 48\nheight = 36\n{frames}\n\
+                 scenes = [\"square-slide\", \"plane-square\"]\n\
+                 [[run]]\nmethod = \"sm\"\nmap_res = [64, 128]\n\
+                 [[grid]]\ntitle = \"g\"\nscene = \"square-slide\"\n\
+                 inset = [0.1, 0.1, 0.2, 0.2]\npanels = [{{ method = \"sm\" }}]\n"
+            )
+        };
+        let parse = |t: &str| Suite::parse(t, std::path::Path::new("m.toml")).expect("parses");
+        let p = plan(&parse(&text("frames = 4")));
+        assert!(matches!(p[1].work, Work::Grid { .. }), "{p:?}");
+        assert_eq!(p.iter().map(|i| i.frames).collect::<Vec<_>>(), [4, 1, 1]);
+        // square-slide is plane-square with the square sliding: the same frame's runs.
+        assert_eq!(p[0].cost, 4.0 * p[2].cost);
+        let own = plan(&parse(&text("")));
+        assert_eq!(own[0].frames, 24, "the scene's own count");
+        let line = serde_json::to_string(&p[0]).expect("json");
+        assert!(line.contains("\"frames\":4"), "{line}");
+        let still = scenes::load("plane-square").expect("built in");
+        assert!(animation_of(&still, Some(4)).is_none());
+        let moving = scenes::load("cage-sweep").expect("built in");
+        assert_eq!(animation_of(&moving, Some(4)).map(|a| a.frames()), Some(4));
+        assert_eq!(animation_of(&moving, Some(0)).map(|a| a.frames()), Some(24));
     }
 
     #[test]

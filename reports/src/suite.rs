@@ -16,6 +16,8 @@
 //! reference = "auto" # exact where it applies (opaque casters), else raytrace at ref_rate; or "exact", "raytrace"
 //! ref_rate = 64
 //! scenes = ["plane-square", "cage"]
+//! frames = 12       # resample every animated scene at this many frames (1..=1000); default:
+//!                   # each scene's own count; still scenes ignore it
 //!
 //! [[run]]
 //! method = "pcf-reeves"
@@ -43,6 +45,9 @@
 //!
 //! Unknown keys and bad values are errors that name the file and the key (and the line,
 //! through the TOML parser).
+//!
+//! A scene whose animation is not still runs each `[[run]]` through every frame of its
+//! animation (`crate::motion`); `frames` samples every such scene at that many frames.
 //!
 //! A `[[run]]` takes `method`, `device`, `width` and `height`, and the parameters its method
 //! declares in the registry's table (`methods::registry::METHODS`, `methods::params`): a key
@@ -158,6 +163,7 @@ struct Spans {
     #[serde(default)]
     scenes: Vec<Spanned<String>>,
     ref_rate: Option<Spanned<u32>>,
+    frames: Option<Spanned<u32>>,
     #[serde(default, rename = "run")]
     runs: Vec<BTreeMap<String, Spanned<toml::Value>>>,
     #[serde(default, rename = "grid")]
@@ -523,6 +529,10 @@ pub struct Suite {
     pub ref_rate: u32,
     /// Built-in scene names or scene file paths.
     pub scenes: Vec<String>,
+    /// The frames every animated scene is sampled at (`scenes::Animation::with_frames`), 1 to
+    /// `scenes::MAX_FRAMES`; default each scene's own count. Still scenes ignore it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frames: Option<u32>,
     /// Methods and their sweeps.
     #[serde(rename = "run")]
     pub runs: Vec<RunSpec>,
@@ -576,6 +586,7 @@ pub const BUILTIN_SUITES: &[(&str, &str)] = &[
     ("quick", include_str!("../suites/quick.toml")),
     ("papers", include_str!("../suites/papers.toml")),
     ("full", include_str!("../suites/full.toml")),
+    ("temporal", include_str!("../suites/temporal.toml")),
 ];
 
 impl Suite {
@@ -617,6 +628,13 @@ impl Suite {
         }
         if suite.scenes.is_empty() {
             return Err(invalid("scenes", "must name at least one scene".into()));
+        }
+        if let Some(n) = suite.frames.filter(|n| !(1..=scenes::MAX_FRAMES).contains(n)) {
+            return Err(at(
+                spans.frames.as_ref().map(Spanned::span),
+                "frames",
+                format!("must be in 1..={}, got {n}", scenes::MAX_FRAMES),
+            ));
         }
         if suite.runs.is_empty() {
             return Err(invalid("run", "must list at least one [[run]]".into()));
@@ -1089,6 +1107,24 @@ mod tests {
                 assert!(e.contains(n), "{at}: `{n}` not in {e}");
             }
         }
+    }
+
+    /// `frames` resamples the animated scenes; outside 1..=MAX_FRAMES it is refused with its
+    /// line.
+    #[test]
+    fn frames_are_checked_with_their_line() {
+        let p = Path::new("s.toml");
+        let text = |frames: &str| {
+            format!("name = \"x\"\nscenes = [\"cage-sweep\"]\n{frames}\n[[run]]\nmethod = \"sm\"\n")
+        };
+        assert_eq!(Suite::parse(&text("frames = 4"), p).expect("parses").frames, Some(4));
+        assert_eq!(Suite::parse(&text(""), p).expect("parses").frames, None);
+        for bad in ["frames = 0", "frames = 1001"] {
+            let e = Suite::parse(&text(bad), p).expect_err(bad).to_string();
+            assert!(e.contains("line 3: `frames`") && e.contains("1..=1000"), "{bad}: {e}");
+        }
+        let e = Suite::parse(&text("frames = -2"), p).expect_err("negative").to_string();
+        assert!(e.contains("frames") && e.contains("line 3"), "{e}");
     }
 
     #[test]

@@ -11,6 +11,12 @@
 //! comparison per pixel class (`compare`'s `metrics.json`), and each scene its reference and
 //! classes, for the run pages ([`Images`]).
 //!
+//! On an animated scene ([`crate::plan::animation_of`]) the `[[run]]`s run in motion, frame by
+//! frame ([`crate::motion`]: one row per run, its metrics pooled over the frames, its times per
+//! frame, its temporal metrics); the scene's tables' runs, grids and `[[external]]` entries run
+//! on its frame 0 only, which is also the frame of its reference and class images and of its
+//! [`SceneInfo`]'s G-buffer time (its reference time is summed over the frames).
+//!
 //! When standard error is not a terminal (a log, a pipe), the sweep prints a line there as it
 //! starts each frame, and when it ends: the runs done of the total, the time elapsed and an
 //! estimate of the time left ([`crate::progress`]). On a terminal the caller's progress bar
@@ -194,12 +200,13 @@ pub fn run_suite(suite: &Suite, progress: impl FnMut(&Progress<'_>)) -> (Report,
     run_items(suite, &plan, &all, None, progress)
 }
 
-/// How many method runs the items of `plan` numbered in `items` make.
+/// How many method runs the items of `plan` numbered in `items` make; a run in motion counts
+/// once per frame ([`WorkItem::frames`]).
 pub fn items_run_count(plan: &[WorkItem], items: &[usize]) -> u64 {
     items
         .iter()
         .map(|&k| match &plan[k].work {
-            Work::Runs { runs, .. } => runs.len() as u64,
+            Work::Runs { runs, .. } => runs.len() as u64 * u64::from(plan[k].frames.max(1)),
             Work::Grid { .. } => 0,
             Work::External { .. } => 1,
             Work::Table { runs, .. } => runs.len() as u64,
@@ -223,6 +230,8 @@ struct SceneRun<'s> {
     truth: Truth,
     /// Index of its images in [`Images::scenes`].
     images: usize,
+    /// Index of its shared work in [`Report::scenes`].
+    info: usize,
 }
 
 /// What a planned run is for.
@@ -249,12 +258,56 @@ struct Planned<'a> {
     cost: f64,
 }
 
+/// Adds the runs of `item`, the `[[run]]` `spec` on an animated scene, to `in_motion`, each
+/// priced per frame; a run whose method cannot be built is listed as not run, every frame of
+/// it told to `tick`.
+fn plan_motion(
+    item: &WorkItem,
+    spec: &crate::suite::RunSpec,
+    in_motion: &mut Vec<crate::motion::Run>,
+    report: &mut Report,
+    tick: &mut crate::motion::Tick<'_>,
+) {
+    let scene = item.scene.as_deref().unwrap_or_default();
+    let combos = spec.expand();
+    let frames = item.frames.max(1);
+    // As `item_runs` prices them.
+    let cost = item.cost / (combos.len() * frames as usize).max(1) as f64;
+    for options in combos {
+        let key = key_of(&spec.method, &options);
+        match analysis::registry::technique(&spec.method, &options) {
+            Ok(technique) => in_motion.push(crate::motion::Run {
+                item: item.item,
+                method: spec.method.clone(),
+                options,
+                technique,
+                key,
+                cost,
+            }),
+            Err(e) => {
+                report.skipped.push(format!("{} on {scene}: {e}", spec.method));
+                for _ in 0..frames {
+                    tick(&format!("{scene} {}", spec.method), &key, cost, None);
+                }
+            }
+        }
+    }
+}
+
 /// The key an estimate prices a run of `method` with `options` by.
 fn key_of(method: &str, options: &MethodOptions) -> String {
     run_key(method, options.device == Device::Gpu)
 }
 
-/// The runs of a plan's item, each with its key and its share of the item's estimated cost.
+/// How many method runs `report` measured, counted as [`items_run_count`] counts them (a run in
+/// motion once per frame it ran): its rows, untimed outside results and tables' runs.
+pub fn measured_run_count(report: &Report) -> u64 {
+    let rows: u64 = report.rows.iter().map(|r| r.per_frame.len().max(1) as u64).sum();
+    rows + report.untimed.len() as u64 + report.table_runs.len() as u64
+}
+
+/// The runs of a plan's item, each with its key and its share of the item's estimated cost; a
+/// run in motion once per frame, with its share of one frame.
 fn item_runs(suite: &Suite, item: &WorkItem) -> Vec<(String, f64)> {
     let runs: Vec<(String, MethodOptions)> = match &item.work {
         Work::Runs { spec, .. } => {
@@ -269,8 +322,9 @@ fn item_runs(suite: &Suite, item: &WorkItem) -> Vec<(String, f64)> {
         Work::Grid { .. } => Vec::new(),
         Work::External { name, .. } => return vec![(external_key(name), item.cost)],
     };
-    let per = item.cost / runs.len().max(1) as f64;
-    runs.iter().map(|(m, o)| (key_of(m, o), per)).collect()
+    let frames = item.frames.max(1) as usize;
+    let per = item.cost / (runs.len() * frames).max(1) as f64;
+    runs.iter().flat_map(|(m, o)| std::iter::repeat_n((key_of(m, o), per), frames)).collect()
 }
 
 /// The key an estimate prices the scoring of an outside result by.
@@ -361,7 +415,7 @@ pub fn run_items(
                 }
             }
         };
-        let scene = match scenes::load(scene_name) {
+        let loaded = match scenes::load(scene_name) {
             Ok(s) => s,
             Err(e) => {
                 if group.iter().any(|i| !matches!(i.work, Work::Table { .. })) {
@@ -371,24 +425,30 @@ pub fn run_items(
                 continue;
             }
         };
+        // An animated scene's `[[run]]` items run in motion (`crate::motion`); its other items
+        // (grids, outside results, tables' runs) run on its frame 0.
+        let animation = crate::plan::animation_of(&loaded, suite.frames);
+        let posed = animation.as_ref().map(|a| a.pose(&loaded, 0));
+        let scene = posed.as_ref().unwrap_or(&loaded);
         let (w, h) = match (first.width, first.height) {
             (0, _) | (_, 0) => (scene.width, scene.height),
             size => size,
         };
         let mut rec = Recorder::default();
-        let frame = Frame::new(&scene, w, h, &mut rec);
+        let frame = Frame::new(scene, w, h, &mut rec);
         let gbuffer_ms = rec.stages.total_ms();
         let triangles = frame.geometry.len() as f64;
         // The suite's runs and grids need the scene's reference; a table's own frame does not.
         let mut ctx = None;
+        let mut build_id = "";
         if group.iter().any(|i| !matches!(i.work, Work::Table { .. })) {
-            let build: &str = match cache {
+            build_id = match cache {
                 Some(_) => build.get_or_insert_with(|| {
                     crate::cache::build_id(&report.provenance.commit, report.provenance.dirty)
                 }),
                 None => "",
             };
-            match reference_for(suite, &scene, &frame, cache.as_deref_mut(), build) {
+            match reference_for(suite, scene, &frame, cache.as_deref_mut(), build_id) {
                 Ok((ref_name, ref_rate, image, reference_ms, reference_cached)) => {
                     // The metrics are taken over the shadow-only pixels, by the frame's pixel
                     // classes (the reference's own, or the camera's view of the triangles when
@@ -417,6 +477,7 @@ pub fn run_items(
                         reference_ms,
                     });
                     ctx = Some(SceneRun {
+                        info: report.scenes.len() - 1,
                         label,
                         frame: &frame,
                         effects,
@@ -431,8 +492,10 @@ pub fn run_items(
                 Err(e) => report.skipped.push(format!("scene {}: reference: {e}", scene.name)),
             }
         }
-        // Every run on the frame is measured together, interleaved round by round.
+        // Every run on the frame is measured together, interleaved round by round; on an
+        // animated scene, the `[[run]]`s frame by frame.
         let mut planned = Vec::new();
+        let mut in_motion = Vec::new();
         for item in group {
             let runs: Vec<(Purpose<'_>, &str, MethodOptions)> = match &item.work {
                 Work::Runs { spec, .. } => {
@@ -441,6 +504,10 @@ pub fn run_items(
                         for (key, cost) in item_runs(suite, item) {
                             tick(&label(&spec.method), &key, cost, None);
                         }
+                        continue;
+                    }
+                    if animation.is_some() {
+                        plan_motion(item, spec, &mut in_motion, &mut report, &mut tick);
                         continue;
                     }
                     spec.expand()
@@ -484,6 +551,39 @@ pub fn run_items(
             tick(&label(p.technique.name()), &key, p.cost, Some(spent));
         });
         drop(subjects);
+        if let (Some(animation), Some(ctx)) = (&animation, &ctx) {
+            let animated = crate::motion::Animated {
+                suite,
+                rest: &loaded,
+                animation,
+                label: &ctx.label,
+                effects: &ctx.effects,
+                ref_name: &ctx.ref_name,
+                ref_rate: ctx.ref_rate,
+                images: ctx.images,
+                first: ctx.frame,
+                first_truth: &ctx.truth,
+                first_reference_ms: ctx.reference_ms,
+                first_reference_cached: ctx.reference_cached,
+            };
+            let mut references = |s: &scenes::Scene, f: &Frame<'_>| {
+                reference_for(suite, s, f, cache.as_deref_mut(), build_id).map(
+                    |(_, _, image, ms, cached)| crate::motion::FrameReference { image, ms, cached },
+                )
+            };
+            let runs = std::mem::take(&mut in_motion);
+            let say = |line: &str| log.print(line, &estimate.borrow());
+            let later_ms = crate::motion::run(
+                &animated,
+                runs,
+                &mut references,
+                &mut tick,
+                &say,
+                &mut report,
+                &mut images,
+            );
+            report.scenes[ctx.info].reference_ms += later_ms;
+        }
         for (p, m) in planned.iter().zip(measured) {
             let m = match m {
                 Ok(m) => m,
@@ -623,6 +723,7 @@ pub fn run_table(
         grids: Vec::new(),
         tables: vec![spec.clone()],
         externals: Vec::new(),
+        frames: None,
     };
     let (report, _) = run_suite(&suite, |p| progress(p.label));
     skipped.extend(report.skipped);

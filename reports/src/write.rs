@@ -21,7 +21,8 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 /// Columns of `runs.csv` before the stage times and the counters: parameters, frame size,
-/// reference, metrics (over the reference's shadow-only pixels), total time and provenance.
+/// reference, metrics (over the reference's shadow-only pixels), total time, provenance, and a
+/// run in motion's temporal metrics and frame count (empty for a still scene's run).
 pub const CSV_COLUMNS: &[&str] = &[
     "scene",
     "method",
@@ -64,6 +65,12 @@ pub const CSV_COLUMNS: &[&str] = &[
     "commit",
     "version",
     "external",
+    "temporal_error",
+    "temporal_p95",
+    "boundary_temporal_error",
+    "boundary_temporal_p95",
+    "temporal_pairs",
+    "frames",
 ];
 
 /// Stage names over every row of `report`, in the order they first appear.
@@ -81,7 +88,9 @@ fn stage_names(report: &Report) -> Vec<&str> {
 /// `external` true), one column per quantity. Cells are
 /// numbers (or text for names), with no thousands suffix; an empty cell is a quantity that
 /// does not apply (a parameter the method has not, the boundary error of a run without
-/// boundary pixels, a stage the run did not have). After [`CSV_COLUMNS`], the error's
+/// boundary pixels, a stage the run did not have, the temporal metrics of a still scene's run).
+/// A run in motion's metrics and times are pooled over its frames, its times per frame
+/// (`crate::motion`); `frames` is its frame count. After [`CSV_COLUMNS`], the error's
 /// distribution as `share_error_over.X` (the share of compared pixels whose absolute error
 /// exceeds X, for each X of `analysis::metrics::EXCEEDANCE_THRESHOLDS`), the median time of
 /// every stage of the report as `stage_ms.NAME` and every counter as `counter.NAME`.
@@ -146,6 +155,15 @@ pub fn csv(report: &Report) -> Result<String, OutputError> {
             report.provenance.version.clone(),
             r.external.to_string(),
         ];
+        let t = r.temporal.as_ref();
+        cells.extend([
+            opt(t.and_then(|t| t.mean)),
+            opt(t.and_then(|t| t.p95)),
+            opt(t.and_then(|t| t.boundary_mean)),
+            opt(t.and_then(|t| t.boundary_p95)),
+            t.map_or_else(String::new, |t| t.pixel_pairs.to_string()),
+            t.map_or_else(String::new, |_| r.per_frame.len().to_string()),
+        ]);
         let shares = r.error_exceedance.iter().map(|v| Some(*v)).chain(std::iter::repeat(None));
         cells.extend(shares.take(EXCEEDANCE_THRESHOLDS.len()).map(opt));
         cells.extend(

@@ -1,9 +1,11 @@
 //! `shadowbench report`: a suite's tables and data, its pages in headless Chromium, a sweep in
-//! shards merged back, the same on a real Slurm cluster, and timing that holds under load.
+//! shards merged back, the same on a real Slurm cluster, timing that holds under load, and runs
+//! over animated scenes.
 
 #[path = "../common/mod.rs"]
 mod common;
 
+mod motion;
 mod report;
 mod report_browser;
 mod shard;
