@@ -55,12 +55,6 @@ impl Kept {
     }
 }
 
-/// The map resolution of frame `i`: `base` times the animation's map scale, rounded, within
-/// the maps' range.
-fn scaled_map_res(base: u32, scale: f64) -> u32 {
-    (f64::from(base) * scale).round().clamp(1.0, 16384.0) as u32
-}
-
 /// Runs `animate`.
 pub fn animate(a: AnimateArgs) -> Result<(), Failure> {
     let r = &a.render;
@@ -99,7 +93,7 @@ pub fn animate(a: AnimateArgs) -> Result<(), Failure> {
     let mut per_frame = Vec::with_capacity(frames as usize);
     let mut cpu_all = true;
     for i in 0..frames {
-        let map_res = base_map.map(|m| scaled_map_res(m, animation.map_scale(i)));
+        let map_res = base_map.map(|m| reports::motion::scaled_map_res(m, animation.map_scale(i)));
         let mut o: MethodOptions = options.clone();
         if let Some(m) = map_res {
             o.map_res = Some(m);
@@ -232,17 +226,4 @@ fn print_summary(r: &AnimationRecord, cached: bool) {
     );
     let cpu = r.method_cpu_ms.map_or(String::new(), |c| format!(", {c:.1} ms CPU"));
     println!("  time: method {:.1} ms wall{cpu} per frame (mean)", r.method_ms);
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_map_scale_rounds_and_stays_in_range() {
-        assert_eq!(scaled_map_res(512, 0.25), 128);
-        assert_eq!(scaled_map_res(512, 1.0), 512);
-        assert_eq!(scaled_map_res(3, 0.1), 1);
-        assert_eq!(scaled_map_res(16384, 2.0), 16384);
-    }
 }

@@ -37,7 +37,7 @@ fn temporal(
         // The scene's map scale multiplies the map's resolution, as `animate` applies it.
         let mut o = options.clone();
         if let Some(m) = o.map_res {
-            o.map_res = Some((f64::from(m) * animation.map_scale(i)).round().max(1.0) as u32);
+            o.map_res = Some(reports::motion::scaled_map_res(m, animation.map_scale(i)));
         }
         let technique = analysis::registry::technique(method, &o).expect("builds");
         let scene = animation.pose(&rest, i);
