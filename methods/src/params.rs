@@ -292,9 +292,26 @@ pub static SHARED: &[&Param] = &[
     &FRUSTUM,
 ];
 
+/// A method's parameter list: the parameters of a shadow map and its depth test ([`MAP`]:
+/// `map_res`, the biases and the light frustum), then the method's others, so that a parameter
+/// every shadow-map method shares is added in one place.
+macro_rules! map_and {
+    ($($other:expr),* $(,)?) => {
+        &[
+            &$crate::params::MAP_RES,
+            &$crate::params::CONSTANT_BIAS,
+            &$crate::params::SLOPE_BIAS,
+            &$crate::params::MAX_SLOPE,
+            &$crate::params::FRUSTUM,
+            $($other),*
+        ]
+    };
+}
+pub(crate) use map_and;
+
 /// The parameters of a shadow map and its depth test (`map_res`, the biases and the light
 /// frustum).
-pub static MAP: &[&Param] = &[&MAP_RES, &CONSTANT_BIAS, &SLOPE_BIAS, &MAX_SLOPE, &FRUSTUM];
+pub static MAP: &[&Param] = map_and!();
 
 /// Where a method runs (`--device`).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]

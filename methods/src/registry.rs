@@ -96,15 +96,7 @@ pub static METHODS: &[MethodEntry] = &[
         description: "percentage-closer filtering of the pixel's footprint, N jittered samples \
                       (Reeves et al. 1987)",
         rates: Rates::All,
-        params: &[
-            &params::MAP_RES,
-            &params::CONSTANT_BIAS,
-            &params::SLOPE_BIAS,
-            &params::MAX_SLOPE,
-            &params::FRUSTUM,
-            &params::RATE,
-            &params::SEED,
-        ],
+        params: params::map_and![&params::RATE, &params::SEED],
         stores_samples: None,
         cpu: |o| Ok(Box::new(ReevesPcf { options: reeves_options(o)? })),
         gpu: gpu!(|o| Ok(Box::new(crate::gpu::pcf::GpuPcf::Reeves {
@@ -226,16 +218,7 @@ pub static METHODS: &[MethodEntry] = &[
                       half-plane bitmask lookup table, --rate sub-samples (default 32) (Pan et \
                       al. 2009)",
         rates: Rates::Masks,
-        params: &[
-            &params::MAP_RES,
-            &params::CONSTANT_BIAS,
-            &params::SLOPE_BIAS,
-            &params::MAX_SLOPE,
-            &params::FRUSTUM,
-            &params::RATE,
-            &params::PATTERN,
-            &params::MASKS,
-        ],
+        params: params::map_and![&params::RATE, &params::PATTERN, &params::MASKS],
         stores_samples: None,
         cpu: |o| Ok(Box::new(Pan09::new(pan09_options(o)?)?)),
         gpu: gpu!(|o| Ok(Box::new(crate::gpu::pan09::GpuPan09::new(pan09_options(o)?)?))),
@@ -246,14 +229,7 @@ pub static METHODS: &[MethodEntry] = &[
 ];
 
 /// The parameters of Brabec and Seidel's methods.
-static BS: &[&Param] = &[
-    &params::MAP_RES,
-    &params::CONSTANT_BIAS,
-    &params::SLOPE_BIAS,
-    &params::MAX_SLOPE,
-    &params::FRUSTUM,
-    &params::DEPTH_BITS,
-];
+static BS: &[&Param] = params::map_and![&params::DEPTH_BITS];
 
 /// The entry of the method called `name`.
 pub fn entry(name: &str) -> Option<&'static MethodEntry> {

@@ -50,15 +50,7 @@ pub const ENTRY: MethodEntry = MethodEntry {
     description: "exponential shadow map: box-filtered exp(c z), the test exp(-c (d - z)) \
                   (Annen et al. 2008)",
     rates: Rates::None,
-    params: &[
-        &params::MAP_RES,
-        &params::CONSTANT_BIAS,
-        &params::SLOPE_BIAS,
-        &params::MAX_SLOPE,
-        &params::FRUSTUM,
-        &FILTER,
-        &EXPONENT,
-    ],
+    params: params::map_and![&FILTER, &EXPONENT],
     stores_samples: None,
     cpu: |o| {
         let m = ExponentialShadowMap {

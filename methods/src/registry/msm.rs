@@ -52,15 +52,7 @@ pub const ENTRY: MethodEntry = MethodEntry {
     description: "moment shadow map: four box-filtered depth moments, Hamburger reconstruction \
                   (Peters & Klein 2015)",
     rates: Rates::None,
-    params: &[
-        &params::MAP_RES,
-        &params::CONSTANT_BIAS,
-        &params::SLOPE_BIAS,
-        &params::MAX_SLOPE,
-        &params::FRUSTUM,
-        &FILTER,
-        &MOMENT_BIAS,
-    ],
+    params: params::map_and![&FILTER, &MOMENT_BIAS],
     stores_samples: None,
     cpu: |o| {
         let m = MomentShadowMap {

@@ -51,15 +51,7 @@ pub const ENTRY: MethodEntry = MethodEntry {
     description: "variance shadow map: box-filtered depth moments, Chebyshev's upper bound \
                   (Donnelly & Lauritzen 2006)",
     rates: Rates::None,
-    params: &[
-        &params::MAP_RES,
-        &params::CONSTANT_BIAS,
-        &params::SLOPE_BIAS,
-        &params::MAX_SLOPE,
-        &params::FRUSTUM,
-        &FILTER,
-        &MIN_VARIANCE,
-    ],
+    params: params::map_and![&FILTER, &MIN_VARIANCE],
     stores_samples: None,
     cpu: |o| {
         let m = VarianceShadowMap {
