@@ -297,6 +297,41 @@ impl ParamSplit {
             .join(" ")
     }
 
+    /// The heads of the parameter columns a table has after its method's: one per varying
+    /// key ([`ParamSplit::columns`]; text for names, numbers otherwise), then `other` when
+    /// some row has parameters left for it.
+    pub fn heads(&self) -> Vec<Head> {
+        let mut heads: Vec<Head> = self
+            .columns
+            .iter()
+            .map(|c| {
+                if matches!(*c, "pattern" | "device" | "frustum") {
+                    Head::text(*c)
+                } else {
+                    Head::num(*c)
+                }
+            })
+            .collect();
+        if self.others {
+            heads.push(Head::text("other"));
+        }
+        heads
+    }
+
+    /// Row `r`'s cells under [`ParamSplit::heads`].
+    pub fn cells(&self, r: &Row) -> Vec<Cell> {
+        let p = params_of(r);
+        let mut cells: Vec<Cell> = self
+            .columns
+            .iter()
+            .map(|c| Cell::parsed(p.get(*c).cloned().unwrap_or_default()))
+            .collect();
+        if self.others {
+            cells.push(Cell::text(self.other_params(r)));
+        }
+        cells
+    }
+
     /// The lines above the table: the constant parameters, then each method's.
     pub fn notes(&self) -> Vec<Note> {
         let kv = |m: &BTreeMap<String, String>| {

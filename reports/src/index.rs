@@ -242,16 +242,7 @@ pub fn runs_table(rows: &[&Row], report: &Report) -> TableView {
     let clock = report.clock;
     let split = ParamSplit::of(rows);
     let mut heads = vec![Head::text("method")];
-    heads.extend(split.columns.iter().map(|c| {
-        if matches!(*c, "pattern" | "device" | "frustum") {
-            Head::text(*c)
-        } else {
-            Head::num(*c)
-        }
-    }));
-    if split.others {
-        heads.push(Head::text("other"));
-    }
+    heads.extend(split.heads());
     heads.extend(RUN_TABLE_METRICS.iter().map(|&k| Head::num(METRIC_COLUMNS[k])));
     heads.push(Head::num(time_head(clock_name(clock))));
     heads.push(Head::num("wall ms"));
@@ -259,19 +250,13 @@ pub fn runs_table(rows: &[&Row], report: &Report) -> TableView {
     let body: Vec<Vec<Cell>> = rows
         .iter()
         .map(|r| {
-            let p = params_of(r);
             let method = Cell::text(method_label(r));
             let mut cells = vec![if r.timed() {
                 method.link(format!("runs/{}.html", row_stem(r)))
             } else {
                 method
             }];
-            cells.extend(
-                split.columns.iter().map(|c| Cell::parsed(p.get(*c).cloned().unwrap_or_default())),
-            );
-            if split.others {
-                cells.push(Cell::text(split.other_params(r)));
-            }
+            cells.extend(split.cells(r));
             let metrics = metric_cells(r);
             cells.extend(RUN_TABLE_METRICS.iter().map(|&k| metrics[k].clone()));
             if r.timed() {
@@ -306,31 +291,16 @@ pub fn motion_table(rows: &[&Row], report: &Report) -> TableView {
     let clock = report.clock;
     let split = ParamSplit::of(rows);
     let mut heads = vec![Head::text("method")];
-    heads.extend(split.columns.iter().map(|c| {
-        if matches!(*c, "pattern" | "device" | "frustum") {
-            Head::text(*c)
-        } else {
-            Head::num(*c)
-        }
-    }));
-    if split.others {
-        heads.push(Head::text("other"));
-    }
+    heads.extend(split.heads());
     heads.extend(MOTION_COLUMNS.iter().map(|&c| Head::num(c)));
     heads.push(Head::num(motion_time_head(clock_name(clock))));
     heads.push(Head::num("pixel pairs"));
     let body: Vec<Vec<Cell>> = rows
         .iter()
         .map(|r| {
-            let p = params_of(r);
             let mut cells =
                 vec![Cell::text(method_label(r)).link(format!("runs/{}.html#motion", row_stem(r)))];
-            cells.extend(
-                split.columns.iter().map(|c| Cell::parsed(p.get(*c).cloned().unwrap_or_default())),
-            );
-            if split.others {
-                cells.push(Cell::text(split.other_params(r)));
-            }
+            cells.extend(split.cells(r));
             let or_na = |v: Option<f64>| v.map_or_else(Cell::na, |v| Cell::num(v, 5));
             let t = r.temporal.as_ref();
             let t_of = |f: fn(&analysis::temporal::TemporalMetrics) -> Option<f64>| t.and_then(f);
