@@ -34,7 +34,8 @@ pub struct AnimateArgs {
           value_parser = clap::value_parser!(u32).range(1..=i64::from(scenes::MAX_FRAMES)))]
     pub frames: Option<u32>,
     /// How long animation.png shows each frame, milliseconds, 1 to 10000; default 100.
-    #[arg(long, value_name = "MS", default_value_t = 100, allow_negative_numbers = true,
+    #[arg(long, value_name = "MS", default_value_t = reports::motion::FRAME_MS,
+          allow_negative_numbers = true,
           value_parser = clap::value_parser!(u16).range(1..=10_000))]
     pub frame_ms: u16,
 }

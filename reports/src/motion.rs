@@ -58,7 +58,8 @@ use instrumentation::{Recorder, RunIdentity, RunRecord};
 use methods::{registry::Device, Frame, MethodOptions, ShadowMethod, Visibility};
 use std::time::Duration;
 
-/// How long a player shows each frame of a run in motion, milliseconds (`animate`'s default).
+/// How long a player shows each frame of a run in motion, milliseconds (also `animate`'s
+/// default).
 pub const FRAME_MS: u16 = 100;
 
 /// The largest map resolution a scaled map takes.

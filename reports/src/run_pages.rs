@@ -193,9 +193,9 @@ pub struct RunPage {
     pub motion: Option<MotionView>,
 }
 
-/// How long a player shows each frame when the run's animation does not say, milliseconds
-/// (`animate`'s default).
-pub const DEFAULT_FRAME_MS: u16 = 100;
+/// How long a player shows each frame when the run's animation does not say, milliseconds:
+/// the sweep's delay.
+pub const DEFAULT_FRAME_MS: u16 = crate::motion::FRAME_MS;
 
 /// The kinds of a run in motion's frames, in the order the players show them.
 pub const FRAME_KINDS: [&str; 3] = ["method", "reference", "error"];
