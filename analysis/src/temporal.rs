@@ -115,14 +115,8 @@ pub struct TemporalMetrics {
 #[derive(Debug, Default)]
 pub struct Temporal {
     reprojected: bool,
-    all: Sum,
-    boundary: Sum,
-    planar: Sum,
-    surface: Sum,
-    /// Every pair's error, for the percentile.
-    values: Vec<f32>,
-    /// Every boundary pair's error, for its percentile.
-    boundary_values: Vec<f32>,
+    /// Every pair added.
+    pairs: Pairs,
     per_frame: Vec<Option<f64>>,
 }
 
@@ -149,15 +143,29 @@ impl Sum {
     }
 }
 
-/// One row's pairs.
-#[derive(Default)]
-struct Row {
+/// Pairs' sums and errors: of one image row while a frame pair is compared, then of every
+/// pair added.
+#[derive(Debug, Default)]
+struct Pairs {
     all: Sum,
     boundary: Sum,
     planar: Sum,
     surface: Sum,
+    /// Every pair's error, for the percentile.
     values: Vec<f32>,
+    /// Every boundary pair's error, for its percentile.
     boundary_values: Vec<f32>,
+}
+
+impl Pairs {
+    fn merge(&mut self, other: Pairs) {
+        self.all.merge(other.all);
+        self.boundary.merge(other.boundary);
+        self.planar.merge(other.planar);
+        self.surface.merge(other.surface);
+        self.values.extend_from_slice(&other.values);
+        self.boundary_values.extend_from_slice(&other.boundary_values);
+    }
 }
 
 impl Temporal {
@@ -190,10 +198,10 @@ impl Temporal {
         }
         let (prev, cur) = (Side::of(prev), Side::of(cur));
         let width = cur.view.gbuffer.width as usize;
-        let rows: Vec<Row> = (0..cur.view.gbuffer.height as usize)
+        let rows: Vec<Pairs> = (0..cur.view.gbuffer.height as usize)
             .into_par_iter()
             .map(|j| {
-                let mut row = Row::default();
+                let mut row = Pairs::default();
                 for k in j * width..(j + 1) * width {
                     if !cur.headline[k] {
                         continue;
@@ -225,13 +233,8 @@ impl Temporal {
         let mut frame = Sum::default();
         for row in rows {
             frame.merge(row.all);
-            self.boundary.merge(row.boundary);
-            self.planar.merge(row.planar);
-            self.surface.merge(row.surface);
-            self.values.extend_from_slice(&row.values);
-            self.boundary_values.extend_from_slice(&row.boundary_values);
+            self.pairs.merge(row);
         }
-        self.all.merge(frame);
         self.per_frame.push(frame.mean());
         frame.n
     }
@@ -245,7 +248,8 @@ impl Temporal {
     /// The metrics of the pairs added.
     pub fn finish(mut self) -> TemporalMetrics {
         let class = |s: Sum| ClassTemporal { pairs: s.n, mean: s.mean() };
-        let per_class = [(PixelClass::Planar, self.planar), (PixelClass::Surface, self.surface)]
+        let p = &mut self.pairs;
+        let per_class = [(PixelClass::Planar, p.planar), (PixelClass::Surface, p.surface)]
             .into_iter()
             .map(|(c, s)| (c.name().to_string(), class(s)))
             .collect();
@@ -256,12 +260,12 @@ impl Temporal {
         TemporalMetrics {
             frames,
             reprojected: self.reprojected,
-            pixel_pairs: self.all.n,
-            mean: self.all.mean(),
-            p95: percentile(&mut self.values),
-            boundary_pairs: self.boundary.n,
-            boundary_mean: self.boundary.mean(),
-            boundary_p95: percentile(&mut self.boundary_values),
+            pixel_pairs: p.all.n,
+            mean: p.all.mean(),
+            p95: percentile(&mut p.values),
+            boundary_pairs: p.boundary.n,
+            boundary_mean: p.boundary.mean(),
+            boundary_p95: percentile(&mut p.boundary_values),
             per_class,
             per_frame: self.per_frame,
         }
