@@ -44,7 +44,7 @@
 //! rows and listed among the report's runs not run, naming the frame; a frame whose reference
 //! cannot be computed ends every run still going. The progress is told once per run per frame.
 
-use crate::animation::FrameRecord;
+use crate::animation::{mean_of, FrameRecord};
 use crate::model::{Images, MotionFrames, Produced, Report, Row};
 use crate::output::{shade, MetricsRecord};
 use crate::suite::Suite;
@@ -192,11 +192,6 @@ impl Pooled {
         let shares = (n > 0).then(|| self.over.iter().map(|&c| c as f64 / n as f64).collect());
         (metrics, shares)
     }
-}
-
-/// The mean of `values`; `None` when there are none.
-fn mean(values: &[f64]) -> Option<f64> {
-    (!values.is_empty()).then(|| values.iter().sum::<f64>() / values.len() as f64)
 }
 
 /// The conditions of two stretches of timed runs, the first before the second, as one.
@@ -638,8 +633,10 @@ fn finish(
         })
         .collect();
     let (metrics, exceedance) = g.pooled.finish();
-    let flip_mean = mean(&g.flip).unwrap_or(0.0);
-    let lecocq = g.lecocq.iter().copied().collect::<Option<Vec<f64>>>().and_then(|l| mean(&l));
+    let flip_mean = mean_of(g.flip.iter().copied().map(Some)).unwrap_or(0.0);
+    // The mean only when every frame has one.
+    let lecocq =
+        g.lecocq.iter().all(Option::is_some).then(|| mean_of(g.lecocq.iter().copied())).flatten();
     let mut notes = first.record.notes.clone();
     let maps: Vec<u32> = g.per_frame.iter().filter_map(|f| f.map_res).collect();
     if let (Some(lo), Some(hi)) = (maps.iter().min(), maps.iter().max()) {
