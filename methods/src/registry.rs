@@ -47,12 +47,27 @@ pub enum Rates {
     Masks,
 }
 
+/// Which techniques a method belongs with: the reports compare today's techniques with the
+/// published ones the workbench began with in a section of their own.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Family {
+    /// The 2001-2014 techniques of the papers the workbench began with (shadow maps, the
+    /// percentage-closer filters, alias-free shadow maps, Pan et al.'s and Lecocq et al.'s
+    /// sub-pixel maps) and their variants.
+    Seed,
+    /// A technique today's shadow papers compare against: the filtered maps (variance,
+    /// exponential, moment shadow maps) and the frustum-traced irregular z-buffer.
+    Today,
+}
+
 /// A method's entry in the table.
 pub struct MethodEntry {
     /// Its name, as on the command line.
     pub name: &'static str,
     /// One line on what it is, with its paper.
     pub description: &'static str,
+    /// Which techniques it belongs with in the reports.
+    pub family: Family,
     /// The rates it takes.
     pub rates: Rates,
     /// The parameters it uses (`rate` among them when it takes rates).
@@ -85,6 +100,7 @@ pub static METHODS: &[MethodEntry] = &[
     MethodEntry {
         name: "sm",
         description: "standard shadow map: one depth test per pixel centre (Williams 1978)",
+        family: Family::Seed,
         rates: Rates::None,
         params: params::MAP,
         stores_samples: None,
@@ -95,6 +111,7 @@ pub static METHODS: &[MethodEntry] = &[
         name: "pcf-reeves",
         description: "percentage-closer filtering of the pixel's footprint, N jittered samples \
                       (Reeves et al. 1987)",
+        family: Family::Seed,
         rates: Rates::All,
         params: params::map_and![&params::RATE, &params::SEED],
         stores_samples: None,
@@ -106,6 +123,7 @@ pub static METHODS: &[MethodEntry] = &[
     MethodEntry {
         name: "pcf-bs-2x2",
         description: "PCF 2x2 from four jittered maps packed as RGBA, 5 levels (Brabec & Seidel)",
+        family: Family::Seed,
         rates: Rates::None,
         params: BS,
         stores_samples: None,
@@ -116,6 +134,7 @@ pub static METHODS: &[MethodEntry] = &[
         name: "pcf-bs-fast-2x2",
         description: "fast PCF: one map, each texel packed with its 2x2 neighbourhood (Brabec & \
                       Seidel)",
+        family: Family::Seed,
         rates: Rates::None,
         params: BS,
         stores_samples: None,
@@ -125,6 +144,7 @@ pub static METHODS: &[MethodEntry] = &[
     MethodEntry {
         name: "pcf-bs-fast-4x4",
         description: "fast PCF over 4x4 texels in four accumulated passes (Brabec & Seidel)",
+        family: Family::Seed,
         rates: Rates::None,
         params: BS,
         stores_samples: None,
@@ -134,6 +154,7 @@ pub static METHODS: &[MethodEntry] = &[
     MethodEntry {
         name: "pcf-gems16",
         description: "16 bilinear PCF lookups over a 4x4-texel region (GPU Gems ch. 11)",
+        family: Family::Seed,
         rates: Rates::None,
         params: params::MAP,
         stores_samples: None,
@@ -143,6 +164,7 @@ pub static METHODS: &[MethodEntry] = &[
     MethodEntry {
         name: "pcf-gems4",
         description: "4 of the 16 lookups, dithered by screen position (GPU Gems ch. 11)",
+        family: Family::Seed,
         rates: Rates::None,
         params: params::MAP,
         stores_samples: None,
@@ -153,6 +175,7 @@ pub static METHODS: &[MethodEntry] = &[
         name: "afsm",
         description: "alias-free shadow map: pixel centres as sampling points, 2D BSP (Aila & \
                       Laine 2004)",
+        family: Family::Seed,
         rates: Rates::None,
         params: &[],
         stores_samples: None,
@@ -166,6 +189,7 @@ pub static METHODS: &[MethodEntry] = &[
     MethodEntry {
         name: "afsm-ss",
         description: "alias-free shadow map at --rate sub-samples per pixel (default 32)",
+        family: Family::Seed,
         rates: Rates::Masks,
         params: SUPERSAMPLED,
         stores_samples: Some(32),
@@ -180,6 +204,7 @@ pub static METHODS: &[MethodEntry] = &[
         name: "spsm",
         description: "sub-pixel shadow map: 128-bit triangle texels, silhouette recovery, AA at \
                       uncertain pixels with --rate (Lecocq et al. 2014)",
+        family: Family::Seed,
         rates: Rates::Masks,
         params: &[
             &params::MAP_RES,
@@ -198,6 +223,7 @@ pub static METHODS: &[MethodEntry] = &[
     MethodEntry {
         name: "spsm-f32",
         description: "sub-pixel shadow map with unpacked f32 texels (Lecocq et al. 2014)",
+        family: Family::Seed,
         rates: Rates::Masks,
         params: &[
             &params::MAP_RES,
@@ -217,6 +243,7 @@ pub static METHODS: &[MethodEntry] = &[
         description: "fast sub-pixel antialiased shadow maps: silhouette mask map, facets, \
                       half-plane bitmask lookup table, --rate sub-samples (default 32) (Pan et \
                       al. 2009)",
+        family: Family::Seed,
         rates: Rates::Masks,
         params: params::map_and![&params::RATE, &params::PATTERN, &params::MASKS],
         stores_samples: None,

@@ -23,7 +23,7 @@
 //! shadowed pixel is `exp(-c (d - z))`, not 0), which the tests check. Casters with opacity
 //! below 1 are treated as opaque.
 
-use super::{map, MethodEntry, Rates};
+use super::{map, Family, MethodEntry, Rates};
 use crate::{
     depth_test::MapOptions,
     filtered_map::{self, check_filter, FilteredMap, DEFAULT_FILTER, FILTER},
@@ -49,6 +49,7 @@ pub const ENTRY: MethodEntry = MethodEntry {
     name: "esm",
     description: "exponential shadow map: box-filtered exp(c z), the test exp(-c (d - z)) \
                   (Annen et al. 2008)",
+    family: Family::Today,
     rates: Rates::None,
     params: params::map_and![&FILTER, &EXPONENT],
     stores_samples: None,

@@ -26,7 +26,7 @@
 //! result approaches the standard shadow map's: the tests check how close. Casters with
 //! opacity below 1 are treated as opaque.
 
-use super::{map, MethodEntry, Rates};
+use super::{map, Family, MethodEntry, Rates};
 use crate::{
     depth_test::MapOptions,
     filtered_map::{self, check_filter, FilteredMap, DEFAULT_FILTER, FILTER},
@@ -51,6 +51,7 @@ pub const ENTRY: MethodEntry = MethodEntry {
     name: "msm",
     description: "moment shadow map: four box-filtered depth moments, Hamburger reconstruction \
                   (Peters & Klein 2015)",
+    family: Family::Today,
     rates: Rates::None,
     params: params::map_and![&FILTER, &MOMENT_BIAS],
     stores_samples: None,

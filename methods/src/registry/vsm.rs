@@ -25,7 +25,7 @@
 //! `min_variance = 0` the test is the standard shadow map's (`sm`), which the tests check pixel
 //! for pixel. Casters with opacity below 1 are treated as opaque, as by `sm`.
 
-use super::{map, MethodEntry, Rates};
+use super::{map, Family, MethodEntry, Rates};
 use crate::{
     depth_test::MapOptions,
     filtered_map::{self, check_filter, FilteredMap, DEFAULT_FILTER, FILTER},
@@ -50,6 +50,7 @@ pub const ENTRY: MethodEntry = MethodEntry {
     name: "vsm",
     description: "variance shadow map: box-filtered depth moments, Chebyshev's upper bound \
                   (Donnelly & Lauritzen 2006)",
+    family: Family::Today,
     rates: Rates::None,
     params: params::map_and![&FILTER, &MIN_VARIANCE],
     stores_samples: None,
