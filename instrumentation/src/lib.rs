@@ -63,10 +63,17 @@ counters! {
     bsp_nodes,
     /// BSP nodes visited during rasterization.
     bsp_nodes_visited,
-    /// BSP nodes skipped because all their samples were already shadowed.
+    /// BSP nodes (`afsm`) or light-grid texels (`ftizb`, once per caster) skipped because all
+    /// their samples were already shadowed.
     nodes_occlusion_culled,
-    /// BSP nodes skipped because the triangle lies beyond their farthest sample.
+    /// BSP nodes (`afsm`) or light-grid texels (`ftizb`, once per caster) skipped because the
+    /// triangle lies beyond their farthest sample.
     nodes_depth_culled,
+    /// Light-grid texels the pixels' footprints were listed in (`ftizb`).
+    footprint_texels,
+    /// Light-grid texels holding pixels that a caster's conservative rasterization reached
+    /// (`ftizb`).
+    caster_texels,
     /// Sampling points tested against a triangle.
     sampling_points_tested,
     /// Depth comparisons against a shadow map.

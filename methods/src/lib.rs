@@ -19,6 +19,7 @@ pub mod depth_test;
 pub mod filtered_map;
 pub mod footprint;
 pub mod frame;
+pub mod ftizb;
 pub mod gbuffer;
 #[cfg(feature = "gpu")]
 pub mod gpu;

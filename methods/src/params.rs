@@ -190,7 +190,7 @@ pub static RATE: Param = Param {
     flag: "--rate",
     value_name: "N",
     help: "Sub-samples per pixel for methods that supersample and for `raytrace`: 1, 4, 8, 16, \
-           32, 64, 128 (up to 1024 for `raytrace`); default 1 (32 for `afsm-ss` and `pan09`). \
+           32, 64, 128 (up to 1024 for `raytrace`); default 1 (32 for `afsm-ss`, `pan09` and `ftizb`). \
            For `pcf-reeves`, the jittered samples per pixel footprint (the same values up to \
            1024); default 16. For `spsm`, the sub-samples of uncertain pixels (1: no \
            antialiasing, the default).",

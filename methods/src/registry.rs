@@ -14,6 +14,7 @@
 use crate::{
     afsm::{AfsmOptions, AliasFreeShadowMap},
     depth_test::{DepthCode, MapOptions},
+    ftizb::{Ftizb, FtizbOptions},
     method::{MethodError, ShadowMethod},
     pan09::{Pan09, Pan09Options},
     params::{self, Param},
@@ -250,10 +251,45 @@ pub static METHODS: &[MethodEntry] = &[
         cpu: |o| Ok(Box::new(Pan09::new(pan09_options(o)?)?)),
         gpu: gpu!(|o| Ok(Box::new(crate::gpu::pan09::GpuPan09::new(pan09_options(o)?)?))),
     },
+    MethodEntry {
+        name: "ftizb",
+        description: "frustum-traced irregular z-buffer: pixel footprints on their tangent \
+                      planes in a light-space grid, casters rasterized conservatively, each \
+                      pair's --rate sub-samples (default 32) tested exactly (Wyman et al. 2015)",
+        family: Family::Today,
+        rates: Rates::Masks,
+        params: &[&params::RATE, &params::PATTERN, &IZB_RES],
+        stores_samples: None,
+        cpu: |o| Ok(Box::new(Ftizb { options: ftizb_options(o)? })),
+        gpu: None,
+    },
     vsm::ENTRY,
     esm::ENTRY,
     msm::ENTRY,
 ];
+
+/// The light-space grid of `ftizb`.
+pub static IZB_RES: Param = Param {
+    key: "izb_res",
+    flag: "--izb-res",
+    value_name: "N",
+    help: "Texels per side of `ftizb`'s light-space grid, 1 to 4096; 0 (the default): the \
+           frame's larger side. Changes the cost, never the result.",
+    kind: params::Kind::Count,
+};
+
+/// `ftizb`'s options from the shared ones, validated.
+fn ftizb_options(options: &MethodOptions) -> Result<FtizbOptions, MethodError> {
+    let d = FtizbOptions::default();
+    let o = FtizbOptions {
+        rate: options.rate.unwrap_or(d.rate),
+        pattern: options.pattern.unwrap_or(d.pattern),
+        izb_res: options.count(IZB_RES.key, d.izb_res),
+        ..d
+    };
+    o.validate()?;
+    Ok(o)
+}
 
 /// The parameters of Brabec and Seidel's methods.
 static BS: &[&Param] = params::map_and![&params::DEPTH_BITS];

@@ -10,6 +10,7 @@ mod afsm;
 mod esm;
 mod far_objects;
 mod frame;
+mod ftizb;
 mod ground_truth;
 mod hard_cases;
 mod light_fit;

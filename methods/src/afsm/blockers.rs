@@ -258,6 +258,17 @@ impl Blocker {
         })
     }
 
+    /// The bounding box `(lo, hi)` of the outline on the light's image plane.
+    pub fn bounds(&self) -> (DVec2, DVec2) {
+        (self.lo, self.hi)
+    }
+
+    /// The nearest light depth of the outline's corners: the triangle shadows no point whose
+    /// threshold depth is at or in front of it.
+    pub fn nearest_depth(&self) -> f64 {
+        self.dmin
+    }
+
     /// Whether the triangle may cover a point of the box `lo..=hi`. Conservative: `false` only
     /// when the boxes are disjoint or, for some edge, the box's corner farthest inside lies
     /// outside by more than `1e-12` of the terms' magnitude, far beyond the rounding of the

@@ -1,0 +1,246 @@
+//! Stage "sample footprints" (Wyman et al., I3D 2015, section 4.1; TVCG 2016, section 5.1):
+//! every covered pixel enters the light-space grid's lists in each texel its footprint meets,
+//! and the pixel's sub-samples are placed on its receiver's tangent plane ([`SubSamples`]).
+//!
+//! **The footprint** is the pixel square seen on the tangent plane of the pixel's G-buffer
+//! point and face normal, limited to a bounded region at grazing angles, projected to the
+//! light's image: `pan09`'s facet ([`project_facet`], whose module doc gives the region), a
+//! convex polygon holding the light image point of every valid sub-sample. A pixel enters each
+//! texel whose closed square the polygon meets ([`Footprint::touches_texel`], conservative by a
+//! rounding margin); a footprint reaching beyond the grid enters every border texel of its
+//! clamped rectangle. A pixel whose tangent plane the camera sees exactly edge-on at its
+//! centre enters the texel of its centre alone; a pixel whose centre a spot light cannot
+//! project enters none (lit, as in `sm`).
+//!
+//! **The sub-samples** ([`SubSamples::pixel`]): sub-sample `s` of the shared pattern lies where
+//! the camera ray through it meets the tangent plane, if that point is in the facet's region
+//! (depth at most [`FACET_DEPTH_RATIO`] times the centre's for perspective cameras, within
+//! [`FACET_ORTHO_SPAN`] pixel widths of it for orthographic ones, beyond a spot light's near
+//! plane); the centre sub-sample is the G-buffer's point itself and always valid. Each becomes
+//! a sample on the light's image plane with `afsm`'s threshold depth
+//! ([`crate::afsm::samples::threshold_depth`], the shadow offset of the ray tracer).
+
+use super::grid::{Grid, TexelLists};
+use crate::{
+    afsm::{
+        samples::{threshold_depth, Sample},
+        shadow_offset,
+    },
+    frame::Frame,
+    gbuffer::GBuffer,
+    method::MethodError,
+    pan09::{
+        facets::{project_facet, LightPlanes, FACET_DEPTH_RATIO, FACET_ORTHO_SPAN},
+        footprint::Footprint,
+        screen::CameraBasis,
+    },
+    pattern::SamplePattern,
+};
+use rayon::prelude::*;
+use scenes::Projector;
+
+/// The pixels' lists: for every texel of the `res x res` grid, the pixels whose footprint
+/// meets it, in row-major order; an error when they would hold `u32::MAX` entries or more.
+pub fn footprints(
+    frame: &Frame<'_>,
+    light: &Projector,
+    res: u32,
+) -> Result<TexelLists, MethodError> {
+    let g = &frame.gbuffer;
+    let grid = Grid { res };
+    let camera = CameraBasis::new(&frame.camera);
+    let planes = LightPlanes::new(light, &camera);
+    let w = g.width as usize;
+    let keys: Vec<Vec<u64>> = (0..g.height as usize)
+        .into_par_iter()
+        .map(|row| {
+            let mut keys = Vec::new();
+            for k in row * w..(row + 1) * w {
+                if !g.covered(k) {
+                    continue;
+                }
+                let Some(footprint) = footprint(g, k, &camera, light, &planes) else { continue };
+                let Some((x0, y0, x1, y1)) = grid.rect(footprint.lo, footprint.hi) else {
+                    continue;
+                };
+                let inside = grid.holds(footprint.lo, footprint.hi);
+                for y in y0..=y1 {
+                    for x in x0..=x1 {
+                        if !inside || footprint.touches_texel(x as usize, y as usize) {
+                            keys.push(Grid::key(grid.index(x, y), k as u32));
+                        }
+                    }
+                }
+            }
+            keys
+        })
+        .collect();
+    let keys = keys.concat();
+    let entries = keys.len();
+    TexelLists::from_keys(res as usize * res as usize, keys).ok_or_else(|| {
+        MethodError::NotApplicable(format!(
+            "ftizb: the pixels' footprints meet {entries} texels of the {res} x {res} grid, \
+             more than its lists can index (2^32); lower --izb-res or the frame size"
+        ))
+    })
+}
+
+/// The footprint of pixel `k` on the light's image; `None` when the light cannot project its
+/// centre.
+fn footprint(
+    g: &GBuffer,
+    k: usize,
+    camera: &CameraBasis,
+    light: &Projector,
+    planes: &LightPlanes,
+) -> Option<Footprint> {
+    let w = g.width as usize;
+    let pixel = ((k % w) as u32, (k / w) as u32);
+    let (t, p, n) = (g.triangle[k], g.position[k], g.normal[k]);
+    match project_facet(camera, light, planes, pixel, g.width, t, p, n) {
+        Some(pf) => Some(pf.footprint),
+        None => {
+            let (xy, _) = light.project(p)?;
+            Footprint::new(&[xy])
+        }
+    }
+}
+
+/// The sub-samples of a frame's pixels on their tangent planes (see the module doc).
+#[derive(Debug, Clone, Copy)]
+pub struct SubSamples<'a> {
+    g: &'a GBuffer,
+    camera: &'a Projector,
+    light: &'a Projector,
+    pattern: &'a SamplePattern,
+    /// Orthographic cameras: the region's reach in depth (64 pixel widths).
+    ortho_span: f64,
+}
+
+impl<'a> SubSamples<'a> {
+    /// The sub-samples of `frame`'s pixels under `light` at `pattern`.
+    pub fn new(frame: &'a Frame<'a>, light: &'a Projector, pattern: &'a SamplePattern) -> Self {
+        let basis = CameraBasis::new(&frame.camera);
+        let pixel = basis.ox.length().max(basis.oy.length());
+        Self {
+            g: &frame.gbuffer,
+            camera: &frame.camera,
+            light,
+            pattern,
+            ortho_span: FACET_ORTHO_SPAN * pixel,
+        }
+    }
+
+    /// Pixels of the frame.
+    #[inline]
+    pub fn pixels(&self) -> usize {
+        self.g.triangle.len()
+    }
+
+    /// The light the sub-samples are projected by.
+    #[inline]
+    pub fn light(&self) -> &'a Projector {
+        self.light
+    }
+
+    /// The G-buffer triangle of pixel `k`.
+    #[inline]
+    pub fn triangle(&self, k: usize) -> u32 {
+        self.g.triangle[k]
+    }
+
+    /// Sub-samples per pixel.
+    #[inline]
+    pub fn rate(&self) -> usize {
+        self.pattern.rate() as usize
+    }
+
+    /// Writes pixel `k`'s sub-samples into `out` (`rate` of them; an invalid one gets a
+    /// threshold of minus infinity, which no caster passes) and returns the mask of the valid
+    /// ones: none for a background pixel or one whose centre the light cannot project.
+    pub fn pixel(&self, k: usize, out: &mut [Sample]) -> u128 {
+        let g = self.g;
+        let tri = g.triangle[k];
+        if !g.covered(k) {
+            return 0;
+        }
+        let (p0, n, dc) = (g.position[k], g.normal[k], g.depth[k]);
+        let w = g.width as usize;
+        let (i, j) = ((k % w) as u32, (k / w) as u32);
+        let offset = n.dot(p0);
+        let centre = self.pattern.centre_index();
+        let mut valid = 0u128;
+        for (s, slot) in out.iter_mut().enumerate().take(self.rate()) {
+            *slot = Sample { x: 0.0, y: 0.0, zt: f64::NEG_INFINITY, id: s as u32, tri };
+            let ray = self.camera.ray(self.pattern.point(i, j, s));
+            let point = if s == centre {
+                Some(p0)
+            } else {
+                ray.intersect_plane(n, offset).filter(|&t| self.in_region(t, dc)).map(|t| ray.at(t))
+            };
+            let Some(x) = point else { continue };
+            let Some((xy, z)) = self.light.project(x) else { continue };
+            let zt = threshold_depth(self.light, xy, z, shadow_offset(ray.origin, x));
+            if zt.is_finite() && xy.is_finite() {
+                *slot = Sample { x: xy.x, y: xy.y, zt, id: s as u32, tri };
+                valid |= 1 << s;
+            }
+        }
+        // The centre always counts when it projects (and nothing does when it does not).
+        if valid & 1 << centre == 0 {
+            return 0;
+        }
+        valid
+    }
+
+    /// Whether camera depth `t` lies in the facet's region around the centre's depth `dc`.
+    #[inline]
+    fn in_region(&self, t: f64, dc: f64) -> bool {
+        if self.camera.is_perspective() {
+            t > 0.0 && t <= FACET_DEPTH_RATIO * dc
+        } else {
+            (t - dc).abs() <= self.ortho_span
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pattern::PatternKind;
+    use glam::DVec2;
+    use instrumentation::Recorder;
+
+    /// Every valid sub-sample's light image point falls in a texel listing its pixel.
+    #[test]
+    fn every_valid_sub_sample_lies_in_a_texel_of_its_pixel() {
+        for name in ["plane-square", "spheres", "spot-spheres", "grazing"] {
+            let Some(Ok(scene)) = scenes::registry::load_builtin(name) else { continue };
+            let frame = Frame::new(&scene, 48, 36, &mut Recorder::default());
+            let res = 64;
+            let light = super::super::light_projector(&frame, res);
+            let pattern = SamplePattern::new(16, PatternKind::Rotated).expect("valid");
+            let lists = footprints(&frame, &light, res).expect("few entries");
+            let subs = SubSamples::new(&frame, &light, &pattern);
+            let grid = Grid { res };
+            let mut out = vec![Sample::default(); 16];
+            let mut checked = 0;
+            for k in 0..frame.gbuffer.triangle.len() {
+                let valid = subs.pixel(k, &mut out);
+                for (s, sample) in out.iter().enumerate() {
+                    if valid >> s & 1 == 0 {
+                        continue;
+                    }
+                    let p = DVec2::new(sample.x, sample.y);
+                    let (x0, y0, x1, y1) = grid.rect(p, p).expect("finite");
+                    let listed = (y0..=y1).any(|y| {
+                        (x0..=x1).any(|x| lists.of(grid.index(x, y)).contains(&(k as u32)))
+                    });
+                    assert!(listed, "{name}: pixel {k} sub-sample {s} at {p} is in no texel");
+                    checked += 1;
+                }
+            }
+            assert!(checked > 1000, "{name}: {checked}");
+        }
+    }
+}

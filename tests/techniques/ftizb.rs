@@ -1,0 +1,196 @@
+//! `ftizb` (Wyman et al. 2015, 2016) end to end: sub-sample for sub-sample against the ray
+//! tracer on planar receivers (both patterns), rate 1 against `afsm`, culling and the grid's
+//! resolution changing only the cost, determinism over thread counts, counters and stages.
+
+use crate::common::load_builtin;
+use analysis::raytrace::{RayTrace, SampleImage};
+use instrumentation::Recorder;
+use methods::{
+    ftizb::{Ftizb, FtizbOptions, SubsampleMasks},
+    method,
+    pattern::{PatternKind, SamplePattern},
+    Frame, MethodOptions, Visibility,
+};
+
+fn ftizb(rate: u32, pattern: PatternKind) -> Ftizb {
+    Ftizb { options: FtizbOptions { rate, pattern, ..FtizbOptions::default() } }
+}
+
+fn run_masks(m: &Ftizb, frame: &Frame<'_>) -> (Visibility, SubsampleMasks, Recorder) {
+    let mut rec = Recorder::default();
+    let (v, masks) = m.run_masks(frame, &mut rec).expect("ftizb runs");
+    assert_eq!(v.lit.len(), frame.gbuffer.triangle.len());
+    assert!(v.lit.iter().all(|l| l.is_finite() && (0.0..=1.0).contains(l)));
+    (v, masks, rec)
+}
+
+fn samples(frame: &Frame<'_>, rate: u32, kind: PatternKind) -> SampleImage {
+    let pattern = SamplePattern::new(rate, kind).expect("valid rate");
+    RayTrace { pattern }.sample_image(frame, &mut Recorder::default()).expect("raytrace applies")
+}
+
+/// Sub-sample comparison over the pixels whose sub-samples all see the receiver plane.
+#[derive(Debug, Default)]
+struct Comparison {
+    pixels: usize,
+    samples: usize,
+    /// Sub-samples whose shadow differs.
+    mismatches: usize,
+    /// Sub-samples left out of the pixel's ratio (there should be none on the plane).
+    invalid: usize,
+    /// Sub-samples in shadow, for the test to be meaningful.
+    shadowed: usize,
+}
+
+fn compare_on_plane(frame: &Frame<'_>, masks: &SubsampleMasks, truth: &SampleImage) -> Comparison {
+    let (plane, _, _) = frame.scene.receiver_plane().expect("a planar receiver");
+    let rate = truth.rate as usize;
+    let mut c = Comparison::default();
+    for k in 0..masks.occlusion.len() {
+        let hits = &truth.triangle[k * rate..(k + 1) * rate];
+        let on_plane = hits.iter().all(|&t| {
+            t != methods::raster::NO_TRIANGLE && frame.geometry.object[t as usize] as usize == plane
+        });
+        if !on_plane {
+            continue;
+        }
+        c.pixels += 1;
+        for s in 0..rate {
+            c.samples += 1;
+            let occluded = masks.occlusion[k] >> s & 1 == 1;
+            let shadowed = truth.light[k * rate + s] == 0.0;
+            c.mismatches += usize::from(occluded != shadowed);
+            c.invalid += usize::from(masks.valid[k] >> s & 1 == 0);
+            c.shadowed += usize::from(shadowed);
+        }
+    }
+    c
+}
+
+#[test]
+fn ftizb_equals_raytrace_sub_sample_for_sub_sample_on_planar_receivers() {
+    let cases = [
+        ("plane-square", 32, PatternKind::Grid),
+        ("plane-square", 32, PatternKind::Rotated),
+        ("cage", 32, PatternKind::Grid),
+        ("cage", 8, PatternKind::Rotated),
+        ("bunny-plane", 16, PatternKind::Rotated),
+        ("spheres", 128, PatternKind::Grid),
+        ("spot-spheres", 32, PatternKind::Rotated),
+    ];
+    for (name, rate, kind) in cases {
+        let Some(scene) = load_builtin(name) else { continue };
+        let frame = Frame::new(&scene, 120, 90, &mut Recorder::default());
+        let (_, masks, rec) = run_masks(&ftizb(rate, kind), &frame);
+        let truth = samples(&frame, rate, kind);
+        let c = compare_on_plane(&frame, &masks, &truth);
+        eprintln!(
+            "{name} {rate} {kind}: {c:?}, {} pairs tested",
+            rec.counters.visibility_evaluations
+        );
+        assert!(c.pixels > 2000 && c.shadowed > 500, "{name}: {c:?}");
+        assert_eq!(c.invalid, 0, "{name} {rate} {kind}");
+        assert!(c.mismatches as f64 <= 1e-5 * c.samples as f64, "{name} {rate} {kind}: {c:?}");
+    }
+}
+
+#[test]
+fn ftizb_at_rate_1_is_afsm() {
+    for name in ["plane-square", "cage", "spheres", "spot-spheres", "grazing", "bunny-plane"] {
+        let Some(scene) = load_builtin(name) else { continue };
+        let frame = Frame::new(&scene, 96, 72, &mut Recorder::default());
+        let (v, _, _) = run_masks(&ftizb(1, PatternKind::Grid), &frame);
+        let afsm = method("afsm", &MethodOptions::default())
+            .expect("valid")
+            .run(&frame, &mut Recorder::default())
+            .expect("runs");
+        let off: Vec<usize> = (0..v.lit.len()).filter(|&k| v.lit[k] != afsm.lit[k]).collect();
+        assert!(off.is_empty(), "{name}: pixels {off:?} differ from afsm");
+    }
+}
+
+fn options(occlusion: bool, depth: bool, izb_res: u32) -> FtizbOptions {
+    FtizbOptions {
+        rate: 16,
+        occlusion_culling: occlusion,
+        depth_culling: depth,
+        izb_res,
+        ..FtizbOptions::default()
+    }
+}
+
+#[test]
+fn culling_and_the_grid_size_change_the_cost_never_a_pixel() {
+    for name in ["cage", "spheres", "grazing"] {
+        let Some(scene) = load_builtin(name) else { continue };
+        let frame = Frame::new(&scene, 80, 60, &mut Recorder::default());
+        let run = |o: FtizbOptions| run_masks(&Ftizb { options: o }, &frame);
+        let (base, masks, rec) = run(options(true, true, 0));
+        let c = &rec.counters;
+        // A texel goes wholly dark only when it holds no lit sample: where a caster is in view,
+        // its lit pixels share the texels of its shadow (the same light rays), as on `cage`
+        // and `spheres`; on `grazing` they do not.
+        assert!(c.nodes_occlusion_culled > 0 || name != "grazing", "{name}: {c:?}");
+        assert!(c.nodes_depth_culled > 0, "{name}: {c:?}");
+        assert!(c.footprint_texels >= c.caster_texels.min(1), "{name}");
+        for o in [options(false, true, 0), options(true, false, 0), options(false, false, 0)] {
+            let (v, m, r) = run(o);
+            assert_eq!(v.lit, base.lit, "{name} {o:?}");
+            assert_eq!(m, masks, "{name} {o:?}");
+            assert!(
+                r.counters.sampling_points_tested > c.sampling_points_tested,
+                "{name} {o:?}: culling off does more work"
+            );
+        }
+        // Another grid rescales the light image coordinates, so a sub-sample within rounding
+        // of a caster's edge may flip; none did on these frames.
+        for res in [1, 16, 1024] {
+            let (v, _, r) = run(options(true, true, res));
+            let off = (0..v.lit.len()).filter(|&k| v.lit[k] != base.lit[k]).count();
+            assert_eq!(off, 0, "{name} at grid {res}");
+            assert_ne!(r.counters.visibility_evaluations, 0, "{name} at grid {res}");
+        }
+    }
+}
+
+#[test]
+fn results_and_counters_do_not_depend_on_the_thread_count() {
+    let Some(scene) = load_builtin("cage") else { return };
+    let frame = Frame::new(&scene, 80, 60, &mut Recorder::default());
+    let m = ftizb(32, PatternKind::Rotated);
+    let (v, _, rec) = run_masks(&m, &frame);
+    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a pool");
+    let (v1, _, rec1) = one.install(|| run_masks(&m, &frame));
+    assert_eq!(v.lit, v1.lit);
+    assert_eq!(rec.counters, rec1.counters);
+}
+
+#[test]
+fn stages_and_counters_are_recorded() {
+    let Some(scene) = load_builtin("bunny-plane") else { return };
+    let frame = Frame::new(&scene, 64, 48, &mut Recorder::default());
+    let (_, _, rec) = run_masks(&ftizb(32, PatternKind::Grid), &frame);
+    let names: Vec<&str> = rec.stages.stages.iter().map(|s| s.name.as_str()).collect();
+    assert_eq!(names, ["sample footprints", "conservative rasterization", "frustum tests"]);
+    let c = &rec.counters;
+    assert!(c.footprint_texels > 0 && c.caster_texels > 0, "{c:?}");
+    assert!(c.visibility_evaluations > 0 && c.sampling_points_tested > 0, "{c:?}");
+    // Every pair tests at most 32 sub-samples.
+    assert!(c.sampling_points_tested <= 32 * c.visibility_evaluations, "{c:?}");
+}
+
+#[test]
+fn registry_builds_ftizb_and_names_bad_flags() {
+    let m = method("ftizb", &MethodOptions::default()).expect("defaults are valid");
+    assert_eq!(m.name(), "ftizb");
+    assert_eq!(m.params()["rate"], 32);
+    assert_eq!(m.params()["izb_res"], "frame");
+    let mut bad = MethodOptions::default();
+    bad.set(&methods::registry::IZB_RES, methods::params::Value::Count(5000));
+    let e = method("ftizb", &bad).map(|_| ()).expect_err("izb_res 5000");
+    assert!(e.to_string().contains("--izb-res"), "{e}");
+    let e = method("ftizb", &MethodOptions { rate: Some(256), ..Default::default() })
+        .map(|_| ())
+        .expect_err("rate 256");
+    assert!(e.to_string().contains("--rate"), "{e}");
+}
