@@ -389,7 +389,7 @@ impl Blocker {
 
     /// [`Blocker::shadows_boxed`] for a sample the triangle is known to cover.
     #[inline]
-    fn shadows_covered(&self, s: &Sample) -> bool {
+    pub fn shadows_covered(&self, s: &Sample) -> bool {
         s.tri != self.id && self.dmin < s.zt && (self.dmax < s.zt || self.depth_at(s.x, s.y) < s.zt)
     }
 

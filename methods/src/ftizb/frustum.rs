@@ -10,13 +10,22 @@
 //!
 //! **Frustum tests** ([`frustum_tests`]), in parallel over the texels holding casters: the
 //! texel's pixels' sub-samples are placed once ([`SubSamples::pixel`]), then each caster is
-//! tested against them in caster order. A caster is skipped in the texel when its nearest
+//! tested against those the texel *owns*, in caster order. A sub-sample is owned by the texel
+//! its light image point falls in (floor, clamped to the grid), or, should rounding have put
+//! that point in a texel that does not list its pixel, by every texel listing the pixel; so
+//! each (sub-sample, caster) pair is tested once however many texels a footprint meets, and
+//! never lost (a caster covering the point meets the point's texel, and is listed there).
+//! The papers test a pixel's whole mask in every texel of its footprint; the owned masks give
+//! the same result (ORed) without the repeated tests (on `cage` at 800 x 600 a footprint met
+//! 2.4 texels on average). A caster is skipped in the texel when its nearest
 //! corner is not in front of the farthest sample's threshold (`nodes_depth_culled`) or when
 //! every valid sub-sample of the texel is already shadowed (`nodes_occlusion_culled`); else
 //! each pixel that is not its own triangle's and still has lit sub-samples is one
-//! `visibility_evaluations`, each of its lit valid sub-samples one `sampling_points_tested`,
-//! and [`Blocker::shadows`] decides it: the frustum test, exact on the `f64` light image point
-//! and threshold (see [`super`]). The texel's masks are ORed into the pixels' (two atomic
+//! `visibility_evaluations`; when the caster may meet the box of the pixel's sub-samples'
+//! light image points ([`Blocker::overlaps`]), its lit valid sub-samples are each one
+//! `sampling_points_tested` and the frustum test decides them ([`frustum_mask`]), with
+//! [`Blocker::shadows`]'s decisions, exact on the `f64` light image point and threshold (see
+//! [`super`]). The texel's masks are ORed into the pixels' (two atomic
 //! words of a `u128`), so the result does not depend on the order the texels are run in.
 //!
 //! Hot loop rules: no allocation per texel (each thread reuses its buffers), one pass over a
@@ -31,6 +40,7 @@ use crate::{
     afsm::{blockers::Blocker, samples::Sample},
     method::MethodError,
 };
+use glam::DVec2;
 use instrumentation::Counters;
 use rayon::prelude::*;
 use scenes::{Geometry, Projector};
@@ -124,9 +134,17 @@ impl AtomicMask {
 /// One thread's buffers for a texel.
 #[derive(Debug, Default)]
 struct Scratch {
+    /// The pixels' sub-samples, `rate` per pixel.
     samples: Vec<Sample>,
+    /// Their light image coordinates again, for the edge masks.
+    xs: Vec<f64>,
+    ys: Vec<f64>,
+    /// Per pixel: its valid sub-samples, those the texel owns, the shadowed ones, and the box
+    /// of the owned ones' light image points.
+    all_valid: Vec<u128>,
     valid: Vec<u128>,
     occluded: Vec<u128>,
+    boxes: Vec<(DVec2, DVec2)>,
 }
 
 /// Tests every texel's casters against its pixels' sub-samples.
@@ -150,13 +168,14 @@ pub fn frustum_tests(
                 geometry,
                 light,
                 subs,
-                pixels.of(texel),
+                pixels,
+                texel,
                 casters.of(texel),
                 options,
                 scratch,
             );
             for (i, &k) in pixels.of(texel).iter().enumerate() {
-                valid[k as usize].or(scratch.valid[i]);
+                valid[k as usize].or(scratch.all_valid[i]);
                 occlusion[k as usize].or(scratch.occluded[i]);
             }
             c
@@ -172,35 +191,58 @@ pub fn frustum_tests(
     }
 }
 
-/// One texel: its pixels' sub-samples against its casters, the masks left in `scratch`.
+/// One texel: the sub-samples it owns of its pixels against its casters, the masks left in
+/// `scratch`.
+#[allow(clippy::too_many_arguments)]
 fn test_texel(
     geometry: &Geometry,
     light: &Projector,
     subs: &SubSamples<'_>,
-    pixels: &[u32],
+    lists: &TexelLists,
+    texel: usize,
     casters: &[u32],
     options: &FtizbOptions,
     scratch: &mut Scratch,
 ) -> Counters {
+    let grid = Grid { res: light.width as u32 };
+    let pixels = lists.of(texel);
     let rate = subs.rate();
     let n = pixels.len();
     let mut c = Counters::default();
     scratch.samples.resize(n * rate, Sample::default());
+    scratch.xs.resize(n * rate, 0.0);
+    scratch.ys.resize(n * rate, 0.0);
     scratch.valid.clear();
+    scratch.all_valid.clear();
+    scratch.boxes.clear();
     scratch.occluded.clear();
     scratch.occluded.resize(n, 0);
     let mut farthest = f64::NEG_INFINITY;
     for (i, &k) in pixels.iter().enumerate() {
-        let samples = &mut scratch.samples[i * rate..(i + 1) * rate];
+        let span = i * rate..(i + 1) * rate;
+        let samples = &mut scratch.samples[span.clone()];
         let v = subs.pixel(k as usize, samples);
-        let mut bits = v;
-        while bits != 0 {
-            farthest = farthest.max(samples[bits.trailing_zeros() as usize].zt);
-            bits &= bits - 1;
+        let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+        let mut own = 0u128;
+        for (s, sample) in samples.iter().enumerate() {
+            scratch.xs[span.start + s] = sample.x;
+            scratch.ys[span.start + s] = sample.y;
+            if v >> s & 1 == 1 {
+                let p = DVec2::new(sample.x, sample.y);
+                let owner = grid.texel_of(p);
+                if owner != texel && lists.of(owner).binary_search(&k).is_ok() {
+                    continue;
+                }
+                own |= 1 << s;
+                (lo, hi) = (lo.min(p), hi.max(p));
+                farthest = farthest.max(sample.zt);
+            }
         }
-        scratch.valid.push(v);
+        scratch.all_valid.push(v);
+        scratch.valid.push(own);
+        scratch.boxes.push((lo, hi));
     }
-    // Pixels with every valid sub-sample shadowed (at first, those with none valid).
+    // Pixels with every owned sub-sample shadowed (at first, those owning none).
     let mut dark = scratch.valid.iter().filter(|&&v| v == 0).count();
     for &t in casters {
         if options.occlusion_culling && dark == n {
@@ -219,17 +261,20 @@ fn test_texel(
                 continue;
             }
             c.visibility_evaluations += 1;
-            let samples = &scratch.samples[i * rate..(i + 1) * rate];
-            let mut bits = lit;
-            let mut hit = 0u128;
-            while bits != 0 {
-                let s = bits.trailing_zeros();
-                bits &= bits - 1;
-                c.sampling_points_tested += 1;
-                if b.shadows(&samples[s as usize]) {
-                    hit |= 1 << s;
-                }
+            let (lo, hi) = scratch.boxes[i];
+            if !b.overlaps(lo, hi) {
+                continue;
             }
+            let span = i * rate..(i + 1) * rate;
+            let hit = frustum_mask(
+                &b,
+                lit,
+                &scratch.samples[span.clone()],
+                &scratch.xs[span.clone()],
+                &scratch.ys[span],
+                (lo, hi),
+            );
+            c.sampling_points_tested += u64::from(lit.count_ones());
             if hit & !scratch.occluded[i] != 0 {
                 scratch.occluded[i] |= hit;
                 dark += usize::from(scratch.occluded[i] == v);
@@ -239,9 +284,66 @@ fn test_texel(
     c
 }
 
+/// The sub-samples among `lit` that the caster `b` shadows, exactly (the decisions of
+/// [`Blocker::shadows`]): the edge masks ([`Blocker::edge_masks`], 64 sub-samples at a time,
+/// inside the box `bounds` of the pixel's points) drop those certainly outside the projection
+/// and settle the coverage of those certainly inside the caster's bounding box and every
+/// edge (their error bound holds in that box); only the rest take the exact predicates.
+#[inline]
+fn frustum_mask(
+    b: &Blocker,
+    lit: u128,
+    samples: &[Sample],
+    xs: &[f64],
+    ys: &[f64],
+    (lo, hi): (DVec2, DVec2),
+) -> u128 {
+    let (blo, bhi) = b.bounds();
+    let mut hit = 0u128;
+    for (chunk, start) in (0..samples.len()).step_by(64).enumerate() {
+        let end = (start + 64).min(samples.len());
+        let todo = (lit >> (64 * chunk)) as u64 & mask_of(end - start);
+        if todo == 0 {
+            continue;
+        }
+        let (maybe, surely) = b.edge_masks(&xs[start..end], &ys[start..end], lo, hi);
+        let mut bits = todo & maybe;
+        while bits != 0 {
+            let s = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            let sample = &samples[start + s];
+            let boxed =
+                sample.x >= blo.x && sample.x <= bhi.x && sample.y >= blo.y && sample.y <= bhi.y;
+            let shadowed = boxed
+                && if surely >> s & 1 == 1 {
+                    b.shadows_covered(sample)
+                } else {
+                    b.shadows_boxed(sample)
+                };
+            if shadowed {
+                hit |= 1u128 << (start + s);
+            }
+        }
+    }
+    hit
+}
+
+/// The mask of the first `n` bits (`n <= 64`).
+#[inline]
+fn mask_of(n: usize) -> u64 {
+    if n >= 64 {
+        u64::MAX
+    } else {
+        (1u64 << n) - 1
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::DVec3;
+    use proptest::prelude::*;
+    use scenes::projection::{look_basis, ProjectionKind};
 
     #[test]
     fn atomic_masks_or_both_words() {
@@ -250,5 +352,64 @@ mod tests {
         m.or(1 << 100);
         m.or(0);
         assert_eq!(m.load(), 1 | 1 << 100);
+    }
+
+    /// A directional light looking down on the square `[0, 16]^2`, one texel a unit.
+    fn light() -> Projector {
+        let (right, up, forward) = look_basis(-DVec3::Z, DVec3::Y);
+        Projector {
+            origin: DVec3::new(8.0, 8.0, 12.0),
+            right,
+            up,
+            forward,
+            kind: ProjectionKind::Orthographic { half_width: 8.0, half_height: 8.0 },
+            near: f64::NEG_INFINITY,
+            width: 16.0,
+            height: 16.0,
+        }
+    }
+
+    proptest! {
+        /// The frustum mask equals the exact test of every sub-sample, with corners and
+        /// samples on a quarter-unit grid (many exactly on edges and corners) and up to 128
+        /// sub-samples (two chunks of edge masks).
+        #[test]
+        fn frustum_masks_equal_the_exact_test_of_each_sub_sample(
+            corners in proptest::collection::vec((0u32..=64, 0u32..=64, 0u32..=8), 3),
+            points in proptest::collection::vec((0u32..=64, 0u32..=64, 0u32..=20), 1..=128),
+            lit_bits in any::<u128>(),
+        ) {
+            let mut g = Geometry::default();
+            g.positions.extend(corners.iter().map(|&(x, y, z)| {
+                DVec3::new(f64::from(x) / 4.0, 16.0 - f64::from(y) / 4.0, f64::from(z) / 2.0)
+            }));
+            g.triangles.push([0, 1, 2]);
+            g.object.push(0);
+            let Some(b) = Blocker::new(&g, 0, &light()) else { return Ok(()) };
+            let samples: Vec<Sample> = points
+                .iter()
+                .enumerate()
+                .map(|(s, &(x, y, z))| Sample {
+                    x: f64::from(x) / 4.0,
+                    y: f64::from(y) / 4.0,
+                    zt: 12.0 - f64::from(z) / 4.0,
+                    id: s as u32,
+                    tri: 7,
+                })
+                .collect();
+            let xs: Vec<f64> = samples.iter().map(|s| s.x).collect();
+            let ys: Vec<f64> = samples.iter().map(|s| s.y).collect();
+            let n = samples.len();
+            let lit = if n == 128 { lit_bits } else { lit_bits & ((1u128 << n) - 1) };
+            let (lo, hi) = samples.iter().fold(
+                (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
+                |(lo, hi), s| (lo.min(DVec2::new(s.x, s.y)), hi.max(DVec2::new(s.x, s.y))),
+            );
+            let got = frustum_mask(&b, lit, &samples, &xs, &ys, (lo, hi));
+            for (s, sample) in samples.iter().enumerate() {
+                let want = lit >> s & 1 == 1 && b.shadows(sample);
+                prop_assert_eq!(got >> s & 1 == 1, want, "sub-sample {}", s);
+            }
+        }
     }
 }

@@ -62,6 +62,15 @@ impl Grid {
         (lo, hi)
     }
 
+    /// The index of the texel point `p` falls in (the floor of its coordinates, clamped to the
+    /// grid, so that a point beyond it falls in a border texel).
+    #[inline]
+    pub fn texel_of(&self, p: DVec2) -> usize {
+        let last = f64::from(self.res - 1);
+        let (x, y) = (p.x.floor().clamp(0.0, last), p.y.floor().clamp(0.0, last));
+        self.index(x as u32, y as u32)
+    }
+
     /// The index of texel `(x, y)`.
     #[inline]
     pub fn index(&self, x: u32, y: u32) -> usize {

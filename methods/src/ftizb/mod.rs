@@ -84,8 +84,9 @@
 //! - **Work per texel**: the papers run one fragment per (caster, texel) that walks the
 //!   texel's list; here the (texel, caster) pairs are sorted by texel and each texel's
 //!   sub-samples are computed once and tested against all its casters, in caster order, in
-//!   parallel over texels. A pixel in several texels can be tested against a caster in each
-//!   (the papers' duplicates; the counters count them).
+//!   parallel over texels. A texel tests only the sub-samples whose light image point it holds
+//!   ([`frustum`]), so that a pixel whose footprint meets several texels is not tested against
+//!   a caster once per texel (the papers' duplicate tests).
 //! - **Transparency**: casters are opaque (the run record says so when the scene has
 //!   semi-transparent ones), as in `pan09`.
 //! - **Memory**: 8 bytes per list entry and per (texel, caster) pair while they are sorted,
