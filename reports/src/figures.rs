@@ -53,8 +53,9 @@ use std::path::Path;
 /// The time budgets of the summary figure, in milliseconds.
 pub const BUDGETS_MS: [f64; 4] = [10.0, 30.0, 100.0, 300.0];
 
-/// The parameters a series may sweep or hold fixed, in the order they are named.
-const PARAMS: [&str; 4] = ["map_res", "rate", "depth_bits", "pattern"];
+/// The parameters a series may sweep or hold fixed, in the order they are named (`filter`:
+/// the filtered maps' box filter width).
+const PARAMS: [&str; 5] = ["map_res", "rate", "depth_bits", "pattern", "filter"];
 
 /// Parameters that name a series (and a run in [`params_text`]) where they vary but are never
 /// swept along one, their values having no order: the light-frustum policy of the shadow-map

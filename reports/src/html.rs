@@ -217,8 +217,9 @@ pub fn metric_cells(r: &Row) -> Vec<Cell> {
 }
 
 /// Parameters given a column of their own when they vary over a table (the ones suites sweep,
-/// and the light-frustum policy of the shadow-map methods).
-const COLUMN_KEYS: [&str; 6] = ["map_res", "rate", "depth_bits", "pattern", "device", "frustum"];
+/// the filtered maps' filter width, and the light-frustum policy of the shadow-map methods).
+const COLUMN_KEYS: [&str; 7] =
+    ["map_res", "rate", "depth_bits", "pattern", "filter", "device", "frustum"];
 
 /// Where each parameter of a table's rows is stated.
 #[derive(Debug, Clone, PartialEq, Default)]
