@@ -174,6 +174,11 @@ impl TableView {
     }
 }
 
+/// The head of a time column on `clock` (`CPU`, `wall`): the median with its 95 % interval.
+pub fn time_head(clock: &str) -> String {
+    format!("{clock} ms (95 % interval)")
+}
+
 /// Heads of the metric columns, under [`metric_cells`].
 pub const METRIC_COLUMNS: [&str; 10] = [
     "mean abs error",
