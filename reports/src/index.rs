@@ -10,11 +10,11 @@
 //! provenance, the contents list, the comparison with a baseline, the scenes, the best error
 //! within each time budget (figure and table), the section "Against today's techniques" when
 //! some scene has runs of today's techniques and of the seeds ([`today_section`]: per such
-//! scene its chart and its table, [`crate::today`]), per scene its image grids, its whole front, its
-//! charts and its table of runs (each run linked to its page, `runs/ID.html`,
+//! scene its chart and its table, [`crate::today`]), per scene its image grids, its whole
+//! front, its charts and its table of runs (each run linked to its page, `runs/ID.html`,
 //! [`crate::run_pages`]) and, for a scene with an animation, its section "In motion"
-//! ([`motion_table`], the charts of [`crate::motion_charts`]), CPU and GPU side by side, the papers' tables, a glossary of the
-//! metrics, and what did not run. Images are files beside the page (`plots/*.png`, with the
+//! ([`motion_table`], the charts of [`crate::motion_charts`]), CPU and GPU side by side, the
+//! papers' tables, a glossary of the metrics, and what did not run. Images are files beside the page (`plots/*.png`, with the
 //! SVG linked).
 //!
 //! A runs table fits a 1400-pixel window with its time column in view: parameters and columns
@@ -398,14 +398,16 @@ pub fn today_section(report: &Report, plots: &[PlotFile]) -> Option<TodaySection
     let names = |family: crate::today::Family| {
         let rows: Vec<&Row> =
             report.rows.iter().filter(|r| crate::today::family_of(r) == Some(family)).collect();
-        crate::figures::methods_in(&rows)
-            .iter()
-            .map(|m| format!("`{m}`"))
-            .collect::<Vec<_>>()
-            .join(", ")
+        crate::figures::methods_in(&rows).join(", ")
     };
     let about = format!(
-        "Today's techniques, the ones today's shadow papers compare against ({}), against the          2001-2014 techniques the workbench began with, the seeds ({}), on the {} scene{} with          runs of both. Per scene: mean error on the shadow-only pixels against the method's          own time on the {clock} clock (per frame for a run in motion), today's methods in          colour, the seeds as dark rings (named where they are on the front), the scene's          other runs as grey dots, and the Pareto front over every run of the scene; then a          row per run, its family and whether it is on the front.",
+        "Today's techniques, the ones today's shadow papers compare against ({}), against \
+         the 2001-2014 techniques the workbench began with, the seeds ({}), on the {} scene{} \
+         with runs of both. Per scene: mean error on the shadow-only pixels against the \
+         method's own time on the {clock} clock (per frame for a run in motion), today's \
+         methods in colour, the seeds as dark rings (named where they are on the front), the \
+         scene's other runs as grey dots, and the Pareto front over every run of the scene; \
+         then a row per run with its family and whether it is on the front.",
         names(crate::today::Family::Today),
         names(crate::today::Family::Seed),
         scenes.len(),
@@ -419,7 +421,9 @@ pub fn today_section(report: &Report, plots: &[PlotFile]) -> Option<TodaySection
             let on = crate::today::on_front(&rows, report.clock).iter().filter(|&&f| f).count();
             TodayScene {
                 about: format!(
-                    "Frame {}x{} against {}; {on} of its {} runs on the Pareto front (no other                      run of the scene is both as fast and as accurate and better in one).",
+                    "Frame {}x{} against {}; {on} of its {} runs on the Pareto front (no \
+                     other run of the scene is at least as fast and as accurate and better in \
+                     one).",
                     sc.width,
                     sc.height,
                     sc.reference,
