@@ -10,8 +10,8 @@
 //! Tables sort by clicking a header (numbers as numbers, `n/a` last) and filter by a text box.
 //! The script marks every image `data-loaded="yes"` or `"no"` once a page has loaded; a page
 //! opened as `PAGE.html#selftest` checks its layout, sorts and filters its first sortable
-//! table, drives its comparison view if it has one, and writes what it found into
-//! `<pre id="selftest">`, for a headless browser to check.
+//! table, sorts every other, drives its comparison view if it has one, and writes what it
+//! found into `<pre id="selftest">`, for a headless browser to check.
 
 use crate::model::{params_of, Row};
 use serde::Serialize;

@@ -36,7 +36,8 @@
 //! by a text box. The script marks every image `data-loaded="yes"` or `"no"` once the page has
 //! loaded, and the page opened as `index.html#selftest` checks its own layout (the first
 //! screen holds the Pareto summary and the machine line; no runs table is wider than the
-//! window), sorts and filters its first run table and writes what it found into
+//! window), sorts and filters its first run table, sorts every other sortable table (the one
+//! against today's techniques among them) and writes what it found into
 //! `<pre id="selftest">`, for a headless browser to check.
 
 use crate::baseline::Comparison;
