@@ -5,7 +5,7 @@
 //! run's family is its method's registry entry's ([`family_of`]); nothing here lists method
 //! names, so a method added to the registry's table joins its family's side by itself.
 //!
-//! A scene takes part when it has a run of each family ([`compares`], [`scenes`]); the index
+//! A scene takes part when it has a run of each family ([`compares`], [`scenes()`]); the index
 //! (`crate::index`) and `report.md` (`crate::write`) show the section when some scene does.
 //! The runs are the scene's rows as the rest of the index takes them: a still scene's frame;
 //! on an animated scene, its runs with their metrics pooled over the frames and their time per
