@@ -7,8 +7,9 @@
 // play/pause button and one frame slider, always on the same frame; playing advances a frame
 // every frame delay and loops.
 // Every page marks each image's data-loaded attribute (yes or no) once loaded; opened with
-// #selftest it exercises itself and writes what it found into a pre element of id selftest,
-// one "key: value" line each, for a headless browser's --dump-dom. On index.html the
+// #selftest it exercises itself (it sorts and filters the first table of runs, and sorts every
+// other sortable table) and writes what it found into a pre element of id selftest, one
+// "key: value" line each, for a headless browser's --dump-dom. On index.html the
 // self-test first checks the layout in a window of 1400 x 1000 pixels: whether the first
 // screen (nothing scrolled) holds the Pareto summary (#summary) and the machine line
 // (#measured), and whether any table of runs is wider than the window or its container.
@@ -351,29 +352,33 @@
     var bad = images.filter(function (i) { return !(i.complete && i.naturalWidth > 0); });
     out.push('images: ' + (images.length - bad.length) + ' of ' + images.length + ' loaded');
     bad.forEach(function (i) { out.push('broken image: ' + i.getAttribute('src')); });
-    var table = document.querySelector('table.runs') || document.querySelector('table.sortable');
-    if (table) {
-      var col = Array.prototype.findIndex.call(table.tHead.rows[0].cells, function (th) {
+    // The first numeric column of a table, and its numbers in the order shown.
+    function numericColumn(t) {
+      return Array.prototype.findIndex.call(t.tHead.rows[0].cells, function (th) {
         return th.classList.contains('num');
       });
-      var values = function () {
-        return Array.prototype.map.call(table.tBodies[0].rows, function (r) {
-          return cellValue(r.cells[col]);
-        }).filter(function (x) { return typeof x === 'number'; });
-      };
-      var ordered = function (dir) {
-        var xs = values();
-        for (var i = 1; i < xs.length; i++) if (dir * (xs[i] - xs[i - 1]) < 0) return false;
-        return xs.length > 1;
-      };
-      var before = values().join(' ');
+    }
+    function values(t, col) {
+      return Array.prototype.map.call(t.tBodies[0].rows, function (r) {
+        return cellValue(r.cells[col]);
+      }).filter(function (x) { return typeof x === 'number'; });
+    }
+    function ordered(t, col, dir) {
+      var xs = values(t, col);
+      for (var i = 1; i < xs.length; i++) if (dir * (xs[i] - xs[i - 1]) < 0) return false;
+      return xs.length > 1;
+    }
+    var table = document.querySelector('table.runs') || document.querySelector('table.sortable');
+    if (table) {
+      var col = numericColumn(table);
+      var before = values(table, col).join(' ');
       clickSort(table, col);
-      var up = ordered(1), upValues = values().join(' ');
+      var up = ordered(table, col, 1), upValues = values(table, col).join(' ');
       clickSort(table, col);
-      var down = ordered(-1);
+      var down = ordered(table, col, -1);
       out.push('sort column: ' + table.tHead.rows[0].cells[col].textContent);
       out.push('sort: ' + (up && down ? 'ok' : 'FAILED') + ' (before ' + before + '; ascending ' +
-        upValues + '; descending ' + values().join(' ') + ')');
+        upValues + '; descending ' + values(table, col).join(' ') + ')');
       var first = table.tBodies[0].rows[0].cells[0].textContent.trim();
       var total = table.tBodies[0].rows.length;
       var shown = filterTable(table, first);
@@ -382,6 +387,20 @@
       out.push('filter: ' + (shown >= 1 && shown <= total && none === 0 ? 'ok' : 'FAILED') +
         ' (' + shown + ' of ' + total + ' rows hold "' + first + '")');
     }
+    // Every other sortable table with two numbers in a numeric column sorts by its first,
+    // ascending then descending; the finding names them by their class.
+    var sorted = [], unsorted = [];
+    document.querySelectorAll('table.sortable').forEach(function (t) {
+      var c = numericColumn(t);
+      if (t === table || c < 0 || values(t, c).length < 2) return;
+      clickSort(t, c);
+      var ascending = ordered(t, c, 1);
+      clickSort(t, c);
+      var name = t.classList.length > 1 ? t.classList[1] : 'sortable';
+      (ascending && ordered(t, c, -1) ? sorted : unsorted).push(name);
+    });
+    out.push('sort tables: ' + (unsorted.length ? 'FAILED for ' + unsorted.join(', ') : 'ok') +
+      ' (' + sorted.join(', ') + ')');
     if (v) {
       var st = v.state, start = st.active;
       var src = function () { return v.views[st.active].getAttribute('src'); };

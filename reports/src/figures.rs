@@ -53,8 +53,9 @@ use std::path::Path;
 /// The time budgets of the summary figure, in milliseconds.
 pub const BUDGETS_MS: [f64; 4] = [10.0, 30.0, 100.0, 300.0];
 
-/// The parameters a series may sweep or hold fixed, in the order they are named.
-const PARAMS: [&str; 4] = ["map_res", "rate", "depth_bits", "pattern"];
+/// The parameters a series may sweep or hold fixed, in the order they are named (`filter`:
+/// the filtered maps' box filter width).
+const PARAMS: [&str; 5] = ["map_res", "rate", "depth_bits", "pattern", "filter"];
 
 /// Parameters that name a series (and a run in [`params_text`]) where they vary but are never
 /// swept along one, their values having no order: the light-frustum policy of the shadow-map
@@ -111,9 +112,19 @@ pub struct PlotFile {
     pub title: String,
     /// File name of the PNG, relative to the report folder (the SVG is beside it).
     pub png: String,
-    /// Whether it draws the scene's runs in motion (`crate::motion_charts`), shown in the
-    /// scene's "In motion" section rather than with its other charts.
-    pub motion: bool,
+    /// Where the index and `report.md` show it.
+    pub place: Place,
+}
+
+/// Where the index and `report.md` show a chart.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Place {
+    /// With its scene's other charts (a figure across scenes: under the budgets).
+    Scene,
+    /// In its scene's "In motion" section: the runs in motion (`crate::motion_charts`).
+    Motion,
+    /// In the section "Against today's techniques" (`crate::today`).
+    Today,
 }
 
 impl PlotFile {
@@ -627,7 +638,7 @@ pub fn write_plots(dir: &Path, report: &Report) -> Result<Vec<PlotFile>, OutputE
                 scene: c.scene.clone(),
                 title: c.chart.title.clone(),
                 png: format!("plots/{}.png", c.stem),
-                motion: false,
+                place: Place::Scene,
             });
         }
     }
@@ -640,7 +651,7 @@ pub fn write_plots(dir: &Path, report: &Report) -> Result<Vec<PlotFile>, OutputE
                 clock_name(report.clock)
             ),
             png: format!("plots/{BUDGET_STEM}.png"),
-            motion: false,
+            place: Place::Scene,
         });
     }
     // The cost-against-work tables' charts, shown under their tables.

@@ -10,8 +10,8 @@
 //! Tables sort by clicking a header (numbers as numbers, `n/a` last) and filter by a text box.
 //! The script marks every image `data-loaded="yes"` or `"no"` once a page has loaded; a page
 //! opened as `PAGE.html#selftest` checks its layout, sorts and filters its first sortable
-//! table, drives its comparison view if it has one, and writes what it found into
-//! `<pre id="selftest">`, for a headless browser to check.
+//! table, sorts every other, drives its comparison view if it has one, and writes what it
+//! found into `<pre id="selftest">`, for a headless browser to check.
 
 use crate::model::{params_of, Row};
 use serde::Serialize;
@@ -174,6 +174,11 @@ impl TableView {
     }
 }
 
+/// The head of a time column on `clock` (`CPU`, `wall`): the median with its 95 % interval.
+pub fn time_head(clock: &str) -> String {
+    format!("{clock} ms (95 % interval)")
+}
+
 /// Heads of the metric columns, under [`metric_cells`].
 pub const METRIC_COLUMNS: [&str; 10] = [
     "mean abs error",
@@ -217,8 +222,9 @@ pub fn metric_cells(r: &Row) -> Vec<Cell> {
 }
 
 /// Parameters given a column of their own when they vary over a table (the ones suites sweep,
-/// and the light-frustum policy of the shadow-map methods).
-const COLUMN_KEYS: [&str; 6] = ["map_res", "rate", "depth_bits", "pattern", "device", "frustum"];
+/// the filtered maps' filter width, and the light-frustum policy of the shadow-map methods).
+const COLUMN_KEYS: [&str; 7] =
+    ["map_res", "rate", "depth_bits", "pattern", "filter", "device", "frustum"];
 
 /// Where each parameter of a table's rows is stated.
 #[derive(Debug, Clone, PartialEq, Default)]

@@ -8,11 +8,13 @@
 //! contended), per scene its Pareto front (mean error against time on the report's clock) as
 //! a compact table, and what the runs say of each method ([`crate::summary`]). Below it: the
 //! provenance, the contents list, the comparison with a baseline, the scenes, the best error
-//! within each time budget (figure and table), per scene its image grids, its whole front, its
-//! charts and its table of runs (each run linked to its page, `runs/ID.html`,
+//! within each time budget (figure and table), the section "Against today's techniques" when
+//! some scene has runs of today's techniques and of the seeds ([`today_section`]: per such
+//! scene its chart and its table, [`crate::today`]), per scene its image grids, its whole
+//! front, its charts and its table of runs (each run linked to its page, `runs/ID.html`,
 //! [`crate::run_pages`]) and, for a scene with an animation, its section "In motion"
-//! ([`motion_table`], the charts of [`crate::motion_charts`]), CPU and GPU side by side, the papers' tables, a glossary of the
-//! metrics, and what did not run. Images are files beside the page (`plots/*.png`, with the
+//! ([`motion_table`], the charts of [`crate::motion_charts`]), CPU and GPU side by side, the
+//! papers' tables, a glossary of the metrics, and what did not run. Images are files beside the page (`plots/*.png`, with the
 //! SVG linked).
 //!
 //! A runs table fits a 1400-pixel window with its time column in view: parameters and columns
@@ -34,13 +36,14 @@
 //! by a text box. The script marks every image `data-loaded="yes"` or `"no"` once the page has
 //! loaded, and the page opened as `index.html#selftest` checks its own layout (the first
 //! screen holds the Pareto summary and the machine line; no runs table is wider than the
-//! window), sorts and filters its first run table and writes what it found into
+//! window), sorts and filters its first run table, sorts every other sortable table (the one
+//! against today's techniques among them) and writes what it found into
 //! `<pre id="selftest">`, for a headless browser to check.
 
 use crate::baseline::Comparison;
-use crate::figures::{clock_name, PlotFile};
+use crate::figures::{clock_name, Place, PlotFile};
 use crate::html::{
-    anchor, metric_cells, Cell, Head, Note, ParamSplit, TableView, METRIC_COLUMNS,
+    anchor, metric_cells, time_head, Cell, Head, Note, ParamSplit, TableView, METRIC_COLUMNS,
     RUN_TABLE_METRICS,
 };
 use crate::model::{method_label, params_of, row_stem, Report, Row};
@@ -144,6 +147,32 @@ pub struct MotionSection {
     pub plots: Vec<Figure>,
 }
 
+/// The section "Against today's techniques" ([`crate::today`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TodaySection {
+    /// Its anchor, `today`.
+    pub id: String,
+    /// What it holds: which of today's techniques, against which seeds, on how many scenes.
+    pub about: String,
+    /// A part per scene that has runs of both.
+    pub scenes: Vec<TodayScene>,
+}
+
+/// A scene's part of the section "Against today's techniques".
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TodayScene {
+    /// Its anchor, `today-cage`.
+    pub id: String,
+    /// Scene.
+    pub name: String,
+    /// What holds for its chart and table: frame, reference, clock, the front.
+    pub about: String,
+    /// Its charts.
+    pub plots: Vec<Figure>,
+    /// A row per run of the scene.
+    pub table: TableView,
+}
+
 /// CPU and GPU side by side.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct DevicesView {
@@ -211,6 +240,8 @@ pub struct IndexPage {
     pub summary_figures: Vec<Figure>,
     /// The best error of every method within each budget.
     pub budget: Option<TableView>,
+    /// Today's techniques against the seeds, when some scene has runs of both.
+    pub today: Option<TodaySection>,
     /// Per scene, its section.
     pub scenes: Vec<SceneSection>,
     /// CPU and GPU side by side.
@@ -230,11 +261,6 @@ fn constant_candidates() -> Vec<&'static str> {
     let mut c: Vec<&'static str> = RUN_TABLE_METRICS.iter().map(|&k| METRIC_COLUMNS[k]).collect();
     c.push("contended");
     c
-}
-
-/// The head of the time column on `clock`.
-fn time_head(clock: &str) -> String {
-    format!("{clock} ms (95 % interval)")
 }
 
 /// The table of one scene's runs (see the module documentation).
@@ -353,12 +379,70 @@ pub fn motion_section(
         table: motion_table(&rows, report),
         plots: plots
             .iter()
-            .filter(|p| p.motion && p.scene == sc.scene)
+            .filter(|p| p.place == Place::Motion && p.scene == sc.scene)
             .enumerate()
             .map(|(k, p)| figure(format!("{id}-plot-{k}"), p))
             .collect(),
         id,
     })
+}
+
+/// The section "Against today's techniques" when some scene has runs of both families
+/// ([`crate::today::scenes`]): per such scene its sentence, its charts among `plots` and its
+/// table.
+pub fn today_section(report: &Report, plots: &[PlotFile]) -> Option<TodaySection> {
+    let scenes = crate::today::scenes(report);
+    if scenes.is_empty() {
+        return None;
+    }
+    let clock = clock_name(report.clock);
+    let names = |family: crate::today::Family| {
+        let rows: Vec<&Row> =
+            report.rows.iter().filter(|r| crate::today::family_of(r) == Some(family)).collect();
+        crate::figures::methods_in(&rows).join(", ")
+    };
+    let about = format!(
+        "Today's techniques, the ones today's shadow papers compare against ({}), against \
+         the 2001-2014 techniques the workbench began with, the seeds ({}), on the {} scene{} \
+         with runs of both. Per scene: mean error on the shadow-only pixels against the \
+         method's own time on the {clock} clock (per frame for a run in motion), today's \
+         methods in colour, the seeds as dark rings (named where they are on the front), the \
+         scene's other runs as grey dots, and the Pareto front over every run of the scene; \
+         then a row per run with its family and whether it is on the front.",
+        names(crate::today::Family::Today),
+        names(crate::today::Family::Seed),
+        scenes.len(),
+        if scenes.len() == 1 { "" } else { "s" }
+    );
+    let parts = scenes
+        .into_iter()
+        .map(|sc| {
+            let id = format!("today-{}", anchor(&sc.scene));
+            let rows = crate::today::scene_rows(report, &sc.scene);
+            let on = crate::today::on_front(&rows, report.clock).iter().filter(|&&f| f).count();
+            TodayScene {
+                about: format!(
+                    "Frame {}x{} against {}; {on} of its {} runs on the Pareto front (no \
+                     other run of the scene is at least as fast and as accurate and better in \
+                     one).",
+                    sc.width,
+                    sc.height,
+                    sc.reference,
+                    rows.len()
+                ),
+                plots: plots
+                    .iter()
+                    .filter(|p| p.place == Place::Today && p.scene == sc.scene)
+                    .enumerate()
+                    .map(|(k, p)| figure(format!("{id}-plot-{k}"), p))
+                    .collect(),
+                table: crate::today::table(&rows, report),
+                name: sc.scene.clone(),
+                id,
+            }
+        })
+        .collect();
+    Some(TodaySection { id: "today".into(), about, scenes: parts })
 }
 
 /// A scene's whole Pareto front as a table: method, parameters, error, time on the clock with
@@ -432,7 +516,7 @@ pub fn index_page(report: &Report, plots: &[PlotFile], baseline: Option<&Compari
     );
     let summary_figures: Vec<Figure> = plots
         .iter()
-        .filter(|p| p.scene.is_empty())
+        .filter(|p| p.scene.is_empty() && p.place == Place::Scene)
         .enumerate()
         .map(|(k, p)| figure(format!("summary-plot-{k}"), p))
         .collect();
@@ -481,7 +565,7 @@ pub fn index_page(report: &Report, plots: &[PlotFile], baseline: Option<&Compari
                 front: fronts.iter().find(|f| f.scene == sc.scene).map(|f| front_table(f, &clock)),
                 plots: plots
                     .iter()
-                    .filter(|p| p.scene == sc.scene && !p.motion)
+                    .filter(|p| p.scene == sc.scene && p.place == Place::Scene)
                     .enumerate()
                     .map(|(k, p)| figure(format!("{id}-plot-{k}"), p))
                     .collect(),
@@ -509,6 +593,7 @@ pub fn index_page(report: &Report, plots: &[PlotFile], baseline: Option<&Compari
             }
         })
         .collect();
+    let today = today_section(report, plots);
     IndexPage {
         page: "index",
         title: format!("shadowbench report: {}", report.suite.name),
@@ -529,11 +614,12 @@ pub fn index_page(report: &Report, plots: &[PlotFile], baseline: Option<&Compari
             timestamp: p.timestamp.clone(),
             command: p.command.clone(),
         },
-        contents: contents(report, &summary_figures, &scenes, baseline.is_some()),
+        contents: contents(report, &summary_figures, today.as_ref(), &scenes, baseline.is_some()),
         baseline: baseline.map(baseline_view),
         scenes_table,
         summary_figures,
         budget,
+        today,
         scenes,
         devices: devices_view(report),
         papers: report
@@ -576,6 +662,7 @@ pub fn index_html(
 fn contents(
     report: &Report,
     summary: &[Figure],
+    today: Option<&TodaySection>,
     scenes: &[SceneSection],
     baseline: bool,
 ) -> Vec<Link> {
@@ -588,6 +675,11 @@ fn contents(
         c.push(Link::to("budgets", "Best error within a time budget"));
     }
     c.extend(summary.iter().map(|f| Link::to(&f.id, &f.title)));
+    if let Some(t) = today {
+        let mut l = Link::to(&t.id, "Against today's techniques");
+        l.children.extend(t.scenes.iter().map(|s| Link::to(&s.id, &s.name)));
+        c.push(l);
+    }
     for s in scenes {
         let mut l = Link::to(&s.id, &s.name);
         l.children.extend(s.grids.iter().map(|g| Link::to(&g.id, &g.title)));

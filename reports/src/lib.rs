@@ -5,7 +5,8 @@
 //! [`model`], written by [`write`] as JSON, CSV, Markdown, EXR images and HTML pages
 //! ([`index`], [`run_pages`], rendered from [`templates`]), leading with the answer that
 //! [`summary`] computes (Pareto fronts, what the runs say of each method, the machine and its
-//! load), with the charts chosen by [`figures`] and drawn by [`plots`];
+//! load), with the charts chosen by [`figures`] and drawn by [`plots`], and the section that
+//! sets today's techniques against the seeds ([`today`]);
 //! the papers' tables and the cost-against-work tables are measured by [`tables`]; shards are
 //! put back together by [`merge`]. A frame for another renderer is written by [`frame_export`],
 //! and an outside renderer's result read by [`external`].
@@ -36,6 +37,7 @@ pub mod sweep;
 pub mod tables;
 pub mod templates;
 pub mod timing;
+pub mod today;
 pub mod write;
 
 pub use figures::write_plots;

@@ -22,7 +22,9 @@
 //! A temporal error of 0 (an exact method, a frame pair where nothing changed) is drawn at the
 //! log axis' floor and the chart says so.
 
-use crate::figures::{clock_name, packed_series, params_text, Measure, PlotFile, SceneChart};
+use crate::figures::{
+    clock_name, packed_series, params_text, Measure, Place, PlotFile, SceneChart,
+};
 use crate::model::{method_label, Report, Row, SceneInfo};
 use crate::output::OutputError;
 use crate::plots::{pareto_front, write_chart, Chart, Marker, Point, Series, MAX_SERIES};
@@ -197,8 +199,8 @@ pub fn charts(report: &Report, scene: &SceneInfo) -> Vec<SceneChart> {
 }
 
 /// Writes the charts of every scene's runs in motion into `dir/plots/` (the folder
-/// [`crate::figures::write_plots`] writes, which must exist). Returns them, each marked
-/// [`PlotFile::motion`], its title followed by its note.
+/// [`crate::figures::write_plots`] writes, which must exist). Returns them, each placed in
+/// the "In motion" section ([`Place::Motion`]), its title followed by its note.
 pub fn write_plots(dir: &Path, report: &Report) -> Result<Vec<PlotFile>, OutputError> {
     let plots = dir.join("plots");
     std::fs::create_dir_all(&plots)
@@ -216,7 +218,7 @@ pub fn write_plots(dir: &Path, report: &Report) -> Result<Vec<PlotFile>, OutputE
                 scene: c.scene,
                 title,
                 png: format!("plots/{}.png", c.stem),
-                motion: true,
+                place: Place::Motion,
             });
         }
     }
@@ -446,7 +448,7 @@ mod tests {
         let per_frame = files.iter().find(|f| f.png.contains("per-frame")).expect("drawn");
         assert!(per_frame.title.ends_with(&left_out.join(", ")), "{}", per_frame.title);
         for f in &files {
-            assert!(f.motion);
+            assert_eq!(f.place, Place::Motion);
             assert!(dir.path().join(&f.png).is_file() && dir.path().join(f.svg()).is_file());
         }
     }

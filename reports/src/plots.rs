@@ -4,7 +4,9 @@
 //! through its points in the order of the parameter it sweeps, each point may carry a label
 //! (the parameter's value) and a horizontal bar (the spread of a time), CPU runs are marked
 //! with circles and GPU runs with triangles, and a chart may set its series against the
-//! scene's other runs, drawn as small grey dots ([`Marker::Context`]). The legend sits beside
+//! scene's other runs, drawn as small grey dots ([`Marker::Context`]), or draw a group of runs
+//! as open dark-grey rings without a line, set apart from the coloured series
+//! ([`Marker::Ring`]: the seed techniques against today's). The legend sits beside
 //! the plot, never over the data, each entry whole (long ones wrapped onto more lines); both
 //! log axes label 1, 2 and 5 times each power of ten. The error-against-time charts also draw
 //! the Pareto front (the runs no other run beats in both error and time).
@@ -52,6 +54,10 @@ pub enum Marker {
     /// A small grey dot without line or label: the scene's other runs, for context; not a
     /// coloured series.
     Context,
+    /// An open dark-grey ring without line, its points labelled where they carry a label: a
+    /// group of runs set apart from the coloured series (the seed techniques on the chart
+    /// against today's); not a coloured series.
+    Ring,
 }
 
 /// One point of a series.
@@ -181,8 +187,12 @@ pub fn colour(k: usize) -> RGBAColor {
 /// The grey of [`Marker::Context`] points.
 pub const CONTEXT_GREY: RGBColor = RGBColor(190, 190, 190);
 
+/// The dark grey of [`Marker::Ring`] points.
+pub const RING_GREY: RGBColor = RGBColor(70, 70, 70);
+
 /// The colour of each series of `chart`, in order: the coloured series take [`colour`]`(0)`,
-/// `colour(1)`, ... in turn, and the context series ([`Marker::Context`]) are grey.
+/// `colour(1)`, ... in turn, the context series ([`Marker::Context`]) are grey and the rings
+/// ([`Marker::Ring`]) dark grey.
 pub fn series_colours(chart: &Chart) -> Vec<RGBAColor> {
     let mut k = 0;
     chart
@@ -190,6 +200,7 @@ pub fn series_colours(chart: &Chart) -> Vec<RGBAColor> {
         .iter()
         .map(|s| match s.marker {
             Marker::Context => CONTEXT_GREY.to_rgba(),
+            Marker::Ring => RING_GREY.to_rgba(),
             _ => {
                 k += 1;
                 colour(k - 1)
@@ -444,7 +455,9 @@ where
                 .map_err(e)?;
             front_drawn = true;
         }
-        c.draw_series(LineSeries::new(pts.clone(), colour.stroke_width(2))).map_err(e)?;
+        if s.marker != Marker::Ring {
+            c.draw_series(LineSeries::new(pts.clone(), colour.stroke_width(2))).map_err(e)?;
+        }
         for p in &s.points {
             if let Some((a, b)) = p.x_span {
                 let y = fy(p.y);
@@ -458,6 +471,10 @@ where
         match s.marker {
             Marker::Triangle => {
                 c.draw_series(pts.iter().map(|&p| TriangleMarker::new(p, 6, colour.filled())))
+                    .map_err(e)?;
+            }
+            Marker::Ring => {
+                c.draw_series(pts.iter().map(|&p| Circle::new(p, 5, colour.stroke_width(2))))
                     .map_err(e)?;
             }
             _ => {
@@ -516,12 +533,13 @@ fn draw_legend<DB: DrawingBackend>(
     let max = LEGEND_WIDTH - LEGEND_TEXT_X as u32 - 6;
     let mut y = 40;
     for (label, colour, marker) in entries {
-        if *marker != Some(Marker::Context) {
+        if !matches!(marker, Some(Marker::Context | Marker::Ring)) {
             area.draw(&PathElement::new(vec![(6, y), (30, y)], colour.stroke_width(2)))?;
         }
         match marker {
             Some(Marker::Circle) => area.draw(&Circle::new((18, y), 4, colour.filled()))?,
             Some(Marker::Context) => area.draw(&Circle::new((18, y), 3, colour.filled()))?,
+            Some(Marker::Ring) => area.draw(&Circle::new((18, y), 5, colour.stroke_width(2)))?,
             Some(Marker::Triangle) => {
                 area.draw(&TriangleMarker::new((18, y), 6, colour.filled()))?
             }
@@ -630,6 +648,7 @@ mod tests {
         let mut list: Vec<Series> =
             (0..MAX_SERIES).map(|k| series(&format!("s{k}"), Marker::Circle)).collect();
         list.insert(3, series("other runs", Marker::Context));
+        list.insert(5, series("seed techniques", Marker::Ring));
         let chart = Chart {
             title: "t".into(),
             x_label: "x".into(),
@@ -640,16 +659,18 @@ mod tests {
         };
         let colours = series_colours(&chart);
         assert_eq!(colours[3], CONTEXT_GREY.to_rgba());
+        assert_eq!(colours[5], RING_GREY.to_rgba());
         let mut coloured: Vec<(u8, u8, u8)> = colours
             .iter()
             .enumerate()
-            .filter(|(k, _)| *k != 3)
+            .filter(|(k, _)| *k != 3 && *k != 5)
             .map(|(_, c)| (c.0, c.1, c.2))
             .collect();
         coloured.sort();
         coloured.dedup();
         assert_eq!(coloured.len(), MAX_SERIES, "no colour twice");
         assert!(!coloured.contains(&(190, 190, 190)) && !coloured.contains(&(0, 0, 0)));
+        assert!(!coloured.contains(&(RING_GREY.0, RING_GREY.1, RING_GREY.2)));
     }
 
     #[test]
@@ -706,6 +727,11 @@ mod tests {
                     marker: Marker::Triangle,
                     points: vec![Point::at(2.0, 0.4)],
                 },
+                Series {
+                    label: "seed rings".into(),
+                    marker: Marker::Ring,
+                    points: vec![point(3.0, 0.2, "ring-label")],
+                },
             ],
             pareto: true,
             linear_x: false,
@@ -714,7 +740,7 @@ mod tests {
         let png = image::open(dir.path().join("c.png")).expect("a PNG");
         assert_eq!((png.width(), png.height()), (1200, 700));
         let svg = std::fs::read_to_string(dir.path().join("c.svg")).expect("an SVG");
-        for text in ["x (ms)", "Pareto", "1024", "software"] {
+        for text in ["x (ms)", "Pareto", "1024", "software", "seed rings", "ring-label"] {
             assert!(svg.contains(text), "{text}");
         }
     }

@@ -1,7 +1,8 @@
 //! A report's files: `runs.json` (everything), `runs.csv` (one line per run: parameters,
 //! metrics, times, counters), `report.md` (the report in Markdown: the machine and the load,
 //! per scene its Pareto front and what the runs say of each method, the scenes, the budget
-//! figure and table, per scene its grids and charts as images, its table of runs and, for an
+//! figure and table, today's techniques against the seeds (the index's section of that name),
+//! per scene its grids and charts as images, its table of runs and, for an
 //! animated scene, its runs in motion (the index's "In motion" table and charts), CPU and GPU
 //! side by side, the papers' tables), the pages (`index.html`, `runs/ID.html`), the
 //! charts (`plots/`), and `visibility/*.exr` (every visibility buffer).
@@ -10,7 +11,7 @@
 //! the output's transaction (`crate::publish`): the report appears under its final names, with
 //! its manifest, only when it is whole.
 
-use crate::figures::{clock_name, write_plots, PlotFile};
+use crate::figures::{clock_name, write_plots, Place, PlotFile};
 use crate::grids::write_grid;
 use crate::model::{param_label, row_stem, Images, Report, Row};
 use crate::output::{write_visibility_exr, OutputError};
@@ -243,10 +244,12 @@ fn md_table(s: &mut String, heads: &[String], rows: &[Vec<String>]) {
 
 /// `report.md`: the machine and the load; per scene its Pareto front and, per method, what
 /// the runs say of it; the scenes; the best error within each time budget (the figure and
-/// the table); per scene its grids and charts as images (`plots/*.png`) and a table of every
-/// run, and for an animated scene its runs in motion (sentence, charts, table); CPU and GPU
-/// side by side; the papers' tables; what did not run. `plots` are the charts [`write_plots`]
-/// and [`crate::motion_charts::write_plots`] wrote.
+/// the table); today's techniques against the seeds where some scene has runs of both
+/// (sentences, charts and per scene the table of `crate::today`); per scene its grids and
+/// charts as images (`plots/*.png`) and a table of every run, and for an animated scene its
+/// runs in motion (sentence, charts, table); CPU and GPU side by side; the papers' tables;
+/// what did not run. `plots` are the charts [`write_plots`],
+/// [`crate::motion_charts::write_plots`] and [`crate::today::write_plots`] wrote.
 pub fn markdown(report: &Report, plots: &[PlotFile]) -> String {
     let mut s = String::new();
     let clock = clock_name(report.clock);
@@ -354,7 +357,7 @@ pub fn markdown(report: &Report, plots: &[PlotFile]) -> String {
             "Per scene and method, the least mean error of its runs whose median {clock} time \
              fits each budget; **bold** is the least of the scene's methods within it.\n"
         );
-        for p in plots.iter().filter(|p| p.scene.is_empty()) {
+        for p in plots.iter().filter(|p| p.scene.is_empty() && p.place == Place::Scene) {
             let _ = writeln!(s, "![{}]({})\n", p.title, p.png);
         }
         let t = budget_table(report);
@@ -375,12 +378,26 @@ pub fn markdown(report: &Report, plots: &[PlotFile]) -> String {
             .collect();
         md_table(&mut s, &heads, &rows);
     }
+    if let Some(t) = crate::index::today_section(report, plots) {
+        let _ = writeln!(s, "\n## Against today's techniques\n\n{}", t.about);
+        for sc in &t.scenes {
+            let _ = writeln!(
+                s,
+                "\n### {}: today's techniques against the seeds\n\n{}\n",
+                sc.name, sc.about
+            );
+            for p in &sc.plots {
+                let _ = writeln!(s, "![{}]({})\n", p.title, p.png);
+            }
+            md_table_view(&mut s, &sc.table);
+        }
+    }
     for sc in &report.scenes {
         let _ = writeln!(s, "\n## {}\n", sc.scene);
         for g in report.grids.iter().filter(|g| g.scene == sc.scene) {
             let _ = writeln!(s, "![{}]({})\n", g.title, g.png);
         }
-        for p in plots.iter().filter(|p| p.scene == sc.scene && !p.motion) {
+        for p in plots.iter().filter(|p| p.scene == sc.scene && p.place == Place::Scene) {
             let _ = writeln!(s, "![{}]({})\n", p.title, p.png);
         }
         let _ = writeln!(s, "### Runs on {}\n", sc.scene);
@@ -493,6 +510,7 @@ pub fn write_summary(
     let json = serde_json::to_string_pretty(report).map_err(|e| err(dir, &e))?;
     let mut plots = write_plots(dir, report)?;
     plots.extend(crate::motion_charts::write_plots(dir, report)?);
+    plots.extend(crate::today::write_plots(dir, report)?);
     let pages = crate::templates::Pages::new().map_err(|e| err(dir, &e))?;
     let index = dir.join("index.html");
     let html =

@@ -1,7 +1,8 @@
 //! A report's pages in headless Chromium, in a window of 1400 x 1000 pixels: index.html and a
 //! run page open from the file system, every image loads, every local link names a file that
 //! exists and every anchor a section, clicking a table header sorts the table (ascending,
-//! then descending), the filter box hides rows, and the run page's comparison view flips
+//! then descending) and every other sortable table, today's techniques against the seeds
+//! among them, the filter box hides rows, and the run page's comparison view flips
 //! between images, zooms, pans and swipes. The index leads with the answer: its first screen
 //! (the top 1000 pixels, nothing scrolled) holds the Pareto summary and the machine line, and
 //! no table of runs is wider than the window, its time column in view.
@@ -37,6 +38,10 @@ map_res = [64, 128]
 
 [[run]]
 method = "pcf-gems4"
+map_res = [64]
+
+[[run]]
+method = "vsm"
 map_res = [64]
 "#;
 
@@ -122,11 +127,11 @@ fn index_and_run_pages_work_in_headless_chromium() {
     let dir = tempfile::tempdir().expect("tempdir");
     let suite = Suite::parse(SUITE, Path::new("browser.toml")).expect("suite");
     let (report, images) = run_suite(&suite, |_| {});
-    assert_eq!(report.rows.len(), 6, "{:?}", report.skipped);
+    assert_eq!(report.rows.len(), 8, "{:?}", report.skipped);
     let out = dir.path();
     write_report(out, &report, &images, None).expect("report written");
     let pages = write_run_pages(out, &report).expect("run pages written");
-    assert_eq!(pages.len(), 6);
+    assert_eq!(pages.len(), 8);
 
     let index = out.join("index.html");
     let html = std::fs::read_to_string(&index).expect("index.html");
@@ -145,6 +150,11 @@ fn index_and_run_pages_work_in_headless_chromium() {
     assert!(finding(&lines, "runs tables").starts_with("ok"), "{lines:#?}");
     assert!(finding(&lines, "sort").starts_with("ok"), "{lines:#?}");
     assert!(finding(&lines, "filter").starts_with("ok"), "{lines:#?}");
+    // The other tables sort too: vsm, one of today's techniques, beside sm gives each scene
+    // a table against the seeds.
+    let tables = finding(&lines, "sort tables");
+    assert!(tables.starts_with("ok"), "{lines:#?}");
+    assert_eq!(tables.matches("today").count(), 2, "{tables}");
     for p in &pages {
         assert!(lines.iter().any(|l| l == &format!("link: {p}")), "index does not link {p}");
     }
@@ -154,8 +164,8 @@ fn index_and_run_pages_work_in_headless_chromium() {
     images_and_links(&run, &lines);
     assert_eq!(
         finding(&lines, "views"),
-        "6",
-        "this run, the reference, its error map, the class map and the scene's two other runs"
+        "7",
+        "this run, the reference, its error map, the class map and the scene's three other runs"
     );
     // The first step and the flip go from the run to the reference and back.
     let flip = finding(&lines, "flip");
