@@ -31,11 +31,12 @@ use crate::{
     method::MethodError,
     pan09::{
         facets::{project_facet, LightPlanes, FACET_DEPTH_RATIO, FACET_ORTHO_SPAN},
-        footprint::Footprint,
+        footprint::{Footprint, MAX_CORNERS},
         screen::CameraBasis,
     },
     pattern::SamplePattern,
 };
+use glam::DVec2;
 use rayon::prelude::*;
 use scenes::Projector;
 
@@ -44,10 +45,10 @@ use scenes::Projector;
 pub fn footprints(
     frame: &Frame<'_>,
     light: &Projector,
-    res: u32,
+    grid: Grid,
 ) -> Result<TexelLists, MethodError> {
     let g = &frame.gbuffer;
-    let grid = Grid { res };
+    let res = grid.res;
     let camera = CameraBasis::new(&frame.camera);
     let planes = LightPlanes::new(light, &camera);
     let w = g.width as usize;
@@ -59,7 +60,9 @@ pub fn footprints(
                 if !g.covered(k) {
                     continue;
                 }
-                let Some(footprint) = footprint(g, k, &camera, light, &planes) else { continue };
+                let Some(footprint) = footprint(g, k, &camera, light, &planes, &grid) else {
+                    continue;
+                };
                 let Some((x0, y0, x1, y1)) = grid.rect(footprint.lo, footprint.hi) else {
                     continue;
                 };
@@ -85,23 +88,31 @@ pub fn footprints(
     })
 }
 
-/// The footprint of pixel `k` on the light's image; `None` when the light cannot project its
-/// centre.
+/// The footprint of pixel `k` on the light's image, in the grid's texel units; `None` when
+/// the light cannot project its centre.
 fn footprint(
     g: &GBuffer,
     k: usize,
     camera: &CameraBasis,
     light: &Projector,
     planes: &LightPlanes,
+    grid: &Grid,
 ) -> Option<Footprint> {
     let w = g.width as usize;
     let pixel = ((k % w) as u32, (k / w) as u32);
     let (t, p, n) = (g.triangle[k], g.position[k], g.normal[k]);
     match project_facet(camera, light, planes, pixel, g.width, t, p, n) {
-        Some(pf) => Some(pf.footprint),
+        Some(pf) => {
+            let mut corners = [DVec2::ZERO; MAX_CORNERS];
+            let c = pf.footprint.corners();
+            for (out, &q) in corners.iter_mut().zip(c) {
+                *out = grid.texels(q);
+            }
+            Footprint::new(&corners[..c.len()])
+        }
         None => {
             let (xy, _) = light.project(p)?;
-            Footprint::new(&[xy])
+            Footprint::new(&[grid.texels(xy)])
         }
     }
 }
@@ -208,7 +219,6 @@ impl<'a> SubSamples<'a> {
 mod tests {
     use super::*;
     use crate::pattern::PatternKind;
-    use glam::DVec2;
     use instrumentation::Recorder;
 
     /// Every valid sub-sample's light image point falls in a texel listing its pixel.
@@ -217,12 +227,11 @@ mod tests {
         for name in ["plane-square", "spheres", "spot-spheres", "grazing"] {
             let Some(Ok(scene)) = scenes::registry::load_builtin(name) else { continue };
             let frame = Frame::new(&scene, 48, 36, &mut Recorder::default());
-            let res = 64;
-            let light = super::super::light_projector(&frame, res);
+            let grid = Grid::new(64);
+            let light = crate::afsm::light_projector(&frame);
             let pattern = SamplePattern::new(16, PatternKind::Rotated).expect("valid");
-            let lists = footprints(&frame, &light, res).expect("few entries");
+            let lists = footprints(&frame, &light, grid).expect("few entries");
             let subs = SubSamples::new(&frame, &light, &pattern);
-            let grid = Grid { res };
             let mut out = vec![Sample::default(); 16];
             let mut checked = 0;
             for k in 0..frame.gbuffer.triangle.len() {
@@ -231,7 +240,7 @@ mod tests {
                     if valid >> s & 1 == 0 {
                         continue;
                     }
-                    let p = DVec2::new(sample.x, sample.y);
+                    let p = grid.texels(DVec2::new(sample.x, sample.y));
                     let (x0, y0, x1, y1) = grid.rect(p, p).expect("finite");
                     let listed = (y0..=y1).any(|y| {
                         (x0..=x1).any(|x| lists.of(grid.index(x, y)).contains(&(k as u32)))

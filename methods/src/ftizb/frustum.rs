@@ -56,10 +56,10 @@ pub fn bin_casters(
     geometry: &Geometry,
     is_caster: impl Fn(usize) -> bool + Sync,
     light: &Projector,
+    grid: Grid,
     pixels: &TexelLists,
 ) -> Result<TexelLists, MethodError> {
-    let res = light.width as u32;
-    let grid = Grid { res };
+    let res = grid.res;
     let n = geometry.triangles.len();
     let keys: Vec<Vec<u64>> = (0..n.div_ceil(TRIANGLES_PER_TASK))
         .into_par_iter()
@@ -71,7 +71,9 @@ pub fn bin_casters(
                 }
                 let Some(b) = Blocker::new(geometry, t, light) else { continue };
                 let (lo, hi) = b.bounds();
-                let Some((x0, y0, x1, y1)) = grid.rect(lo, hi) else { continue };
+                let Some((x0, y0, x1, y1)) = grid.rect(grid.texels(lo), grid.texels(hi)) else {
+                    continue;
+                };
                 for y in y0..=y1 {
                     for x in x0..=x1 {
                         let texel = grid.index(x, y);
@@ -150,6 +152,7 @@ struct Scratch {
 /// Tests every texel's casters against its pixels' sub-samples.
 pub fn frustum_tests(
     geometry: &Geometry,
+    grid: Grid,
     subs: &SubSamples<'_>,
     pixels: &TexelLists,
     casters: &TexelLists,
@@ -166,7 +169,7 @@ pub fn frustum_tests(
             let texel = texel as usize;
             let c = test_texel(
                 geometry,
-                light,
+                (light, grid),
                 subs,
                 pixels,
                 texel,
@@ -196,7 +199,7 @@ pub fn frustum_tests(
 #[allow(clippy::too_many_arguments)]
 fn test_texel(
     geometry: &Geometry,
-    light: &Projector,
+    (light, grid): (&Projector, Grid),
     subs: &SubSamples<'_>,
     lists: &TexelLists,
     texel: usize,
@@ -204,7 +207,6 @@ fn test_texel(
     options: &FtizbOptions,
     scratch: &mut Scratch,
 ) -> Counters {
-    let grid = Grid { res: light.width as u32 };
     let pixels = lists.of(texel);
     let rate = subs.rate();
     let n = pixels.len();

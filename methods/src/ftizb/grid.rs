@@ -2,14 +2,18 @@
 //! res` texels over the light's image, each holding a list (of pixels whose footprint meets
 //! it, or of casters rasterized into it).
 //!
-//! Texel `(x, y)` covers the closed square `[x, x + 1] x [y, y + 1]` of light image
-//! coordinates; the texels of the border also stand for everything beyond the grid on their
-//! side ([`Grid::texel_box`]), so that a point outside the light image still has a texel, and
-//! both the pixels and the casters reach it.
+//! The light image's coordinates are `afsm`'s (a [`LIGHT_IMAGE_RES`] square); the grid scales
+//! them to *texel units* ([`Grid::texels`]), in which texel `(x, y)` covers the closed square
+//! `[x, x + 1] x [y, y + 1]`. Every decision is made on the light image's coordinates, so the
+//! grid's size changes which texels hold what, never a sample's coordinates. The texels of the
+//! border also stand for everything beyond the grid on their side ([`Grid::texel_box`]), so
+//! that a point outside the light image still has a texel, and both the pixels and the casters
+//! reach it.
 //!
 //! The lists are one array of entries sorted by texel with an offset per texel
 //! ([`TexelLists`]): built from `(texel, item)` keys sorted in parallel, read contiguously.
 
+use crate::afsm::LIGHT_IMAGE_RES;
 use glam::DVec2;
 use rayon::prelude::*;
 
@@ -18,16 +22,30 @@ use rayon::prelude::*;
 const BEYOND: f64 = 1e150;
 
 /// A `res x res` grid over the light's image.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Grid {
     /// Texels per side.
     pub res: u32,
+    /// Texels per unit of light image coordinates: `res / LIGHT_IMAGE_RES`.
+    scale: f64,
 }
 
 impl Grid {
+    /// The grid of `res` texels a side (at least 1) over the light image.
+    pub fn new(res: u32) -> Self {
+        let res = res.max(1);
+        Self { res, scale: f64::from(res) / f64::from(LIGHT_IMAGE_RES) }
+    }
+
+    /// Light image point `p` in texel units.
+    #[inline]
+    pub fn texels(&self, p: DVec2) -> DVec2 {
+        p * self.scale
+    }
+
     /// The texels `(x0, y0, x1, y1)` (inclusive, clamped to the grid) whose closed squares may
-    /// meet the box `lo..=hi`, widened by a rounding margin; `None` when the box is not finite
-    /// or is empty.
+    /// meet the box `lo..=hi` (texel units), widened by a rounding margin; `None` when the box
+    /// is not finite or is empty.
     #[inline]
     pub fn rect(&self, lo: DVec2, hi: DVec2) -> Option<(u32, u32, u32, u32)> {
         if !(lo.is_finite() && hi.is_finite() && lo.x <= hi.x && lo.y <= hi.y) {
@@ -41,32 +59,34 @@ impl Grid {
         Some((first(lo.x), first(lo.y), end(hi.x), end(hi.y)))
     }
 
-    /// Whether the box `lo..=hi` lies within the grid's image `[0, res]^2`.
+    /// Whether the box `lo..=hi` (texel units) lies within the grid `[0, res]^2`.
     #[inline]
     pub fn holds(&self, lo: DVec2, hi: DVec2) -> bool {
         let r = f64::from(self.res);
         lo.x >= 0.0 && lo.y >= 0.0 && hi.x <= r && hi.y <= r
     }
 
-    /// The region texel `(x, y)` stands for: its closed square, extended beyond the grid on
-    /// the sides where it is a border texel.
+    /// The region texel `(x, y)` stands for, in light image coordinates: its closed square,
+    /// extended beyond the grid on the sides where it is a border texel.
     #[inline]
     pub fn texel_box(&self, x: u32, y: u32) -> (DVec2, DVec2) {
         let last = self.res - 1;
-        let (fx, fy) = (f64::from(x), f64::from(y));
-        let lo = DVec2::new(if x == 0 { -BEYOND } else { fx }, if y == 0 { -BEYOND } else { fy });
+        let at = |v: u32| f64::from(v) / self.scale;
+        let lo =
+            DVec2::new(if x == 0 { -BEYOND } else { at(x) }, if y == 0 { -BEYOND } else { at(y) });
         let hi = DVec2::new(
-            if x == last { BEYOND } else { fx + 1.0 },
-            if y == last { BEYOND } else { fy + 1.0 },
+            if x == last { BEYOND } else { at(x + 1) },
+            if y == last { BEYOND } else { at(y + 1) },
         );
         (lo, hi)
     }
 
-    /// The index of the texel point `p` falls in (the floor of its coordinates, clamped to the
-    /// grid, so that a point beyond it falls in a border texel).
+    /// The index of the texel light image point `p` falls in (the floor of its texel
+    /// coordinates, clamped to the grid, so that a point beyond it falls in a border texel).
     #[inline]
     pub fn texel_of(&self, p: DVec2) -> usize {
         let last = f64::from(self.res - 1);
+        let p = self.texels(p);
         let (x, y) = (p.x.floor().clamp(0.0, last), p.y.floor().clamp(0.0, last));
         self.index(x as u32, y as u32)
     }
@@ -159,14 +179,17 @@ mod tests {
 
     #[test]
     fn rects_clamp_to_the_grid_and_border_texels_reach_beyond() {
-        let g = Grid { res: 8 };
+        let g = Grid::new(8);
         assert_eq!(g.rect(DVec2::new(2.5, 3.0), DVec2::new(4.0, 3.5)), Some((2, 2, 4, 3)));
         assert_eq!(g.rect(DVec2::new(-50.0, 9.5), DVec2::new(-40.0, 20.0)), Some((0, 7, 0, 7)));
         assert_eq!(g.rect(DVec2::new(f64::NAN, 0.0), DVec2::ONE), None);
+        // 8 texels over 1024 light image units: 128 units a texel.
+        assert_eq!(g.texels(DVec2::new(256.0, 64.0)), DVec2::new(2.0, 0.5));
         let (lo, hi) = g.texel_box(0, 7);
-        assert!(lo.x < -1e100 && hi.y > 1e100 && hi.x == 1.0 && lo.y == 7.0);
-        assert!(
-            g.holds(DVec2::ZERO, DVec2::splat(8.0)) && !g.holds(DVec2::ZERO, DVec2::splat(8.5))
-        );
+        assert!(lo.x < -1e100 && hi.y > 1e100 && hi.x == 128.0 && lo.y == 896.0);
+        assert!(g.holds(DVec2::ZERO, DVec2::splat(8.0)));
+        assert!(!g.holds(DVec2::ZERO, DVec2::splat(8.5)));
+        assert_eq!(g.texel_of(DVec2::new(384.0, 383.9)), g.index(3, 2));
+        assert_eq!(g.texel_of(DVec2::new(-1e30, 1e30)), g.index(0, 7));
     }
 }

@@ -55,13 +55,14 @@
 //!
 //! # Choices where the papers leave them open
 //!
-//! - **Grid**: the light's projector fitted to the scene, as `afsm`'s
-//!   ([`crate::afsm::light_projector`]), at `--izb-res` texels a side; by default the frame's
-//!   larger side ([`FtizbOptions::grid_res`]), as the papers match the light-space resolution
-//!   to the eye's (a 1024 x 1024 grid for 1024 x 768 frames). The grid only bins the samples,
-//!   so its resolution changes the cost, never the result (tested): a grid much finer than
-//!   the pixels lists each pixel in many texels and tests its pairs in each (on `cage` at
-//!   80 x 60 a 1024 grid listed each pixel in 72 texels). Texels on the
+//! - **Grid**: over the light image of `afsm` ([`crate::afsm::light_projector`]: the light's
+//!   projector fitted to the scene, in which every sample's coordinates are computed), at
+//!   `--izb-res` texels a side; by default the frame's larger side
+//!   ([`FtizbOptions::grid_res`]), as the papers match the light-space resolution to the
+//!   eye's (a 1024 x 1024 grid for 1024 x 768 frames). The grid only bins the samples, so its
+//!   resolution changes the cost, never a decision (the results are equal bit for bit,
+//!   tested); a grid much finer than the pixels lists each pixel in many texels (on `cage` at
+//!   80 x 60 a 1024 grid listed each pixel in 72). Texels on the
 //!   grid's border stand for everything beyond it on their side, so that samples outside the
 //!   light image (a spot's points outside its cone, which the ray tracer also shadows) are
 //!   kept.
@@ -105,6 +106,7 @@ use crate::{
 };
 use footprints::{footprints, SubSamples};
 use frustum::{bin_casters, frustum_tests};
+use grid::Grid;
 use instrumentation::{Counters, Recorder};
 use scenes::Projector;
 
@@ -194,34 +196,25 @@ pub struct Ftizb {
     pub options: FtizbOptions,
 }
 
-/// The light's projector: `afsm`'s, its image scaled to `res` texels a side (the scale of
-/// coordinates changes, not the frustum).
-pub fn light_projector(frame: &Frame<'_>, res: u32) -> Projector {
-    let mut light = crate::afsm::light_projector(frame);
-    light.width = f64::from(res);
-    light.height = f64::from(res);
-    light
-}
-
 impl Ftizb {
     /// The run: each pixel's light, occlusion mask and valid mask (the valid masks of the
     /// pixels some caster was tested against).
     fn masks(&self, frame: &Frame<'_>, rec: &mut Recorder) -> Result<Masked, MethodError> {
         self.options.validate()?;
         let pattern = SamplePattern::new(self.options.rate, self.options.pattern)?;
-        let res = self.options.grid_res(frame.width(), frame.height());
-        let light = light_projector(frame, res);
+        let grid = Grid::new(self.options.grid_res(frame.width(), frame.height()));
+        let light = crate::afsm::light_projector(frame);
         if frame.effects.transparency {
             rec.notes.push("ftizb treats semi-transparent casters as opaque".into());
         }
         let subs = SubSamples::new(frame, &light, &pattern);
-        let lists = rec.stages.time(STAGE_FOOTPRINTS, || footprints(frame, &light, res))?;
+        let lists = rec.stages.time(STAGE_FOOTPRINTS, || footprints(frame, &light, grid))?;
         let bins = rec.stages.time(STAGE_RASTERIZATION, || {
-            bin_casters(&frame.geometry, |t| frame.is_caster(t), &light, &lists)
+            bin_casters(&frame.geometry, |t| frame.is_caster(t), &light, grid, &lists)
         })?;
         let options = self.options;
         let (out, lit) = rec.stages.time(STAGE_FRUSTUM_TESTS, || {
-            let out = frustum_tests(&frame.geometry, &subs, &lists, &bins, &options);
+            let out = frustum_tests(&frame.geometry, grid, &subs, &lists, &bins, &options);
             let lit = resolve(&out.occlusion, &out.valid);
             (out, lit)
         });
