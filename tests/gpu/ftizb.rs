@@ -16,13 +16,13 @@ use methods::{
 use scenes::{Camera, Scene};
 
 /// GPU and CPU `ftizb` at `rate` on `scene` at 96 x 72: the number of pixels whose light,
-/// valid count or shadowed count differ.
-fn differing(scene: &Scene, rate: u32, pattern: PatternKind) -> usize {
+/// valid count or shadowed count differ, and the number of pixels with some sub-samples
+/// outside their tangent plane's region (valid, but fewer than `rate`).
+fn differing(scene: &Scene, rate: u32, pattern: PatternKind) -> (usize, usize) {
     let frame = Frame::new(scene, 96, 72, &mut Recorder::default());
     let options = FtizbOptions { rate, pattern, ..FtizbOptions::default() };
-    let (cpu, masks) = Ftizb { options }
-        .run_masks(&frame, &mut Recorder::default())
-        .expect("CPU ftizb runs");
+    let (cpu, masks) =
+        Ftizb { options }.run_masks(&frame, &mut Recorder::default()).expect("CPU ftizb runs");
     let ctx = GpuContext::shared().expect("a GPU adapter (Mesa's lavapipe on CI)");
     let gpu = GpuFrame::upload(ctx, &frame, &frame.gbuffer);
     let mut rec = Recorder::default();
@@ -35,7 +35,10 @@ fn differing(scene: &Scene, rate: u32, pattern: PatternKind) -> usize {
         let got = (out.lit[k], out.valid[k], out.shadowed[k]);
         if want != got {
             if differing < 5 {
-                eprintln!("{}: pixel {k}: CPU (lit, valid, shadowed) {want:?}, GPU {got:?}", scene.name);
+                eprintln!(
+                    "{}: pixel {k}: CPU (lit, valid, shadowed) {want:?}, GPU {got:?}",
+                    scene.name
+                );
             }
             differing += 1;
         }
@@ -61,7 +64,7 @@ fn differing(scene: &Scene, rate: u32, pattern: PatternKind) -> usize {
         assert_eq!(stages.iter().filter(|s| **s == stage).count(), 1, "{stage}: {stages:?}");
     }
     assert!(rec.notes.iter().any(|n| n.contains(&format!("over {rate} sub-samples"))));
-    differing
+    (differing, thinned)
 }
 
 #[test]
@@ -69,7 +72,7 @@ fn gpu_parity_ftizb_on_the_parity_scenes() {
     for name in ["plane-square", "cage", "random-10k", "bumpy", "spot-spheres"] {
         match load_builtin(name) {
             Some(scene) => {
-                let d = differing(&scene, 4, PatternKind::Grid);
+                let (d, _) = differing(&scene, 4, PatternKind::Grid);
                 assert_eq!(d, 0, "{name}: {d} pixels differ from the CPU ftizb");
             }
             None => eprintln!("{name}: skipped (model missing)"),
@@ -81,21 +84,43 @@ fn gpu_parity_ftizb_on_the_parity_scenes() {
 fn gpu_parity_ftizb_rotated_at_rate_8() {
     for name in ["plane-square", "spot-spheres"] {
         let scene = load_builtin(name).expect("built-in");
-        let d = differing(&scene, 8, PatternKind::Rotated);
+        let (d, _) = differing(&scene, 8, PatternKind::Rotated);
         assert_eq!(d, 0, "{name}: {d} pixels differ from the CPU ftizb");
     }
 }
 
-/// An orthographic camera: the region around the centre's depth is a span of pixel widths,
-/// not a depth ratio.
+/// A camera just above the ground, looking along it: below the horizon, the sub-samples
+/// above a pixel's centre meet the ground's plane far beyond 4 times the centre's depth, so
+/// they are not valid and the pixel's ratio is over the others.
+#[test]
+fn gpu_parity_ftizb_with_sub_samples_beyond_the_region() {
+    let mut scene = load_builtin("spot-spheres").expect("built-in");
+    scene.camera = Camera::Perspective {
+        eye: DVec3::new(0.0, 0.05, 7.9),
+        target: DVec3::new(0.0, 0.05, 0.0),
+        up: DVec3::Y,
+        fov_y_deg: 45.0,
+        near: 0.01,
+    };
+    let (d, thinned) = differing(&scene, 8, PatternKind::Rotated);
+    assert_eq!(d, 0, "{d} pixels differ from the CPU ftizb");
+    assert!(thinned > 0, "no pixel with sub-samples beyond the region");
+}
+
+/// An orthographic camera nearly edge-on to the ground: the region is a span of 64 pixel
+/// widths in depth, not a depth ratio, and the sub-samples beyond it are not valid.
 #[test]
 fn gpu_parity_ftizb_with_an_orthographic_camera() {
     let mut scene = load_builtin("spot-spheres").expect("built-in");
-    let (eye, target) = (scene.camera.eye(), scene.camera.target());
-    let height = 0.6 * (target - eye).length();
-    scene.camera = Camera::Orthographic { eye, target, up: DVec3::Y, height };
-    let d = differing(&scene, 8, PatternKind::Rotated);
+    scene.camera = Camera::Orthographic {
+        eye: DVec3::new(0.0, 0.05, 7.9),
+        target: DVec3::ZERO,
+        up: DVec3::Y,
+        height: 4.0,
+    };
+    let (d, thinned) = differing(&scene, 8, PatternKind::Rotated);
     assert_eq!(d, 0, "orthographic: {d} pixels differ from the CPU ftizb");
+    assert!(thinned > 0, "orthographic: no pixel with sub-samples beyond the region");
 }
 
 #[test]
