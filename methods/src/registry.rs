@@ -261,7 +261,7 @@ pub static METHODS: &[MethodEntry] = &[
         params: &[&params::RATE, &params::PATTERN, &IZB_RES],
         stores_samples: None,
         cpu: |o| Ok(Box::new(Ftizb { options: ftizb_options(o)? })),
-        gpu: None,
+        gpu: gpu!(|o| Ok(Box::new(crate::gpu::ftizb::GpuFtizb { options: ftizb_options(o)? }))),
     },
     vsm::ENTRY,
     esm::ENTRY,

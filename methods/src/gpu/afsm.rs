@@ -33,7 +33,8 @@
 //!
 //! [`Izb`] holds the pipelines and buffers of one frame and runs the stages for one
 //! sub-sample of every pixel ([`SampleSurface`]); `afsm` runs it once, at the pixel centres,
-//! and `afsm-ss` ([`super::afsm_ss`]) once per sub-sample. The casters' setup (the first part
+//! `afsm-ss` ([`super::afsm_ss`]) once per sub-sample, and `ftizb` ([`super::ftizb`]) once per
+//! sub-sample on the pixels' tangent planes. The casters' setup (the first part
 //! of the rasterization of blockers) depends on the light only and runs once per frame.
 //!
 //! # Choices
@@ -563,6 +564,16 @@ impl<'a> Izb<'a> {
                 tri: tri[k],
             })
             .collect())
+    }
+
+    /// Per pixel, whether the last transformation of samples gave it a sample: its surface
+    /// has a triangle there and the light projects the point to a finite light image point
+    /// with a finite threshold depth. These are the samples a pass tests, over which a
+    /// supersampled method takes its ratio (`ftizb`'s valid sub-samples).
+    pub fn sampled(&self, ctx: &GpuContext) -> Result<Vec<bool>, GpuError> {
+        let [_, _, _, _, sample_tri, _] = &self.transform_io;
+        let tri: Vec<u32> = ctx.read(sample_tri)?;
+        Ok(tri.iter().take(self.pixels).map(|&t| t != NO_TRIANGLE).collect())
     }
 
     /// The run record's note on the grid and the `undecided` pairs.

@@ -15,8 +15,9 @@
 //! uncertain pixel), `spsm::raster::SetupData` (`spsm/setup.wgsl`, a prepared triangle)
 //! and `Dims`, `spsm::antialias::Dims`, `spsm::pack::PackParams` (`spsm/pack.wgsl`), `pan09::params::Params` and `PlaneData`
 //! (`pan09/params.wgsl`, pan09's per-frame constants), `pan09::facets::FacetF` and `FacetU`
-//! (`pan09/facet_layout.wgsl`, a silhouette facet's record) and afsm's `FParams`, `UParams`,
-//! `BlockerOutline`, `BlockerPlane` and `BlockerU` (`afsm/layout.wgsl`).
+//! (`pan09/facet_layout.wgsl`, a silhouette facet's record), afsm's `FParams`, `UParams`,
+//! `BlockerOutline`, `BlockerPlane` and `BlockerU` (`afsm/layout.wgsl`) and
+//! `ftizb::TangentParams` (`ftizb/tangent.wgsl`).
 
 /// Declares that the `#[repr(C)]` struct `$ty` is mirrored by the WGSL struct `$name` of the
 /// shader source `$source` (an expression giving a `String`), fields `[$field, ...]` in

@@ -33,6 +33,7 @@ pub mod common;
 mod context;
 mod error;
 pub mod frame;
+pub mod ftizb;
 mod layout;
 pub mod pan09;
 pub mod pcf;
