@@ -32,7 +32,7 @@ use crate::{
     pan09::{
         facets::{project_facet, LightPlanes, FACET_DEPTH_RATIO, FACET_ORTHO_SPAN},
         footprint::{Footprint, MAX_CORNERS},
-        screen::CameraBasis,
+        screen::{CameraBasis, FacetMap, HalfPlane},
     },
     pattern::SamplePattern,
 };
@@ -124,8 +124,30 @@ pub struct SubSamples<'a> {
     camera: &'a Projector,
     light: &'a Projector,
     pattern: &'a SamplePattern,
+    basis: CameraBasis,
+    planes: LightPlanes,
     /// Orthographic cameras: the region's reach in depth (64 pixel widths).
     ortho_span: f64,
+}
+
+/// Where a pixel's sub-samples fall on the light's image, to within rounding: the facet's
+/// projective map from the pixel to the light image (three affine functions and a division a
+/// sub-sample, `pan09`'s footprint map), cheaper than placing the sub-sample
+/// ([`SubSamples::sample`]), which is done only where a texel owns it.
+#[derive(Debug, Clone, Copy)]
+pub struct Approximate {
+    x: HalfPlane,
+    y: HalfPlane,
+    w: HalfPlane,
+}
+
+impl Approximate {
+    /// The light image point of the sub-sample at pixel-local point `u` (`u = offset - 1/2`).
+    #[inline]
+    pub fn at(&self, u: DVec2) -> DVec2 {
+        let inv = 1.0 / self.w.at(u);
+        DVec2::new(self.x.at(u) * inv, self.y.at(u) * inv)
+    }
 }
 
 impl<'a> SubSamples<'a> {
@@ -138,6 +160,8 @@ impl<'a> SubSamples<'a> {
             camera: &frame.camera,
             light,
             pattern,
+            basis,
+            planes: LightPlanes::new(light, &basis),
             ortho_span: FACET_ORTHO_SPAN * pixel,
         }
     }
@@ -154,6 +178,12 @@ impl<'a> SubSamples<'a> {
         self.light
     }
 
+    /// The pattern.
+    #[inline]
+    pub fn pattern(&self) -> &'a SamplePattern {
+        self.pattern
+    }
+
     /// The G-buffer triangle of pixel `k`.
     #[inline]
     pub fn triangle(&self, k: usize) -> u32 {
@@ -166,40 +196,73 @@ impl<'a> SubSamples<'a> {
         self.pattern.rate() as usize
     }
 
-    /// Writes pixel `k`'s sub-samples into `out` (`rate` of them; an invalid one gets a
-    /// threshold of minus infinity, which no caster passes) and returns the mask of the valid
-    /// ones: none for a background pixel or one whose centre the light cannot project.
-    pub fn pixel(&self, k: usize, out: &mut [Sample]) -> u128 {
+    /// Sub-sample `s` of pixel `k` (covered) on the light's image plane, `None` when it is not
+    /// valid: its camera ray misses the tangent plane or meets it outside the facet's region,
+    /// or the light cannot project the point, or its coordinates or threshold are not finite.
+    /// The centre sub-sample is the G-buffer's point itself.
+    #[inline]
+    pub fn sample(&self, k: usize, s: usize) -> Option<Sample> {
         let g = self.g;
-        let tri = g.triangle[k];
-        if !g.covered(k) {
-            return 0;
-        }
         let (p0, n, dc) = (g.position[k], g.normal[k], g.depth[k]);
         let w = g.width as usize;
         let (i, j) = ((k % w) as u32, (k / w) as u32);
-        let offset = n.dot(p0);
-        let centre = self.pattern.centre_index();
+        let ray = self.camera.ray(self.pattern.point(i, j, s));
+        let x = if s == self.pattern.centre_index() {
+            p0
+        } else {
+            let t = ray.intersect_plane(n, n.dot(p0)).filter(|&t| self.in_region(t, dc))?;
+            ray.at(t)
+        };
+        let (xy, z) = self.light.project(x)?;
+        let zt = threshold_depth(self.light, xy, z, shadow_offset(ray.origin, x));
+        (zt.is_finite() && xy.is_finite()).then_some(Sample {
+            x: xy.x,
+            y: xy.y,
+            zt,
+            id: s as u32,
+            tri: g.triangle[k],
+        })
+    }
+
+    /// The approximate light image points of pixel `k`'s sub-samples; `None` when the camera
+    /// sees its tangent plane edge-on at the centre (only the centre is then valid).
+    #[inline]
+    pub fn approximate(&self, k: usize) -> Option<Approximate> {
+        let g = self.g;
+        let w = g.width as usize;
+        let centre = DVec2::new((k % w) as f64 + 0.5, (k / w) as f64 + 0.5);
+        let (p0, n) = (g.position[k], g.normal[k]);
+        let map = FacetMap::new(&self.basis, centre, n, n.dot(p0))?;
+        let [a0, ax, ay] = map.a;
+        let hw = match &self.planes.w {
+            Some(w) => map.half_plane(w),
+            None => HalfPlane { g0: a0, gx: ax, gy: ay },
+        };
+        Some(Approximate {
+            x: map.half_plane(&self.planes.x),
+            y: map.half_plane(&self.planes.y),
+            w: hw,
+        })
+    }
+
+    /// Writes pixel `k`'s sub-samples into `out` (`rate` of them; an invalid one gets a
+    /// threshold of minus infinity, which no caster passes) and returns the mask of the valid
+    /// ones: none for a background pixel or one whose centre is not valid (the centre always
+    /// counts when the pixel does).
+    pub fn pixel(&self, k: usize, out: &mut [Sample]) -> u128 {
+        if !self.g.covered(k) || self.sample(k, self.pattern.centre_index()).is_none() {
+            return 0;
+        }
+        let tri = self.g.triangle[k];
         let mut valid = 0u128;
         for (s, slot) in out.iter_mut().enumerate().take(self.rate()) {
-            *slot = Sample { x: 0.0, y: 0.0, zt: f64::NEG_INFINITY, id: s as u32, tri };
-            let ray = self.camera.ray(self.pattern.point(i, j, s));
-            let point = if s == centre {
-                Some(p0)
-            } else {
-                ray.intersect_plane(n, offset).filter(|&t| self.in_region(t, dc)).map(|t| ray.at(t))
+            *slot = match self.sample(k, s) {
+                Some(sample) => {
+                    valid |= 1 << s;
+                    sample
+                }
+                None => Sample { x: 0.0, y: 0.0, zt: f64::NEG_INFINITY, id: s as u32, tri },
             };
-            let Some(x) = point else { continue };
-            let Some((xy, z)) = self.light.project(x) else { continue };
-            let zt = threshold_depth(self.light, xy, z, shadow_offset(ray.origin, x));
-            if zt.is_finite() && xy.is_finite() {
-                *slot = Sample { x: xy.x, y: xy.y, zt, id: s as u32, tri };
-                valid |= 1 << s;
-            }
-        }
-        // The centre always counts when it projects (and nothing does when it does not).
-        if valid & 1 << centre == 0 {
-            return 0;
         }
         valid
     }
@@ -221,9 +284,11 @@ mod tests {
     use crate::pattern::PatternKind;
     use instrumentation::Recorder;
 
-    /// Every valid sub-sample's light image point falls in a texel listing its pixel.
+    /// Every valid sub-sample is owned (its approximate light image point lies in the region)
+    /// by a texel that lists its pixel, and the approximate point is the placed one to within
+    /// rounding.
     #[test]
-    fn every_valid_sub_sample_lies_in_a_texel_of_its_pixel() {
+    fn every_valid_sub_sample_is_owned_by_a_texel_of_its_pixel() {
         for name in ["plane-square", "spheres", "spot-spheres", "grazing"] {
             let Some(Ok(scene)) = scenes::registry::load_builtin(name) else { continue };
             let frame = Frame::new(&scene, 48, 36, &mut Recorder::default());
@@ -236,16 +301,27 @@ mod tests {
             let mut checked = 0;
             for k in 0..frame.gbuffer.triangle.len() {
                 let valid = subs.pixel(k, &mut out);
+                let approximate = subs.approximate(k);
                 for (s, sample) in out.iter().enumerate() {
                     if valid >> s & 1 == 0 {
                         continue;
                     }
-                    let p = grid.texels(DVec2::new(sample.x, sample.y));
-                    let (x0, y0, x1, y1) = grid.rect(p, p).expect("finite");
-                    let listed = (y0..=y1).any(|y| {
-                        (x0..=x1).any(|x| lists.of(grid.index(x, y)).contains(&(k as u32)))
+                    let exact = DVec2::new(sample.x, sample.y);
+                    let p = match &approximate {
+                        Some(a) => a.at(pattern.offsets()[s] - DVec2::splat(0.5)),
+                        None => exact,
+                    };
+                    let scale = 1.0 + exact.abs().max_element();
+                    assert!((p - exact).abs().max_element() <= 1e-9 * scale, "{name}: {p} {exact}");
+                    let q = grid.texels(p);
+                    let (x0, y0, x1, y1) = grid.rect(q, q).expect("finite");
+                    let owned = (y0..=y1).any(|y| {
+                        (x0..=x1).any(|x| {
+                            let t = grid.index(x, y);
+                            grid.region_holds(t, p) && lists.of(t).contains(&(k as u32))
+                        })
                     });
-                    assert!(listed, "{name}: pixel {k} sub-sample {s} at {p} is in no texel");
+                    assert!(owned, "{name}: pixel {k} sub-sample {s} at {p} is owned by no texel");
                     checked += 1;
                 }
             }

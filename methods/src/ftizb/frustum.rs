@@ -10,14 +10,18 @@
 //!
 //! **Frustum tests** ([`frustum_tests`]), in parallel over the texels holding casters: the
 //! texel's pixels' sub-samples are placed once ([`SubSamples::pixel`]), then each caster is
-//! tested against those the texel *owns*, in caster order. A sub-sample is owned by the texel
-//! its light image point falls in (floor, clamped to the grid), or, should rounding have put
-//! that point in a texel that does not list its pixel, by every texel listing the pixel; so
-//! each (sub-sample, caster) pair is tested once however many texels a footprint meets, and
-//! never lost (a caster covering the point meets the point's texel, and is listed there).
-//! The papers test a pixel's whole mask in every texel of its footprint; the owned masks give
-//! the same result (ORed) without the repeated tests (on `cage` at 800 x 600 a footprint met
-//! 2.4 texels on average). A caster is skipped in the texel when its nearest
+//! tested against those the texel *owns*, in caster order. A sub-sample is owned by every
+//! texel whose closed square (extended beyond the grid at the border) holds its light image
+//! point as the facet's projective map places it
+//! ([`Approximate`](super::footprints::Approximate), the map the footprint's
+//! corners come from, so the point lies in the footprint and its texels list the pixel); only
+//! owned sub-samples are placed exactly ([`SubSamples::sample`]). Each (sub-sample, caster)
+//! pair is thus tested once however many texels a footprint meets (twice or four times for a
+//! point exactly on a texel's side or corner, which changes nothing). The papers test a
+//! pixel's whole mask in every texel of its footprint; the owned masks give the same result
+//! (ORed) without the repeated tests and placements (on `cage` at 800 x 600 a footprint met
+//! 2.4 texels on average). The valid masks, the ratio's denominator, are placed once per pixel
+//! with a shadowed sub-sample, after the tests. A caster is skipped in the texel when its nearest
 //! corner is not in front of the farthest sample's threshold (`nodes_depth_culled`) or when
 //! every valid sub-sample of the texel is already shadowed (`nodes_occlusion_culled`); else
 //! each pixel that is not its own triangle's and still has lit sub-samples is one
@@ -105,7 +109,8 @@ pub fn bin_casters(
 pub struct Tested {
     /// Shadowed sub-samples per pixel.
     pub occlusion: Vec<u128>,
-    /// Valid sub-samples per pixel, for the pixels of texels holding casters (zero elsewhere).
+    /// Valid sub-samples per pixel, for the pixels with a shadowed sub-sample (zero
+    /// elsewhere).
     pub valid: Vec<u128>,
     /// `visibility_evaluations`, `sampling_points_tested` and the culling counters.
     pub counters: Counters,
@@ -141,9 +146,8 @@ struct Scratch {
     /// Their light image coordinates again, for the edge masks.
     xs: Vec<f64>,
     ys: Vec<f64>,
-    /// Per pixel: its valid sub-samples, those the texel owns, the shadowed ones, and the box
-    /// of the owned ones' light image points.
-    all_valid: Vec<u128>,
+    /// Per pixel: the valid sub-samples the texel owns, the shadowed ones, and the box of the
+    /// owned ones' light image points.
     valid: Vec<u128>,
     occluded: Vec<u128>,
     boxes: Vec<(DVec2, DVec2)>,
@@ -160,7 +164,6 @@ pub fn frustum_tests(
 ) -> Tested {
     let count = subs.pixels();
     let occlusion: Vec<AtomicMask> = (0..count).map(|_| AtomicMask::default()).collect();
-    let valid: Vec<AtomicMask> = (0..count).map(|_| AtomicMask::default()).collect();
     let light = subs.light();
     let counters = casters
         .texels()
@@ -171,14 +174,13 @@ pub fn frustum_tests(
                 geometry,
                 (light, grid),
                 subs,
-                pixels,
+                pixels.of(texel),
                 texel,
                 casters.of(texel),
                 options,
                 scratch,
             );
             for (i, &k) in pixels.of(texel).iter().enumerate() {
-                valid[k as usize].or(scratch.all_valid[i]);
                 occlusion[k as usize].or(scratch.occluded[i]);
             }
             c
@@ -187,11 +189,17 @@ pub fn frustum_tests(
             a.merge(&b);
             a
         });
-    Tested {
-        occlusion: occlusion.iter().map(AtomicMask::load).collect(),
-        valid: valid.iter().map(AtomicMask::load).collect(),
-        counters,
-    }
+    let occlusion: Vec<u128> = occlusion.iter().map(AtomicMask::load).collect();
+    // The ratio's denominator, for the pixels with a shadowed sub-sample.
+    let valid = occlusion
+        .par_iter()
+        .enumerate()
+        .map_init(
+            || vec![Sample::default(); subs.rate()],
+            |out, (k, &o)| if o == 0 { 0 } else { subs.pixel(k, out) },
+        )
+        .collect();
+    Tested { occlusion, valid, counters }
 }
 
 /// One texel: the sub-samples it owns of its pixels against its casters, the masks left in
@@ -201,46 +209,56 @@ fn test_texel(
     geometry: &Geometry,
     (light, grid): (&Projector, Grid),
     subs: &SubSamples<'_>,
-    lists: &TexelLists,
+    pixels: &[u32],
     texel: usize,
     casters: &[u32],
     options: &FtizbOptions,
     scratch: &mut Scratch,
 ) -> Counters {
-    let pixels = lists.of(texel);
     let rate = subs.rate();
+    let pattern = subs.pattern();
+    let centre = pattern.centre_index();
     let n = pixels.len();
     let mut c = Counters::default();
     scratch.samples.resize(n * rate, Sample::default());
     scratch.xs.resize(n * rate, 0.0);
     scratch.ys.resize(n * rate, 0.0);
     scratch.valid.clear();
-    scratch.all_valid.clear();
     scratch.boxes.clear();
     scratch.occluded.clear();
     scratch.occluded.resize(n, 0);
     let mut farthest = f64::NEG_INFINITY;
     for (i, &k) in pixels.iter().enumerate() {
-        let span = i * rate..(i + 1) * rate;
-        let samples = &mut scratch.samples[span.clone()];
-        let v = subs.pixel(k as usize, samples);
+        let k = k as usize;
         let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
         let mut own = 0u128;
-        for (s, sample) in samples.iter().enumerate() {
-            scratch.xs[span.start + s] = sample.x;
-            scratch.ys[span.start + s] = sample.y;
-            if v >> s & 1 == 1 {
-                let p = DVec2::new(sample.x, sample.y);
-                let owner = grid.texel_of(p);
-                if owner != texel && lists.of(owner).binary_search(&k).is_ok() {
+        // A pixel whose centre is not valid has no valid sub-sample.
+        if let Some(middle) = subs.sample(k, centre) {
+            let approximate = subs.approximate(k);
+            for (s, offset) in pattern.offsets().iter().enumerate() {
+                let owned = match &approximate {
+                    Some(a) => grid.region_holds(texel, a.at(*offset - DVec2::splat(0.5))),
+                    None => s == centre && grid.region_holds(texel, DVec2::new(middle.x, middle.y)),
+                };
+                let sample = match owned {
+                    true if s == centre => Some(middle),
+                    true => subs.sample(k, s),
+                    false => None,
+                };
+                let slot = i * rate + s;
+                let Some(sample) = sample else {
+                    scratch.samples[slot] = Sample { zt: f64::NEG_INFINITY, ..middle };
                     continue;
-                }
+                };
+                scratch.samples[slot] = sample;
+                scratch.xs[slot] = sample.x;
+                scratch.ys[slot] = sample.y;
+                let p = DVec2::new(sample.x, sample.y);
                 own |= 1 << s;
                 (lo, hi) = (lo.min(p), hi.max(p));
                 farthest = farthest.max(sample.zt);
             }
         }
-        scratch.all_valid.push(v);
         scratch.valid.push(own);
         scratch.boxes.push((lo, hi));
     }

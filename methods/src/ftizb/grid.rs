@@ -81,14 +81,18 @@ impl Grid {
         (lo, hi)
     }
 
-    /// The index of the texel light image point `p` falls in (the floor of its texel
-    /// coordinates, clamped to the grid, so that a point beyond it falls in a border texel).
+    /// Whether light image point `p` lies in the closed region texel `t` (an index) stands
+    /// for: its square in texel units, extended beyond the grid where it is a border texel.
     #[inline]
-    pub fn texel_of(&self, p: DVec2) -> usize {
+    pub fn region_holds(&self, t: usize, p: DVec2) -> bool {
+        let res = self.res as usize;
+        let (x, y) = ((t % res) as f64, (t / res) as f64);
         let last = f64::from(self.res - 1);
-        let p = self.texels(p);
-        let (x, y) = (p.x.floor().clamp(0.0, last), p.y.floor().clamp(0.0, last));
-        self.index(x as u32, y as u32)
+        let q = self.texels(p);
+        (x == 0.0 || q.x >= x)
+            && (x == last || q.x <= x + 1.0)
+            && (y == 0.0 || q.y >= y)
+            && (y == last || q.y <= y + 1.0)
     }
 
     /// The index of texel `(x, y)`.
@@ -189,7 +193,9 @@ mod tests {
         assert!(lo.x < -1e100 && hi.y > 1e100 && hi.x == 128.0 && lo.y == 896.0);
         assert!(g.holds(DVec2::ZERO, DVec2::splat(8.0)));
         assert!(!g.holds(DVec2::ZERO, DVec2::splat(8.5)));
-        assert_eq!(g.texel_of(DVec2::new(384.0, 383.9)), g.index(3, 2));
-        assert_eq!(g.texel_of(DVec2::new(-1e30, 1e30)), g.index(0, 7));
+        assert!(g.region_holds(g.index(3, 2), DVec2::new(384.0, 383.9)));
+        assert!(g.region_holds(g.index(2, 2), DVec2::new(384.0, 383.9)), "closed squares");
+        assert!(!g.region_holds(g.index(4, 2), DVec2::new(384.0, 383.9)));
+        assert!(g.region_holds(g.index(0, 7), DVec2::new(-1e30, 1e30)));
     }
 }
