@@ -266,14 +266,7 @@ pub fn check_bleeding_reduction(a: f64) -> Result<(), MethodError> {
 /// `lit` remapped to `clamp((lit - a) / (1 - a), 0, 1)` (`a` below 1); `a = 0` leaves a value in
 /// [0, 1] as it is.
 pub fn reduce_bleeding(lit: f64, a: f64) -> f64 {
-    let v = (lit - a) / (1.0 - a);
-    if v < 0.0 {
-        0.0
-    } else if v > 1.0 {
-        1.0
-    } else {
-        v
-    }
+    ((lit - a) / (1.0 - a)).clamp(0.0, 1.0)
 }
 
 /// A pixel's lit value `v` as written: clamped to [0, 1] (NaN to 0), values below the least

@@ -32,6 +32,7 @@ pub mod afsm_ss;
 pub mod common;
 mod context;
 mod error;
+pub mod filtered;
 pub mod frame;
 mod layout;
 pub mod pan09;

@@ -36,7 +36,7 @@
 //! the standard shadow map's as `c` grows (a shadowed pixel is `exp(-c (d - z))`, not 0), which
 //! the tests check. Casters with opacity below 1 are treated as opaque.
 
-use super::{map, Family, MethodEntry, Rates};
+use super::{gpu, map, Build, Family, MethodEntry, Rates};
 use crate::{
     depth_test::MapOptions,
     filtered_map::{self, check_filter, FilteredMap, Precision, DEFAULT_FILTER, FILTER, PRECISION},
@@ -68,7 +68,7 @@ pub const ENTRY: MethodEntry = MethodEntry {
     params: params::map_and![&FILTER, &PRECISION, &EXPONENT],
     stores_samples: None,
     cpu: |o| Ok(Box::new(build(o)?)),
-    gpu: None,
+    gpu: gpu!(|o| Ok(Box::new(crate::gpu::filtered::GpuFilteredMap::<1, _> { twin: build(o)? }))),
 };
 
 /// The map the options give, validated.
@@ -114,7 +114,7 @@ pub struct ExponentialShadowMap {
 // coefficients of the rational approximation on [-ln 2 / 2, ln 2 / 2].
 const LN2_HI: f64 = 0.6931471803691238;
 const LN2_LO: f64 = 1.9082149292705877e-10;
-const INV_LN2: f64 = 1.4426950408889634;
+const INV_LN2: f64 = std::f64::consts::LOG2_E;
 const P1: f64 = 0.16666666666666602;
 const P2: f64 = -0.0027777777777015593;
 const P3: f64 = 6.613756321437934e-05;
@@ -155,7 +155,7 @@ const POW2_DOWN: [f64; 10] = [
 /// powers of two), so that `esm.wgsl`'s `exp64` gives the same bits: within one unit in the
 /// last place for `x` in [`EXP_MIN`], [`EXP_MAX`]; 0 below (and for NaN), `exp(EXP_MAX)` above.
 pub fn exp(x: f64) -> f64 {
-    if !(x >= EXP_MIN) {
+    if x.is_nan() || x < EXP_MIN {
         return 0.0;
     }
     let x = if x > EXP_MAX { EXP_MAX } else { x };
@@ -353,6 +353,27 @@ mod tests {
         assert!(w.contains("f16") && w.contains("0.783") && w.contains("17.3"), "{w}");
         assert!(at(Precision::F32, 700.0).warning().is_some_and(|w| w.contains("104.0")));
         assert!(at(Precision::F64, 700.0).warning().is_none());
+    }
+
+    /// `esm.wgsl`'s `exp64` gives this module's `exp` bit for bit, over its whole range and
+    /// beyond both ends.
+    #[cfg(feature = "gpu")]
+    #[test]
+    fn the_kernels_exp_equals_the_cpus_bit_for_bit() {
+        let ctx = crate::gpu::GpuContext::shared().expect("a GPU adapter");
+        let mut x: Vec<f64> = (0..=100_000)
+            .map(|k| EXP_MIN - 1.0 + (EXP_MAX - EXP_MIN + 2.0) * f64::from(k) / 100_000.0)
+            .collect();
+        x.extend((0..10_000).map(|k| -f64::from(k) * 1e-4 - 1e-9));
+        x.extend([0.0, -0.0, EXP_MIN, EXP_MAX, -745.0, 1e6, -1e6, f64::NAN]);
+        let wgsl = format!(
+            "{}\nfn probe(x: f64) -> f64 {{ return exp64(x); }}",
+            at(Precision::F64, 80.0).wgsl()
+        );
+        let got = crate::gpu::filtered::probe(ctx, &wgsl, 0, &x).expect("probe runs");
+        for (x, g) in x.iter().zip(got) {
+            assert_eq!(g.to_bits(), exp(*x).to_bits(), "exp({x:e}): {g:e} vs {:e}", exp(*x));
+        }
     }
 
     #[test]

@@ -41,7 +41,7 @@
 //! approaches the standard shadow map's: the tests check how close. Casters with opacity
 //! below 1 are treated as opaque.
 
-use super::{map, Family, MethodEntry, Rates};
+use super::{gpu, map, Build, Family, MethodEntry, Rates};
 use crate::{
     depth_test::MapOptions,
     filtered_map::{
@@ -75,7 +75,7 @@ pub const ENTRY: MethodEntry = MethodEntry {
     params: params::map_and![&FILTER, &PRECISION, &MOMENT_BIAS, &BLEEDING_REDUCTION],
     stores_samples: None,
     cpu: |o| Ok(Box::new(build(o)?)),
-    gpu: None,
+    gpu: gpu!(|o| Ok(Box::new(crate::gpu::filtered::GpuFilteredMap::<4, _> { twin: build(o)? }))),
 };
 
 /// The map the options give, validated.

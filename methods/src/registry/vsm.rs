@@ -31,8 +31,11 @@
 //! the rounding of `M2` leaves a variance of rounding size (about `2^-25`), under which the
 //! bound behind a caster is small but not 0. Casters with opacity below 1 are treated as
 //! opaque, as by `sm`.
+//!
+//! On the GPU (`--device gpu`, [`crate::gpu::filtered`]) the same stages run as compute kernels
+//! with `vsm.wgsl`'s `store` and `test`, the twins of this module's, in `f64`.
 
-use super::{map, Family, MethodEntry, Rates};
+use super::{gpu, map, Build, Family, MethodEntry, Rates};
 use crate::{
     depth_test::MapOptions,
     filtered_map::{
@@ -65,7 +68,7 @@ pub const ENTRY: MethodEntry = MethodEntry {
     params: params::map_and![&FILTER, &PRECISION, &MIN_VARIANCE, &BLEEDING_REDUCTION],
     stores_samples: None,
     cpu: |o| Ok(Box::new(build(o)?)),
-    gpu: None,
+    gpu: gpu!(|o| Ok(Box::new(crate::gpu::filtered::GpuFilteredMap::<2, _> { twin: build(o)? }))),
 };
 
 /// The map the options give, validated.
@@ -148,7 +151,7 @@ impl FilteredMap<2> for VarianceShadowMap {
         }
         let d = m2 - mu * mu;
         let variance = if d > self.min_variance { d } else { self.min_variance };
-        if !(variance > 0.0) {
+        if variance.is_nan() || variance <= 0.0 {
             // No spread behind a caster: the bound is 0.
             return 0.0;
         }
