@@ -92,6 +92,7 @@ macro_rules! gpu {
         build
     }};
 }
+pub(crate) use gpu;
 
 /// The parameters of `afsm-ss`, `pan09` and `spsm-f32`'s sub-samples.
 static SUPERSAMPLED: &[&Param] = &[&params::RATE, &params::PATTERN];

@@ -331,6 +331,34 @@ fn bad_flags_and_names_are_named() {
     }
 }
 
+/// The filtered maps' storage precision and light-bleeding reduction: a precision the method
+/// does not store (named with those it does), a name that is no precision, and reductions
+/// outside [0, 1) exit 2 naming the flag.
+#[test]
+fn bad_precisions_and_bleeding_reductions_are_named() {
+    let cases: &[(&str, &[&str], &[&str])] = &[
+        ("vsm", &["--precision", "u16"], &["--precision: `vsm` stores f16, f32, f64, got u16"]),
+        ("esm", &["--precision", "u16"], &["--precision: `esm` stores f16, f32, f64, got u16"]),
+        ("msm", &["--precision", "f16"], &["--precision: `msm` stores u16, f32, f64, got f16"]),
+        ("msm", &["--precision", "f8"], &["--precision", "f8", "f16, f32, f64, u16"]),
+        ("vsm", &["--bleeding-reduction", "1"], &["--bleeding-reduction", "below 1"]),
+        ("msm", &["--bleeding-reduction=-0.1"], &["--bleeding-reduction", "at least 0"]),
+        ("vsm", &["--bleeding-reduction", "nan"], &["--bleeding-reduction"]),
+        ("msm", &["--bleeding-reduction", "half"], &["--bleeding-reduction"]),
+    ];
+    for (method, extra, needles) in cases {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let out = dir.path().join("out");
+        let o = render_into(&out, "cage", method, extra);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{method} {extra:?}: {err}");
+        for n in *needles {
+            assert!(err.contains(n), "{method} {extra:?}: `{n}` not in {err}");
+        }
+        assert!(!out.join("visibility.exr").exists(), "{method} {extra:?}: ran");
+    }
+}
+
 /// `--out` that cannot take the files is refused before anything is computed, for every
 /// command that writes (it used to fail with "internal error" after the whole run).
 #[test]

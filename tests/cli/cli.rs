@@ -235,8 +235,8 @@ fn render_on_the_gpu_names_the_adapter_and_the_timing_in_run_json() {
     assert!(stages.contains(&"G-buffer (GPU)") && stages.contains(&"rasterization of blockers"));
 }
 
-/// `render --device gpu` runs every technique with GPU kernels in the registry's table; the
-/// references and the methods without kernels (`vsm`, `esm`, `msm`) are refused, named.
+/// `render --device gpu` runs every technique with GPU kernels in the registry's table (every
+/// method has them); the references, and a method without kernels, are refused, named.
 #[cfg(feature = "gpu")]
 #[test]
 fn gpu_device_runs_every_method_but_the_references() {
@@ -244,7 +244,7 @@ fn gpu_device_runs_every_method_but_the_references() {
     let cpu_only = ["exact", "raytrace"];
     let no_kernels: Vec<&str> =
         methods::registry::METHODS.iter().filter(|m| m.gpu.is_none()).map(|m| m.name).collect();
-    assert_eq!(no_kernels, ["vsm", "esm", "msm"]);
+    assert_eq!(no_kernels, Vec::<&str>::new());
     for name in methods::registry::METHODS.iter().map(|m| m.name).chain(cpu_only) {
         let out = dir.path().join(name);
         let mut args = vec!["render", "--scene", "plane-square", "--method", name];
@@ -269,7 +269,7 @@ fn gpu_device_runs_every_method_but_the_references() {
 
 /// A scene whose objects cast no shadow leaves the GPU kernels empty inputs (no caster, no
 /// silhouette edge, no uncertain pixel): every method still runs (once, pan09 and spsm failed
-/// to bind their empty buffers), and the image is lit everywhere.
+/// to bind their empty buffers), and the image is lit everywhere (msm to within 1e-4).
 #[test]
 fn gpu_device_runs_every_method_on_a_scene_without_casters() {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -293,8 +293,12 @@ fn gpu_device_runs_every_method_on_a_scene_without_casters() {
         assert!(o.status.success(), "{name} on the GPU without casters: {}", stderr(&o));
         let exr = exr::prelude::read_first_flat_layer_from_file(out.join("visibility.exr"))
             .expect("EXR reads");
+        // msm's default 16-bit moments in the optimized basis cannot hold the far plane's
+        // exactly: a texel without a caster dims its receivers by about 4e-5.
+        let least = if name == "msm" { 1.0 - 1e-4 } else { 1.0 };
         for c in &exr.layer_data.channel_data.list {
-            assert!(c.sample_data.values_as_f32().all(|v| v == 1.0), "{name}: not lit everywhere");
+            let lit = c.sample_data.values_as_f32().all(|v| (least..=1.0).contains(&v));
+            assert!(lit, "{name}: not lit everywhere");
         }
     }
 }

@@ -7,6 +7,7 @@ mod common;
 
 mod afsm;
 mod afsm_ss;
+mod filtered;
 mod ftizb;
 mod pan09;
 mod raster;

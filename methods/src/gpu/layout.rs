@@ -10,7 +10,8 @@
 //!
 //! The layouts checked: `common::ProjectorData` and `common::Xyz` (`common.wgsl`, every
 //! projector the kernels read), `raster::Params` (`raster.wgsl`), `sm::Params`
-//! (`receiver.wgsl`, shared by `sm` and the PCF kernels), `spsm::texel::Params`
+//! (`receiver.wgsl`, shared by `sm` and the PCF kernels), `filtered::FParams` (`filtered.wgsl`,
+//! the filtered shadow maps' kernels), `spsm::texel::Params`
 //! (`texel.wgsl`), `spsm::antialias::Record` (`spsm/antialias.wgsl`, a silhouette per
 //! uncertain pixel), `spsm::raster::SetupData` (`spsm/setup.wgsl`, a prepared triangle)
 //! and `Dims`, `spsm::antialias::Dims`, `spsm::pack::PackParams` (`spsm/pack.wgsl`), `pan09::params::Params` and `PlaneData`

@@ -32,6 +32,7 @@ pub mod afsm_ss;
 pub mod common;
 mod context;
 mod error;
+pub mod filtered;
 pub mod frame;
 pub mod ftizb;
 mod layout;
