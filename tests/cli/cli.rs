@@ -249,7 +249,7 @@ fn gpu_device_runs_every_method_but_the_references() {
         let out = dir.path().join(name);
         let mut args = vec!["render", "--scene", "plane-square", "--method", name];
         args.extend(["--device", "gpu", "--width", "16", "--height", "12"]);
-        if name == "afsm-ss" || name == "pan09" {
+        if name == "afsm-ss" || name == "pan09" || name == "ftizb" {
             args.extend(["--rate", "4"]);
         }
         args.extend(["--out", out.to_str().expect("utf-8")]);
