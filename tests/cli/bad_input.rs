@@ -549,3 +549,26 @@ fn runs_over_the_memory_budget_are_refused_before_anything_is_built() {
     assert_eq!(code, Some(2));
     assert!(err.contains("--max-memory") && err.contains("`lots` is not a size"), "{err}");
 }
+
+/// `ftizb`'s grid size and rates: a grid beyond 4096 texels, a rate its masks cannot hold and
+/// a grid that is no number exit 2 naming the flag, and nothing is written.
+#[test]
+fn bad_ftizb_grids_and_rates_are_named() {
+    let cases: &[(&[&str], &[&str])] = &[
+        (&["--izb-res", "5000"], &["--izb-res", "1..=4096"]),
+        (&["--izb-res", "big"], &["--izb-res"]),
+        (&["--rate", "256"], &["--rate"]),
+        (&["--rate", "3"], &["--rate"]),
+    ];
+    for (extra, needles) in cases {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let out = dir.path().join("out");
+        let o = render_into(&out, "cage", "ftizb", extra);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{extra:?}: {err}");
+        for n in *needles {
+            assert!(err.contains(n), "{extra:?}: `{n}` not in {err}");
+        }
+        assert!(!out.exists() || !out.join("visibility.exr").exists(), "{extra:?}: ran");
+    }
+}
