@@ -21,12 +21,15 @@
 //!   ([`Blocker::shadows`](afsm::blockers::Blocker::shadows)): inside the bounding box,
 //!   not the sample's own triangle, the caster's plane depth (clamped to its corners' range)
 //!   in front of the sample's threshold, and inside the outline by `orient2d` with the
-//!   top-left rule. A covered sample's pixel is marked by `atomicOr`.
+//!   top-left rule. A covered sample's pixel is marked by `atomicOr`. In `ftizb`'s passes
+//!   ([`Izb::shadowed_and_hidden`]) the pixel is also marked hidden when the covering caster
+//!   [`hides`] its sub-sample from the camera (`sample.wgsl` gives the camera ray through it).
 //! - [`STAGE_UNDECIDED`]: `orient2d` is the robust crate's filter (its first stage, with the
 //!   same error bound [`ORIENT2D_FILTER_BOUND`]); where it decides, it returns what the CPU's
 //!   `orient2d` returns. The (sample, triangle) pairs it cannot decide (an edge test, or the
 //!   triangle's winding) are appended to an undecided list (atomic counter) and resolved on
-//!   the CPU by `Blocker::new(..).shadows(..)` itself. The depth comparison needs no such
+//!   the CPU by `Blocker::new(..).shadows(..)` itself (and, in `ftizb`'s passes, by
+//!   [`hides`] where they shadow). The depth comparison needs no such
 //!   care: its operands are computed bit for bit as on the CPU.
 //!
 //! The result is therefore the CPU `afsm`'s, pixel for pixel.
@@ -71,9 +74,9 @@ use crate::{
     raster::NO_TRIANGLE,
 };
 use bytemuck::{Pod, Zeroable};
-use glam::DVec2;
+use glam::{DVec2, DVec3};
 use instrumentation::Recorder;
-use scenes::Projector;
+use scenes::{Projector, Ray};
 
 /// Name of the stage that bins the samples into the grid.
 pub const STAGE_IZB: &str = "IZB construction";
@@ -118,7 +121,8 @@ struct FParams {
 }
 
 /// The kernels' `u32` constants, the WGSL `UParams`: pixels, grid cells a side, triangles,
-/// image width.
+/// image width, and whether the pass's sample tests mark hidden sub-samples (1 in a pass of
+/// [`Izb::shadowed_and_hidden`], else 0; written per pass).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 struct UParams {
@@ -126,6 +130,7 @@ struct UParams {
     grid: u32,
     triangles: u32,
     width: u32,
+    hidden: u32,
 }
 
 /// A blocker's outline (up to four corners, `x` then `y`) and bounding box, the WGSL
@@ -170,7 +175,7 @@ super::layout::wgsl_mirror!(
     UParams,
     "UParams",
     compose(&[&LAYOUT]),
-    [pixels, grid, triangles, width];
+    [pixels, grid, triangles, width, hidden];
     BlockerOutline,
     "BlockerOutline",
     compose(&[&LAYOUT]),
@@ -184,10 +189,16 @@ super::layout::wgsl_mirror!(
     compose(&[&LAYOUT]),
     [flags, x0, y0, x1, y1];
 );
+/// The camera ray through a pixel's sub-sample and the shadow offset of a point on it.
+const SAMPLE: Part = Part {
+    name: "afsm/sample.wgsl",
+    source: include_str!("afsm/sample.wgsl"),
+    needs: &[&COMMON, &LAYOUT],
+};
 const TRANSFORM: Part = Part {
     name: "afsm/transform.wgsl",
     source: include_str!("afsm/transform.wgsl"),
-    needs: &[&COMMON, &LAYOUT],
+    needs: &[&COMMON, &LAYOUT, &SAMPLE],
 };
 const IZB: Part = Part {
     name: "afsm/izb.wgsl",
@@ -204,7 +215,7 @@ const ARGS: Part =
 const TEST: Part = Part {
     name: "afsm/test.wgsl",
     source: include_str!("afsm/test.wgsl"),
-    needs: &[&COMMON, &LAYOUT],
+    needs: &[&COMMON, &LAYOUT, &SAMPLE],
 };
 
 /// The alias-free shadow map on the GPU (`afsm` with `--device gpu`).
@@ -263,6 +274,9 @@ pub struct SampleSurface<'a> {
 pub struct ShadowedSamples {
     /// Per pixel, 1 where the sub-sample is shadowed, else 0.
     pub shadowed: Vec<u32>,
+    /// Per pixel, 1 where some caster that shadows the sub-sample also hides it from the
+    /// camera (`ftizb`'s rule, [`hides`]), else 0; all 0 in a pass of [`Izb::shadowed`].
+    pub hidden: Vec<u32>,
     /// (Sample, triangle) pairs the GPU's filter could not decide, resolved on the CPU.
     pub undecided: u64,
     /// Samples tested against a triangle (`sampling_points_tested`).
@@ -294,9 +308,10 @@ pub struct Izb<'a> {
     test: wgpu::ComputePipeline,
     /// `test.wgsl`'s first ten bindings.
     test_inputs: [wgpu::Buffer; 10],
-    /// The tests' counters and undecided list, cleared for every sub-sample, and their bind.
+    /// The triangles' corners, which the hidden test reads.
+    corners: wgpu::Buffer,
+    /// The tests' counters and undecided list, cleared for every sub-sample.
     pairs: TestBuffers,
-    bind_test: wgpu::BindGroup,
     set_up: std::cell::Cell<bool>,
 }
 
@@ -346,6 +361,7 @@ impl<'a> Izb<'a> {
                 grid,
                 triangles: gpu.triangles,
                 width: frame.width(),
+                hidden: 0,
             }],
         );
         let camera = ctx.upload("afsm camera", &[ProjectorData::new(&frame.camera)]);
@@ -414,7 +430,6 @@ impl<'a> Izb<'a> {
             shadow,
         ];
         let pairs = TestBuffers::new(ctx, pixels.max(4096));
-        let bind_test = pairs.bind(ctx, &test, &test_inputs);
         Self {
             frame,
             light,
@@ -431,8 +446,8 @@ impl<'a> Izb<'a> {
             args_buf,
             test,
             test_inputs,
+            corners: gpu.corners.clone(),
             pairs,
-            bind_test,
             cell_start,
             fparams,
             set_up: std::cell::Cell::new(false),
@@ -448,6 +463,31 @@ impl<'a> Izb<'a> {
         surface: SampleSurface<'_>,
         rec: &mut Recorder,
     ) -> Result<ShadowedSamples, MethodError> {
+        self.pass(ctx, surface, false, rec)
+    }
+
+    /// As [`Izb::shadowed`], and which of the shadowed sub-samples are hidden from the camera
+    /// (`ftizb`'s rule for its sub-samples but the centre): some caster that shadows the
+    /// sub-sample (in the GPU's tests or the CPU's undecided ones) [`hides`] it, on the camera
+    /// ray through its pixel's corner plus `surface.offset` at `surface.depth`, with its shadow
+    /// offset ([`afsm::shadow_offset`]).
+    pub fn shadowed_and_hidden(
+        &self,
+        ctx: &GpuContext,
+        surface: SampleSurface<'_>,
+        rec: &mut Recorder,
+    ) -> Result<ShadowedSamples, MethodError> {
+        self.pass(ctx, surface, true, rec)
+    }
+
+    /// A pass of [`Izb::shadowed`] (`hidden` false) or [`Izb::shadowed_and_hidden`].
+    fn pass(
+        &self,
+        ctx: &GpuContext,
+        surface: SampleSurface<'_>,
+        hidden: bool,
+        rec: &mut Recorder,
+    ) -> Result<ShadowedSamples, MethodError> {
         let pixels = self.pixels;
         let groups = GpuContext::groups_1d(pixels, WG);
         ctx.queue.write_buffer(
@@ -455,6 +495,13 @@ impl<'a> Izb<'a> {
             std::mem::offset_of!(FParams, sub_x) as u64,
             bytemuck::cast_slice(&[surface.offset.x, surface.offset.y]),
         );
+        let [_, _, uparams_buf, _, _, camera_buf] = &self.transform_io;
+        ctx.queue.write_buffer(
+            uparams_buf,
+            std::mem::offset_of!(UParams, hidden) as u64,
+            bytemuck::cast_slice(&[u32::from(hidden)]),
+        );
+        let camera_side = [camera_buf, &self.corners, surface.depth];
 
         // Transformation of samples.
         let [light, fparams, uparams, sample_f, sample_tri, camera] = &self.transform_io;
@@ -497,6 +544,7 @@ impl<'a> Izb<'a> {
             pass.set_bind_group(0, bind, &[]);
             pass.dispatch_workgroups_indirect(&self.args_buf, 0);
         };
+        let bind_test = self.pairs.bind(ctx, &self.test, &self.test_inputs, camera_side);
         ctx.stage(rec, STAGE_RASTERIZATION, |e| {
             if !set_up {
                 self.setup.dispatch(e, GpuContext::groups_1d(triangles, WG));
@@ -505,7 +553,7 @@ impl<'a> Izb<'a> {
             }
             e.clear_buffer(shadow, 0, None);
             e.clear_buffer(&self.pairs.counters, 0, None);
-            indirect(e, &self.bind_test);
+            indirect(e, &bind_test);
         })?;
         let (mut tested, mut undecided) = self.pairs.counts(ctx)?;
         let larger;
@@ -515,12 +563,14 @@ impl<'a> Izb<'a> {
             // (marking a shadowed pixel twice changes nothing), timed as part of the stage.
             larger = TestBuffers::new(ctx, undecided);
             pairs = &larger;
-            let bind = pairs.bind(ctx, &self.test, &self.test_inputs);
+            let bind = pairs.bind(ctx, &self.test, &self.test_inputs, camera_side);
             ctx.stage(rec, STAGE_RASTERIZATION, |e| indirect(e, &bind))?;
             (tested, undecided) = pairs.counts(ctx)?;
         }
-        let mut shadowed: Vec<u32> = ctx.read(shadow)?;
-        shadowed.truncate(pixels);
+        // Bit 1: shadowed; bit 2: hidden.
+        let marks: Vec<u32> = ctx.read(shadow)?;
+        let mut shadowed: Vec<u32> = marks.iter().take(pixels).map(|&m| m & 1).collect();
+        let mut hidden_out: Vec<u32> = marks.iter().take(pixels).map(|&m| m >> 1 & 1).collect();
 
         // Undecided tests (CPU).
         let (pf, pu): (Vec<f64>, Vec<u32>) = if undecided > 0 {
@@ -528,6 +578,10 @@ impl<'a> Izb<'a> {
         } else {
             (Vec::new(), Vec::new())
         };
+        // The sub-samples' depths, for the hidden test of the pairs found shadowing.
+        let depth: Vec<f64> =
+            if hidden && undecided > 0 { ctx.read(surface.depth)? } else { Vec::new() };
+        let width = self.frame.width() as usize;
         rec.stages.time(STAGE_UNDECIDED, || {
             for k in 0..undecided {
                 let (pixel, t) = (pu[3 * k] as usize, pu[3 * k + 2] as usize);
@@ -541,10 +595,19 @@ impl<'a> Izb<'a> {
                 if Blocker::new(&self.frame.geometry, t, &self.light).is_some_and(|b| b.shadows(&s))
                 {
                     shadowed[pixel] = 1;
+                    if hidden {
+                        let (i, j) = ((pixel % width) as f64, (pixel / width) as f64);
+                        let ray = self.frame.camera.ray(DVec2::new(i, j) + surface.offset);
+                        let ts = depth[pixel];
+                        let offset = afsm::shadow_offset(ray.origin, ray.at(ts));
+                        if hides(&ray, ts, offset, self.frame.geometry.corners(t)) {
+                            hidden_out[pixel] = 1;
+                        }
+                    }
                 }
             }
         });
-        Ok(ShadowedSamples { shadowed, undecided: undecided as u64, tested })
+        Ok(ShadowedSamples { shadowed, hidden: hidden_out, undecided: undecided as u64, tested })
     }
 
     /// The samples the last transformation of samples wrote, read back as the CPU's
@@ -598,6 +661,35 @@ pub(super) fn opaque_casters_only(frame: &Frame<'_>, method: &str) -> Result<(),
     Ok(())
 }
 
+/// Whether the triangle `corners` hides the point at parameter `t` of `ray` from the camera:
+/// the ray meets the closed triangle (Möller and Trumbore's test in `f64`) at a parameter
+/// `hit` with `0 < hit < t - margin`, `margin = offset / |direction|`, `offset` the point's
+/// shadow offset ([`afsm::shadow_offset`], world units). `ftizb`'s rule for its sub-samples
+/// (Pan et al.'s validity mask); `test.wgsl`'s `hides` computes it with the same operations in
+/// the same order.
+fn hides(ray: &Ray, t: f64, offset: f64, corners: [DVec3; 3]) -> bool {
+    let [a, b, c] = corners;
+    let (e1, e2) = (b - a, c - a);
+    let p = ray.direction.cross(e2);
+    let det = e1.dot(p);
+    if det == 0.0 || !det.is_finite() {
+        return false;
+    }
+    let inv = 1.0 / det;
+    let tv = ray.origin - a;
+    let u = tv.dot(p) * inv;
+    if !(0.0..=1.0).contains(&u) {
+        return false;
+    }
+    let q = tv.cross(e1);
+    let v = ray.direction.dot(q) * inv;
+    if v < 0.0 || u + v > 1.0 {
+        return false;
+    }
+    let hit = e2.dot(q) * inv;
+    hit > 0.0 && hit < t - offset / ray.direction.length()
+}
+
 /// The counters and the undecided list of the sample tests.
 struct TestBuffers {
     /// Room for this many undecided pairs.
@@ -621,15 +713,18 @@ impl TestBuffers {
         }
     }
 
-    /// The bind group of `test.wgsl`: its first ten buffers, then these.
+    /// The bind group of `test.wgsl`: its first ten buffers, then these, then the hidden
+    /// test's `camera_side` (camera, corners, the sub-samples' depths).
     fn bind(
         &self,
         ctx: &GpuContext,
         test: &wgpu::ComputePipeline,
         first: &[wgpu::Buffer; 10],
+        camera_side: [&wgpu::Buffer; 3],
     ) -> wgpu::BindGroup {
         let mut all: Vec<&wgpu::Buffer> = first.iter().collect();
         all.extend([&self.counters, &self.und_f, &self.und_u]);
+        all.extend(camera_side);
         ctx.bind(test, &all)
     }
 
@@ -669,5 +764,53 @@ impl ShadowMethod for GpuAfsm {
             lit: out.lit,
             transmittance: None,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::hides;
+    use glam::DVec3;
+    use scenes::Ray;
+
+    /// A ray down -z from z = 10 (parameter = distance) and a triangle around the z axis at
+    /// height `z`.
+    fn at_height(z: f64) -> (Ray, [DVec3; 3]) {
+        let ray = Ray { origin: DVec3::new(0.0, 0.0, 10.0), direction: DVec3::NEG_Z };
+        let corners =
+            [DVec3::new(-1.0, -1.0, z), DVec3::new(1.0, -1.0, z), DVec3::new(0.0, 1.0, z)];
+        (ray, corners)
+    }
+
+    #[test]
+    fn a_triangle_hides_only_points_beyond_it_by_more_than_the_margin() {
+        let (ray, corners) = at_height(2.0);
+        // The triangle is met at parameter 8.
+        assert!(hides(&ray, 9.0, 0.0, corners));
+        assert!(hides(&ray, 9.0, 0.5, corners));
+        assert!(!hides(&ray, 9.0, 1.0, corners), "within the margin");
+        assert!(!hides(&ray, 8.0, 0.0, corners), "on the triangle");
+        assert!(!hides(&ray, 7.0, 0.0, corners), "in front of it");
+        // Behind the ray's origin.
+        let (ray, corners) = at_height(11.0);
+        assert!(!hides(&ray, 20.0, 0.0, corners));
+    }
+
+    #[test]
+    fn the_triangle_is_closed_and_a_miss_or_an_edge_on_one_hides_nothing() {
+        let (ray, [a, b, c]) = at_height(2.0);
+        // The ray through a corner and through an edge.
+        assert!(hides(&ray, 9.0, 0.0, [DVec3::new(0.0, 0.0, 2.0), b, c]));
+        assert!(hides(&ray, 9.0, 0.0, [a, DVec3::new(1.0, 0.0, 2.0), DVec3::new(-1.0, 0.0, 2.0)]));
+        // Beside it.
+        let shifted = [a, b, c].map(|p| p + DVec3::new(3.0, 0.0, 0.0));
+        assert!(!hides(&ray, 9.0, 0.0, shifted));
+        // Edge-on (det 0) and degenerate.
+        let edge_on =
+            [DVec3::new(0.0, -1.0, 0.0), DVec3::new(0.0, 1.0, 0.0), DVec3::new(0.0, 0.0, 5.0)];
+        assert!(!hides(&ray, 20.0, 0.0, edge_on));
+        assert!(!hides(&ray, 9.0, 0.0, [a, a, a]));
+        let nan = [a, b, DVec3::splat(f64::NAN)];
+        assert!(!hides(&ray, 9.0, 0.0, nan));
     }
 }

@@ -36,7 +36,16 @@
 //!   the tangent plane's region and the light projects it to a finite light image point with
 //!   a finite threshold, which is exactly when `Izb`'s transformation gives it a sample
 //!   ([`Izb::sampled`]); a pixel whose centre has no sample has none (lit), as on the CPU.
-//!   `lit = 1 - shadowed / valid` in `f64`, 1 where nothing is shadowed, as `f32`.
+//! - **Hidden sub-samples** (the CPU's rule, after Pan et al.'s validity mask): where a pixel
+//!   spans several triangles of a curved mesh, tangent-plane points lie behind the real
+//!   surface and its own triangles would shadow them. A sub-sample but the centre is hidden
+//!   when a caster that shadows it also hides it from the camera (the camera ray through it
+//!   meets the caster before its tangent-plane depth, less its shadow offset): every pass but
+//!   the centre's is [`Izb::shadowed_and_hidden`], which tests this on the GPU for every
+//!   shadowing (sample, caster) pair and on the CPU for the undecided pairs found shadowing,
+//!   so hidden wins whatever the order of the casters. A hidden sub-sample leaves the ratio:
+//!   `lit = 1 - (shadowed - hidden) / (valid - hidden)` in `f64`, 1 where nothing is
+//!   shadowed and not hidden, as `f32`.
 //! - **Counters.** `sampling_points_tested` as GPU `afsm-ss` sums it (the samples inside a
 //!   caster's bounding box in the cells it visits); the undecided pairs in a note.
 //! - **Transparency** is not applicable, as for `afsm` on the GPU (the twin treats
@@ -103,13 +112,17 @@ pub struct GpuFtizb {
 /// What [`shade`] returns.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FtizbGpuOutput {
-    /// Per pixel, `1 - shadowed / valid` over its sub-samples (1 where none is shadowed).
+    /// Per pixel, `1 - (shadowed - hidden) / (valid - hidden)` over its sub-samples (1 where
+    /// none is shadowed and not hidden).
     pub lit: Vec<f32>,
     /// Valid sub-samples per pixel (0 for background pixels and pixels whose centre the
     /// light cannot project).
     pub valid: Vec<u32>,
-    /// Shadowed valid sub-samples per pixel.
+    /// Shadowed valid sub-samples per pixel (hidden ones included).
     pub shadowed: Vec<u32>,
+    /// Hidden valid sub-samples per pixel: shadowed by a caster that also hides them from the
+    /// camera, left out of the pixel's ratio.
+    pub hidden: Vec<u32>,
     /// (Sample, triangle) pairs the GPU's filter could not decide, over all sub-samples.
     pub undecided: u64,
 }
@@ -164,6 +177,7 @@ pub fn shade(
 
     let mut valid = vec![0u32; pixels];
     let mut shadowed = vec![0u32; pixels];
+    let mut hidden = vec![0u32; pixels];
     let mut centre_valid = vec![false; pixels];
     let mut passes = Recorder::default();
     let mut undecided = 0;
@@ -184,12 +198,19 @@ pub fn shade(
             })?;
             SampleSurface { triangle: &s_triangle, depth: &s_depth, offset }
         };
-        let out = izb.shadowed(ctx, surface, &mut passes)?;
+        // The centre sub-sample is never hidden.
+        let out = if s == centre {
+            izb.shadowed(ctx, surface, &mut passes)?
+        } else {
+            izb.shadowed_and_hidden(ctx, surface, &mut passes)?
+        };
         let sampled = izb.sampled(ctx)?;
-        for (k, (&has, &dark)) in sampled.iter().zip(&out.shadowed).enumerate() {
+        let marks = out.shadowed.iter().zip(&out.hidden);
+        for (k, (&has, (&dark, &behind))) in sampled.iter().zip(marks).enumerate() {
             if has {
                 valid[k] += 1;
                 shadowed[k] += u32::from(dark != 0);
+                hidden[k] += u32::from(behind != 0);
             }
         }
         if s == centre {
@@ -207,10 +228,14 @@ pub fn shade(
         if !has {
             valid[k] = 0;
             shadowed[k] = 0;
+            hidden[k] = 0;
         }
     }
-    let lit = valid.iter().zip(&shadowed).map(|(&v, &s)| resolve(s, v)).collect();
-    Ok(FtizbGpuOutput { lit, valid, shadowed, undecided })
+    // A hidden sub-sample is shadowed (by the caster that hides it): it leaves both counts.
+    let lit = (0..pixels)
+        .map(|k| resolve(shadowed[k].saturating_sub(hidden[k]), valid[k].saturating_sub(hidden[k])))
+        .collect();
+    Ok(FtizbGpuOutput { lit, valid, shadowed, hidden, undecided })
 }
 
 /// A pixel's light from its shadowed and valid sub-samples, as the CPU's `resolve`:

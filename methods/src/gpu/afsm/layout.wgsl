@@ -13,12 +13,14 @@ struct FParams {
     sub_y: f64,
 }
 
-// Pixels, grid cells a side, triangles, image width.
+// Pixels, grid cells a side, triangles, image width, and 1 in a pass whose sample tests
+// mark hidden sub-samples (ftizb's sub-samples but the centre), else 0.
 struct UParams {
     pixels: u32,
     grid: u32,
     triangles: u32,
     width: u32,
+    hidden: u32,
 }
 
 // A blocker's outline (up to four corners, x then y) and bounding box.

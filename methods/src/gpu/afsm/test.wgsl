@@ -3,7 +3,9 @@
 // (afsm::blockers::Blocker::shadows): inside the triangle's bounding box (counted as a test),
 // not on the triangle itself, caster depth in front of the sample's threshold, and inside the
 // outline by orient2d with the top-left rule. Pairs the orient2d filter cannot decide go to
-// the undecided list for the CPU. Appended to common.wgsl.
+// the undecided list for the CPU. In a pass with uparams.hidden set (ftizb's sub-samples but
+// the centre), a shadowed sample is also marked hidden when the caster hides it from the
+// camera (ftizb::hidden::hides). Appended to common.wgsl and sample.wgsl.
 
 @group(0) @binding(0) var<storage, read> fparams: FParams;
 @group(0) @binding(1) var<storage, read> uparams: UParams;
@@ -15,7 +17,7 @@
 @group(0) @binding(6) var<storage, read> cell_start: array<u32>;
 @group(0) @binding(7) var<storage, read> izb_f: array<f64>;
 @group(0) @binding(8) var<storage, read> izb_u: array<u32>;
-// Per pixel: 1 when shadowed.
+// Per pixel: bit 1 when shadowed, bit 2 when also hidden (passes with uparams.hidden set).
 @group(0) @binding(9) var<storage, read_write> shadow: array<atomic<u32>>;
 // [tests (low word), tests (high word), undecided pairs]
 @group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>>;
@@ -23,6 +25,11 @@
 // triangle, caster triangle) each.
 @group(0) @binding(11) var<storage, read_write> und_f: array<f64>;
 @group(0) @binding(12) var<storage, read_write> und_u: array<u32>;
+// The hidden test's inputs: the camera, the triangles' corners (9 f64 each) and, per pixel,
+// the sub-sample's depth (the parameter of its camera ray).
+@group(0) @binding(13) var<storage, read> camera_data: ProjectorData;
+@group(0) @binding(14) var<storage, read> corners: array<f64>;
+@group(0) @binding(15) var<storage, read> s_depth: array<f64>;
 
 const ORIENTATION_UNDECIDED: u32 = 256u;
 
@@ -40,6 +47,46 @@ fn inside_edge(a: vec2<f64>, b: vec2<f64>, p: vec2<f64>) -> u32 {
     }
     let d = b - a;
     return select(0u, 1u, d.y < 0.0lf || (d.y == 0.0lf && d.x > 0.0lf));
+}
+
+fn caster_corner(t: u32, i: u32) -> vec3<f64> {
+    let b = 9u * t + 3u * i;
+    return vec3<f64>(corners[b], corners[b + 1u], corners[b + 2u]);
+}
+
+// ftizb::hidden::hides: whether the triangle (a, b, c) hides the point at parameter t of
+// `ray` from the camera: the ray meets the closed triangle (Moller and Trumbore's test) at a
+// parameter in (0, t - offset / |direction|), offset the point's shadow offset.
+fn hides(ray: Ray, t: f64, offset: f64, a: vec3<f64>, b: vec3<f64>, c: vec3<f64>) -> bool {
+    let e1 = b - a;
+    let e2 = c - a;
+    let p = cross3(ray.direction, e2);
+    let det = dot3(e1, p);
+    if det == 0.0lf || !is_finite64(det) {
+        return false;
+    }
+    let inv = 1.0lf / det;
+    let tv = ray.origin - a;
+    let u = dot3(tv, p) * inv;
+    if !(u >= 0.0lf && u <= 1.0lf) {
+        return false;
+    }
+    let q = cross3(tv, e1);
+    let v = dot3(ray.direction, q) * inv;
+    if v < 0.0lf || u + v > 1.0lf {
+        return false;
+    }
+    let hit = dot3(e2, q) * inv;
+    return hit > 0.0lf && hit < t - offset / sqrt(dot3(ray.direction, ray.direction));
+}
+
+// Whether caster t hides pixel k's sub-sample (at its depth on the camera ray through it)
+// from the camera.
+fn hides_sample(k: u32, t: u32) -> bool {
+    let ray = sample_ray(k);
+    let ts = s_depth[k];
+    let offset = shadow_offset(ray.origin, ray.origin + ts * ray.direction);
+    return hides(ray, ts, offset, caster_corner(t, 0u), caster_corner(t, 1u), caster_corner(t, 2u));
 }
 
 @compute @workgroup_size(64)
@@ -126,7 +173,11 @@ fn test(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         }
         let pixel = izb_u[2u * k];
         if inside == 1u {
-            atomicOr(&shadow[pixel], 1u);
+            var mark = 1u;
+            if uparams.hidden != 0u && hides_sample(pixel, t) {
+                mark = 3u;
+            }
+            atomicOr(&shadow[pixel], mark);
         } else if inside == 2u {
             let at = atomicAdd(&counters[2], 1u);
             if at < arrayLength(&und_u) / 3u {

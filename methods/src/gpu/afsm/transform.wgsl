@@ -1,6 +1,6 @@
 // Stage "transformation of samples" (afsm::samples::transform_samples) for one sub-sample of
 // every pixel: the surface point of the sub-sample's G-buffer moved to the light's image
-// plane, with its shadow threshold depth. Appended to common.wgsl.
+// plane, with its shadow threshold depth. Appended to common.wgsl and sample.wgsl.
 
 @group(0) @binding(0) var<storage, read> light_data: ProjectorData;
 @group(0) @binding(1) var<storage, read> fparams: FParams;
@@ -13,16 +13,6 @@
 // Per pixel: the sample's triangle, NO_TRIANGLE where the pixel has no sample.
 @group(0) @binding(6) var<storage, read_write> sample_tri: array<u32>;
 @group(0) @binding(7) var<storage, read> camera_data: ProjectorData;
-
-fn max_element(v: vec3<f64>) -> f64 {
-    return max(max(v.x, v.y), v.z);
-}
-
-// afsm::shadow_offset: the offset of the surface point `p` hit by a camera ray from `origin`.
-fn shadow_offset(origin: vec3<f64>, p: vec3<f64>) -> f64 {
-    let magnitude = max_element(max(abs(origin), abs(p))) + max_element(abs(p - origin));
-    return fparams.offset * magnitude;
-}
 
 // samples::threshold_depth.
 fn threshold_depth(p: Proj, x: f64, y: f64, z: f64, offset: f64) -> f64 {
@@ -46,11 +36,9 @@ fn transform(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     var r = vec4<f64>(0.0lf, 0.0lf, 0.0lf, 0.0lf);
     if tri != NO_TRIANGLE {
         let p = proj_load(light_data);
-        // SamplePattern::point: the pixel's corner plus the sub-sample's offset; the surface
-        // point is Ray::at(depth) on the camera ray through it, as transform_samples takes it.
-        let w = uparams.width;
-        let point = vec2<f64>(f64(k % w) + fparams.sub_x, f64(k / w) + fparams.sub_y);
-        let ray = proj_ray(proj_load(camera_data), point);
+        // The surface point is Ray::at(depth) on the camera ray through the sub-sample, as
+        // transform_samples takes it.
+        let ray = sample_ray(k);
         let position = ray.origin + g_depth[k] * ray.direction;
         r = proj_project(p, position);
         if r.w == 0.0lf {
