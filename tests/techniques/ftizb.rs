@@ -4,12 +4,12 @@
 //! over thread counts, counters and stages.
 
 use crate::common::load_builtin;
-use analysis::raytrace::{RayTrace, SampleImage};
+use crate::planar::{compare_on_plane, samples};
 use instrumentation::Recorder;
 use methods::{
     ftizb::{Ftizb, FtizbOptions, SubsampleMasks},
     method,
-    pattern::{PatternKind, SamplePattern},
+    pattern::PatternKind,
     Frame, MethodOptions, Visibility,
 };
 
@@ -23,49 +23,6 @@ fn run_masks(m: &Ftizb, frame: &Frame<'_>) -> (Visibility, SubsampleMasks, Recor
     assert_eq!(v.lit.len(), frame.gbuffer.triangle.len());
     assert!(v.lit.iter().all(|l| l.is_finite() && (0.0..=1.0).contains(l)));
     (v, masks, rec)
-}
-
-fn samples(frame: &Frame<'_>, rate: u32, kind: PatternKind) -> SampleImage {
-    let pattern = SamplePattern::new(rate, kind).expect("valid rate");
-    RayTrace { pattern }.sample_image(frame, &mut Recorder::default()).expect("raytrace applies")
-}
-
-/// Sub-sample comparison over the pixels whose sub-samples all see the receiver plane.
-#[derive(Debug, Default)]
-struct Comparison {
-    pixels: usize,
-    samples: usize,
-    /// Sub-samples whose shadow differs.
-    mismatches: usize,
-    /// Sub-samples left out of the pixel's ratio (there should be none on the plane).
-    invalid: usize,
-    /// Sub-samples in shadow, for the test to be meaningful.
-    shadowed: usize,
-}
-
-fn compare_on_plane(frame: &Frame<'_>, masks: &SubsampleMasks, truth: &SampleImage) -> Comparison {
-    let (plane, _, _) = frame.scene.receiver_plane().expect("a planar receiver");
-    let rate = truth.rate as usize;
-    let mut c = Comparison::default();
-    for k in 0..masks.occlusion.len() {
-        let hits = &truth.triangle[k * rate..(k + 1) * rate];
-        let on_plane = hits.iter().all(|&t| {
-            t != methods::raster::NO_TRIANGLE && frame.geometry.object[t as usize] as usize == plane
-        });
-        if !on_plane {
-            continue;
-        }
-        c.pixels += 1;
-        for s in 0..rate {
-            c.samples += 1;
-            let occluded = masks.occlusion[k] >> s & 1 == 1;
-            let shadowed = truth.light[k * rate + s] == 0.0;
-            c.mismatches += usize::from(occluded != shadowed);
-            c.invalid += usize::from(masks.valid[k] >> s & 1 == 0);
-            c.shadowed += usize::from(shadowed);
-        }
-    }
-    c
 }
 
 #[test]
@@ -84,7 +41,7 @@ fn ftizb_equals_raytrace_sub_sample_for_sub_sample_on_planar_receivers() {
         let frame = Frame::new(&scene, 120, 90, &mut Recorder::default());
         let (_, masks, rec) = run_masks(&ftizb(rate, kind), &frame);
         let truth = samples(&frame, rate, kind);
-        let c = compare_on_plane(&frame, &masks, &truth);
+        let c = compare_on_plane(&frame, &masks.occlusion, &masks.valid, &truth);
         eprintln!(
             "{name} {rate} {kind}: {c:?}, {} pairs tested",
             rec.counters.visibility_evaluations
