@@ -234,7 +234,7 @@ mod tests {
     use super::*;
     use instrumentation::stats::Summary;
 
-    /// `sm` at two map sizes, `vsm` at two map sizes and two filters and `esm` on one scene
+    /// `sm` at two map sizes, `msm` at two map sizes and two filters and `esm` on one scene
     /// at 32 x 24, on the wall clock, with the times given per run.
     fn report(times: &[f64]) -> Report {
         let mut report = crate::sweep::report_of(
@@ -249,7 +249,7 @@ mod tests {
             method = "sm"
             map_res = [64, 128]
             [[run]]
-            method = "vsm"
+            method = "msm"
             map_res = [64, 128]
             filter = [3, 7]
             [[run]]
@@ -329,7 +329,7 @@ mod tests {
             chart.chart.series.iter().filter(|s| s.marker == Marker::Ring).collect();
         assert_eq!(rings.len(), 1);
         assert_eq!(rings[0].points.len(), 2, "both sm runs");
-        // vsm's two series sweep the map and are named by the filter; esm's one.
+        // msm's two series sweep the map and are named by the filter; esm's one.
         let mut coloured: Vec<&str> = chart
             .chart
             .series
@@ -338,7 +338,7 @@ mod tests {
             .map(|s| s.label.as_str())
             .collect();
         coloured.sort();
-        assert_eq!(coloured, ["esm", "vsm filter=3", "vsm filter=7"]);
+        assert_eq!(coloured, ["esm", "msm filter=3", "msm filter=7"]);
         assert!(chart.chart.series.iter().all(|s| s.marker != Marker::Context), "nothing else");
         // Every run once, and the front drawn is the runs' own.
         let mut drawn: Vec<(f64, f64)> =

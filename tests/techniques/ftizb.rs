@@ -1,14 +1,15 @@
 //! `ftizb` (Wyman et al. 2015, 2016) end to end: sub-sample for sub-sample against the ray
-//! tracer on planar receivers (both patterns), rate 1 against `afsm`, culling and the grid's
-//! resolution changing only the cost, determinism over thread counts, counters and stages.
+//! tracer on planar receivers (both patterns), rate 1 against `afsm`, hidden sub-samples on
+//! curved receivers, culling and the grid's resolution changing only the cost, determinism
+//! over thread counts, counters and stages.
 
 use crate::common::load_builtin;
-use analysis::raytrace::{RayTrace, SampleImage};
+use crate::planar::{compare_on_plane, samples};
 use instrumentation::Recorder;
 use methods::{
     ftizb::{Ftizb, FtizbOptions, SubsampleMasks},
     method,
-    pattern::{PatternKind, SamplePattern},
+    pattern::PatternKind,
     Frame, MethodOptions, Visibility,
 };
 
@@ -22,49 +23,6 @@ fn run_masks(m: &Ftizb, frame: &Frame<'_>) -> (Visibility, SubsampleMasks, Recor
     assert_eq!(v.lit.len(), frame.gbuffer.triangle.len());
     assert!(v.lit.iter().all(|l| l.is_finite() && (0.0..=1.0).contains(l)));
     (v, masks, rec)
-}
-
-fn samples(frame: &Frame<'_>, rate: u32, kind: PatternKind) -> SampleImage {
-    let pattern = SamplePattern::new(rate, kind).expect("valid rate");
-    RayTrace { pattern }.sample_image(frame, &mut Recorder::default()).expect("raytrace applies")
-}
-
-/// Sub-sample comparison over the pixels whose sub-samples all see the receiver plane.
-#[derive(Debug, Default)]
-struct Comparison {
-    pixels: usize,
-    samples: usize,
-    /// Sub-samples whose shadow differs.
-    mismatches: usize,
-    /// Sub-samples left out of the pixel's ratio (there should be none on the plane).
-    invalid: usize,
-    /// Sub-samples in shadow, for the test to be meaningful.
-    shadowed: usize,
-}
-
-fn compare_on_plane(frame: &Frame<'_>, masks: &SubsampleMasks, truth: &SampleImage) -> Comparison {
-    let (plane, _, _) = frame.scene.receiver_plane().expect("a planar receiver");
-    let rate = truth.rate as usize;
-    let mut c = Comparison::default();
-    for k in 0..masks.occlusion.len() {
-        let hits = &truth.triangle[k * rate..(k + 1) * rate];
-        let on_plane = hits.iter().all(|&t| {
-            t != methods::raster::NO_TRIANGLE && frame.geometry.object[t as usize] as usize == plane
-        });
-        if !on_plane {
-            continue;
-        }
-        c.pixels += 1;
-        for s in 0..rate {
-            c.samples += 1;
-            let occluded = masks.occlusion[k] >> s & 1 == 1;
-            let shadowed = truth.light[k * rate + s] == 0.0;
-            c.mismatches += usize::from(occluded != shadowed);
-            c.invalid += usize::from(masks.valid[k] >> s & 1 == 0);
-            c.shadowed += usize::from(shadowed);
-        }
-    }
-    c
 }
 
 #[test]
@@ -83,7 +41,7 @@ fn ftizb_equals_raytrace_sub_sample_for_sub_sample_on_planar_receivers() {
         let frame = Frame::new(&scene, 120, 90, &mut Recorder::default());
         let (_, masks, rec) = run_masks(&ftizb(rate, kind), &frame);
         let truth = samples(&frame, rate, kind);
-        let c = compare_on_plane(&frame, &masks, &truth);
+        let c = compare_on_plane(&frame, &masks.occlusion, &masks.valid, &truth);
         eprintln!(
             "{name} {rate} {kind}: {c:?}, {} pairs tested",
             rec.counters.visibility_evaluations
@@ -109,42 +67,30 @@ fn ftizb_at_rate_1_is_afsm() {
     }
 }
 
-fn options(occlusion: bool, depth: bool, izb_res: u32) -> FtizbOptions {
-    FtizbOptions {
-        rate: 16,
-        occlusion_culling: occlusion,
-        depth_culling: depth,
-        izb_res,
-        ..FtizbOptions::default()
-    }
+fn options(depth: bool, izb_res: u32) -> FtizbOptions {
+    FtizbOptions { rate: 16, depth_culling: depth, izb_res, ..FtizbOptions::default() }
 }
 
 #[test]
-fn culling_and_the_grid_size_change_the_cost_never_a_pixel() {
+fn depth_culling_and_the_grid_size_change_the_cost_never_a_pixel() {
     for name in ["cage", "spheres", "grazing"] {
         let Some(scene) = load_builtin(name) else { continue };
         let frame = Frame::new(&scene, 80, 60, &mut Recorder::default());
         let run = |o: FtizbOptions| run_masks(&Ftizb { options: o }, &frame);
-        let (base, masks, rec) = run(options(true, true, 0));
+        let (base, masks, rec) = run(options(true, 0));
         let c = &rec.counters;
-        // A texel goes wholly dark only when it holds no lit sample: where a caster is in view,
-        // its lit pixels share the texels of its shadow (the same light rays), as on `cage`
-        // and `spheres`; on `grazing` they do not.
-        assert!(c.nodes_occlusion_culled > 0 || name != "grazing", "{name}: {c:?}");
         assert!(c.nodes_depth_culled > 0, "{name}: {c:?}");
         assert!(c.footprint_texels >= c.caster_texels.min(1), "{name}");
-        for o in [options(false, true, 0), options(true, false, 0), options(false, false, 0)] {
-            let (v, m, r) = run(o);
-            assert_eq!(v.lit, base.lit, "{name} {o:?}");
-            assert_eq!(m, masks, "{name} {o:?}");
-            assert!(
-                r.counters.sampling_points_tested > c.sampling_points_tested,
-                "{name} {o:?}: culling off does more work"
-            );
-        }
+        let (v, m, r) = run(options(false, 0));
+        assert_eq!(v.lit, base.lit, "{name}: depth culling off");
+        assert_eq!(m, masks, "{name}: depth culling off");
+        assert!(
+            r.counters.sampling_points_tested > c.sampling_points_tested,
+            "{name}: depth culling off does more work"
+        );
         // The grid bins the samples; their coordinates and every decision are the same.
         for res in [1, 16, 1024] {
-            let (v, m, r) = run(options(true, true, res));
+            let (v, m, r) = run(options(true, res));
             assert_eq!(v.lit, base.lit, "{name} at grid {res}");
             assert_eq!(m, masks, "{name} at grid {res}");
             assert_ne!(r.counters.visibility_evaluations, 0, "{name} at grid {res}");
@@ -192,4 +138,36 @@ fn registry_builds_ftizb_and_names_bad_flags() {
         .map(|_| ())
         .expect_err("rate 256");
     assert!(e.to_string().contains("--rate"), "{e}");
+}
+
+/// On a curved mesh with several triangles a pixel, the sub-samples a caster shadows and hides
+/// from the camera are left out (they lie behind the surface on the tangent plane). At 160 x
+/// 120 the pixels differ from the ray tracer's at the same rate by 0.0141 on `bunny-plane`
+/// (`pan09` 0.0118, `ftizb` at 1 sub-sample 0.0088) and by 0.076 on `bumpy`, whose 530,688
+/// triangles put about 20 in a pixel (`pan09` 0.0131, `ftizb` at 1 0.0083); without the rule
+/// 41 % of `bumpy`'s sub-samples disagreed with the ray tracer's at 64 x 48.
+#[test]
+fn hidden_sub_samples_are_left_out_on_curved_receivers() {
+    for (name, most) in [("bunny-plane", 0.02), ("bumpy", 0.1)] {
+        let Some(scene) = load_builtin(name) else { continue };
+        let frame = Frame::new(&scene, 160, 120, &mut Recorder::default());
+        let (v, masks, _) = run_masks(&ftizb(32, PatternKind::Grid), &frame);
+        let truth = samples(&frame, 32, PatternKind::Grid);
+        let g = &frame.gbuffer;
+        let (mut hidden, mut pixels, mut error) = (0u32, 0usize, 0.0f64);
+        for k in (0..masks.occlusion.len()).filter(|&k| g.covered(k)) {
+            hidden += masks.hidden[k].count_ones();
+            assert_eq!(masks.valid[k] & masks.hidden[k], 0, "{name}: hidden and valid");
+            assert_eq!(masks.occlusion[k] & masks.hidden[k], 0, "{name}: hidden and shadowed");
+            let traced = truth.light[k * 32..(k + 1) * 32].iter().sum::<f64>() / 32.0;
+            error += (f64::from(v.lit[k]) - traced).abs();
+            pixels += 1;
+        }
+        let mean = error / pixels as f64;
+        eprintln!(
+            "{name}: mean difference from raytrace {mean:.4} over {pixels} pixels, {hidden} hidden"
+        );
+        assert!(hidden > 0, "{name}: nothing hidden");
+        assert!(mean < most, "{name}: {mean}");
+    }
 }

@@ -19,6 +19,7 @@ mod motion;
 mod msm;
 mod pan09;
 mod pcf;
+mod planar;
 mod shadow_maps;
 mod spsm;
 mod vsm;

@@ -6,7 +6,7 @@
 use crate::common;
 
 use crate::common::load_builtin;
-use analysis::raytrace::{RayTrace, SampleImage};
+use crate::planar::{compare_on_plane, samples, Comparison};
 use glam::DVec3;
 use instrumentation::Recorder;
 use methods::{
@@ -34,49 +34,6 @@ fn run_masks(m: &Pan09, frame: &Frame<'_>) -> (Visibility, SubsampleMasks, Recor
     (v, masks, rec)
 }
 
-fn samples(frame: &Frame<'_>, rate: u32, kind: PatternKind) -> SampleImage {
-    let pattern = SamplePattern::new(rate, kind).expect("valid rate");
-    RayTrace { pattern }.sample_image(frame, &mut Recorder::default()).expect("raytrace applies")
-}
-
-/// Sub-sample comparison over the pixels whose sub-samples all see the receiver plane.
-#[derive(Debug, Default)]
-struct Comparison {
-    pixels: usize,
-    samples: usize,
-    /// Sub-samples whose shadow differs.
-    mismatches: usize,
-    /// Sub-samples left out of the pixel's ratio (there should be none on the plane).
-    invalid: usize,
-    /// Sub-samples in shadow and lit, for the test to be meaningful.
-    shadowed: usize,
-}
-
-fn compare_on_plane(frame: &Frame<'_>, masks: &SubsampleMasks, truth: &SampleImage) -> Comparison {
-    let (plane, _, _) = frame.scene.receiver_plane().expect("a planar receiver");
-    let rate = truth.rate as usize;
-    let mut c = Comparison::default();
-    for k in 0..masks.occlusion.len() {
-        let hits = &truth.triangle[k * rate..(k + 1) * rate];
-        let on_plane = hits.iter().all(|&t| {
-            t != methods::raster::NO_TRIANGLE && frame.geometry.object[t as usize] as usize == plane
-        });
-        if !on_plane {
-            continue;
-        }
-        c.pixels += 1;
-        for s in 0..rate {
-            c.samples += 1;
-            let occluded = masks.occlusion[k] >> s & 1 == 1;
-            let shadowed = truth.light[k * rate + s] == 0.0;
-            c.mismatches += usize::from(occluded != shadowed);
-            c.invalid += usize::from(masks.valid[k] >> s & 1 == 0);
-            c.shadowed += usize::from(shadowed);
-        }
-    }
-    c
-}
-
 #[test]
 fn exact_mode_equals_raytrace_sub_sample_for_sub_sample_on_planar_receivers() {
     for name in ["plane-square", "cage", "random-10k", "plant", "bunny-plane", "spheres"] {
@@ -87,7 +44,7 @@ fn exact_mode_equals_raytrace_sub_sample_for_sub_sample_on_planar_receivers() {
         {
             let (_, masks, rec) = run_masks(&pan09(rate, kind, VisibilityMode::Exact), &frame);
             let truth = samples(&frame, rate, kind);
-            let c = compare_on_plane(&frame, &masks, &truth);
+            let c = compare_on_plane(&frame, &masks.occlusion, &masks.valid, &truth);
             eprintln!(
                 "{name} {rate} {kind}: {c:?}, {} silhouette pixels",
                 rec.counters.silhouette_pixels
@@ -218,7 +175,7 @@ fn hard_case(scene: &Scene, rate: u32) -> (Comparison, Vec<(usize, usize)>, usiz
     }
     let (_, masks, _) = run_masks(&pan09(rate, PatternKind::Grid, VisibilityMode::Exact), &frame);
     let truth = samples(&frame, rate, PatternKind::Grid);
-    let c = compare_on_plane(&frame, &masks, &truth);
+    let c = compare_on_plane(&frame, &masks.occlusion, &masks.valid, &truth);
     let r = rate as usize;
     let differing = (0..truth.light.len())
         .filter(|&i| {

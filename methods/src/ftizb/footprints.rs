@@ -38,7 +38,7 @@ use crate::{
 };
 use glam::DVec2;
 use rayon::prelude::*;
-use scenes::Projector;
+use scenes::{Projector, Ray};
 
 /// The pixels' lists: for every texel of the `res x res` grid, the pixels whose footprint
 /// meets it, in row-major order; an error when they would hold `u32::MAX` entries or more.
@@ -203,15 +203,11 @@ impl<'a> SubSamples<'a> {
     #[inline]
     pub fn sample(&self, k: usize, s: usize) -> Option<Sample> {
         let g = self.g;
-        let (p0, n, dc) = (g.position[k], g.normal[k], g.depth[k]);
-        let w = g.width as usize;
-        let (i, j) = ((k % w) as u32, (k / w) as u32);
-        let ray = self.camera.ray(self.pattern.point(i, j, s));
-        let x = if s == self.pattern.centre_index() {
-            p0
+        let (ray, x) = if s == self.pattern.centre_index() {
+            (self.ray(k, s), g.position[k])
         } else {
-            let t = ray.intersect_plane(n, n.dot(p0)).filter(|&t| self.in_region(t, dc))?;
-            ray.at(t)
+            let (ray, t) = self.tangent_point(k, s)?;
+            (ray, ray.at(t))
         };
         let (xy, z) = self.light.project(x)?;
         let zt = threshold_depth(self.light, xy, z, shadow_offset(ray.origin, x));
@@ -222,6 +218,24 @@ impl<'a> SubSamples<'a> {
             id: s as u32,
             tri: g.triangle[k],
         })
+    }
+
+    /// The camera ray through sub-sample `s` of pixel `k`.
+    #[inline]
+    pub fn ray(&self, k: usize, s: usize) -> Ray {
+        let w = self.g.width as usize;
+        self.camera.ray(self.pattern.point((k % w) as u32, (k / w) as u32, s))
+    }
+
+    /// The camera ray through sub-sample `s` of pixel `k` and the parameter where it meets the
+    /// pixel's tangent plane, when that point is in the facet's region.
+    #[inline]
+    pub fn tangent_point(&self, k: usize, s: usize) -> Option<(Ray, f64)> {
+        let g = self.g;
+        let (p0, n) = (g.position[k], g.normal[k]);
+        let ray = self.ray(k, s);
+        let t = ray.intersect_plane(n, n.dot(p0)).filter(|&t| self.in_region(t, g.depth[k]))?;
+        Some((ray, t))
     }
 
     /// The approximate light image points of pixel `k`'s sub-samples; `None` when the camera

@@ -21,27 +21,33 @@
 //! pixel's whole mask in every texel of its footprint; the owned masks give the same result
 //! (ORed) without the repeated tests and placements (on `cage` at 800 x 600 a footprint met
 //! 2.4 texels on average). The valid masks, the ratio's denominator, are placed once per pixel
-//! with a shadowed sub-sample, after the tests. A caster is skipped in the texel when its nearest
-//! corner is not in front of the farthest sample's threshold (`nodes_depth_culled`) or when
-//! every valid sub-sample of the texel is already shadowed (`nodes_occlusion_culled`); else
-//! each pixel that is not its own triangle's and still has lit sub-samples is one
-//! `visibility_evaluations`; when the caster may meet the box of the pixel's sub-samples'
-//! light image points ([`Blocker::overlaps`]), its lit valid sub-samples are each one
-//! `sampling_points_tested` and the frustum test decides them ([`frustum_mask`]), with
-//! [`Blocker::shadows`]'s decisions, exact on the `f64` light image point and threshold (see
-//! [`super`]). The texel's masks are ORed into the pixels' (two atomic
-//! words of a `u128`), so the result does not depend on the order the texels are run in.
+//! with a shadowed sub-sample, after the tests.
+//!
+//! A caster is skipped in the texel when its nearest corner is not in front of the farthest
+//! sample's threshold (`nodes_depth_culled`); else each pixel that is not its own triangle's
+//! and still has sub-samples that are not hidden is one `visibility_evaluations`; when the
+//! caster may meet the box of the pixel's sub-samples' light image points
+//! ([`Blocker::overlaps`]), those sub-samples are each one `sampling_points_tested` and the
+//! frustum test decides them ([`frustum_mask`]), with [`Blocker::shadows`]'s decisions, exact
+//! on the `f64` light image point and threshold (see [`super`]). A sub-sample the caster
+//! shadows and also hides from the camera is hidden ([`super::hidden`]) instead. A shadowed
+//! sub-sample is tested again against later casters, since one of them may hide it: there is
+//! no occlusion culling (hidden wins whatever the casters' order, as on the GPU). The texel's
+//! masks are ORed into the pixels' (two atomic words of a `u128`), so the result does not
+//! depend on the order the texels are run in.
 //!
 //! Hot loop rules: no allocation per texel (each thread reuses its buffers), one pass over a
-//! pixel's sub-samples per caster, visiting only the lit valid ones (their bits).
+//! pixel's sub-samples per caster, visiting only the owned ones not hidden (their bits); a
+//! sub-sample's camera ray is formed again only where a caster shadows it.
 
 use super::{
     footprints::SubSamples,
     grid::{Grid, TexelLists},
+    hidden::hides,
     FtizbOptions,
 };
 use crate::{
-    afsm::{blockers::Blocker, samples::Sample},
+    afsm::{blockers::Blocker, samples::Sample, shadow_offset},
     method::MethodError,
 };
 use glam::DVec2;
@@ -109,9 +115,11 @@ pub fn bin_casters(
 pub struct Tested {
     /// Shadowed sub-samples per pixel.
     pub occlusion: Vec<u128>,
-    /// Valid sub-samples per pixel, for the pixels with a shadowed sub-sample (zero
-    /// elsewhere).
+    /// Valid sub-samples per pixel that are not hidden, for the pixels with a shadowed
+    /// sub-sample (zero elsewhere).
     pub valid: Vec<u128>,
+    /// Hidden sub-samples per pixel ([`super::hidden`]).
+    pub hidden: Vec<u128>,
     /// `visibility_evaluations`, `sampling_points_tested` and the culling counters.
     pub counters: Counters,
 }
@@ -146,10 +154,11 @@ struct Scratch {
     /// Their light image coordinates again, for the edge masks.
     xs: Vec<f64>,
     ys: Vec<f64>,
-    /// Per pixel: the valid sub-samples the texel owns, the shadowed ones, and the box of the
-    /// owned ones' light image points.
+    /// Per pixel: the valid sub-samples the texel owns, the shadowed ones, the hidden ones
+    /// ([`super::hidden`]), and the box of the owned ones' light image points.
     valid: Vec<u128>,
     occluded: Vec<u128>,
+    hidden: Vec<u128>,
     boxes: Vec<(DVec2, DVec2)>,
 }
 
@@ -164,6 +173,7 @@ pub fn frustum_tests(
 ) -> Tested {
     let count = subs.pixels();
     let occlusion: Vec<AtomicMask> = (0..count).map(|_| AtomicMask::default()).collect();
+    let hidden: Vec<AtomicMask> = (0..count).map(|_| AtomicMask::default()).collect();
     let light = subs.light();
     let counters = casters
         .texels()
@@ -182,6 +192,7 @@ pub fn frustum_tests(
             );
             for (i, &k) in pixels.of(texel).iter().enumerate() {
                 occlusion[k as usize].or(scratch.occluded[i]);
+                hidden[k as usize].or(scratch.hidden[i]);
             }
             c
         })
@@ -189,17 +200,20 @@ pub fn frustum_tests(
             a.merge(&b);
             a
         });
-    let occlusion: Vec<u128> = occlusion.iter().map(AtomicMask::load).collect();
+    // Hidden wins: a sub-sample one caster shadows and another hides is left out.
+    let hidden: Vec<u128> = hidden.iter().map(AtomicMask::load).collect();
+    let occlusion: Vec<u128> = occlusion.iter().zip(&hidden).map(|(o, &h)| o.load() & !h).collect();
     // The ratio's denominator, for the pixels with a shadowed sub-sample.
     let valid = occlusion
         .par_iter()
+        .zip(&hidden)
         .enumerate()
         .map_init(
             || vec![Sample::default(); subs.rate()],
-            |out, (k, &o)| if o == 0 { 0 } else { subs.pixel(k, out) },
+            |out, (k, (&o, &h))| if o == 0 { 0 } else { subs.pixel(k, out) & !h },
         )
         .collect();
-    Tested { occlusion, valid, counters }
+    Tested { occlusion, valid, hidden, counters }
 }
 
 /// One texel: the sub-samples it owns of its pixels against its casters, the masks left in
@@ -227,6 +241,8 @@ fn test_texel(
     scratch.boxes.clear();
     scratch.occluded.clear();
     scratch.occluded.resize(n, 0);
+    scratch.hidden.clear();
+    scratch.hidden.resize(n, 0);
     let mut farthest = f64::NEG_INFINITY;
     for (i, &k) in pixels.iter().enumerate() {
         let k = k as usize;
@@ -262,22 +278,19 @@ fn test_texel(
         scratch.valid.push(own);
         scratch.boxes.push((lo, hi));
     }
-    // Pixels with every owned sub-sample shadowed (at first, those owning none).
-    let mut dark = scratch.valid.iter().filter(|&&v| v == 0).count();
+    let centre_bit = 1u128 << centre;
     for &t in casters {
-        if options.occlusion_culling && dark == n {
-            c.nodes_occlusion_culled += 1;
-            continue;
-        }
         let Some(b) = Blocker::new(geometry, t as usize, light) else { continue };
         if options.depth_culling && b.nearest_depth() >= farthest {
             c.nodes_depth_culled += 1;
             continue;
         }
+        let mut corners = None;
         for (i, &k) in pixels.iter().enumerate() {
-            let v = scratch.valid[i];
-            let lit = if options.occlusion_culling { v & !scratch.occluded[i] } else { v };
-            if lit == 0 || subs.triangle(k as usize) == t {
+            let k = k as usize;
+            // A shadowed sub-sample is tested again: a later caster may hide it.
+            let candidates = scratch.valid[i] & !scratch.hidden[i];
+            if candidates == 0 || subs.triangle(k) == t {
                 continue;
             }
             c.visibility_evaluations += 1;
@@ -286,19 +299,27 @@ fn test_texel(
                 continue;
             }
             let span = i * rate..(i + 1) * rate;
-            let hit = frustum_mask(
+            let mut hit = frustum_mask(
                 &b,
-                lit,
+                candidates,
                 &scratch.samples[span.clone()],
                 &scratch.xs[span.clone()],
                 &scratch.ys[span],
                 (lo, hi),
             );
-            c.sampling_points_tested += u64::from(lit.count_ones());
-            if hit & !scratch.occluded[i] != 0 {
-                scratch.occluded[i] |= hit;
-                dark += usize::from(scratch.occluded[i] == v);
+            c.sampling_points_tested += u64::from(candidates.count_ones());
+            let mut bits = hit & !centre_bit;
+            while bits != 0 {
+                let s = bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                let Some((ray, ts)) = subs.tangent_point(k, s) else { continue };
+                let corners = *corners.get_or_insert_with(|| geometry.corners(t as usize));
+                if hides(&ray, ts, shadow_offset(ray.origin, ray.at(ts)), corners) {
+                    scratch.hidden[i] |= 1 << s;
+                    hit &= !(1 << s);
+                }
             }
+            scratch.occluded[i] |= hit;
         }
     }
     c
