@@ -70,13 +70,14 @@ use crate::{
         STAGE_RASTERIZATION, STAGE_TRANSFORMATION,
     },
     frame::Frame,
+    ftizb::hidden::hides,
     method::{MethodError, ShadowMethod, Visibility},
     raster::NO_TRIANGLE,
 };
 use bytemuck::{Pod, Zeroable};
-use glam::{DVec2, DVec3};
+use glam::DVec2;
 use instrumentation::Recorder;
-use scenes::{Projector, Ray};
+use scenes::Projector;
 
 /// Name of the stage that bins the samples into the grid.
 pub const STAGE_IZB: &str = "IZB construction";
@@ -661,35 +662,6 @@ pub(super) fn opaque_casters_only(frame: &Frame<'_>, method: &str) -> Result<(),
     Ok(())
 }
 
-/// Whether the triangle `corners` hides the point at parameter `t` of `ray` from the camera:
-/// the ray meets the closed triangle (Möller and Trumbore's test in `f64`) at a parameter
-/// `hit` with `0 < hit < t - margin`, `margin = offset / |direction|`, `offset` the point's
-/// shadow offset ([`afsm::shadow_offset`], world units). `ftizb`'s rule for its sub-samples
-/// (Pan et al.'s validity mask); `test.wgsl`'s `hides` computes it with the same operations in
-/// the same order.
-fn hides(ray: &Ray, t: f64, offset: f64, corners: [DVec3; 3]) -> bool {
-    let [a, b, c] = corners;
-    let (e1, e2) = (b - a, c - a);
-    let p = ray.direction.cross(e2);
-    let det = e1.dot(p);
-    if det == 0.0 || !det.is_finite() {
-        return false;
-    }
-    let inv = 1.0 / det;
-    let tv = ray.origin - a;
-    let u = tv.dot(p) * inv;
-    if !(0.0..=1.0).contains(&u) {
-        return false;
-    }
-    let q = tv.cross(e1);
-    let v = ray.direction.dot(q) * inv;
-    if v < 0.0 || u + v > 1.0 {
-        return false;
-    }
-    let hit = e2.dot(q) * inv;
-    hit > 0.0 && hit < t - offset / ray.direction.length()
-}
-
 /// The counters and the undecided list of the sample tests.
 struct TestBuffers {
     /// Room for this many undecided pairs.
@@ -764,53 +736,5 @@ impl ShadowMethod for GpuAfsm {
             lit: out.lit,
             transmittance: None,
         })
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::hides;
-    use glam::DVec3;
-    use scenes::Ray;
-
-    /// A ray down -z from z = 10 (parameter = distance) and a triangle around the z axis at
-    /// height `z`.
-    fn at_height(z: f64) -> (Ray, [DVec3; 3]) {
-        let ray = Ray { origin: DVec3::new(0.0, 0.0, 10.0), direction: DVec3::NEG_Z };
-        let corners =
-            [DVec3::new(-1.0, -1.0, z), DVec3::new(1.0, -1.0, z), DVec3::new(0.0, 1.0, z)];
-        (ray, corners)
-    }
-
-    #[test]
-    fn a_triangle_hides_only_points_beyond_it_by_more_than_the_margin() {
-        let (ray, corners) = at_height(2.0);
-        // The triangle is met at parameter 8.
-        assert!(hides(&ray, 9.0, 0.0, corners));
-        assert!(hides(&ray, 9.0, 0.5, corners));
-        assert!(!hides(&ray, 9.0, 1.0, corners), "within the margin");
-        assert!(!hides(&ray, 8.0, 0.0, corners), "on the triangle");
-        assert!(!hides(&ray, 7.0, 0.0, corners), "in front of it");
-        // Behind the ray's origin.
-        let (ray, corners) = at_height(11.0);
-        assert!(!hides(&ray, 20.0, 0.0, corners));
-    }
-
-    #[test]
-    fn the_triangle_is_closed_and_a_miss_or_an_edge_on_one_hides_nothing() {
-        let (ray, [a, b, c]) = at_height(2.0);
-        // The ray through a corner and through an edge.
-        assert!(hides(&ray, 9.0, 0.0, [DVec3::new(0.0, 0.0, 2.0), b, c]));
-        assert!(hides(&ray, 9.0, 0.0, [a, DVec3::new(1.0, 0.0, 2.0), DVec3::new(-1.0, 0.0, 2.0)]));
-        // Beside it.
-        let shifted = [a, b, c].map(|p| p + DVec3::new(3.0, 0.0, 0.0));
-        assert!(!hides(&ray, 9.0, 0.0, shifted));
-        // Edge-on (det 0) and degenerate.
-        let edge_on =
-            [DVec3::new(0.0, -1.0, 0.0), DVec3::new(0.0, 1.0, 0.0), DVec3::new(0.0, 0.0, 5.0)];
-        assert!(!hides(&ray, 20.0, 0.0, edge_on));
-        assert!(!hides(&ray, 9.0, 0.0, [a, a, a]));
-        let nan = [a, b, DVec3::splat(f64::NAN)];
-        assert!(!hides(&ray, 9.0, 0.0, nan));
     }
 }

@@ -44,8 +44,8 @@
 //!   the centre's is [`Izb::shadowed_and_hidden`], which tests this on the GPU for every
 //!   shadowing (sample, caster) pair and on the CPU for the undecided pairs found shadowing,
 //!   so hidden wins whatever the order of the casters. A hidden sub-sample leaves the ratio:
-//!   `lit = 1 - (shadowed - hidden) / (valid - hidden)` in `f64`, 1 where nothing is
-//!   shadowed and not hidden, as `f32`.
+//!   `lit = 1 - shadowed / valid` over the valid sub-samples that are not hidden, in `f64`,
+//!   1 where none of them is shadowed, as `f32`.
 //! - **Counters.** `sampling_points_tested` as GPU `afsm-ss` sums it (the samples inside a
 //!   caster's bounding box in the cells it visits); the undecided pairs in a note.
 //! - **Transparency** is not applicable, as for `afsm` on the GPU (the twin treats
@@ -112,16 +112,16 @@ pub struct GpuFtizb {
 /// What [`shade`] returns.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FtizbGpuOutput {
-    /// Per pixel, `1 - (shadowed - hidden) / (valid - hidden)` over its sub-samples (1 where
-    /// none is shadowed and not hidden).
+    /// Per pixel, `1 - shadowed / valid` over its sub-samples counted (1 where none is
+    /// shadowed).
     pub lit: Vec<f32>,
-    /// Valid sub-samples per pixel (0 for background pixels and pixels whose centre the
-    /// light cannot project).
+    /// Sub-samples per pixel counted in its ratio: valid and not hidden (0 for background
+    /// pixels and pixels whose centre the light cannot project).
     pub valid: Vec<u32>,
-    /// Shadowed valid sub-samples per pixel (hidden ones included).
+    /// Shadowed sub-samples per pixel among those counted.
     pub shadowed: Vec<u32>,
-    /// Hidden valid sub-samples per pixel: shadowed by a caster that also hides them from the
-    /// camera, left out of the pixel's ratio.
+    /// Hidden sub-samples per pixel: valid, and shadowed by a caster that also hides them
+    /// from the camera; left out of the pixel's ratio.
     pub hidden: Vec<u32>,
     /// (Sample, triangle) pairs the GPU's filter could not decide, over all sub-samples.
     pub undecided: u64,
@@ -207,10 +207,15 @@ pub fn shade(
         let sampled = izb.sampled(ctx)?;
         let marks = out.shadowed.iter().zip(&out.hidden);
         for (k, (&has, (&dark, &behind))) in sampled.iter().zip(marks).enumerate() {
-            if has {
+            if !has {
+                continue;
+            }
+            // Hidden wins over shadowed.
+            if behind != 0 {
+                hidden[k] += 1;
+            } else {
                 valid[k] += 1;
                 shadowed[k] += u32::from(dark != 0);
-                hidden[k] += u32::from(behind != 0);
             }
         }
         if s == centre {
@@ -231,10 +236,7 @@ pub fn shade(
             hidden[k] = 0;
         }
     }
-    // A hidden sub-sample is shadowed (by the caster that hides it): it leaves both counts.
-    let lit = (0..pixels)
-        .map(|k| resolve(shadowed[k].saturating_sub(hidden[k]), valid[k].saturating_sub(hidden[k])))
-        .collect();
+    let lit = valid.iter().zip(&shadowed).map(|(&v, &s)| resolve(s, v)).collect();
     Ok(FtizbGpuOutput { lit, valid, shadowed, hidden, undecided })
 }
 
