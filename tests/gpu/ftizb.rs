@@ -165,3 +165,54 @@ fn gpu_ftizb_runs_end_to_end_through_the_registry() {
     let differing = v.lit.iter().zip(&c.lit).filter(|(g, c)| g != c).count();
     assert!(differing * 100 <= v.lit.len(), "{differing} pixels differ from the CPU's");
 }
+
+/// The CPU's resolution of undecided pairs, hidden test included, against the GPU's decisions:
+/// one pass on `bumpy`'s sub-samples at one offset on their tangent planes, once decided on
+/// the GPU and once with every pair that passes the depth test left to the CPU.
+#[test]
+fn gpu_parity_ftizb_hidden_sub_samples_decided_on_the_cpu() {
+    use glam::DVec2;
+    use methods::{
+        gpu::afsm::{Izb, SampleSurface},
+        raster::NO_TRIANGLE,
+    };
+    let scene = load_builtin("bumpy").expect("built-in");
+    let frame = Frame::new(&scene, 48, 36, &mut Recorder::default());
+    let g = &frame.gbuffer;
+    let offset = DVec2::new(0.125, 0.875);
+    // Each pixel's sub-sample at `offset` on its tangent plane (Ray::intersect_plane).
+    let w = frame.width() as usize;
+    let (mut triangle, mut depth) = (g.triangle.clone(), vec![0.0; g.triangle.len()]);
+    for k in 0..g.triangle.len() {
+        let ray = frame.camera.ray(DVec2::new((k % w) as f64, (k / w) as f64) + offset);
+        let (n, p) = (g.normal[k], g.position[k]);
+        match ray.intersect_plane(n, n.dot(p)) {
+            Some(t) if g.covered(k) => depth[k] = t,
+            _ => triangle[k] = NO_TRIANGLE,
+        }
+    }
+    let ctx = GpuContext::shared().expect("a GPU adapter (Mesa's lavapipe on CI)");
+    let gpu = GpuFrame::upload(ctx, &frame, g);
+    let (triangle, depth) = (ctx.upload("triangle", &triangle), ctx.upload("depth", &depth));
+    let surface = SampleSurface { triangle: &triangle, depth: &depth, offset };
+    let pass = |all_on_the_cpu: bool| {
+        let izb = Izb::new(ctx, &gpu, &frame);
+        if all_on_the_cpu {
+            izb.leave_every_pair_undecided(ctx);
+        }
+        izb.shadowed_and_hidden(ctx, surface, &mut Recorder::default()).expect("GPU pass")
+    };
+    let (on_gpu, on_cpu) = (pass(false), pass(true));
+    let count = |v: &[u32]| v.iter().filter(|&&m| m != 0).count();
+    let (shadowed, hidden) = (count(&on_gpu.shadowed), count(&on_gpu.hidden));
+    eprintln!(
+        "bumpy: {shadowed} shadowed and {hidden} hidden sub-samples; {} and {} undecided pairs",
+        on_gpu.undecided, on_cpu.undecided
+    );
+    assert!(hidden > 0, "no hidden sub-sample");
+    assert!(on_cpu.undecided as usize >= shadowed, "the pairs were not left to the CPU");
+    assert_eq!(count(&on_cpu.shadowed), shadowed, "shadowed sub-samples");
+    assert_eq!(on_cpu.shadowed, on_gpu.shadowed);
+    assert_eq!(count(&on_cpu.hidden), hidden, "hidden sub-samples");
+    assert_eq!(on_cpu.hidden, on_gpu.hidden);
+}

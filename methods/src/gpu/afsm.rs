@@ -611,6 +611,19 @@ impl<'a> Izb<'a> {
         Ok(ShadowedSamples { shadowed, hidden: hidden_out, undecided: undecided as u64, tested })
     }
 
+    /// Leaves every (sample, caster) pair that passes the depth test undecided from now on (the
+    /// filter's error bound made infinite, so that no edge test and no caster's winding is
+    /// certain), so the CPU resolves them all, hidden test included: for parity tests of the
+    /// CPU's resolution against the GPU's decisions. Effective for every caster only when
+    /// called before the first pass (which sets the casters up).
+    pub fn leave_every_pair_undecided(&self, ctx: &GpuContext) {
+        ctx.queue.write_buffer(
+            &self.fparams,
+            std::mem::offset_of!(FParams, filter_bound) as u64,
+            bytemuck::cast_slice(&[f64::INFINITY]),
+        );
+    }
+
     /// The samples the last transformation of samples wrote, read back as the CPU's
     /// [`afsm::samples::transform_samples`] gives them for sub-sample `s` of `rate` (ids
     /// `pixel * rate + s`, pixels without a sample left out): for stage-by-stage parity tests.
