@@ -31,7 +31,7 @@
 //!   sub-samples a caster shadows does not depend on how they are binned, so the result is
 //!   the CPU's, pixel for pixel; the counters are not (as GPU `afsm`'s are not): there is no
 //!   footprint list, no conservative rasterization and no culling (the `--izb-res` grid and
-//!   the culling switches are accepted and recorded, and change nothing).
+//!   the depth-culling switch are accepted and recorded, and change nothing).
 //! - **Valid sub-samples.** A sub-sample counts in its pixel's ratio when it has a point on
 //!   the tangent plane's region and the light projects it to a finite light image point with
 //!   a finite threshold, which is exactly when `Izb`'s transformation gives it a sample
@@ -104,7 +104,7 @@ super::layout::wgsl_mirror!(
 /// `ftizb` on the GPU (`ftizb` with `--device gpu`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct GpuFtizb {
-    /// The CPU `ftizb`'s options (the grid resolution and the culling switches have no
+    /// The CPU `ftizb`'s options (the grid resolution and the depth-culling switch have no
     /// effect here).
     pub options: FtizbOptions,
 }
