@@ -965,9 +965,11 @@ mod tests {
                 "sm (ms)",
                 "pan09 32x (ms)",
                 "spsm (ms)",
+                "ftizb 1x (ms)",
+                "ftizb 32x (ms)",
             ]
         );
-        assert_eq!(t.curves.len(), 7, "the G-buffer and six runs");
+        assert_eq!(t.curves.len(), 9, "the G-buffer and eight runs");
         for c in &t.curves {
             let works: Vec<f64> = c.points.iter().map(|p| p.0).collect();
             assert_eq!(works.len(), 2, "{}: a point per scene", c.label);
@@ -975,7 +977,7 @@ mod tests {
             assert!(c.exponent.is_some_and(f64::is_finite), "{}", c.label);
         }
         let drawn = crate::tables::chart(&t).expect("a cost table has a chart");
-        assert_eq!((drawn.x_label.as_str(), drawn.series.len()), ("triangles", 7));
+        assert_eq!((drawn.x_label.as_str(), drawn.series.len()), ("triangles", 9));
         assert!(drawn.series[2].label.starts_with("raytrace 1x (exponent "), "{:?}", drawn.series);
         assert!(crate::tables::markdown(&t).contains("| fitted exponent |"));
         // The papers' tables draw no chart.

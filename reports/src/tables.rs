@@ -77,7 +77,9 @@ pub const COST_FRAMES: [(u32, u32); 5] =
 
 /// The runs of the cost-against-work tables: each method at its default settings, the
 /// supersampled ones at the rates the papers compare (`raytrace` at one sample per pixel, the
-/// brute force a shadow method replaces; `pan09` at 32x, Pan et al.'s setting).
+/// brute force a shadow method replaces; `pan09` at 32x, Pan et al.'s setting; `ftizb` at 1x
+/// and 32x, Wyman et al.'s "32 samples at about twice the cost of one", which they measured
+/// at 1080p and 2160p, frames of `cost-against-pixels`).
 fn cost_runs() -> Vec<(&'static str, MethodOptions)> {
     let rate = |r| MethodOptions { rate: Some(r), ..Default::default() };
     vec![
@@ -87,6 +89,8 @@ fn cost_runs() -> Vec<(&'static str, MethodOptions)> {
         ("sm", MethodOptions::default()),
         ("pan09", rate(32)),
         ("spsm", MethodOptions::default()),
+        ("ftizb", rate(1)),
+        ("ftizb", rate(32)),
     ]
 }
 

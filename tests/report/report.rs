@@ -54,13 +54,13 @@ fn a_suite_file_writes_tables_that_parse_back() {
     // tables, share one.
     let log = stderr(&o);
     let starts = |p: &str| log.lines().filter(|l| l.starts_with(p)).count();
-    assert_eq!(starts("frame 1/3 plane-square 64x48: 0/26 runs done, "), 1, "{log}");
-    assert_eq!(starts("frame 2/3 hairball 64x48: 13/26 runs done, "), 1, "{log}");
-    assert_eq!(starts("frame 3/3 random-1k 64x48: 19/26 runs done, "), 1, "{log}");
-    assert_eq!(starts("done: 26/26 runs done, "), 1, "{log}");
+    assert_eq!(starts("frame 1/3 plane-square 64x48: 0/30 runs done, "), 1, "{log}");
+    assert_eq!(starts("frame 2/3 hairball 64x48: 15/30 runs done, "), 1, "{log}");
+    assert_eq!(starts("frame 3/3 random-1k 64x48: 21/30 runs done, "), 1, "{log}");
+    assert_eq!(starts("done: 30/30 runs done, "), 1, "{log}");
     let last = String::from_utf8_lossy(&o.stdout);
     assert!(
-        last.contains("26 of 26 planned runs measured") || !methods::registry::HAS_GPU,
+        last.contains("30 of 30 planned runs measured") || !methods::registry::HAS_GPU,
         "{last}"
     );
 
@@ -287,7 +287,9 @@ fn a_suite_file_writes_tables_that_parse_back() {
         cost["header"].as_array().expect("header").iter().filter_map(|h| h.as_str()).collect();
     assert_eq!(header, ["", "plane-square 64x48", "random-1k 64x48", "fitted exponent"]);
     let rows = cost["rows"].as_array().expect("rows");
-    assert_eq!(rows.len(), 9, "triangles, pixels, the G-buffer and six methods");
+    assert_eq!(rows.len(), 11, "triangles, pixels, the G-buffer and eight runs");
+    let labels: Vec<&str> = rows.iter().filter_map(|r| r[0].as_str()).collect();
+    assert!(labels.contains(&"ftizb 1x (ms)") && labels.contains(&"ftizb 32x (ms)"), "{labels:?}");
     for r in &rows[2..] {
         let exponent: f64 = r[3].as_str().expect("cell").parse().expect("an exponent");
         assert!(exponent.is_finite(), "{r}");
