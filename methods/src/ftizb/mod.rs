@@ -98,8 +98,10 @@
 //! - **Transparency**: casters are opaque (the run record says so when the scene has
 //!   semi-transparent ones), as in `pan09`.
 //! - **Memory**: 8 bytes per list entry and per (texel, caster) pair while they are sorted,
-//!   4 bytes per texel for each list's offsets, 32 bytes of masks per pixel; each thread
-//!   keeps one texel's sub-samples (40 bytes each).
+//!   4 bytes per texel for each list's offsets, about 80 bytes of masks per pixel
+//!   (shadowed, hidden and valid sub-samples, 128 bits each, the first two also as atomic
+//!   words while the texels run); each thread keeps one texel's sub-samples (56 bytes each
+//!   with their coordinates again for the edge masks).
 
 pub mod footprints;
 pub mod frustum;
