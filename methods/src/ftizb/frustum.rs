@@ -28,7 +28,7 @@
 //! and still has sub-samples that are not hidden is one `visibility_evaluations`; when the
 //! caster may meet the box of the pixel's sub-samples' light image points
 //! ([`Blocker::overlaps`]), those sub-samples are each one `sampling_points_tested` and the
-//! frustum test decides them ([`frustum_mask`]), with [`Blocker::shadows`]'s decisions, exact
+//! frustum test decides them (`frustum_mask`), with [`Blocker::shadows`]'s decisions, exact
 //! on the `f64` light image point and threshold (see [`super`]). A sub-sample the caster
 //! shadows and also hides from the camera is hidden ([`super::hidden`]) instead. A shadowed
 //! sub-sample is tested again against later casters, since one of them may hide it: there is

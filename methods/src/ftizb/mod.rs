@@ -19,7 +19,7 @@
 //! | stage | constant | module | paper |
 //! |---|---|---|---|
 //! | camera G-buffer | (the frame's) | [`crate::gbuffer`] | I3D 2015 section 3, step 1 |
-//! | sample footprints | [`STAGE_FOOTPRINTS`] | [`footprints`] | I3D 2015 section 4.1; TVCG 2016 section 5.1 |
+//! | sample footprints | [`STAGE_FOOTPRINTS`] | [`mod@footprints`] | I3D 2015 section 4.1; TVCG 2016 section 5.1 |
 //! | conservative rasterization | [`STAGE_RASTERIZATION`] | [`frustum`] | I3D 2015 section 4.2 |
 //! | frustum tests | [`STAGE_FRUSTUM_TESTS`] | [`frustum`] | I3D 2015 section 4.3; TVCG 2016 section 5.2 |
 //!
@@ -73,7 +73,7 @@
 //!   grid's border stand for everything beyond it on their side, so that samples outside the
 //!   light image (a spot's points outside its cone, which the ray tracer also shadows) are
 //!   kept.
-//! - **Footprint of a pixel** ([`footprints`]): the pixel square seen on the tangent plane of
+//! - **Footprint of a pixel** ([`mod@footprints`]): the pixel square seen on the tangent plane of
 //!   its G-buffer point and face normal, projected to the light: `pan09`'s facet
 //!   ([`crate::pan09::facets::project_facet`], Pan et al. 2009 section 3.1), so that the two
 //!   methods see the same sub-sample points and differ only in how they decide them. **At

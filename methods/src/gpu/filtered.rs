@@ -9,7 +9,7 @@
 //!   `filtered.wgsl`'s `quantize`; then two passes of the separable box filter (rows, then
 //!   columns; none for a one-texel filter), each summing its texels in the CPU's order in
 //!   `f64`, all in one submission timed as one stage;
-//! - **test** (its second stage, [`test`]): one thread per pixel builds the receiver as
+//! - **test** (its second stage, [`fn@test`]): one thread per pixel builds the receiver as
 //!   [`crate::gpu::sm`] does, finds its texel, normalises its depth after the bias tolerance
 //!   with the filter's reach, and runs the method's `test`, written as
 //!   [`crate::filtered_map::lit_value`] writes it. Counter `shadow_map_lookups`, one per
