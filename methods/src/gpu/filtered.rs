@@ -35,7 +35,7 @@
 use super::{
     common::COMMON,
     shader::{compose, Part},
-    sm::{counters_buffer, read_counters, Params, COUNTERS, PIXEL, RECEIVER, WORKGROUP},
+    sm::{per_pixel, Params, RECEIVER, WORKGROUP},
     GpuContext, GpuDepthMap, GpuError, GpuFrame,
 };
 use crate::{
@@ -211,35 +211,12 @@ pub fn test<const N: usize, M: FilteredMap<N>>(
     debug_assert_eq!(reach.x, reach.y);
     let params = Params { reach: reach.x, ..Params::new(frame, map, tester) };
     let fparams = FParams::new(m, map, near, range);
-    let n = frame.pixels();
-    let method = method_part(m);
-    let source = compose(&[&PIXEL, &COUNTERS, &method, &TEST]);
-    let p = ctx.pipeline("filtered test", &source, "main");
-    let uniform = ctx.uniform("filtered test params", &params);
     let funiform = ctx.uniform("filtered params", &fparams);
-    let lit = ctx.zeroed::<f32>("lit", n);
-    let counters = counters_buffer(ctx);
-    let bind = ctx.bind(
-        &p,
-        &[
-            &uniform,
-            &map.light,
-            &frame.triangle,
-            &frame.position,
-            &frame.normal,
-            &funiform,
-            &filtered.values,
-            &lit,
-            &counters,
-        ],
-    );
+    let method = method_part(m);
+    let buffers =
+        [&map.light, &frame.triangle, &frame.position, &frame.normal, &funiform, &filtered.values];
     let [_, stage] = m.stages();
-    ctx.stage(rec, stage, |e| {
-        GpuContext::dispatch(e, &p, &bind, GpuContext::groups_1d(n, WORKGROUP))
-    })?;
-    let mut out: Vec<f32> = ctx.read(&lit)?;
-    out.truncate(n);
-    Ok((out, read_counters(ctx, &counters)?))
+    per_pixel(ctx, frame, ("filtered test", &[&method, &TEST]), &params, &buffers, stage, rec)
 }
 
 /// A filtered shadow map on the GPU: the twin `twin`'s stages as kernels.

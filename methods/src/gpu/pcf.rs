@@ -29,7 +29,7 @@
 
 use super::{
     shader::Part,
-    sm::{counters_buffer, map_pipeline, pipeline, read_counters, Params, WORKGROUP},
+    sm::{counters_buffer, map_pipeline, per_pixel, pipeline, read_counters, Params, WORKGROUP},
     GpuContext, GpuDepthMap, GpuError, GpuFrame,
 };
 use crate::{
@@ -55,35 +55,6 @@ const BS_PACK_FAST: Part =
     Part::file("pcf_bs_pack_fast.wgsl", include_str!("pcf_bs_pack_fast.wgsl"));
 const BS_TEST: Part = Part::file("pcf_bs_test.wgsl", include_str!("pcf_bs_test.wgsl"));
 
-/// Runs a per-pixel kernel over `frame` with `buffers` bound after the uniform `params`, as
-/// the stage `stage`; returns the lit values and the counters. The kernel's last two
-/// bindings are the lit values and the counters, which this makes.
-fn per_pixel(
-    ctx: &GpuContext,
-    frame: &GpuFrame,
-    (label, kernel): (&str, &Part),
-    params: &Params,
-    buffers: &[&wgpu::Buffer],
-    stage: &str,
-    rec: &mut Recorder,
-) -> Result<(Vec<f32>, Counters), GpuError> {
-    let n = frame.pixels();
-    let p = pipeline(ctx, label, kernel);
-    let uniform = ctx.uniform(label, params);
-    let lit = ctx.zeroed::<f32>("lit", n);
-    let counters = counters_buffer(ctx);
-    let mut all = vec![&uniform];
-    all.extend_from_slice(buffers);
-    all.extend([&lit, &counters]);
-    let bind = ctx.bind(&p, &all);
-    ctx.stage(rec, stage, |e| {
-        GpuContext::dispatch(e, &p, &bind, GpuContext::groups_1d(n, WORKGROUP))
-    })?;
-    let mut out: Vec<f32> = ctx.read(&lit)?;
-    out.truncate(n);
-    Ok((out, read_counters(ctx, &counters)?))
-}
-
 /// The stage `percentage-closer filtering` of `pcf-reeves` on the GPU, as
 /// [`crate::pcf_reeves::footprint`] and [`crate::pcf_reeves::filter`] per pixel.
 pub fn reeves(
@@ -108,7 +79,7 @@ pub fn reeves(
     per_pixel(
         ctx,
         frame,
-        ("pcf-reeves", &REEVES),
+        ("pcf-reeves", &[&REEVES]),
         &params,
         &buffers,
         crate::pcf_reeves::STAGE_FILTERING,
@@ -133,7 +104,7 @@ pub fn gems(
         ..Params::new(frame, map, tester)
     };
     let buffers = [&map.light, &frame.triangle, &frame.position, &frame.normal, &map.depth];
-    per_pixel(ctx, frame, ("pcf-gems", &GEMS), &params, &buffers, STAGE_FILTERING, rec)
+    per_pixel(ctx, frame, ("pcf-gems", &[&GEMS]), &params, &buffers, STAGE_FILTERING, rec)
 }
 
 /// Brabec and Seidel's depth-as-colour ramp as the kernels read it: the

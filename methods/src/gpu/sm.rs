@@ -161,25 +161,36 @@ pub fn depth_test(
 ) -> Result<(Vec<f32>, Counters), GpuError> {
     debug_assert_eq!(NEAREST_REACH.x, NEAREST_REACH.y);
     let params = Params { reach: NEAREST_REACH.x, ..Params::new(frame, map, tester) };
+    let buffers = [&map.light, &frame.triangle, &frame.position, &frame.normal, &map.depth];
+    per_pixel(ctx, frame, ("sm depth test", &[&SM]), &params, &buffers, STAGE_DEPTH_TEST, rec)
+}
+
+/// Runs a per-pixel kernel (the parts `kernel`, after `pixel.wgsl` and `counters.wgsl`) over
+/// `frame` with `buffers` bound after the uniform `params`, as the stage `stage`; returns the
+/// lit values and the counters. The kernel's last two bindings are the lit values and the
+/// counters, which this makes. `sm`, the percentage-closer filters and the filtered maps'
+/// tests run this way.
+pub(super) fn per_pixel(
+    ctx: &GpuContext,
+    frame: &GpuFrame,
+    (label, kernel): (&str, &[&Part]),
+    params: &Params,
+    buffers: &[&wgpu::Buffer],
+    stage: &str,
+    rec: &mut Recorder,
+) -> Result<(Vec<f32>, Counters), GpuError> {
     let n = frame.pixels();
-    let p = pipeline(ctx, "sm depth test", &SM);
-    let uniform = ctx.uniform("sm params", &params);
+    let mut parts = vec![&PIXEL, &COUNTERS];
+    parts.extend_from_slice(kernel);
+    let p = ctx.pipeline(label, &compose(&parts), "main");
+    let uniform = ctx.uniform(label, params);
     let lit = ctx.zeroed::<f32>("lit", n);
     let counters = counters_buffer(ctx);
-    let bind = ctx.bind(
-        &p,
-        &[
-            &uniform,
-            &map.light,
-            &frame.triangle,
-            &frame.position,
-            &frame.normal,
-            &map.depth,
-            &lit,
-            &counters,
-        ],
-    );
-    ctx.stage(rec, STAGE_DEPTH_TEST, |e| {
+    let mut all = vec![&uniform];
+    all.extend_from_slice(buffers);
+    all.extend([&lit, &counters]);
+    let bind = ctx.bind(&p, &all);
+    ctx.stage(rec, stage, |e| {
         GpuContext::dispatch(e, &p, &bind, GpuContext::groups_1d(n, WORKGROUP))
     })?;
     let mut out: Vec<f32> = ctx.read(&lit)?;
