@@ -174,7 +174,6 @@ pub fn frustum_tests(
     let count = subs.pixels();
     let occlusion: Vec<AtomicMask> = (0..count).map(|_| AtomicMask::default()).collect();
     let hidden: Vec<AtomicMask> = (0..count).map(|_| AtomicMask::default()).collect();
-    let light = subs.light();
     let counters = casters
         .texels()
         .par_iter()
@@ -182,7 +181,7 @@ pub fn frustum_tests(
             let texel = texel as usize;
             let c = test_texel(
                 geometry,
-                (light, grid),
+                grid,
                 subs,
                 pixels.of(texel),
                 texel,
@@ -221,7 +220,7 @@ pub fn frustum_tests(
 #[allow(clippy::too_many_arguments)]
 fn test_texel(
     geometry: &Geometry,
-    (light, grid): (&Projector, Grid),
+    grid: Grid,
     subs: &SubSamples<'_>,
     pixels: &[u32],
     texel: usize,
@@ -230,6 +229,7 @@ fn test_texel(
     scratch: &mut Scratch,
 ) -> Counters {
     let rate = subs.rate();
+    let light = subs.light();
     let pattern = subs.pattern();
     let centre = pattern.centre_index();
     let n = pixels.len();

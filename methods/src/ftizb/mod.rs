@@ -270,20 +270,19 @@ struct Masked {
     hidden: Vec<u128>,
 }
 
-/// Per pixel `1 - popcount(occluded) / popcount(valid)`; 1 where nothing is occluded.
+/// Per pixel [`lit`] of its shadowed and valid sub-samples.
 fn resolve(occlusion: &[u128], valid: &[u128]) -> Vec<f32> {
-    occlusion
-        .iter()
-        .zip(valid)
-        .map(|(&o, &v)| {
-            let shadowed = (o & v).count_ones();
-            if shadowed == 0 {
-                1.0
-            } else {
-                (1.0 - f64::from(shadowed) / f64::from(v.count_ones())).clamp(0.0, 1.0) as f32
-            }
-        })
-        .collect()
+    occlusion.iter().zip(valid).map(|(&o, &v)| lit((o & v).count_ones(), v.count_ones())).collect()
+}
+
+/// A pixel's light from its `shadowed` and `valid` sub-samples: `1 - shadowed / valid` in
+/// `f64`, 1 where none is shadowed (on the CPU and, from its counts, the GPU).
+pub fn lit(shadowed: u32, valid: u32) -> f32 {
+    if shadowed == 0 {
+        1.0
+    } else {
+        (1.0 - f64::from(shadowed) / f64::from(valid)).clamp(0.0, 1.0) as f32
+    }
 }
 
 impl ShadowMethod for Ftizb {
@@ -303,5 +302,19 @@ impl ShadowMethod for Ftizb {
 
     fn run(&self, frame: &Frame<'_>, rec: &mut Recorder) -> Result<Visibility, MethodError> {
         Ok(self.masks(frame, rec)?.visibility)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::lit;
+
+    #[test]
+    fn lit_is_the_share_of_lit_valid_sub_samples() {
+        assert_eq!(lit(0, 0), 1.0);
+        assert_eq!(lit(0, 7), 1.0);
+        assert_eq!(lit(1, 4), 0.75);
+        assert_eq!(lit(4, 4), 0.0);
+        assert_eq!(lit(1, 3), (1.0 - 1.0 / 3.0f64) as f32);
     }
 }

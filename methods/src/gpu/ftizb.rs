@@ -59,7 +59,7 @@ use super::{
 };
 use crate::{
     frame::Frame,
-    ftizb::{Ftizb, FtizbOptions, STAGE_FOOTPRINTS},
+    ftizb::{self, Ftizb, FtizbOptions, STAGE_FOOTPRINTS},
     method::{MethodError, ShadowMethod, Visibility},
     pan09::{
         facets::{FACET_DEPTH_RATIO, FACET_ORTHO_SPAN},
@@ -236,18 +236,8 @@ pub fn shade(
             hidden[k] = 0;
         }
     }
-    let lit = valid.iter().zip(&shadowed).map(|(&v, &s)| resolve(s, v)).collect();
+    let lit = valid.iter().zip(&shadowed).map(|(&v, &s)| ftizb::lit(s, v)).collect();
     Ok(FtizbGpuOutput { lit, valid, shadowed, hidden, undecided })
-}
-
-/// A pixel's light from its shadowed and valid sub-samples, as the CPU's `resolve`:
-/// `1 - shadowed / valid` in `f64`, 1 where none is shadowed.
-fn resolve(shadowed: u32, valid: u32) -> f32 {
-    if shadowed == 0 {
-        1.0
-    } else {
-        (1.0 - f64::from(shadowed) / f64::from(valid)).clamp(0.0, 1.0) as f32
-    }
 }
 
 impl GpuFtizb {
@@ -279,19 +269,5 @@ impl ShadowMethod for GpuFtizb {
             lit: out.lit,
             transmittance: None,
         })
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::resolve;
-
-    #[test]
-    fn resolve_is_the_share_of_lit_valid_sub_samples() {
-        assert_eq!(resolve(0, 0), 1.0);
-        assert_eq!(resolve(0, 7), 1.0);
-        assert_eq!(resolve(1, 4), 0.75);
-        assert_eq!(resolve(4, 4), 0.0);
-        assert_eq!(resolve(1, 3), (1.0 - 1.0 / 3.0f64) as f32);
     }
 }
