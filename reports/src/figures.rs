@@ -355,17 +355,18 @@ pub fn packed_series(
     charts
 }
 
+/// A run's point on the error-against-time charts: its median time on `clock` and its mean
+/// error.
+pub fn point(r: &Row, clock: Clock) -> (f64, f64) {
+    (r.time(clock).median, r.metrics.mean_abs_error)
+}
+
 /// The rows on the Pareto front of error against time on `clock`, fastest first.
 pub fn pareto_rows<'a>(rows: &[&'a Row], clock: Clock) -> Vec<&'a Row> {
-    let points: Vec<(f64, f64)> =
-        rows.iter().map(|r| (r.time(clock).median, r.metrics.mean_abs_error)).collect();
+    let points: Vec<(f64, f64)> = rows.iter().map(|r| point(r, clock)).collect();
     pareto_front(&points)
         .into_iter()
-        .filter_map(|(t, e)| {
-            rows.iter()
-                .find(|r| r.time(clock).median == t && r.metrics.mean_abs_error == e)
-                .copied()
-        })
+        .filter_map(|(t, e)| rows.iter().find(|r| point(r, clock) == (t, e)).copied())
         .collect()
 }
 
@@ -460,7 +461,7 @@ pub fn budget_methods(report: &Report) -> Vec<String> {
     let order = methods_in(&all);
     let mut wins: Vec<usize> = vec![0; order.len()];
     for sc in &report.scenes {
-        let rows: Vec<&Row> = report.rows.iter().filter(|r| r.scene == sc.scene).collect();
+        let rows = report.scene_rows(&sc.scene);
         for &b in &BUDGETS_MS {
             let best = best_within(&rows, b, report.clock);
             let least = best.iter().filter_map(|(_, e)| *e).fold(f64::INFINITY, f64::min);
@@ -486,7 +487,7 @@ pub fn charts(report: &Report) -> Vec<SceneChart> {
     let time = Measure::Time(clock);
     let mut out = Vec::new();
     for sc in &report.scenes {
-        let rows: Vec<&Row> = report.rows.iter().filter(|r| r.scene == sc.scene).collect();
+        let rows = report.scene_rows(&sc.scene);
         let reference = format!("against {} at {}x{}", sc.reference, sc.width, sc.height);
         let families: Vec<Family> = FAMILIES
             .into_iter()
@@ -577,12 +578,15 @@ pub fn charts(report: &Report) -> Vec<SceneChart> {
 /// The scene's runs not drawn by `lines` (error against time on `clock`), as points.
 fn context_points(rows: &[&Row], lines: &[Series], clock: Clock) -> Vec<Point> {
     let drawn = |r: &Row| {
-        let (x, y) = (r.time(clock).median, r.metrics.mean_abs_error);
+        let (x, y) = point(r, clock);
         lines.iter().any(|s| s.points.iter().any(|p| p.x == x && p.y == y))
     };
     rows.iter()
         .filter(|r| !drawn(r))
-        .map(|r| Point::at(r.time(clock).median, r.metrics.mean_abs_error))
+        .map(|r| {
+            let (x, y) = point(r, clock);
+            Point::at(x, y)
+        })
         .collect()
 }
 
@@ -590,7 +594,7 @@ fn context_points(rows: &[&Row], lines: &[Series], clock: Clock) -> Vec<Point> {
 /// evenly spread along the front); `None` when none compared a pixel.
 pub fn distribution_chart(report: &Report, scene: &str) -> Option<SceneChart> {
     let sc = report.scenes.iter().find(|s| s.scene == scene)?;
-    let rows: Vec<&Row> = report.rows.iter().filter(|r| r.scene == scene).collect();
+    let rows = report.scene_rows(scene);
     let front = pareto_rows(&rows, report.clock);
     let shown = spread(&front, MAX_SERIES);
     let lines = exceedance_series(&shown);
@@ -704,7 +708,7 @@ fn draw_budgets<DB: DrawingBackend>(
         root.split_vertically(h.saturating_sub(legend_height(methods.len() as u32)));
     let panels = grid.split_evenly((n.div_ceil(2), 2));
     for (sc, panel) in report.scenes.iter().zip(panels) {
-        let rows: Vec<&Row> = report.rows.iter().filter(|r| r.scene == sc.scene).collect();
+        let rows = report.scene_rows(&sc.scene);
         let best: Vec<Vec<(String, Option<f64>)>> =
             BUDGETS_MS.iter().map(|&b| best_within(&rows, b, clock)).collect();
         let errors: Vec<f64> = best

@@ -418,7 +418,7 @@ pub fn today_section(report: &Report, plots: &[PlotFile]) -> Option<TodaySection
         .into_iter()
         .map(|sc| {
             let id = format!("today-{}", anchor(&sc.scene));
-            let rows = crate::today::scene_rows(report, &sc.scene);
+            let rows = report.scene_rows(&sc.scene);
             let on = crate::today::on_front(&rows, report.clock).iter().filter(|&&f| f).count();
             TodayScene {
                 about: format!(

@@ -191,6 +191,13 @@ pub struct Report {
     pub shards: Vec<ShardInfo>,
 }
 
+impl Report {
+    /// The timed runs of `scene`, in report order.
+    pub fn scene_rows(&self, scene: &str) -> Vec<&Row> {
+        self.rows.iter().filter(|r| r.scene == scene).collect()
+    }
+}
+
 /// Where and how one shard of a report ran.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ShardInfo {

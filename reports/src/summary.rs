@@ -148,18 +148,13 @@ fn front_runs(report: &Report, rows: &[&Row]) -> Vec<FrontRun> {
         .collect()
 }
 
-/// The rows of `scene`.
-fn scene_rows<'a>(report: &'a Report, scene: &str) -> Vec<&'a Row> {
-    report.rows.iter().filter(|r| r.scene == scene).collect()
-}
-
 /// Every scene's Pareto front, in report order (scenes without runs left out).
 pub fn fronts(report: &Report) -> Vec<Front> {
     report
         .scenes
         .iter()
         .filter_map(|sc| {
-            let rows = scene_rows(report, &sc.scene);
+            let rows = report.scene_rows(&sc.scene);
             (!rows.is_empty()).then(|| Front {
                 scene: sc.scene.clone(),
                 anchor: format!("scene-{}", crate::html::anchor(&sc.scene)),
@@ -205,7 +200,7 @@ struct SceneFacts<'a> {
 }
 
 fn facts<'a>(report: &'a Report, scene: &str) -> Option<SceneFacts<'a>> {
-    let rows = scene_rows(report, scene);
+    let rows = report.scene_rows(scene);
     let clock = report.clock;
     let least = rows.iter().map(|r| r.metrics.mean_abs_error).fold(f64::INFINITY, f64::min);
     let quickest = rows.iter().map(|r| r.time(clock).median).fold(f64::INFINITY, f64::min);
@@ -424,7 +419,7 @@ pub fn budget_table(report: &Report) -> BudgetTable {
     let clock = report.clock;
     let mut rows = Vec::new();
     for sc in &report.scenes {
-        let mine = scene_rows(report, &sc.scene);
+        let mine = report.scene_rows(&sc.scene);
         let best: Vec<Vec<(String, Option<f64>)>> =
             BUDGETS_MS.iter().map(|&b| best_within(&mine, b, clock)).collect();
         let least: Vec<f64> = best
@@ -476,7 +471,7 @@ mod tests {
         let fronts = fronts(&report);
         assert_eq!(fronts.len(), 2);
         for f in &fronts {
-            let rows = scene_rows(&report, &f.scene);
+            let rows = report.scene_rows(&f.scene);
             assert_eq!(f.runs_total, rows.len());
             // No run of the scene beats a front run in both error and time.
             for run in &f.runs {

@@ -27,7 +27,7 @@
 //!   ([`on_front`]: no other run of the scene is at least as fast and as accurate and better
 //!   in one of the two).
 
-use crate::figures::{packed_series, params_text, Measure, Place, PlotFile, SceneChart};
+use crate::figures::{packed_series, params_text, point, Measure, Place, PlotFile, SceneChart};
 use crate::html::{metric_cells, time_head, Cell, Head, TableView, METRIC_COLUMNS};
 use crate::model::{method_label, row_stem, scene_stem, Report, Row, SceneInfo};
 use crate::output::OutputError;
@@ -55,11 +55,6 @@ pub fn family_name(family: Option<Family>) -> &'static str {
     }
 }
 
-/// The runs of `scene`, in report order.
-pub fn scene_rows<'a>(report: &'a Report, scene: &str) -> Vec<&'a Row> {
-    report.rows.iter().filter(|r| r.scene == scene).collect()
-}
-
 /// Whether `rows` set today's techniques against the seeds: a run of each family at least.
 pub fn compares(rows: &[&Row]) -> bool {
     let has = |f: Family| rows.iter().any(|r| family_of(r) == Some(f));
@@ -68,19 +63,14 @@ pub fn compares(rows: &[&Row]) -> bool {
 
 /// The scenes of `report` whose runs [`compares`], in report order.
 pub fn scenes(report: &Report) -> Vec<&SceneInfo> {
-    report.scenes.iter().filter(|sc| compares(&scene_rows(report, &sc.scene))).collect()
-}
-
-/// A run's point: its median time on `clock` and its mean error.
-fn point_of(row: &Row, clock: Clock) -> (f64, f64) {
-    (row.time(clock).median, row.metrics.mean_abs_error)
+    report.scenes.iter().filter(|sc| compares(&report.scene_rows(&sc.scene))).collect()
 }
 
 /// For each of `rows`, whether it is on their Pareto front of mean error against time on
 /// `clock`: no other run is at least as fast and as accurate and better in one of the two
 /// (two runs with the same time and error are on it together), the front the charts draw.
 pub fn on_front(rows: &[&Row], clock: Clock) -> Vec<bool> {
-    let points: Vec<(f64, f64)> = rows.iter().map(|r| point_of(r, clock)).collect();
+    let points: Vec<(f64, f64)> = rows.iter().map(|r| point(r, clock)).collect();
     let front = pareto_front(&points);
     points.iter().map(|p| front.contains(p)).collect()
 }
@@ -88,7 +78,7 @@ pub fn on_front(rows: &[&Row], clock: Clock) -> Vec<bool> {
 /// The charts of `scene` (see the module documentation); none when its runs do not
 /// [`compares`].
 pub fn charts(report: &Report, scene: &SceneInfo) -> Vec<SceneChart> {
-    let rows = scene_rows(report, &scene.scene);
+    let rows = report.scene_rows(&scene.scene);
     if !compares(&rows) {
         return Vec::new();
     }
@@ -101,7 +91,7 @@ pub fn charts(report: &Report, scene: &SceneInfo) -> Vec<SceneChart> {
         .zip(&front)
         .filter(|(r, _)| family_of(r) == Some(Family::Seed))
         .map(|(r, &on)| {
-            let (x, y) = point_of(r, clock);
+            let (x, y) = point(r, clock);
             Point { label: if on { method_label(r) } else { String::new() }, ..Point::at(x, y) }
         })
         .collect();
@@ -119,14 +109,14 @@ pub fn charts(report: &Report, scene: &SceneInfo) -> Vec<SceneChart> {
         .enumerate()
         .map(|(k, lines)| {
             let drawn = |r: &Row| {
-                let (x, y) = point_of(r, clock);
+                let (x, y) = point(r, clock);
                 lines.iter().any(|s| s.points.iter().any(|p| p.x == x && p.y == y))
             };
             let others: Vec<Point> = rows
                 .iter()
                 .filter(|r| family_of(r) != Some(Family::Seed) && !drawn(r))
                 .map(|r| {
-                    let (x, y) = point_of(r, clock);
+                    let (x, y) = point(r, clock);
                     Point::at(x, y)
                 })
                 .collect();
@@ -271,10 +261,10 @@ mod tests {
     /// Whether row `k` of `rows` is on the front by the definition: no other row at least
     /// as fast and as accurate and better in one.
     fn undominated(rows: &[&Row], k: usize) -> bool {
-        let (t, e) = point_of(rows[k], Clock::Wall);
+        let (t, e) = point(rows[k], Clock::Wall);
         !rows
             .iter()
-            .map(|r| point_of(r, Clock::Wall))
+            .map(|r| point(r, Clock::Wall))
             .any(|(u, f)| u <= t && f <= e && (u < t || f < e))
     }
 
@@ -344,14 +334,14 @@ mod tests {
         let mut drawn: Vec<(f64, f64)> =
             chart.chart.series.iter().flat_map(|s| s.points.iter().map(|p| (p.x, p.y))).collect();
         let rows: Vec<&Row> = report.rows.iter().collect();
-        let mut points: Vec<(f64, f64)> = rows.iter().map(|r| point_of(r, Clock::Wall)).collect();
+        let mut points: Vec<(f64, f64)> = rows.iter().map(|r| point(r, Clock::Wall)).collect();
         drawn.sort_by(|a, b| a.0.total_cmp(&b.0));
         points.sort_by(|a, b| a.0.total_cmp(&b.0));
         assert_eq!(drawn, points);
         let flags = on_front(&rows, Clock::Wall);
         let front = pareto_front(&drawn);
         for (r, &on) in rows.iter().zip(&flags) {
-            assert_eq!(front.contains(&point_of(r, Clock::Wall)), on, "{}", r.method);
+            assert_eq!(front.contains(&point(r, Clock::Wall)), on, "{}", r.method);
         }
         // A seed is named where it is on the front, and only there.
         for ((p, r), &on) in rings[0].points.iter().zip(&rows).zip(&flags) {
