@@ -138,8 +138,12 @@ fn receiver(
             full = true;
             break;
         }
-        if !clip::separated(piece.points(), own.points()) && clip::intersect(&piece, &own).n >= 3 {
-            pieces.push(piece.points());
+        if clip::separated(piece.points(), own.points()) {
+            continue;
+        }
+        let inside = clip::intersect(&piece, &own);
+        if inside.n >= 3 {
+            pieces.push(inside.points());
         }
     }
     let width = screen.width as usize;
