@@ -68,6 +68,14 @@ impl Poly {
         s
     }
 
+    /// Makes `self` a copy of `other`, copying only its valid vertices (a whole `Poly` is
+    /// [`CAP`] vertices; the hot loops copy the few they hold).
+    #[inline]
+    pub fn assign(&mut self, other: &Poly) {
+        self.n = other.n;
+        self.v[..other.n].copy_from_slice(other.points());
+    }
+
     /// Reverses the vertex order.
     pub fn reverse(&mut self) {
         self.v[..self.n].reverse();
@@ -202,39 +210,75 @@ pub(crate) fn for_each_pixel(
     width: usize,
     mut f: impl FnMut(usize, usize, f64),
 ) {
-    let (mut lo, mut hi) = (Poly::new(), Poly::new());
-    let mut cur = *poly;
-    let (ymin, ymax) = cur.range(1);
+    let (ymin, ymax) = poly.range(1);
     if ymax.is_nan() || ymin.is_nan() || ymax <= r0 as f64 || ymin >= r1 as f64 {
         return;
     }
+    // The polygon left below the rows swept so far, a row strip and a spare, rotated
+    // rather than copied.
+    let mut bufs = [Poly::new(), Poly::new(), Poly::new()];
+    let (mut cur, row, mut spare) = (0, 1, 2);
+    bufs[spare].assign(poly);
     if ymin < r0 as f64 {
-        split(&cur, 1, r0 as f64, &mut lo, &mut hi);
-        cur = hi;
+        split_among(&mut bufs, spare, 1, r0 as f64, row, cur);
+    } else {
+        std::mem::swap(&mut cur, &mut spare);
     }
     let j_start = (ymin.floor().max(r0 as f64)) as usize;
     let j_end = (ymax.ceil().max(0.0) as usize).min(r1);
+    let mut columns = [Poly::new(), Poly::new(), Poly::new()];
     for j in j_start..j_end {
-        if cur.n < 3 {
+        if bufs[cur].n < 3 {
             break;
         }
-        let row = if ymax > (j + 1) as f64 {
-            split(&cur, 1, (j + 1) as f64, &mut lo, &mut hi);
-            cur = hi;
-            lo
+        if ymax > (j + 1) as f64 {
+            split_among(&mut bufs, cur, 1, (j + 1) as f64, row, spare);
+            std::mem::swap(&mut cur, &mut spare);
+            sweep_row(&bufs[row], j, width, &mut columns, &mut f);
         } else {
-            let row = cur;
-            cur.n = 0;
-            row
-        };
-        sweep_row(&row, j, width, &mut f);
+            sweep_row(&bufs[cur], j, width, &mut columns, &mut f);
+            bufs[cur].n = 0;
+        }
+    }
+}
+
+/// [`split`] of `bufs[src]` into `bufs[lo]` and `bufs[hi]` (three different buffers).
+#[inline(always)]
+fn split_among(bufs: &mut [Poly; 3], src: usize, axis: usize, c: f64, lo: usize, hi: usize) {
+    bufs[lo].n = 0;
+    bufs[hi].n = 0;
+    let n = bufs[src].n;
+    for k in 0..n {
+        let p = bufs[src].v[k];
+        let q = bufs[src].v[if k + 1 == n { 0 } else { k + 1 }];
+        let dp = p[axis] - c;
+        let dq = q[axis] - c;
+        if dp <= 0.0 {
+            bufs[lo].push(p);
+        }
+        if dp >= 0.0 {
+            bufs[hi].push(p);
+        }
+        if (dp < 0.0 && dq > 0.0) || (dp > 0.0 && dq < 0.0) {
+            let t = dp / (dp - dq);
+            let mut x = [p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])];
+            x[axis] = c;
+            bufs[lo].push(x);
+            bufs[hi].push(x);
+        }
     }
 }
 
 /// Calls `f(i, j, area)` for every column `i` the convex polygon `row` (inside the row strip
-/// at `y = j`) overlaps, splitting it at every column line.
+/// at `y = j`) overlaps, splitting it at every column line (into `bufs`).
 #[inline]
-fn sweep_row(row: &Poly, j: usize, width: usize, f: &mut impl FnMut(usize, usize, f64)) {
+fn sweep_row(
+    row: &Poly,
+    j: usize,
+    width: usize,
+    bufs: &mut [Poly; 3],
+    f: &mut impl FnMut(usize, usize, f64),
+) {
     if row.n < 3 {
         return;
     }
@@ -243,25 +287,26 @@ fn sweep_row(row: &Poly, j: usize, width: usize, f: &mut impl FnMut(usize, usize
         return;
     }
     let fj = j as f64;
-    let mut cur = *row;
-    let (mut lo, mut hi) = (Poly::new(), Poly::new());
+    let (mut cur, piece, mut spare) = (0, 1, 2);
+    bufs[spare].assign(row);
     if xmin < 0.0 {
-        split(&cur, 0, 0.0, &mut lo, &mut hi);
-        cur = hi;
+        split_among(bufs, spare, 0, 0.0, piece, cur);
+    } else {
+        std::mem::swap(&mut cur, &mut spare);
     }
     let i_start = xmin.floor().max(0.0) as usize;
     let i_end = (xmax.ceil() as usize).min(width);
     for i in i_start..i_end {
-        if cur.n < 3 {
+        if bufs[cur].n < 3 {
             break;
         }
         let fi = i as f64;
         if xmax > fi + 1.0 {
-            split(&cur, 0, fi + 1.0, &mut lo, &mut hi);
-            f(i, j, 0.5 * lo.area2_rel(fi, fj));
-            cur = hi;
+            split_among(bufs, cur, 0, fi + 1.0, piece, spare);
+            f(i, j, 0.5 * bufs[piece].area2_rel(fi, fj));
+            std::mem::swap(&mut cur, &mut spare);
         } else {
-            f(i, j, 0.5 * cur.area2_rel(fi, fj));
+            f(i, j, 0.5 * bufs[cur].area2_rel(fi, fj));
             break;
         }
     }

@@ -167,17 +167,15 @@ pub(crate) fn rows_areas<'a>(
             if rest.n < 3 || *lo >= y1 {
                 continue;
             }
-            let strip = if *hi > y1 {
+            if *hi > y1 {
                 clip::split(rest, 1, y1, &mut above, &mut below);
-                *rest = below;
+                rest.assign(&below);
                 *lo = y1;
-                above
+                scratch.strips.push((above, 0, 0));
             } else {
-                let strip = *rest;
+                scratch.strips.push((*rest, 0, 0));
                 rest.n = 0;
-                strip
-            };
-            scratch.strips.push((strip, 0, 0));
+            }
         }
         work += row_areas(j, cols.clone(), within, |i| accept(i, j), scratch, |i, a| emit(i, j, a));
     }
