@@ -278,12 +278,23 @@ impl Screen {
             [0.0, -1.0, y1 + m, 0.0, 0.0, 0.0],
         ];
         let eval = |pl: &Rec, r: &Rec| -> f64 { pl.iter().zip(r).map(|(a, b)| a * b).sum() };
+        // The planes' values at the three vertices, written out: each plane has at most three
+        // non-zero coefficients, and the zero terms of `eval`'s sum add nothing (`x + 0 * y`
+        // is `x` for finite `y`).
+        let values: [[f64; 3]; 7] = [
+            recs.map(|r| r[3]),
+            recs.map(|r| r[4]),
+            recs.map(|r| r[5]),
+            recs.map(|r| r[0] + (m - x0) * r[2]),
+            recs.map(|r| -r[0] + (x1 + m) * r[2]),
+            recs.map(|r| r[1] + (m - y0) * r[2]),
+            recs.map(|r| -r[1] + (y1 + m) * r[2]),
+        ];
         // Trivial reject (culls everything whose shadow misses the rectangle) and accept; only the
         // planes that cut the triangle clip it (a plane every vertex is inside of leaves a
         // polygon as it is).
         let mut cutting = [false; 7];
-        for (pl, cuts) in planes.iter().zip(&mut cutting) {
-            let v = recs.map(|r| eval(pl, &r));
+        for (v, cuts) in values.iter().zip(&mut cutting) {
             if v.iter().all(|&x| x < 0.0) {
                 return None;
             }
