@@ -14,6 +14,10 @@ pub(crate) type Pt = [f64; 2];
 /// frame sides stays below 16 vertices; the pixel clipper needs at most 7.
 pub(crate) const CAP: usize = 24;
 
+/// Most vertices of a projected triangle ([`super::shadow`]: three corners, one more per
+/// homogeneous plane (seven) and per side of the rectangle it is clipped to (four)).
+pub(crate) const MAX_PROJECTED: usize = 14;
+
 /// Rows per band of the parallel pixel clipper.
 pub(crate) const BAND: usize = 8;
 

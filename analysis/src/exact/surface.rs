@@ -6,7 +6,7 @@
 //! own mesh included: self-shadowing) are cut to their part between the plane and the light
 //! and projected along light rays onto the plane and through the camera ([`Setup::caster`],
 //! the machinery of the planar receiver); each shadow polygon is cut to the bounding box of
-//! `T`'s own screen polygon and kept if it meets that polygon (both convex), and the area
+//! `T`'s own screen polygon, then to that polygon itself (both convex), and the area
 //! their union covers within `T`'s screen polygon is computed in each pixel `T` tiles
 //! ([`coverage`]), so a pixel takes the areas of the receivers that tile it (and of no other:
 //! a triangle hidden behind the surface in one pixel is that pixel's business only where it is
@@ -143,7 +143,11 @@ fn receiver(
         }
         let inside = clip::intersect(&piece, &own);
         if inside.n >= 3 {
-            pieces.push(inside.points());
+            // The intersection of two convex polygons can have as many vertices as both
+            // together; beyond what a shadow polygon can have, the piece itself is kept, so
+            // that the union's clips stay within `clip::CAP`.
+            let kept = if inside.n <= clip::MAX_PROJECTED { &inside } else { &piece };
+            pieces.push(kept.points());
         }
     }
     let width = screen.width as usize;
