@@ -2,7 +2,9 @@
 //! process, on the same frames and sample points, at one thread count (see the library's
 //! documentation). Prints one Markdown table, with ratios (ours / Embree: above 1, Embree is
 //! faster); on `bunny-plane` also `spsm` against `sm` at 1920x1080 (there the ratio is
-//! `spsm / sm`, the "Embree" column holding `sm`'s time).
+//! `spsm / sm`, the "Embree" column holding `sm`'s time). Then, for `bunny-plane`, `bumpy`,
+//! `cage` and `random-1m` among the scenes, a second table: the exact reference beside `sm`
+//! at map 1024 on the same frame, its largest stages, and `raytrace` at rate 64.
 //!
 //! Timing: every figure is measured by the workbench's one timing loop,
 //! `instrumentation::measure::measure_all`, under `Protocol::fixed(1, R)`: one untimed warm-up,
@@ -319,6 +321,75 @@ mod side_by_side {
                     }
                 }
             }
+        }
+        exact_table(&a.scenes, &protocol)
+    }
+
+    /// The scenes of the exact reference's table (issue table of `exact`'s cost), at their
+    /// own frame sizes.
+    const EXACT_SCENES: [&str; 4] = ["bunny-plane", "bumpy", "cage", "random-1m"];
+
+    /// The second table: what the references cost beside a shadow map on the same frame.
+    /// `exact` (edge pixels ray traced at rate 1, as `render --method exact`) and `sm` at map
+    /// 1024 interleaved under `protocol`; `raytrace` at rate 64 once (one cold run: seconds a
+    /// frame), on the frames up to 800x600. Ratios are given without and with the frame's camera
+    /// G-buffer (which `render` counts in a run's total and the methods share).
+    fn exact_table(names: &[String], protocol: &Protocol) -> anyhow::Result<()> {
+        let chosen: Vec<&String> =
+            names.iter().filter(|n| EXACT_SCENES.contains(&n.as_str())).collect();
+        if chosen.is_empty() {
+            return Ok(());
+        }
+        println!(
+            "\n# The references beside a shadow map: `exact` and `sm` (map 1024) interleaved, \
+             wall-clock medians as above; `raytrace --rate 64` one cold run\n"
+        );
+        println!("| scene | frame | triangles | camera G-buffer ms | exact ms | exact CPU ms | exact's largest stages (ms) | sm ms | exact / sm | exact / sm with G-buffer | raytrace rate 64 ms |");
+        println!("|---|---|---|---|---|---|---|---|---|---|---|");
+        let exact = analysis::registry::technique("exact", &MethodOptions::default())?;
+        let options = MethodOptions { map_res: Some(1024), ..Default::default() };
+        let sm = analysis::registry::technique("sm", &options)?;
+        let options = MethodOptions { rate: Some(64), ..Default::default() };
+        let rt64 = analysis::registry::technique("raytrace", &options)?;
+        for name in chosen {
+            let scene = match scenes::load(name) {
+                Ok(s) => s,
+                Err(e) => {
+                    println!("| {name} | skipped: {e} ||||||||||");
+                    continue;
+                }
+            };
+            let mut rec = Recorder::default();
+            let frame = Frame::new(&scene, scene.width, scene.height, &mut rec);
+            let gbuffer = rec.stages.total_ms();
+            let mut subjects = vec![ours(&frame, exact.as_ref()), ours(&frame, sm.as_ref())];
+            let measured = measure_frame(protocol, &mut subjects)?;
+            let [e, s] = &measured[..] else {
+                return Err(anyhow!("two subjects, {} measured", measured.len()));
+            };
+            let mut stages: Vec<_> =
+                e.stages.iter().map(|st| (st.name.as_str(), st.ms.median)).collect();
+            stages.sort_by(|a, b| b.1.total_cmp(&a.1));
+            let largest: Vec<String> =
+                stages.iter().take(3).map(|(n, ms)| format!("{n} {ms:.0}")).collect();
+            let brute = if scene.width * scene.height <= 800 * 600 {
+                let once = Protocol::fixed(0, 1);
+                let m = measure_frame(&once, &mut [ours(&frame, rt64.as_ref())])?;
+                m.first().map_or_else(|| "–".into(), |m| format!("{:.0}", m.wall_ms.median))
+            } else {
+                "–".into()
+            };
+            let (ew, sw) = (e.wall_ms.median, s.wall_ms.median);
+            let cpu = e.cpu_ms.map_or_else(|| "–".into(), |c| format!("{:.1}", c.median));
+            println!(
+                "| {name} | {}x{} | {} | {gbuffer:.1} | {ew:.1} | {cpu} | {} | {sw:.1} | {:.2} | {:.2} | {brute} |",
+                scene.width,
+                scene.height,
+                frame.geometry.len(),
+                largest.join(", "),
+                ew / sw,
+                (ew + gbuffer) / (sw + gbuffer),
+            );
         }
         Ok(())
     }
