@@ -54,8 +54,11 @@ pub(crate) struct Scratch {
     strips: Vec<(Poly, usize, usize)>,
     /// Columns of the current row wholly covered by one polygon.
     full: Vec<bool>,
-    /// (column, strip) pairs of polygons partly covering a pixel.
+    /// (column, rank of the strip) pairs of polygons partly covering a pixel.
     pairs: Vec<(u32, u32)>,
+    /// The strips by decreasing area (`order[rank]` is a strip), and each strip's rank.
+    order: Vec<(f64, u32)>,
+    rank: Vec<u32>,
     pieces: Vec<Poly>,
     next: Vec<Poly>,
 }
@@ -193,7 +196,7 @@ fn row_areas(
     mut emit: impl FnMut(usize, f64),
 ) -> Work {
     let mut work = Work::default();
-    let Scratch { rests: _, strips, full, pairs, pieces, next } = scratch;
+    let Scratch { rests: _, strips, full, pairs, order, rank, pieces, next } = scratch;
     let (y0, y1) = (j as f64, j as f64 + 1.0);
     let (c0, c1) = (cols.start, cols.end);
     full.clear();
@@ -225,11 +228,22 @@ fn row_areas(
         (*first_col, *last_col) = (first, last);
         true
     });
+    // A pixel's polygons are cut from it largest first: the pieces run out sooner.
+    order.clear();
+    order.extend(
+        strips.iter().enumerate().map(|(s, (p, _, _))| (p.area2_rel(c0 as f64, y0), s as u32)),
+    );
+    order.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    rank.clear();
+    rank.resize(strips.len(), 0);
+    for (r, &(_, s)) in order.iter().enumerate() {
+        rank[s as usize] = r as u32;
+    }
     pairs.clear();
     for (s, &(_, first, last)) in strips.iter().enumerate() {
         for i in first..=last {
             if !full[i - c0] && accept(i) {
-                pairs.push((i as u32, s as u32));
+                pairs.push((i as u32, rank[s]));
             }
         }
     }
@@ -251,7 +265,8 @@ fn row_areas(
             continue;
         }
         work.pixel_polygon_pairs += (next_pair - start) as u64;
-        let group = pairs[start..next_pair].iter().map(|&(_, s)| &strips[s as usize].0);
+        let group =
+            pairs[start..next_pair].iter().map(|&(_, r)| &strips[order[r as usize].1 as usize].0);
         emit(i, pixel_area(i, j, within, group, pieces, next));
     }
     work
