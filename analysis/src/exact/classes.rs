@@ -323,8 +323,18 @@ impl Context<'_> {
         let Some(seed) = group.iter().position(|o| tri(o) == seed_tri as usize) else {
             return PixelClass::Edge;
         };
-        let winding = p.winding[group[seed].contour as usize];
         let object = g.object[seed_tri as usize];
+        let class =
+            if self.planar[object as usize] { PixelClass::Planar } else { PixelClass::Surface };
+        // One triangle in the square, the seed: rules 3 to 5 reduce to rule 4's coverage.
+        if group.len() == 1 {
+            if group[0].area < MIN_TILE_COVERAGE {
+                return PixelClass::Edge;
+            }
+            tiles.push(seed_tri);
+            return class;
+        }
+        let winding = p.winding[group[seed].contour as usize];
         let Scratch { corners, normals, in_c, stack, members } = scratch;
         corners.clear();
         corners.extend(group.iter().map(|o| g.corners(tri(o))));
@@ -406,11 +416,7 @@ impl Context<'_> {
             }
         }
         tiles.extend(members.iter().map(|&m| tri(&group[m]) as u32));
-        if self.planar[object as usize] {
-            PixelClass::Planar
-        } else {
-            PixelClass::Surface
-        }
+        class
     }
 
     /// Whether the plane of triangle `u` is nearer to the camera than that of `t` along the
