@@ -117,6 +117,17 @@ pub(crate) fn keep(poly: &Poly, axis: usize, c: f64, keep_above: bool) -> Poly {
     out
 }
 
+/// [`keep`] into `out` (its vertices replaced), without a new polygon.
+#[inline]
+pub(crate) fn keep_into(poly: &Poly, axis: usize, c: f64, keep_above: bool, out: &mut Poly) {
+    out.n = 0;
+    if keep_above {
+        split_into(poly, axis, c, None, Some(out));
+    } else {
+        split_into(poly, axis, c, Some(out), None);
+    }
+}
+
 /// Appends the parts of [`split`] to the sides given (inlined, so a side not asked for costs
 /// nothing).
 #[inline(always)]

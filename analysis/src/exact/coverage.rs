@@ -294,12 +294,17 @@ fn region(within: Option<&Poly>, i: usize, j: usize) -> Option<Poly> {
 /// `poly` with coordinates relative to the corner of pixel `(i, j)`: exact for points in
 /// the pixel (`x - i` for `x` in `[i, i + 1]`).
 fn to_local(poly: &Poly, i: usize, j: usize) -> Poly {
-    let (x, y) = (i as f64, j as f64);
     let mut out = *poly;
-    for p in &mut out.v[..out.n] {
+    to_local_in_place(&mut out, i, j);
+    out
+}
+
+/// [`to_local`] in place.
+fn to_local_in_place(poly: &mut Poly, i: usize, j: usize) {
+    let (x, y) = (i as f64, j as f64);
+    for p in &mut poly.v[..poly.n] {
         *p = [p[0] - x, p[1] - y];
     }
-    out
 }
 
 /// The area of pixel `(i, j)`'s region ([`region`]) the polygons cover; each polygon lies in
@@ -320,9 +325,13 @@ fn pixel_area<'a>(
     pieces.clear();
     pieces.push(start);
     let x = i as f64;
+    // The polygon's part in the pixel, built in two buffers reused from polygon to polygon.
+    let (mut column, mut p) = (Poly::new(), Poly::new());
     for strip in polygons {
-        let p = to_local(&clip::keep(&clip::keep(strip, 0, x, true), 0, x + 1.0, false), i, j);
-        let p = strictly_convex(&p);
+        clip::keep_into(strip, 0, x, true, &mut column);
+        clip::keep_into(&column, 0, x + 1.0, false, &mut p);
+        to_local_in_place(&mut p, i, j);
+        make_strictly_convex(&mut p);
         if p.n < 3 || p.area2_rel(0.0, 0.0) <= MIN_AREA2 {
             continue;
         }
@@ -379,7 +388,7 @@ fn subtract(piece: &Poly, cut: &Poly, first: usize, out: &mut Vec<Poly>) {
     }
 }
 
-/// `poly` without the vertices where it does not turn strictly left (repeated points, and
+/// Removes from `out` the vertices where it does not turn strictly left (repeated points, and
 /// points that rounding left on or just inside the line through their neighbours).
 ///
 /// Cutting along every edge line of a polygon gives back the polygon only where it is
@@ -388,8 +397,7 @@ fn subtract(piece: &Poly, cut: &Poly, first: usize, out: &mut Vec<Poly>) {
 /// across the pixel, would cut away covered area far from the vertex. Dropping such a vertex
 /// `v` between `u` and `w` changes the area by the triangle `(u, v, w)`, whose doubled area is
 /// the turn `cross(v - u, w - v) <= 0` measured at `v`: on the order of the rounding.
-fn strictly_convex(poly: &Poly) -> Poly {
-    let mut out = *poly;
+fn make_strictly_convex(out: &mut Poly) {
     let mut changed = true;
     while changed && out.n >= 3 {
         changed = false;
@@ -409,7 +417,6 @@ fn strictly_convex(poly: &Poly) -> Poly {
     if out.n < 3 {
         out.n = 0;
     }
-    out
 }
 
 /// Pushes `piece` onto `out` unless it is empty or below [`MIN_AREA2`]; halved first when it
