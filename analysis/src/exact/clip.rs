@@ -411,7 +411,12 @@ pub(crate) fn separated(a: &[Pt], b: &[Pt]) -> bool {
 #[inline]
 pub(crate) fn clip_to_pixel(poly: &Poly, i: usize, j: usize) -> Poly {
     let (x, y) = (i as f64, j as f64);
-    keep(&keep(&keep(&keep(poly, 0, x, true), 0, x + 1.0, false), 1, y, true), 1, y + 1.0, false)
+    let (mut a, mut b) = (Poly::new(), Poly::new());
+    keep_into(poly, 0, x, true, &mut a);
+    keep_into(&a, 0, x + 1.0, false, &mut b);
+    keep_into(&b, 1, y, true, &mut a);
+    keep_into(&a, 1, y + 1.0, false, &mut b);
+    b
 }
 
 #[cfg(test)]

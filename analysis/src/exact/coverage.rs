@@ -371,6 +371,7 @@ const HALVE_AT: usize = 16;
 fn subtract(piece: &Poly, cut: &Poly, first: usize, out: &mut Vec<Poly>) {
     let mut rest = *piece;
     let (mut inside, mut outside) = (Poly::new(), Poly::new());
+    // `rest` takes `inside`'s valid vertices only at each edge (`Poly::assign`).
     for k in first..cut.n {
         if rest.n >= clip::CAP - 1 {
             let (a, b) = halve(&rest);
@@ -384,7 +385,7 @@ fn subtract(piece: &Poly, cut: &Poly, first: usize, out: &mut Vec<Poly>) {
         if inside.n < 3 || inside.area2_rel(0.0, 0.0) <= MIN_AREA2 {
             return;
         }
-        rest = inside;
+        rest.assign(&inside);
     }
 }
 
