@@ -9,7 +9,7 @@
 //! functions, up to rounding), then `(X / W, Y / W)` is taken, which is a projective map with
 //! `W > 0` on the kept part, so convex polygons stay convex and straight edges straight.
 
-use super::clip::{keep, Poly};
+use super::clip::{keep_into, Poly};
 use super::ScreenPolygons;
 use crate::reference::ReferenceError;
 use glam::DVec3;
@@ -354,19 +354,20 @@ impl Screen {
             pts[k] = [x, y];
         }
         let mut poly = Poly::from_slice(&pts[..na]);
-        // A side every vertex is inside of leaves the polygon as it is.
+        // A side every vertex is inside of leaves the polygon as it is; the others clip it
+        // through a second buffer.
         let ((lx, hx), (ly, hy)) = (poly.range(0), poly.range(1));
-        if lx < x0 {
-            poly = keep(&poly, 0, x0, true);
-        }
-        if hx > x1 {
-            poly = keep(&poly, 0, x1, false);
-        }
-        if ly < y0 {
-            poly = keep(&poly, 1, y0, true);
-        }
-        if hy > y1 {
-            poly = keep(&poly, 1, y1, false);
+        let mut other = Poly::new();
+        for (cuts, axis, c, above) in [
+            (lx < x0, 0, x0, true),
+            (hx > x1, 0, x1, false),
+            (ly < y0, 1, y0, true),
+            (hy > y1, 1, y1, false),
+        ] {
+            if cuts {
+                keep_into(&poly, axis, c, above, &mut other);
+                std::mem::swap(&mut poly, &mut other);
+            }
         }
         if poly.n < 3 {
             return None;
