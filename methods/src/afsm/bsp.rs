@@ -13,6 +13,16 @@
 //! child lies `right` entries later), so every subtree is a contiguous run of nodes. Each
 //! node keeps the exact bounding box of its samples (tighter than its split planes) and the
 //! largest threshold depth among them (for max-depth culling).
+//!
+//! The split moves the 32-byte samples themselves, in place. Alternatives measured on `cage`'s
+//! 325,840 samples at one thread: a bracket sampled around the median (Floyd and Rivest) with
+//! two branch-free partitions, 15.6 ms (Lomuto) or 14.2 ms (Hoare) against quickselect's 14.0
+//! (minimum of 15 builds); u32 indices selected by gathered keys, 36 ms. Records of 20 bytes
+//! (image point and input index), each leaf gathering its samples and flat coordinates into
+//! new vectors, made the stage slower, not faster: 23.5 and 32.9 ms of CPU time against 15.2
+//! and 15.0 (24-byte records: 27.8 and 24.7 against 16.7 and 15.8; one pinned thread, load
+//! 5 on 2 cores, alternating runs of 7 frames): the new vectors' first touch and the gather
+//! cost more than the smaller records save.
 
 use super::samples::Sample;
 use glam::DVec2;

@@ -98,8 +98,8 @@
 //! - **Parallelism** (see [`blockers`]): the BSP's top levels split the samples into up to 64
 //!   subtrees, each owned by one task that rasterizes its triangles in triangle order;
 //!   nodes above them are depth culled but never occlusion culled.
-//! - **Memory.** 32 bytes per id while the samples are transformed (one slot per pixel and
-//!   sub-sample, compacted in place to the visible ones), then 48 per visible sub-sample
+//! - **Memory.** 32 bytes per covered sub-sample while the samples are transformed (one slot
+//!   per sub-sample the G-buffers cover), then 48 per visible sub-sample
 //!   (coordinates, threshold depth, ids, and the coordinates again in two flat arrays for the
 //!   leaves' vectorised tests), 56 per BSP node, and for `afsm-ss` the `rate - 1` extra
 //!   G-buffers (12 bytes per pixel each) until the samples are transformed.

@@ -1,6 +1,15 @@
 //! Stage "transformation of samples" (Aila and Laine 2004, section 3): every visible
 //! sub-sample's surface point is moved to the light's image plane, keeping its exact `f64`
 //! image coordinates (no discretisation) and its light depth.
+//!
+//! The rows of pixels are transformed in parallel, each into its own slots of one vector,
+//! sized by a first count of the covered sub-samples per row, so that the samples lie packed
+//! in id order as they are written. One slot per pixel and a serial move of every row's
+//! samples to the front afterwards cost more: on `cage` (800x600, 325,840 samples, one thread
+//! pinned, load 5-7 on 2 cores, CPU time of the stage, three alternating runs of 7 frames) the
+//! stage took 11.5, 11.2 and 8.3 ms that way and 6.7, 6.9 and 7.5 ms with the count; on
+//! `bunny-plane` 8.4, 8.6, 8.7 against 8.2, 6.9, 7.0 ms. At two threads the move was also the
+//! stage's serial part.
 
 use super::shadow_offset;
 use crate::{pattern::SamplePattern, raster::NO_TRIANGLE};
@@ -56,10 +65,11 @@ pub fn threshold_depth(light: &Projector, xy: DVec2, z: f64, offset: f64) -> f64
 /// Background sub-samples, and points a spot light cannot project (nearer than its `near`
 /// plane, or behind it), give no sample. Samples come out in id order.
 ///
-/// Every row of pixels is transformed in parallel into its own slots of one vector, its
-/// samples packed at the front of them (no index is divided, no per-thread list is
-/// concatenated); the rows' samples are then moved together in row order. Every pass but that
-/// last move runs in parallel.
+/// Every row of pixels gets as many slots of one vector as it has covered sub-samples (a
+/// count of the G-buffers' triangles, in parallel), so the slots already lie in id order
+/// without gaps; the rows are then transformed in parallel, each into its own slots (no index
+/// is divided, no per-thread list is concatenated). A spot light drops the points it cannot
+/// project: only then are the rows' samples moved together, in row order.
 pub fn transform_samples(
     camera: &Projector,
     light: &Projector,
@@ -69,27 +79,44 @@ pub fn transform_samples(
 ) -> Vec<Sample> {
     let rate = pattern.rate() as usize;
     let pixels = surfaces.first().map_or(0, |s| s.triangle.len());
-    let w = width as usize;
-    let row_len = (w * rate).max(1);
+    let w = (width as usize).max(1);
+    let rows = pixels.div_ceil(w);
+    let row_pixels = |row: usize| row * w..((row + 1) * w).min(pixels);
+    let covered: Vec<usize> = (0..rows)
+        .into_par_iter()
+        .map(|row| {
+            let range = row_pixels(row);
+            let count = |s: &Surface<'_>| {
+                s.triangle[range.clone()].iter().filter(|&&t| t != NO_TRIANGLE).count()
+            };
+            surfaces.iter().map(count).sum()
+        })
+        .collect();
     let mut samples = Vec::new();
-    (0..pixels * rate)
+    (0..covered.iter().sum::<usize>())
         .into_par_iter()
         .with_min_len(4096)
         .map(|_| Sample::default())
         .collect_into_vec(&mut samples);
-    let counts: Vec<usize> = samples
-        .par_chunks_mut(row_len)
-        .enumerate()
+    let mut row_slots = Vec::with_capacity(rows);
+    let mut rest = samples.as_mut_slice();
+    for (row, &count) in covered.iter().enumerate() {
+        let (slots, tail) = std::mem::take(&mut rest).split_at_mut(count);
+        row_slots.push((row, slots));
+        rest = tail;
+    }
+    let counts: Vec<usize> = row_slots
+        .into_par_iter()
         .map(|(row, slots)| {
             let mut count = 0;
-            for x in 0..slots.len() / rate {
-                let pixel = row * w + x;
+            for pixel in row_pixels(row) {
+                let x = (pixel - row * w) as u32;
                 for (s, surface) in surfaces.iter().enumerate() {
                     let tri = surface.triangle[pixel];
                     if tri == NO_TRIANGLE {
                         continue;
                     }
-                    let ray = camera.ray(pattern.point(x as u32, row as u32, s));
+                    let ray = camera.ray(pattern.point(x, row as u32, s));
                     let position = ray.at(surface.depth[pixel]);
                     let Some((xy, z)) = light.project(position) else { continue };
                     let zt = threshold_depth(light, xy, z, shadow_offset(ray.origin, position));
@@ -103,14 +130,102 @@ pub fn transform_samples(
             count
         })
         .collect();
-    let mut end = 0;
-    for (row, &count) in counts.iter().enumerate() {
-        let start = row * row_len;
-        if start != end {
-            samples.copy_within(start..start + count, end);
+    if counts != covered {
+        let (mut start, mut end) = (0, 0);
+        for (&count, &slots) in counts.iter().zip(&covered) {
+            if start != end {
+                samples.copy_within(start..start + count, end);
+            }
+            start += slots;
+            end += count;
         }
-        end += count;
+        samples.truncate(end);
     }
-    samples.truncate(end);
     samples
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{pattern::PatternKind, raster::tests::pixel_projector};
+    use glam::DVec3;
+    use scenes::projection::look_basis;
+
+    /// A spot light at height 12 above the camera's image, looking down, `near` 0.5: surface
+    /// points above height 11.5 are dropped.
+    fn spot() -> Projector {
+        let (right, up, forward) = look_basis(-DVec3::Z, DVec3::Y);
+        Projector {
+            origin: DVec3::new(3.5, 2.5, 12.0),
+            right,
+            up,
+            forward,
+            kind: ProjectionKind::Perspective { tan_half_x: 0.8, tan_half_y: 0.8 },
+            near: 0.5,
+            width: 16.0,
+            height: 16.0,
+        }
+    }
+
+    /// Every sub-sample in id order, one at a time.
+    fn one_by_one(
+        camera: &Projector,
+        light: &Projector,
+        surfaces: &[Surface<'_>],
+        pattern: &SamplePattern,
+        width: usize,
+    ) -> Vec<Sample> {
+        let rate = surfaces.len();
+        let mut out = Vec::new();
+        for pixel in 0..surfaces[0].triangle.len() {
+            for (s, surface) in surfaces.iter().enumerate() {
+                let tri = surface.triangle[pixel];
+                if tri == NO_TRIANGLE {
+                    continue;
+                }
+                let (x, y) = ((pixel % width) as u32, (pixel / width) as u32);
+                let ray = camera.ray(pattern.point(x, y, s));
+                let position = ray.at(surface.depth[pixel]);
+                let Some((xy, z)) = light.project(position) else { continue };
+                let zt = threshold_depth(light, xy, z, shadow_offset(ray.origin, position));
+                if zt.is_finite() {
+                    let id = (pixel * rate + s) as u32;
+                    out.push(Sample { x: xy.x, y: xy.y, zt, id, tri });
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn rows_packed_in_parallel_equal_samples_one_by_one() {
+        let (w, h, rate) = (7usize, 5usize, 4u32);
+        let camera = pixel_projector(w as u32, h as u32);
+        let pattern = SamplePattern::new(rate, PatternKind::Grid).expect("grid");
+        // Background on a third of the sub-samples; camera depths 0..16 put surface points
+        // from height 10 down to -6, and depths below 0 up to height 13, beside the spot.
+        let tris: Vec<Vec<u32>> = (0..rate as usize)
+            .map(|s| {
+                (0..w * h)
+                    .map(|p| if (p * 7 + s * 3) % 3 == 0 { NO_TRIANGLE } else { (p + s) as u32 })
+                    .collect()
+            })
+            .collect();
+        let depths: Vec<Vec<f64>> = (0..rate as usize)
+            .map(|s| (0..w * h).map(|p| ((p * 5 + s * 11) % 19) as f64 - 3.0).collect())
+            .collect();
+        let surfaces: Vec<Surface<'_>> =
+            tris.iter().zip(&depths).map(|(triangle, depth)| Surface { triangle, depth }).collect();
+        for light in [pixel_projector(16, 16), spot()] {
+            let got = transform_samples(&camera, &light, &surfaces, &pattern, w as u32);
+            let want = one_by_one(&camera, &light, &surfaces, &pattern, w);
+            assert_eq!(got, want);
+            let covered = tris.iter().flatten().filter(|&&t| t != NO_TRIANGLE).count();
+            if light.is_perspective() {
+                assert!(want.len() < covered, "the spot drops some points");
+            } else {
+                assert_eq!(want.len(), covered);
+            }
+        }
+    }
 }
