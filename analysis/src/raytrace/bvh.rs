@@ -8,7 +8,9 @@
 //! the traversal's time. Here a node is the two children's boxes with their references (64
 //! bytes), the packet tests both children from their parent's line, and the nodes are laid
 //! out in depth-first order. The boxes are obvhs' `f32` boxes, copied, so the padding argument
-//! (parent module, "Precision") is unchanged.
+//! (parent module, "Precision") is unchanged. A cluster built in parts has one such tree per
+//! part; [`join`] puts them under the nodes of the halvings that made the parts (a parent's
+//! boxes are unions of `f32` boxes, so they hold what they held in the parts).
 
 use super::memory::{AllocationError, Allocator};
 use obvhs::{aabb::Aabb, bvh2::Bvh2};
@@ -79,6 +81,83 @@ pub(crate) fn convert(bvh: &Bvh2, alloc: &Allocator) -> Result<Vec<Node>, Alloca
             (node.boxes[c], node.child[c], node.count[c]) = (Bounds::from(&n.aabb), child, count);
         }
         todo.extend(inner_children.into_iter().rev().flatten());
+    }
+    Ok(nodes)
+}
+
+/// A subtree of a BVH built in parts ([`join`]): a node that splits two subtrees, or a part.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Piece {
+    Split(usize),
+    Part(usize),
+}
+
+/// The smallest box holding `a` and `b`.
+fn union(a: &Bounds, b: &Bounds) -> Bounds {
+    let f = |k: usize| (a.lo[k].min(b.lo[k]), a.hi[k].max(b.hi[k]));
+    let (x, y, z) = (f(0), f(1), f(2));
+    Bounds { lo: [x.0, y.0, z.0], hi: [x.1, y.1, z.1] }
+}
+
+/// The trees of `parts` (each [`convert`]ed over its own slots, numbered from 0; part `p` has
+/// `slots[p]` of them, following those of the parts before it) joined under the nodes
+/// `splits` into one tree: split `s` (its children, splits or parts) becomes node `s`, split 0
+/// the root (children of a split come after it), then each part's nodes follow with their
+/// references moved by the part's offsets. A part whose tree is a single leaf is referenced
+/// as a leaf by its split. With no split, the single part's tree is returned as it is.
+pub(crate) fn join(
+    splits: &[[Piece; 2]],
+    mut parts: Vec<Vec<Node>>,
+    slots: &[usize],
+    alloc: &Allocator,
+) -> Result<Vec<Node>, AllocationError> {
+    if splits.is_empty() {
+        return Ok(parts.pop().unwrap_or_default());
+    }
+    let is_leaf = |part: &[Node]| part.first().is_none_or(|n| n.count[1] == EMPTY);
+    let inner: usize = parts.iter().filter(|p| !is_leaf(p)).map(Vec::len).sum();
+    let mut nodes: Vec<Node> = alloc.vec(splits.len() + inner, "the BVH's nodes")?;
+    let empty = Bounds { lo: [0.0; 3], hi: [0.0; 3] };
+    nodes.resize(splits.len(), Node { boxes: [empty; 2], child: [0; 2], count: [0; 2] });
+    // Each part's reference from its split: (box, child, count) as in a `Node`.
+    let mut refs = Vec::with_capacity(parts.len());
+    let mut first_slot = 0u32;
+    for (part, &len) in parts.iter().zip(slots) {
+        let Some(root) = part.first() else {
+            refs.push((empty, 0, EMPTY));
+            continue;
+        };
+        if is_leaf(part) {
+            refs.push((root.boxes[0], root.child[0] + first_slot, root.count[0]));
+        } else {
+            let offset = nodes.len() as u32;
+            refs.push((union(&root.boxes[0], &root.boxes[1]), offset, 0));
+            nodes.extend(part.iter().map(|n| {
+                let mut n = *n;
+                for c in 0..2 {
+                    if n.count[c] == 0 {
+                        n.child[c] += offset;
+                    } else if n.count[c] != EMPTY {
+                        n.child[c] += first_slot;
+                    }
+                }
+                n
+            }));
+        }
+        first_slot += len as u32;
+    }
+    // The splits from the last (whose children come after it) to the root.
+    let mut boxes = vec![empty; splits.len()];
+    for s in (0..splits.len()).rev() {
+        let mut node = nodes[s];
+        for (c, piece) in splits[s].iter().enumerate() {
+            (node.boxes[c], node.child[c], node.count[c]) = match *piece {
+                Piece::Split(k) => (boxes[k], k as u32, 0),
+                Piece::Part(p) => refs[p],
+            };
+        }
+        boxes[s] = union(&node.boxes[0], &node.boxes[1]);
+        nodes[s] = node;
     }
     Ok(nodes)
 }

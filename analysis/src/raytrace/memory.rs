@@ -18,8 +18,9 @@ pub(crate) const OBVHS_BYTES_PER_TRIANGLE: u64 = 200;
 
 /// Bytes per triangle of the tracer's own arrays kept beside the BVH: the `f64` corners (72),
 /// the triangle id (4) and the light it lets through (8) per slot, plus the build's temporary
-/// triangle list, radii and `f32` boxes (4 + 8 + 8 + 32).
-const OWN_BYTES_PER_TRIANGLE: u64 = 136;
+/// triangle list, radii and `f32` boxes (4 + 8 + 8 + 32), and, for a cluster built in parts,
+/// the order of its triangles and each part's copy of its boxes (4 + 32).
+const OWN_BYTES_PER_TRIANGLE: u64 = 172;
 
 /// Bytes per sub-sample of the per-sample buffers: [`super::RayTrace::sample_image`] keeps a
 /// triangle id and a light value (12 bytes) per sub-sample twice (the rows and the image);

@@ -48,26 +48,37 @@
 //! Hierarchies" (ACM TOG 26(1), 2007) and Overbeck, Ramamoorthi and Mark, "Large Ray Packets
 //! for Real-Time Whitted Ray Tracing" (IRT 2008).
 //!
-//! obvhs builds the trees (PLOC) but its traversals cannot be driven by packets: they take one
-//! ray, keep their stack and node test to themselves (the CWBVH's sorts children by the ray's
-//! octant and ignores boxes left before frame distance 1e-4), and call back per primitive
-//! only. The traversal is therefore our own, over obvhs' binary tree converted to nodes that
-//! hold both children's boxes (`bvh`: half the node loads, a quarter of the traversal's time on
-//! bunny-plane with obvhs' own nodes); its per-ray slab test is obvhs' own, lane by lane.
+//! obvhs builds the trees (PLOC; a cluster of more than 2^15 triangles in parts, halved at
+//! median box centres, built in parallel and joined: `accel`) but its traversals cannot be
+//! driven by packets: they take one ray, keep their stack and node test to themselves (the
+//! CWBVH's sorts children by the ray's octant and ignores boxes left before frame distance
+//! 1e-4), and call back per primitive only. The traversal is therefore our own, over obvhs'
+//! binary tree converted to nodes that hold both children's boxes (`bvh`: half the node loads,
+//! a quarter of the traversal's time on bunny-plane with obvhs' own nodes); its per-ray slab
+//! test is obvhs' own, lane by lane.
 //!
-//! Measured against Embree 3's per-ray API (`embree-side-by-side`, BVH build + camera + shadow
-//! rays on both sides, one thread, load 3-5 on two shared cores): at rate 64 (320 x 240) our
-//! time is 0.9 of Embree's on bunny-plane and cage (2.0 before the packets); at rate 1 (800 x
-//! 600) it is 1.25 (2.6 before). What bounds rate 1, from the profile of bunny-plane: the
-//! per-ray set-up (camera ray, `f64` ray set-up, the `f64` clip to the cluster, the packet's
-//! `f32` rays) is about half of our time, the `f64` triangle tests a fifth, the shared node
-//! tests a quarter, the build a twentieth. Pixel centres 1/800 apart share fewer nodes than a
-//! pixel's sub-samples, so the shared tests save less there, and the `f64` set-up and tests,
-//! which the exact decisions need, cost more per ray than Embree's `f32` ones. On random-1m
-//! (a million scattered triangles) the ratio is 1.5 at rate 64 (2.2 before) and 1.7-2.0 at
-//! rate 1 (1.9 before): there the node tests of the packets are most of our time (the
-//! boxes of random triangles overlap, and a million nodes do not stay in cache), and obvhs'
-//! fastest build gives a looser tree than Embree's.
+//! Measured against Embree 3's per-ray API (`embree-side-by-side --threads 1`, pinned to one
+//! core, BVH build + camera + shadow rays on both sides, wall-clock medians, ours / Embree;
+//! load 5.5 on two shared cores, so the process CPU times beside are the steadier figures):
+//! at rate 64 (320 x 240) 0.74 on bunny-plane and 0.63 on cage; at rate 1 (800 x 600) 1.09 on
+//! bunny-plane (CPU 89 / 82 ms) and 1.27 on cage (CPU 47 / 44 ms). What bounds rate 1, from
+//! the profile of bunny-plane: the per-ray set-up (camera ray, `f64` ray set-up, the `f64`
+//! clip to the cluster, the packet's `f32` rays) is about half of our time, the `f64` triangle
+//! tests a fifth, the shared node tests a quarter, the build a twentieth. Pixel centres 1/800
+//! apart share fewer nodes than a pixel's sub-samples, so the shared tests save less there,
+//! and the `f64` set-up and tests, which the exact decisions need, cost more per ray than
+//! Embree's `f32` ones. Packets of 64 or 128 rays (tiles of 8 x 8 or 16 x 8 pixel centres)
+//! instead of 256 made random-1m's rate 1 tracing slower (1237-1297 and 1147-1176 ms of CPU
+//! against 1049-1111, load 5-6) and changed bunny-plane and cage within the noise. On
+//! random-1m (a million scattered triangles, 1024 x 768) the ratio is 1.22 at rate 1 (CPU 1535
+//! / 1314 ms) and 1.23 at rate 64 (CPU 4457 / 3687 ms), from 1.32 and 1.39 (CPU 1838 / 1425
+//! and 5693 / 4060) before the BVH was built in parts. There (`perf`, `render --method
+//! raytrace --rate 1`, 2 threads) the packets' node tests are 39 % of the samples (the boxes
+//! of random triangles overlap, and a million nodes do not stay in cache), the `f64` triangle
+//! tests 4 %, and the build about 18 %: obvhs' own work (PLOC, sort, leaf collapse) 7 %, ours
+//! (clusters, padded boxes, the triangles' copies in slot order, node conversion) 10 %.
+//! Computing each triangle's box once for the clusters' seven passes instead of gathering its
+//! corners at each saved 0-40 ms of 600 (within the noise) and was left out.
 //!
 //! Hot path: the packets' buffers are a band's, reused from packet to packet; no allocation
 //! per ray or packet; one `f64` clip per ray and cluster, then `f32` group tests and `f64`
