@@ -395,6 +395,22 @@ pub(crate) mod tests {
         }
     }
 
+    /// A spot light at `(x, y, 12)` looking down -z, a 16 x 16 image, `near` 0.5: the light of
+    /// the alias-free map's unit tests (surface points above height 11.5 are not projected).
+    pub(crate) fn spot_above(x: f64, y: f64) -> Projector {
+        let (right, up, forward) = look_basis(-DVec3::Z, DVec3::Y);
+        Projector {
+            origin: DVec3::new(x, y, 12.0),
+            right,
+            up,
+            forward,
+            kind: ProjectionKind::Perspective { tan_half_x: 0.8, tan_half_y: 0.8 },
+            near: 0.5,
+            width: 16.0,
+            height: 16.0,
+        }
+    }
+
     /// Geometry from 2D triangles given in pixel coordinates (y down), at z = 0.
     fn flat(tris: &[[[f64; 2]; 3]], h: u32) -> Geometry {
         let mut g = Geometry::default();

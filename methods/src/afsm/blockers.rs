@@ -700,23 +700,15 @@ pub fn rasterize_blockers<S: Shade>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::raster::{tests::pixel_projector, NO_TRIANGLE};
+    use crate::raster::{
+        tests::{pixel_projector, spot_above},
+        NO_TRIANGLE,
+    };
     use proptest::prelude::*;
-    use scenes::projection::look_basis;
 
     /// A spot light above the square `[0, 16]^2` at height 12, looking straight down.
     fn spot() -> Projector {
-        let (right, up, forward) = look_basis(-DVec3::Z, DVec3::Y);
-        Projector {
-            origin: DVec3::new(8.0, 8.0, 12.0),
-            right,
-            up,
-            forward,
-            kind: ProjectionKind::Perspective { tan_half_x: 0.8, tan_half_y: 0.8 },
-            near: 0.5,
-            width: 16.0,
-            height: 16.0,
-        }
+        spot_above(8.0, 8.0)
     }
 
     fn geometry(tris: &[[(f64, f64, f64); 3]]) -> Geometry {

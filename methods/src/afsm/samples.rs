@@ -147,24 +147,15 @@ pub fn transform_samples(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{pattern::PatternKind, raster::tests::pixel_projector};
-    use glam::DVec3;
-    use scenes::projection::look_basis;
+    use crate::{
+        pattern::PatternKind,
+        raster::tests::{pixel_projector, spot_above},
+    };
 
     /// A spot light at height 12 above the camera's image, looking down, `near` 0.5: surface
     /// points above height 11.5 are dropped.
     fn spot() -> Projector {
-        let (right, up, forward) = look_basis(-DVec3::Z, DVec3::Y);
-        Projector {
-            origin: DVec3::new(3.5, 2.5, 12.0),
-            right,
-            up,
-            forward,
-            kind: ProjectionKind::Perspective { tan_half_x: 0.8, tan_half_y: 0.8 },
-            near: 0.5,
-            width: 16.0,
-            height: 16.0,
-        }
+        spot_above(3.5, 2.5)
     }
 
     /// Every sub-sample in id order, one at a time.
