@@ -136,17 +136,15 @@ impl CasterGrid {
     pub fn new(frame: &Frame<'_>, receivers: &[u32]) -> Self {
         let space = Space::new(&frame.scene.light);
         let g = &frame.geometry;
-        let mut region = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
-        for &r in receivers {
-            if let Some((b, _)) = space.bounds(&g.corners(r as usize)) {
-                region = [
-                    region[0].min(b[0]),
-                    region[1].min(b[1]),
-                    region[2].max(b[2]),
-                    region[3].max(b[3]),
-                ];
-            }
-        }
+        let empty = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+        let join = |a: [f64; 4], b: [f64; 4]| {
+            [a[0].min(b[0]), a[1].min(b[1]), a[2].max(b[2]), a[3].max(b[3])]
+        };
+        // Minima and maxima: the same region in any order of reduction.
+        let region = receivers
+            .par_iter()
+            .filter_map(|&r| space.bounds(&g.corners(r as usize)).map(|(b, _)| b))
+            .reduce(|| empty, join);
         let all: Vec<u32> = (0..g.len() as u32).filter(|&t| frame.is_caster(t as usize)).collect();
         let boxes: Vec<Option<([f64; 4], [f64; 2])>> =
             all.par_iter().map(|&t| space.bounds(&g.corners(t as usize))).collect();
@@ -194,23 +192,22 @@ impl CasterGrid {
         let unbounded = [f64::NEG_INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::INFINITY];
         let mut caster_boxes = vec![unbounded; g.len()];
         let max_span = MAX_SPAN.max(nx * ny / 16);
-        let mut spans = Vec::with_capacity(all.len());
-        for (&t, b) in all.iter().zip(&boxes) {
-            let span = match b {
+        let spans: Vec<Option<Option<[usize; 4]>>> = boxes
+            .par_iter()
+            .map(|b| match b {
                 None => Some(None),
-                Some((b, z)) => {
-                    near[t as usize] = z[0];
-                    caster_boxes[t as usize] = *b;
-                    if !valid {
-                        Some(None)
-                    } else {
-                        grid.cell_range(b).map(|r| {
-                            let n = (r[2] - r[0] + 1) * (r[3] - r[1] + 1);
-                            (n <= max_span).then_some(r)
-                        })
-                    }
-                }
-            };
+                Some(_) if !valid => Some(None),
+                Some((b, _)) => grid.cell_range(b).map(|r| {
+                    let n = (r[2] - r[0] + 1) * (r[3] - r[1] + 1);
+                    (n <= max_span).then_some(r)
+                }),
+            })
+            .collect();
+        for ((&t, b), &span) in all.iter().zip(&boxes).zip(&spans) {
+            if let Some((b, z)) = b {
+                near[t as usize] = z[0];
+                caster_boxes[t as usize] = *b;
+            }
             match span {
                 // Outside the receivers' region: it shadows no receiver.
                 None => {}
@@ -223,7 +220,6 @@ impl CasterGrid {
                     }
                 }
             }
-            spans.push(span);
         }
         for c in 0..nx * ny {
             grid.offsets[c + 1] += grid.offsets[c];
