@@ -109,11 +109,7 @@ pub(crate) fn split(poly: &Poly, axis: usize, c: f64, lo: &mut Poly, hi: &mut Po
 #[inline]
 pub(crate) fn keep(poly: &Poly, axis: usize, c: f64, keep_above: bool) -> Poly {
     let mut out = Poly::new();
-    if keep_above {
-        split_into(poly, axis, c, None, Some(&mut out));
-    } else {
-        split_into(poly, axis, c, Some(&mut out), None);
-    }
+    keep_into(poly, axis, c, keep_above, &mut out);
     out
 }
 
@@ -229,63 +225,37 @@ pub(crate) fn for_each_pixel(
     if ymax.is_nan() || ymin.is_nan() || ymax <= r0 as f64 || ymin >= r1 as f64 {
         return;
     }
-    // The polygon left below the rows swept so far, a row strip and a spare, rotated
-    // rather than copied.
+    // The polygon left below the rows swept so far, a row strip and a spare: the references
+    // rotate, the polygons are not copied.
     let mut bufs = [Poly::new(), Poly::new(), Poly::new()];
-    let (mut cur, row, mut spare) = (0, 1, 2);
-    bufs[spare].assign(poly);
+    let [cur, row, spare] = &mut bufs;
+    let (mut cur, mut spare) = (cur, spare);
     if ymin < r0 as f64 {
-        split_among(&mut bufs, spare, 1, r0 as f64, row, cur);
+        split(poly, 1, r0 as f64, row, cur);
     } else {
-        std::mem::swap(&mut cur, &mut spare);
+        cur.assign(poly);
     }
     let j_start = (ymin.floor().max(r0 as f64)) as usize;
     let j_end = (ymax.ceil().max(0.0) as usize).min(r1);
     let mut columns = [Poly::new(), Poly::new(), Poly::new()];
     for j in j_start..j_end {
-        if bufs[cur].n < 3 {
+        if cur.n < 3 {
             break;
         }
         if ymax > (j + 1) as f64 {
-            split_among(&mut bufs, cur, 1, (j + 1) as f64, row, spare);
+            split(cur, 1, (j + 1) as f64, row, spare);
             std::mem::swap(&mut cur, &mut spare);
-            sweep_row(&bufs[row], j, width, &mut columns, &mut f);
+            sweep_row(row, j, width, &mut columns, &mut f);
         } else {
-            sweep_row(&bufs[cur], j, width, &mut columns, &mut f);
-            bufs[cur].n = 0;
-        }
-    }
-}
-
-/// [`split`] of `bufs[src]` into `bufs[lo]` and `bufs[hi]` (three different buffers).
-#[inline(always)]
-fn split_among(bufs: &mut [Poly; 3], src: usize, axis: usize, c: f64, lo: usize, hi: usize) {
-    bufs[lo].n = 0;
-    bufs[hi].n = 0;
-    let n = bufs[src].n;
-    for k in 0..n {
-        let p = bufs[src].v[k];
-        let q = bufs[src].v[if k + 1 == n { 0 } else { k + 1 }];
-        let dp = p[axis] - c;
-        let dq = q[axis] - c;
-        if dp <= 0.0 {
-            bufs[lo].push(p);
-        }
-        if dp >= 0.0 {
-            bufs[hi].push(p);
-        }
-        if (dp < 0.0 && dq > 0.0) || (dp > 0.0 && dq < 0.0) {
-            let t = dp / (dp - dq);
-            let mut x = [p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])];
-            x[axis] = c;
-            bufs[lo].push(x);
-            bufs[hi].push(x);
+            sweep_row(cur, j, width, &mut columns, &mut f);
+            cur.n = 0;
         }
     }
 }
 
 /// Calls `f(i, j, area)` for every column `i` the convex polygon `row` (inside the row strip
-/// at `y = j`) overlaps, splitting it at every column line (into `bufs`).
+/// at `y = j`) overlaps, splitting it at every column line (into `bufs`, whose references
+/// rotate as in [`for_each_pixel`]).
 #[inline]
 fn sweep_row(
     row: &Poly,
@@ -302,26 +272,26 @@ fn sweep_row(
         return;
     }
     let fj = j as f64;
-    let (mut cur, piece, mut spare) = (0, 1, 2);
-    bufs[spare].assign(row);
+    let [cur, piece, spare] = bufs;
+    let (mut cur, mut spare) = (cur, spare);
     if xmin < 0.0 {
-        split_among(bufs, spare, 0, 0.0, piece, cur);
+        split(row, 0, 0.0, piece, cur);
     } else {
-        std::mem::swap(&mut cur, &mut spare);
+        cur.assign(row);
     }
     let i_start = xmin.floor().max(0.0) as usize;
     let i_end = (xmax.ceil() as usize).min(width);
     for i in i_start..i_end {
-        if bufs[cur].n < 3 {
+        if cur.n < 3 {
             break;
         }
         let fi = i as f64;
         if xmax > fi + 1.0 {
-            split_among(bufs, cur, 0, fi + 1.0, piece, spare);
-            f(i, j, 0.5 * bufs[piece].area2_rel(fi, fj));
+            split(cur, 0, fi + 1.0, piece, spare);
+            f(i, j, 0.5 * piece.area2_rel(fi, fj));
             std::mem::swap(&mut cur, &mut spare);
         } else {
-            f(i, j, 0.5 * bufs[cur].area2_rel(fi, fj));
+            f(i, j, 0.5 * cur.area2_rel(fi, fj));
             break;
         }
     }
