@@ -268,28 +268,21 @@ impl Screen {
     fn finish(&self, recs: [Rec; 3], rect: [f64; 4]) -> Option<(Poly, f64)> {
         let [x0, x1, y0, y1] = rect;
         let m = FRAME_MARGIN;
-        let planes: [Rec; 7] = [
-            [0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
-            [0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
-            [0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
-            [1.0, 0.0, m - x0, 0.0, 0.0, 0.0],
-            [-1.0, 0.0, x1 + m, 0.0, 0.0, 0.0],
-            [0.0, 1.0, m - y0, 0.0, 0.0, 0.0],
-            [0.0, -1.0, y1 + m, 0.0, 0.0, 0.0],
-        ];
-        let eval = |pl: &Rec, r: &Rec| -> f64 { pl.iter().zip(r).map(|(a, b)| a * b).sum() };
-        // The planes' values at the three vertices, written out: each plane has at most three
-        // non-zero coefficients, and the zero terms of `eval`'s sum add nothing (`x + 0 * y`
-        // is `x` for finite `y`).
-        let values: [[f64; 3]; 7] = [
-            recs.map(|r| r[3]),
-            recs.map(|r| r[4]),
-            recs.map(|r| r[5]),
-            recs.map(|r| r[0] + (m - x0) * r[2]),
-            recs.map(|r| -r[0] + (x1 + m) * r[2]),
-            recs.map(|r| r[1] + (m - y0) * r[2]),
-            recs.map(|r| -r[1] + (y1 + m) * r[2]),
-        ];
+        // The seven clip planes' values at a clip-space vertex: `f0, f1, f2`, then the four
+        // sides of the rectangle widened by the margin (each plane has at most three non-zero
+        // coefficients; written out, not as six-term dot products).
+        let value = |plane: usize, r: &Rec| -> f64 {
+            match plane {
+                0 => r[3],
+                1 => r[4],
+                2 => r[5],
+                3 => r[0] + (m - x0) * r[2],
+                4 => -r[0] + (x1 + m) * r[2],
+                5 => r[1] + (m - y0) * r[2],
+                _ => -r[1] + (y1 + m) * r[2],
+            }
+        };
+        let values: [[f64; 3]; 7] = std::array::from_fn(|plane| recs.map(|r| value(plane, &r)));
         // Trivial reject (culls everything whose shadow misses the rectangle) and accept; only the
         // planes that cut the triangle clip it (a plane every vertex is inside of leaves a
         // polygon as it is).
@@ -311,7 +304,7 @@ impl Screen {
             bufs = [[[0.0; 6]; HCAP]; 2];
             bufs[0][..3].copy_from_slice(&recs);
             let mut cur = 0;
-            for pl in planes.iter().zip(cutting).filter(|(_, cuts)| *cuts).map(|(pl, _)| pl) {
+            for plane in (0..7).filter(|&plane| cutting[plane]) {
                 let (first, second) = bufs.split_at_mut(1);
                 let (a, b) = if cur == 0 {
                     (&first[0], &mut second[0])
@@ -322,7 +315,7 @@ impl Screen {
                 for k in 0..na {
                     let p = a[k];
                     let q = a[if k + 1 == na { 0 } else { k + 1 }];
-                    let (dp, dq) = (eval(pl, &p), eval(pl, &q));
+                    let (dp, dq) = (value(plane, &p), value(plane, &q));
                     if dp >= 0.0 && nb < HCAP {
                         b[nb] = p;
                         nb += 1;
