@@ -56,6 +56,38 @@ pub fn threshold_depth(light: &Projector, xy: DVec2, z: f64, offset: f64) -> f64
     }
 }
 
+/// What makes one sub-sample's [`Sample`]: the camera, the light and the pattern.
+struct SampleAt<'a> {
+    camera: &'a Projector,
+    light: &'a Projector,
+    pattern: &'a SamplePattern,
+}
+
+impl SampleAt<'_> {
+    /// The sample of sub-sample `s` of pixel `pixel` (at `(x, y)`) on `surface`: its surface
+    /// point `camera.ray(point).at(depth)`, moved to the light's image with its threshold
+    /// depth; `None` for a background sub-sample and a point the light cannot project.
+    #[inline]
+    fn sample(
+        &self,
+        surface: &Surface<'_>,
+        pixel: usize,
+        (x, y): (u32, u32),
+        s: usize,
+    ) -> Option<Sample> {
+        let tri = surface.triangle[pixel];
+        if tri == NO_TRIANGLE {
+            return None;
+        }
+        let ray = self.camera.ray(self.pattern.point(x, y, s));
+        let position = ray.at(surface.depth[pixel]);
+        let (xy, z) = self.light.project(position)?;
+        let zt = threshold_depth(self.light, xy, z, shadow_offset(ray.origin, position));
+        let id = (pixel * self.pattern.rate() as usize + s) as u32;
+        zt.is_finite().then_some(Sample { x: xy.x, y: xy.y, zt, id, tri })
+    }
+}
+
 /// Transforms the visible sub-samples to the light's image plane.
 ///
 /// `surfaces[s]` is the camera's nearest surface at sub-sample `s` of `pattern` (for the
@@ -77,7 +109,7 @@ pub fn transform_samples(
     pattern: &SamplePattern,
     width: u32,
 ) -> Vec<Sample> {
-    let rate = pattern.rate() as usize;
+    let at = SampleAt { camera, light, pattern };
     let pixels = surfaces.first().map_or(0, |s| s.triangle.len());
     let w = (width as usize).max(1);
     let rows = pixels.div_ceil(w);
@@ -112,17 +144,8 @@ pub fn transform_samples(
             for pixel in row_pixels(row) {
                 let x = (pixel - row * w) as u32;
                 for (s, surface) in surfaces.iter().enumerate() {
-                    let tri = surface.triangle[pixel];
-                    if tri == NO_TRIANGLE {
-                        continue;
-                    }
-                    let ray = camera.ray(pattern.point(x, row as u32, s));
-                    let position = ray.at(surface.depth[pixel]);
-                    let Some((xy, z)) = light.project(position) else { continue };
-                    let zt = threshold_depth(light, xy, z, shadow_offset(ray.origin, position));
-                    if zt.is_finite() {
-                        let id = (pixel * rate + s) as u32;
-                        slots[count] = Sample { x: xy.x, y: xy.y, zt, id, tri };
+                    if let Some(sample) = at.sample(surface, pixel, (x, row as u32), s) {
+                        slots[count] = sample;
                         count += 1;
                     }
                 }
@@ -166,23 +189,12 @@ mod tests {
         pattern: &SamplePattern,
         width: usize,
     ) -> Vec<Sample> {
-        let rate = surfaces.len();
+        let at = SampleAt { camera, light, pattern };
         let mut out = Vec::new();
         for pixel in 0..surfaces[0].triangle.len() {
             for (s, surface) in surfaces.iter().enumerate() {
-                let tri = surface.triangle[pixel];
-                if tri == NO_TRIANGLE {
-                    continue;
-                }
-                let (x, y) = ((pixel % width) as u32, (pixel / width) as u32);
-                let ray = camera.ray(pattern.point(x, y, s));
-                let position = ray.at(surface.depth[pixel]);
-                let Some((xy, z)) = light.project(position) else { continue };
-                let zt = threshold_depth(light, xy, z, shadow_offset(ray.origin, position));
-                if zt.is_finite() {
-                    let id = (pixel * rate + s) as u32;
-                    out.push(Sample { x: xy.x, y: xy.y, zt, id, tri });
-                }
+                let xy = ((pixel % width) as u32, (pixel / width) as u32);
+                out.extend(at.sample(surface, pixel, xy, s));
             }
         }
         out
