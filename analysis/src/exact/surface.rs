@@ -20,7 +20,7 @@
 //! Receivers are processed in parallel, results kept in receiver order, so the output does not
 //! depend on the thread count.
 
-use super::casters::CasterGrid;
+use super::casters::{Candidates, CasterGrid};
 use super::clip::{self, Poly};
 use super::coverage::{self, Work};
 use super::shadow::{Screen, Setup};
@@ -83,7 +83,7 @@ pub(crate) fn shadows(
 /// Buffers a worker reuses from receiver to receiver.
 #[derive(Default)]
 struct Scratch {
-    candidates: Vec<u32>,
+    candidates: Candidates,
     pieces: ScreenPolygons,
     coverage: coverage::Scratch,
 }
@@ -124,7 +124,7 @@ fn receiver(
     pieces.points.clear();
     pieces.ranges.clear();
     let mut full = false;
-    for &c in candidates.iter() {
+    for &c in candidates.casters.iter() {
         if c == r {
             continue;
         }
