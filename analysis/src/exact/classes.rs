@@ -192,35 +192,41 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
         .map(|band| {
             let r0 = band * clip::BAND;
             let r1 = (r0 + clip::BAND).min(height);
+            let count = (r1 - r0) * width;
             let mut entries: Vec<(u32, Overlap)> = Vec::new();
+            // How many overlaps each pixel has, at `starts[local + 1]`.
+            let mut starts = vec![0u32; count + 1];
             for &k in &items[offsets[band]..offsets[band + 1]] {
                 let poly = projected.poly(k as usize);
                 // Every overlap is kept, however small: the rule counts those above
                 // `MIN_OVERLAP`, the edge pixels' rays may meet any.
                 clip::for_each_pixel(&poly, r0, r1, width, |i, j, area| {
-                    let local = ((j - r0) * width + i) as u32;
-                    entries.push((local, Overlap { contour: k, area }));
+                    let local = (j - r0) * width + i;
+                    starts[local + 1] += 1;
+                    entries.push((local as u32, Overlap { contour: k, area }));
                 });
             }
-            // The keys are unique (one entry per pixel and contour): an unstable sort gives
-            // the same order.
-            entries.sort_unstable_by_key(|e| (e.0, e.1.contour));
-            let count = (r1 - r0) * width;
+            // The overlaps grouped by pixel (a counting sort): the band's contours come in
+            // ascending order, so each pixel's stay in contour order.
+            for p in 0..count {
+                starts[p + 1] += starts[p];
+            }
+            let mut fill = starts.clone();
+            let mut by_pixel = vec![Overlap { contour: 0, area: 0.0 }; entries.len()];
+            for &(local, o) in &entries {
+                by_pixel[fill[local as usize] as usize] = o;
+                fill[local as usize] += 1;
+            }
+            drop(entries);
             let mut class = vec![PixelClass::Uncovered; count];
             let (mut counts, mut tiles) = (vec![0u32; count], Vec::new());
             let mut group: Vec<Overlap> = Vec::new();
             let mut scratch = Scratch::default();
-            let (mut at, mut overlaps, mut edge_overlaps) = (0, 0, Vec::new());
-            while at < entries.len() {
-                let local = entries[at].0 as usize;
-                let first = at;
+            let (mut overlaps, mut edge_overlaps) = (0, Vec::new());
+            for local in 0..count {
+                let all = &by_pixel[starts[local] as usize..starts[local + 1] as usize];
                 group.clear();
-                while at < entries.len() && entries[at].0 as usize == local {
-                    if entries[at].1.area > MIN_OVERLAP {
-                        group.push(entries[at].1);
-                    }
-                    at += 1;
-                }
+                group.extend(all.iter().filter(|o| o.area > MIN_OVERLAP));
                 if group.is_empty() {
                     continue;
                 }
@@ -231,9 +237,7 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
                 counts[local] = (tiles.len() - before) as u32;
                 if class[local] == PixelClass::Edge {
                     let k = (j * width + i) as u32;
-                    let seen =
-                        entries[first..at].iter().map(|e| (k, projected.tri[e.1.contour as usize]));
-                    edge_overlaps.extend(seen);
+                    edge_overlaps.extend(all.iter().map(|o| (k, projected.tri[o.contour as usize])));
                 }
             }
             Band { class, counts, tiles, overlaps, edge_overlaps }
