@@ -237,7 +237,8 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
                 counts[local] = (tiles.len() - before) as u32;
                 if class[local] == PixelClass::Edge {
                     let k = (j * width + i) as u32;
-                    edge_overlaps.extend(all.iter().map(|o| (k, projected.tri[o.contour as usize])));
+                    edge_overlaps
+                        .extend(all.iter().map(|o| (k, projected.tri[o.contour as usize])));
                 }
             }
             Band { class, counts, tiles, overlaps, edge_overlaps }

@@ -428,7 +428,7 @@ const EDGE_SUBSET_RATIO: usize = 8;
 /// all four meet it in front of the camera; otherwise the whole triangle is asked for.
 fn edge_casters(
     frame: &Frame<'_>,
-    grid: &casters::CasterGrid,
+    grid: &casters::CasterGrid<'_>,
     edge_overlaps: &[(u32, u32)],
 ) -> Vec<bool> {
     use rayon::prelude::*;

@@ -49,7 +49,7 @@ pub(crate) struct SurfaceShadows {
 /// wanted at (`wanted(r, k)`).
 pub(crate) fn shadows(
     frame: &Frame<'_>,
-    grid: &CasterGrid,
+    grid: &CasterGrid<'_>,
     receivers: &[u32],
     polygon: impl Fn(u32) -> Option<Poly> + Sync,
     wanted: impl Fn(u32, usize) -> bool + Sync,
@@ -92,7 +92,7 @@ struct Scratch {
 struct Shared<'a> {
     frame: &'a Frame<'a>,
     screen: Screen,
-    grid: &'a CasterGrid,
+    grid: &'a CasterGrid<'a>,
 }
 
 /// The shadow on receiver triangle `r` (screen polygon `own`), over the pixels `k` with
