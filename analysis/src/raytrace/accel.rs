@@ -294,36 +294,37 @@ fn split(
     tris: &[u32],
     alloc: &Allocator,
 ) -> Result<(BvhFrame, Vec<u32>, Vec<u32>), AllocationError> {
-    let boxes = || tris.iter().map(|&t| corners_box(geometry.corners(t as usize)));
+    // The boxes once, in parallel; every pass below reads them in order.
+    let mut boxes: Vec<(DVec3, DVec3)> = alloc.vec(tris.len(), "the BVH frame's boxes")?;
+    boxes.par_extend(tris.par_iter().map(|&t| corners_box(geometry.corners(t as usize))));
     let mut values: Vec<f64> = alloc.vec(tris.len(), "the BVH frame's medians")?;
-    let middle = |v: &mut Vec<f64>, it: &mut dyn Iterator<Item = f64>| {
-        v.clear();
-        v.extend(it);
-        select_middle(v)
+    let mut middle = |f: &(dyn Fn(&(DVec3, DVec3)) -> f64 + Sync)| {
+        values.clear();
+        values.par_extend(boxes.par_iter().map(f));
+        select_middle(&mut values)
     };
     let mut centre = DVec3::ZERO;
     for k in 0..3 {
-        centre[k] = middle(&mut values, &mut boxes().map(|(lo, hi)| 0.5 * lo[k] + 0.5 * hi[k]));
+        centre[k] = middle(&|(lo, hi)| 0.5 * lo[k] + 0.5 * hi[k]);
     }
-    let typical = middle(&mut values, &mut boxes().map(|(lo, hi)| (hi - lo).max_element()));
-    let radius = |(lo, hi): (DVec3, DVec3)| (lo - centre).abs().max(hi - centre).max_element();
-    let median_radius = middle(&mut values, &mut boxes().map(radius));
+    let typical = middle(&|(lo, hi)| (*hi - *lo).max_element());
+    let radius = |&(lo, hi): &(DVec3, DVec3)| (lo - centre).abs().max(hi - centre).max_element();
+    let median_radius = middle(&radius);
     drop(values);
     let limit = OUTLIER_FACTOR * (median_radius + typical);
-    let count = boxes().filter(|&b| radius(b) <= limit).count();
+    let count = boxes.par_iter().filter(|b| radius(b) <= limit).count();
     let mut main = alloc.vec(count, "the BVH's triangle lists")?;
     let mut rest = alloc.vec(tris.len() - count, "the BVH's triangle lists")?;
-    let (mut lo, mut hi, mut extent) = (DVec3::INFINITY, DVec3::NEG_INFINITY, 0.0f64);
-    for (&t, b) in tris.iter().zip(boxes()) {
-        if radius(b) <= limit {
-            main.push(t);
-            lo = lo.min(b.0 - centre);
-            hi = hi.max(b.1 - centre);
-            extent = extent.max(radius(b));
-        } else {
-            rest.push(t);
-        }
-    }
+    let pairs = || tris.par_iter().zip(boxes.par_iter());
+    main.par_extend(pairs().filter(|(_, b)| radius(b) <= limit).map(|(&t, _)| t));
+    rest.par_extend(pairs().filter(|(_, b)| radius(b) > limit).map(|(&t, _)| t));
+    // Minima, maxima and the largest radius: the same in any order of reduction.
+    let empty = (DVec3::INFINITY, DVec3::NEG_INFINITY, 0.0f64);
+    let (lo, hi, extent) = boxes
+        .par_iter()
+        .filter(|b| radius(b) <= limit)
+        .map(|b| (b.0 - centre, b.1 - centre, radius(b)))
+        .reduce(|| empty, |a, b| (a.0.min(b.0), a.1.max(b.1), a.2.max(b.2)));
     Ok((BvhFrame::new(centre, typical, lo, hi, extent), main, rest))
 }
 
@@ -386,7 +387,7 @@ impl Accel {
     /// are at most `log2(n) + 1` clusters.
     pub(crate) fn build(
         geometry: &Geometry,
-        keep: impl Fn(usize) -> bool,
+        keep: impl Fn(usize) -> bool + Sync,
         pass: impl Fn(usize) -> f64 + Sync,
         alloc: &Allocator,
     ) -> Result<Self, AllocationError> {
@@ -397,15 +398,18 @@ impl Accel {
     /// triangles (see [`PART`]).
     fn build_in_parts(
         geometry: &Geometry,
-        keep: impl Fn(usize) -> bool,
+        keep: impl Fn(usize) -> bool + Sync,
         pass: impl Fn(usize) -> f64 + Sync,
         alloc: &Allocator,
         max_part: usize,
     ) -> Result<Self, AllocationError> {
         // Room for every triangle, so that each is tested for area once.
         let mut tris: Vec<u32> = alloc.vec(geometry.len(), "the BVH's triangle lists")?;
-        tris.extend(
-            (0..geometry.len()).filter(|&t| keep(t) && hittable(geometry, t)).map(|t| t as u32),
+        tris.par_extend(
+            (0..geometry.len())
+                .into_par_iter()
+                .filter(|&t| keep(t) && hittable(geometry, t))
+                .map(|t| t as u32),
         );
         let n = tris.len();
         let mut accel = Self {
@@ -425,8 +429,8 @@ impl Accel {
             let first = accel.ids.len();
             let bvh = if frame.traversable() {
                 let mut boxes = alloc.vec(main.len(), "the BVH's boxes")?;
-                boxes.extend(
-                    main.iter()
+                boxes.par_extend(
+                    main.par_iter()
                         .map(|&t| frame.padded_box(corners_box(geometry.corners(t as usize)))),
                 );
                 let mut order: Vec<u32> = alloc.vec(main.len(), "the BVH's triangle lists")?;
