@@ -120,7 +120,8 @@ pub(crate) struct CasterGrid<'a> {
     items: Vec<u32>,
     /// Casters every receiver scans.
     global: Vec<u32>,
-    /// Nearest light-space depth of every caster (`-inf` for those in `global`).
+    /// Nearest light-space depth of every caster (`-inf` for those without a bounded image, and
+    /// for triangles that cast no shadow).
     near: Vec<f64>,
     /// Light-space box of every caster (unbounded for those without a bounded image).
     boxes: Vec<[f64; 4]>,
