@@ -562,6 +562,38 @@ mod tests {
         }
     }
 
+    /// A query's casters do not depend on the queries made before it with the same
+    /// [`Candidates`] (whose stamps mark the casters already looked at), also when the stamp
+    /// counter wraps.
+    #[test]
+    fn a_query_does_not_depend_on_the_queries_before_it() {
+        use instrumentation::Recorder;
+        let scene = scenes::load("bumpy").expect("built-in");
+        let frame = Frame::new(&scene, 80, 60, &mut Recorder::default());
+        let receivers: Vec<u32> = (0..frame.geometry.len() as u32).step_by(97).collect();
+        let grid = CasterGrid::new(&frame, &receivers);
+        let mut shared = Candidates::default();
+        let mut wrapping = Candidates::default();
+        let (mut found, mut queried) = (0, 0);
+        for (k, &r) in receivers.iter().enumerate() {
+            let tri = frame.geometry.corners(r as usize);
+            let mut fresh = Candidates::default();
+            grid.query(&tri, &mut fresh);
+            grid.query(&tri, &mut shared);
+            if k % 7 == 0 {
+                wrapping.next_stamp(grid.boxes.len());
+                wrapping.stamp = u32::MAX - 1;
+            }
+            grid.query(&tri, &mut wrapping);
+            assert_eq!(shared.casters, fresh.casters, "receiver {r}");
+            assert_eq!(wrapping.casters, fresh.casters, "receiver {r}");
+            assert!(fresh.casters.windows(2).all(|w| w[0] < w[1]), "sorted, without duplicates");
+            found += fresh.casters.len();
+            queried += 1;
+        }
+        assert!(queried > 1000 && found > 100, "{queried} queries, {found} casters");
+    }
+
     /// A caster whose image is apart from the receiver's, and one the receiver lies on the lit
     /// side of, are ruled out; a caster over the receiver is ruled out by neither test.
     #[test]
