@@ -222,11 +222,12 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
             let mut entries: Vec<(u32, Overlap)> = Vec::new();
             // How many overlaps each pixel has, at `starts[local + 1]`.
             let mut starts = vec![0u32; count + 1];
+            let (mut poly, mut bufs) = (Poly::new(), clip::PixelBufs::new());
             for &k in &items[offsets[band]..offsets[band + 1]] {
-                let poly = projected.poly(k as usize);
+                poly.assign_points(projected.points(k as usize));
                 // Every overlap is kept, however small: the rule counts those above
                 // `MIN_OVERLAP`, the edge pixels' rays may meet any.
-                clip::for_each_pixel(&poly, r0, r1, width, |i, j, area| {
+                clip::for_each_pixel_in(&poly, r0, r1, width, &mut bufs, |i, j, area| {
                     let local = (j - r0) * width + i;
                     starts[local + 1] += 1;
                     entries.push((local as u32, Overlap { contour: k, area }));
