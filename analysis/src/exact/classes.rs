@@ -208,7 +208,7 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
     let projected = Projected::new(frame, &screen);
     let planar: Vec<bool> = frame.scene.objects.iter().map(|o| o.mesh.plane().is_some()).collect();
     let (offsets, items) = clip::bin_by_band(projected.tri.len(), height, |k| {
-        let (lo, hi) = projected.poly(k).range(1);
+        let (lo, hi) = clip::range(projected.points(k), 1);
         clip::overlapped_rows(lo, hi, height)
     });
     let bands = height.div_ceil(clip::BAND);

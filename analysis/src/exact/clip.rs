@@ -97,10 +97,16 @@ impl Poly {
     /// Smallest and largest coordinate along `axis`.
     #[inline]
     pub fn range(&self, axis: usize) -> (f64, f64) {
-        self.points()
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p[axis]), b.max(p[axis])))
+        range(self.points(), axis)
     }
+}
+
+/// Smallest and largest coordinate of `points` along `axis`.
+#[inline]
+pub(crate) fn range(points: &[Pt], axis: usize) -> (f64, f64) {
+    points
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p[axis]), b.max(p[axis])))
 }
 
 /// Splits the convex polygon `poly` at the line `coordinate[axis] = c` into the part with

@@ -92,7 +92,7 @@ pub(crate) fn union_area(
         return (area, Work::default());
     }
     let (offsets, items) = clip::bin_by_band(polygons.len(), height, |p| {
-        let (lo, hi) = y_range(polygons.contour(p));
+        let (lo, hi) = clip::range(polygons.contour(p), 1);
         clip::overlapped_rows(lo, hi, height)
     });
     let work = area
@@ -122,11 +122,6 @@ pub(crate) fn union_area(
     (area, work)
 }
 
-/// Smallest and largest `y` of a contour.
-fn y_range(points: &[Pt]) -> (f64, f64) {
-    points.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p[1]), b.max(p[1])))
-}
-
 /// The area the union of `polygons` (convex, positive [`Poly::area2_rel`]) covers inside the
 /// region `within` (convex, positive [`Poly::area2_rel`]; `None`: the whole pixel) in every
 /// pixel of rows `rows` and columns `cols` with `accept(i, j)`: calls `emit(i, j, area)` for
@@ -152,7 +147,7 @@ pub(crate) fn rows_areas<'a>(
     let mut rests = std::mem::take(&mut scratch.rests);
     rests.clear();
     for points in polygons {
-        let (lo, hi) = y_range(points);
+        let (lo, hi) = clip::range(points, 1);
         if !(hi > top && lo < bottom) {
             continue;
         }

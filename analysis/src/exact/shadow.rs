@@ -338,28 +338,31 @@ impl Screen {
             }
             &bufs[cur]
         };
-        let mut pts = [[0.0; 2]; HCAP];
-        for (k, r) in a[..na].iter().enumerate() {
+        let mut poly = Poly::new();
+        for r in &a[..na] {
             let (x, y) = (r[0] / r[2], r[1] / r[2]);
             if r[2].is_nan() || r[2] <= 0.0 || !x.is_finite() || !y.is_finite() {
                 return None;
             }
-            pts[k] = [x, y];
+            poly.push([x, y]);
         }
-        let mut poly = Poly::from_slice(&pts[..na]);
         // A side every vertex is inside of leaves the polygon as it is; the others clip it
-        // through a second buffer.
+        // through a second buffer, made only then (a polygon is 392 bytes to zero, and most
+        // triangles lie inside the rectangle).
         let ((lx, hx), (ly, hy)) = (poly.range(0), poly.range(1));
-        let mut other = Poly::new();
-        for (cuts, axis, c, above) in [
+        let sides = [
             (lx < x0, 0, x0, true),
             (hx > x1, 0, x1, false),
             (ly < y0, 1, y0, true),
             (hy > y1, 1, y1, false),
-        ] {
-            if cuts {
-                keep_into(&poly, axis, c, above, &mut other);
-                std::mem::swap(&mut poly, &mut other);
+        ];
+        if sides.iter().any(|side| side.0) {
+            let mut other = Poly::new();
+            for (cuts, axis, c, above) in sides {
+                if cuts {
+                    keep_into(&poly, axis, c, above, &mut other);
+                    std::mem::swap(&mut poly, &mut other);
+                }
             }
         }
         if poly.n < 3 {
