@@ -142,47 +142,12 @@ impl Projected {
                 part
             })
             .collect();
-        // The parts joined in parallel, each copied into its own range of the whole (a serial
-        // join cost as much as projecting the triangles on `bumpy`).
-        let contours: usize = parts.iter().map(|p| p.tri.len()).sum();
-        let points: usize = parts.iter().map(|p| p.polys.points.len()).sum();
-        let mut all = Projected {
-            polys: ScreenPolygons { points: vec![[0.0; 2]; points], ranges: vec![0..0; contours] },
-            tri: vec![0; contours],
-            winding: vec![0.0; contours],
-            depth: vec![[0.0; 2]; contours],
-        };
-        let mut places = Vec::with_capacity(parts.len());
-        let (mut pts, mut ranges, mut tri, mut winding, mut depth) = (
-            &mut all.polys.points[..],
-            &mut all.polys.ranges[..],
-            &mut all.tri[..],
-            &mut all.winding[..],
-            &mut all.depth[..],
-        );
-        let mut first = 0;
-        for p in &parts {
-            let (n, m) = (p.tri.len(), p.polys.points.len());
-            let (a, rest_pts) = std::mem::take(&mut pts).split_at_mut(m);
-            let (b, rest_ranges) = std::mem::take(&mut ranges).split_at_mut(n);
-            let (c, rest_tri) = std::mem::take(&mut tri).split_at_mut(n);
-            let (d, rest_winding) = std::mem::take(&mut winding).split_at_mut(n);
-            let (e, rest_depth) = std::mem::take(&mut depth).split_at_mut(n);
-            (pts, ranges, tri, winding, depth) =
-                (rest_pts, rest_ranges, rest_tri, rest_winding, rest_depth);
-            places.push((p, first, a, b, c, d, e));
-            first += m;
+        Projected {
+            polys: ScreenPolygons::concat(parts.iter().map(|p| &p.polys)),
+            tri: parts.iter().map(|p| p.tri.as_slice()).collect::<Vec<_>>().concat(),
+            winding: parts.iter().map(|p| p.winding.as_slice()).collect::<Vec<_>>().concat(),
+            depth: parts.iter().map(|p| p.depth.as_slice()).collect::<Vec<_>>().concat(),
         }
-        places.into_par_iter().for_each(|(p, first, pts, ranges, tri, winding, depth)| {
-            pts.copy_from_slice(&p.polys.points);
-            for (r, s) in ranges.iter_mut().zip(&p.polys.ranges) {
-                *r = first + s.start..first + s.end;
-            }
-            tri.copy_from_slice(&p.tri);
-            winding.copy_from_slice(&p.winding);
-            depth.copy_from_slice(&p.depth);
-        });
-        all
     }
 
     fn points(&self, k: usize) -> &[Pt] {

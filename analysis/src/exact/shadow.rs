@@ -395,16 +395,7 @@ fn collect(count: usize, f: impl Fn(usize) -> Option<Poly> + Sync) -> ScreenPoly
             part
         })
         .collect();
-    let mut all = ScreenPolygons {
-        points: Vec::with_capacity(parts.iter().map(|p| p.points.len()).sum()),
-        ranges: Vec::with_capacity(parts.iter().map(|p| p.ranges.len()).sum()),
-    };
-    for p in &parts {
-        for c in p.contours() {
-            all.push(c);
-        }
-    }
-    all
+    ScreenPolygons::concat(&parts)
 }
 
 /// The depth at which the camera ray `ray` (parameterised by depth) meets the plane through
