@@ -40,9 +40,7 @@ impl Poly {
     /// the callers rule out by construction).
     pub fn from_slice(points: &[Pt]) -> Self {
         let mut p = Self::new();
-        for &q in points.iter().take(CAP) {
-            p.push(q);
-        }
+        p.assign_points(points);
         p
     }
 
@@ -80,8 +78,8 @@ impl Poly {
         self.v[..other.n].copy_from_slice(other.points());
     }
 
-    /// Makes `self` the polygon with the given vertices (at most [`CAP`], as
-    /// [`Poly::from_slice`]), without a new polygon.
+    /// Makes `self` the polygon with the given vertices (at most [`CAP`]; extra vertices are
+    /// dropped), without a new polygon.
     #[inline]
     pub fn assign_points(&mut self, points: &[Pt]) {
         let n = points.len().min(CAP);
