@@ -43,11 +43,15 @@ fn spawn(args: &[&str], slow: Option<&str>) -> Child {
     c.spawn().expect("the shadowbench binary starts")
 }
 
-/// Waits until `file` exists (the first writer holds the folder), at most 20 s.
-fn wait_for(file: &Path) {
+/// Waits until the lock file `lock` names `child` as its holder, at most 20 s. The holder
+/// writes its name only once it holds the lock: the file's mere presence is not enough, for
+/// the first writer creates it before it takes the lock, and a second writer started in
+/// between may take the lock first.
+fn wait_for_holder(lock: &Path, child: &std::process::Child) {
+    let me = format!("process {}\n", child.id());
     let start = Instant::now();
-    while !file.exists() {
-        assert!(start.elapsed() < Duration::from_secs(20), "{} never appeared", file.display());
+    while !std::fs::read_to_string(lock).is_ok_and(|t| t.starts_with(&me)) {
+        assert!(start.elapsed() < Duration::from_secs(20), "{} never named {me}", lock.display());
         std::thread::sleep(Duration::from_millis(5));
     }
 }
@@ -92,7 +96,7 @@ fn two_renders_into_one_folder_give_one_output_and_one_refusal() {
         let a: Vec<&str> = a.iter().map(String::as_str).collect();
         let b: Vec<&str> = b.iter().map(String::as_str).collect();
         let first = spawn(&a, Some("sm=200"));
-        wait_for(&out.join(".shadowbench-lock"));
+        wait_for_holder(&out.join(".shadowbench-lock"), &first);
         let second = shadowbench(&b);
         let first = first.wait_with_output().expect("the first ends");
         assert_eq!(first.status.code(), Some(0), "try {k}: {}", stderr(&first));
@@ -118,7 +122,7 @@ fn two_reports_into_one_folder_give_one_report_and_one_refusal() {
     let out = dir.path().join("out");
     for k in 0..10 {
         let first = spawn(&["report", "--suite", &suite, "--out", path(&out)], Some("sm=30"));
-        wait_for(&out.join(".shadowbench-lock"));
+        wait_for_holder(&out.join(".shadowbench-lock"), &first);
         let second = shadowbench(&["report", "--suite", &other, "--out", path(&out)]);
         let first = first.wait_with_output().expect("the first ends");
         assert_eq!(first.status.code(), Some(0), "try {k}: {}", stderr(&first));
