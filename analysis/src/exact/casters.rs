@@ -30,6 +30,9 @@ use scenes::{projection::look_basis, Geometry, Light};
 /// Largest number of cells of the grid.
 const MAX_CELLS: usize = 1 << 22;
 
+/// Bands of cell rows the cells' lists are filled by, in parallel.
+const BANDS: usize = 64;
+
 /// A caster spanning more cells than this (and more than the grid's cells / 16) goes to the
 /// list every receiver scans.
 const MAX_SPAN: usize = 64;
@@ -137,11 +140,14 @@ impl<'a> CasterGrid<'a> {
     /// The grid over the casters of `frame` (`is_caster` triangles), covering the light-space
     /// boxes of the triangles `receivers`.
     ///
-    /// Every per-triangle array is made in parallel straight into its place, and the cells'
-    /// spans are computed where they are used rather than stored: on `bumpy` (530,688
-    /// triangles) the build touched 135 MB of fresh memory, whose page faults were most of
-    /// its time. A caster's plane ([`LitSide`]) is taken from its corners when a query asks,
-    /// which is only for the casters whose image meets the receiver's.
+    /// Everything is made in parallel straight into its place: every triangle's box, nearest
+    /// depth, magnitude and image in one pass over its corners (on `bumpy`, 530,688 triangles,
+    /// the build touches over 100 MB of fresh memory, whose page faults were most of its time),
+    /// and the cells' lists by bands of cell rows ([`BANDS`]): the casters are binned to the
+    /// bands their boxes reach, then each band counts and fills its own cells, whose lists are
+    /// one contiguous run, in caster order, as one pass over every caster would. A caster's
+    /// plane ([`LitSide`]) is taken from its corners when a query asks, which is only for the
+    /// casters whose image meets the receiver's.
     pub fn new(frame: &'a Frame<'a>, receivers: &[u32]) -> Self {
         let space = Space::new(&frame.scene.light);
         let g = &frame.geometry;
@@ -154,18 +160,9 @@ impl<'a> CasterGrid<'a> {
             .par_iter()
             .filter_map(|&r| space.bounds(&g.corners(r as usize)).map(|(b, _)| b))
             .reduce(|| empty, join);
-        let all: Vec<u32> = (0..g.len() as u32).filter(|&t| frame.is_caster(t as usize)).collect();
-        // Every triangle's light-space box and nearest depth: those of its image for a caster
-        // with a bounded one; unbounded and `-inf` otherwise (a caster without a bounded image
-        // goes to `global`, the others are never listed).
-        let unbounded = [f64::NEG_INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::INFINITY];
-        let (boxes, near): (Vec<[f64; 4]>, Vec<f64>) = (0..g.len())
-            .into_par_iter()
-            .map(|t| match frame.is_caster(t).then(|| space.bounds(&g.corners(t))).flatten() {
-                Some((b, z)) => (b, z[0]),
-                None => (unbounded, f64::NEG_INFINITY),
-            })
-            .unzip();
+        let all: Vec<u32> =
+            (0..g.len() as u32).into_par_iter().filter(|&t| frame.is_caster(t as usize)).collect();
+        let (boxes, near, magnitude, images) = per_triangle(frame, &space);
         let (ex, ey) = (region[2] - region[0], region[3] - region[1]);
         let valid = ex.is_finite() && ey.is_finite() && ex >= 0.0 && ey >= 0.0;
         let target = all.len().clamp(1, MAX_CELLS) as f64;
@@ -198,68 +195,37 @@ impl<'a> CasterGrid<'a> {
             end: [region[2], region[3]],
             scale,
             cells: [nx, ny],
-            offsets: vec![0; nx * ny + 1],
+            offsets: Vec::new(),
             items: Vec::new(),
             global: Vec::new(),
-            near: Vec::new(),
-            boxes: Vec::new(),
-            magnitude: Vec::new(),
-            images: Vec::new(),
+            near,
+            boxes,
+            magnitude,
+            images,
             all: Vec::new(),
         };
         let max_span = MAX_SPAN.max(nx * ny / 16);
         // The cells caster `t` is listed in: `Some(None)` for `global`, `None` for none (it
         // lies outside the receivers' region and shadows none of them).
-        let span = |grid: &Self, t: u32| -> Option<Option<[usize; 4]>> {
-            let b = &boxes[t as usize];
-            if !valid || near[t as usize] == f64::NEG_INFINITY {
+        let span = |t: u32| -> Option<Option<[usize; 4]>> {
+            if !valid || grid.near[t as usize] == f64::NEG_INFINITY {
                 return Some(None);
             }
-            grid.cell_range(b).map(|r| {
+            grid.cell_range(&grid.boxes[t as usize]).map(|r| {
                 let n = (r[2] - r[0] + 1) * (r[3] - r[1] + 1);
                 (n <= max_span).then_some(r)
             })
         };
-        for &t in &all {
-            match span(&grid, t) {
-                None => {}
-                Some(None) => grid.global.push(t),
-                Some(Some(r)) => {
-                    for y in r[1]..=r[3] {
-                        for x in r[0]..=r[2] {
-                            grid.offsets[y * nx + x + 1] += 1;
-                        }
-                    }
-                }
-            }
-        }
-        for c in 0..nx * ny {
-            grid.offsets[c + 1] += grid.offsets[c];
-        }
-        let mut fill: Vec<u32> = grid.offsets.clone();
-        grid.items = vec![0; grid.offsets[nx * ny] as usize];
-        for &t in &all {
-            if let Some(Some(r)) = span(&grid, t) {
-                for y in r[1]..=r[3] {
-                    for x in r[0]..=r[2] {
-                        let c = y * nx + x;
-                        grid.items[fill[c] as usize] = t;
-                        fill[c] += 1;
-                    }
-                }
-            }
-        }
-        grid.magnitude = boxes
-            .par_iter()
-            .map(|b| b.iter().map(|v| v.abs()).filter(|v| v.is_finite()).fold(0.0, f64::max))
+        let spans: Vec<Option<Option<[usize; 4]>>> = all.par_iter().map(|&t| span(t)).collect();
+        let global: Vec<u32> = all
+            .iter()
+            .zip(&spans)
+            .filter(|(_, s)| matches!(s, Some(None)))
+            .map(|(&t, _)| t)
             .collect();
-        if let Space::Directional { .. } = space {
-            grid.images =
-                (0..g.len()).into_par_iter().map(|t| space.image(&g.corners(t))).collect();
-        }
-        grid.near = near;
-        grid.boxes = boxes;
-        grid.all = all;
+        let listed = |k: usize| spans[k].flatten();
+        let (offsets, items) = fill_cells(&all, listed, [nx, ny]);
+        (grid.offsets, grid.items, grid.global, grid.all) = (offsets, items, global, all);
         grid
     }
 
@@ -434,6 +400,132 @@ impl LitSide {
     }
 }
 
+/// Every triangle's light-space box, nearest depth and the largest magnitude of its box's
+/// coordinates, and under a directional light its image, in one parallel pass over its
+/// corners: the box and depth of its image for a caster with a bounded one; unbounded, `-inf`
+/// and 0 otherwise (a caster without a bounded image goes to the list every receiver scans,
+/// the other triangles are never listed).
+#[allow(clippy::type_complexity)]
+fn per_triangle(
+    frame: &Frame<'_>,
+    space: &Space,
+) -> (Vec<[f64; 4]>, Vec<f64>, Vec<f64>, Vec<[[f64; 2]; 3]>) {
+    const CHUNK: usize = 1 << 12;
+    let g = &frame.geometry;
+    let n = g.len();
+    let directional = matches!(space, Space::Directional { .. });
+    // Zeroed vectors come from fresh zeroed pages, first touched by the pass below.
+    let mut boxes = vec![[0.0; 4]; n];
+    let mut near = vec![0.0; n];
+    let mut magnitude = vec![0.0; n];
+    let mut images = vec![[[0.0; 2]; 3]; if directional { n } else { 0 }];
+    let image_chunks: Vec<Option<&mut [[[f64; 2]; 3]]>> = if directional {
+        images.chunks_mut(CHUNK).map(Some).collect()
+    } else {
+        (0..n.div_ceil(CHUNK)).map(|_| None).collect()
+    };
+    let unbounded = [f64::NEG_INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::INFINITY];
+    boxes
+        .par_chunks_mut(CHUNK)
+        .zip(near.par_chunks_mut(CHUNK))
+        .zip(magnitude.par_chunks_mut(CHUNK))
+        .zip(image_chunks)
+        .enumerate()
+        .for_each(|(k, (((b, z), m), mut im))| {
+            for i in 0..b.len() {
+                let t = k * CHUNK + i;
+                let corners = g.corners(t);
+                if let Some(im) = im.as_deref_mut() {
+                    im[i] = space.image(&corners);
+                }
+                (b[i], z[i], m[i]) = match frame.is_caster(t).then(|| space.bounds(&corners)) {
+                    Some(Some((cb, cz))) => {
+                        let mag = cb.iter().map(|v| v.abs()).filter(|v| v.is_finite());
+                        (cb, cz[0], mag.fold(0.0, f64::max))
+                    }
+                    _ => (unbounded, f64::NEG_INFINITY, 0.0),
+                };
+            }
+        });
+    (boxes, near, magnitude, images)
+}
+
+/// The grid's cells' lists in CSR layout (`offsets`, `items`) over `cells = [nx, ny]`: caster
+/// `all[k]` is listed in every cell of `listed(k)` (`[x0, y0, x1, y1]`, inclusive), and each
+/// cell's list is in the order of `all`. The casters are binned to bands of cell rows, then
+/// each band, in parallel, counts its cells' listings and fills them into its own contiguous
+/// part of `items`.
+fn fill_cells(
+    all: &[u32],
+    listed: impl Fn(usize) -> Option<[usize; 4]> + Sync,
+    [nx, ny]: [usize; 2],
+) -> (Vec<u32>, Vec<u32>) {
+    let rows = ny.div_ceil(BANDS);
+    let band_cells = rows * nx;
+    let (band_offsets, band_items) =
+        super::clip::bin_by_band(all.len(), ny, rows, |k| listed(k).map(|r| (r[1], r[3])));
+    let listed = &listed;
+    let in_band = |b: usize| {
+        band_items[band_offsets[b]..band_offsets[b + 1]]
+            .iter()
+            .filter_map(move |&k| listed(k as usize).map(|r| (k as usize, r)))
+    };
+    // Per band: the running count of its cells' listings (cell `c` of the band ends at
+    // `ends[c]`, counted from the band's start).
+    let mut offsets = vec![0u32; nx * ny + 1];
+    offsets[1..].par_chunks_mut(band_cells).enumerate().for_each(|(b, ends)| {
+        for (_, r) in in_band(b) {
+            for c in cells_in_band(r, b, rows, nx) {
+                ends[c] += 1;
+            }
+        }
+        for c in 1..ends.len() {
+            ends[c] += ends[c - 1];
+        }
+    });
+    // Each band's first listing: the listings of the bands before it.
+    let mut starts = Vec::with_capacity(BANDS);
+    let mut total = 0u32;
+    for ends in offsets[1..].chunks(band_cells) {
+        starts.push(total);
+        total += ends.last().copied().unwrap_or(0);
+    }
+    offsets[1..].par_chunks_mut(band_cells).zip(&starts).for_each(|(ends, &start)| {
+        ends.iter_mut().for_each(|e| *e += start);
+    });
+    let mut items = vec![0u32; total as usize];
+    let mut parts = Vec::with_capacity(starts.len());
+    let mut rest = items.as_mut_slice();
+    for (b, &start) in starts.iter().enumerate() {
+        let end = starts.get(b + 1).copied().unwrap_or(total);
+        let (part, tail) = std::mem::take(&mut rest).split_at_mut((end - start) as usize);
+        parts.push(part);
+        rest = tail;
+    }
+    let offsets_ref = &offsets;
+    parts.into_par_iter().zip(&starts).enumerate().for_each(|(b, (part, &start))| {
+        // The next free slot of each of the band's cells, from the band's start.
+        let first = b * band_cells;
+        let last = (first + band_cells).min(nx * ny);
+        let mut next: Vec<u32> = offsets_ref[first..last].iter().map(|&o| o - start).collect();
+        for (k, r) in in_band(b) {
+            for c in cells_in_band(r, b, rows, nx) {
+                part[next[c] as usize] = all[k];
+                next[c] += 1;
+            }
+        }
+    });
+    (offsets, items)
+}
+
+/// The cells of the cell range `r` (`[x0, y0, x1, y1]`, inclusive) in band `b` of `rows` cell
+/// rows, numbered from the band's first cell.
+#[inline]
+fn cells_in_band(r: [usize; 4], b: usize, rows: usize, nx: usize) -> impl Iterator<Item = usize> {
+    let (y0, y1) = (r[1].max(b * rows), r[3].min((b + 1) * rows - 1));
+    (y0..=y1).flat_map(move |y| (r[0]..=r[2]).map(move |x| (y - b * rows) * nx + x))
+}
+
 /// Whether the light-space images `a` and `b` of two triangles are apart by more than the
 /// rounding of their coordinates, by a separating line through an edge of one of them.
 ///
@@ -478,6 +570,38 @@ fn images_separated(a: &[[f64; 2]; 3], b: &[[f64; 2]; 3], m: f64, extent: f64) -
 mod tests {
     use super::*;
     use crate::exact::clip::{self, Poly};
+
+    /// The cells' lists filled by bands in parallel equal those of one pass over the casters:
+    /// every cell lists its casters in their order, across bands of cell rows, with casters
+    /// reaching over several bands or none, on grids narrower and taller than [`BANDS`] rows.
+    #[test]
+    fn cells_are_filled_as_one_pass_over_the_casters_would() {
+        for [nx, ny] in [[1, 1], [7, 3], [5, 64], [13, 200], [300, 2]] {
+            let all: Vec<u32> = (0..20_000u32).map(|k| 3 * k + 1).collect();
+            let listed = |k: usize| {
+                let (x0, y0) = ((k * 7919) % (nx + 2), (k * 104_729) % (ny + 3));
+                let r = [x0, y0, (x0 + k % 3).min(nx - 1), (y0 + k % 9).min(ny - 1)];
+                (x0 < nx && y0 < ny && !k.is_multiple_of(11)).then_some(r)
+            };
+            let (offsets, items) = fill_cells(&all, listed, [nx, ny]);
+            let mut expected = vec![Vec::new(); nx * ny];
+            for (k, &t) in all.iter().enumerate() {
+                if let Some(r) = listed(k) {
+                    for y in r[1]..=r[3] {
+                        for x in r[0]..=r[2] {
+                            expected[y * nx + x].push(t);
+                        }
+                    }
+                }
+            }
+            assert_eq!(offsets.len(), nx * ny + 1);
+            for (c, cell) in expected.iter().enumerate() {
+                let got = &items[offsets[c] as usize..offsets[c + 1] as usize];
+                assert_eq!(got, &cell[..], "{nx} x {ny}: cell {c}");
+            }
+            assert_eq!(items.len(), expected.iter().map(Vec::len).sum::<usize>());
+        }
+    }
 
     /// The area of the shadow caster `c` casts on receiver `r` under a directional light
     /// along `dir`, seen along the light (computed independently of the grid's tests: the

@@ -172,7 +172,7 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
     let (width, height) = (frame.width() as usize, frame.height() as usize);
     let projected = Projected::new(frame, &screen);
     let planar: Vec<bool> = frame.scene.objects.iter().map(|o| o.mesh.plane().is_some()).collect();
-    let (offsets, items) = clip::bin_by_band(projected.tri.len(), height, |k| {
+    let (offsets, items) = clip::bin_by_band(projected.tri.len(), height, clip::BAND, |k| {
         let (lo, hi) = clip::range(projected.points(k), 1);
         clip::overlapped_rows(lo, hi, height)
     });

@@ -177,9 +177,10 @@ fn split_into(
     }
 }
 
-/// Bins items into bands of [`BAND`] rows: `rows(item)` gives the inclusive row range an item
-/// may touch (already clamped to the image). Returns `(offsets, items)` in CSR layout: band
-/// `b`'s items are `items[offsets[b]..offsets[b + 1]]`, in ascending order.
+/// Bins items into bands of `band` rows (at least 1; [`BAND`] for the pixel clipper): `rows(item)`
+/// gives the inclusive row range an item may touch (already clamped to `0..height`). Returns
+/// `(offsets, items)` in CSR layout: band `b`'s items are `items[offsets[b]..offsets[b + 1]]`,
+/// in ascending order.
 ///
 /// In parallel over runs of items: each run counts its items per band, and writes them into its
 /// own part of every band (the runs' parts follow each other in run order, so each band stays
@@ -187,15 +188,17 @@ fn split_into(
 pub(crate) fn bin_by_band(
     count: usize,
     height: usize,
+    band: usize,
     rows: impl Fn(usize) -> Option<(usize, usize)> + Sync,
 ) -> (Vec<usize>, Vec<u32>) {
     use rayon::prelude::*;
     const RUN: usize = 1 << 14;
-    let bands = height.div_ceil(BAND);
+    let band = band.max(1);
+    let bands = height.div_ceil(band);
     // Each item's bands, `(first, last)` (`first > last`: none).
     let spans: Vec<(u32, u32)> = (0..count)
         .into_par_iter()
-        .map(|i| rows(i).map_or((1, 0), |(a, b)| ((a / BAND) as u32, (b / BAND) as u32)))
+        .map(|i| rows(i).map_or((1, 0), |(a, b)| ((a / band) as u32, (b / band) as u32)))
         .collect();
     let counts: Vec<Vec<usize>> = spans
         .par_chunks(RUN)
@@ -480,15 +483,17 @@ mod tests {
             (a < height).then(|| (a, (a + i % 37).min(height - 1)))
         };
         let count = 3 * (1 << 14) + 5;
-        let (offsets, items) = bin_by_band(count, height, rows);
-        let bands = height.div_ceil(BAND);
-        assert_eq!(offsets.len(), bands + 1);
-        for b in 0..bands {
-            let expected: Vec<u32> = (0..count)
-                .filter(|&i| rows(i).is_some_and(|(a, z)| a / BAND <= b && b <= z / BAND))
-                .map(|i| i as u32)
-                .collect();
-            assert_eq!(&items[offsets[b]..offsets[b + 1]], &expected[..], "band {b}");
+        for band in [BAND, 1, 13, 500] {
+            let (offsets, items) = bin_by_band(count, height, band, rows);
+            let bands = height.div_ceil(band);
+            assert_eq!(offsets.len(), bands + 1);
+            for b in 0..bands {
+                let expected: Vec<u32> = (0..count)
+                    .filter(|&i| rows(i).is_some_and(|(a, z)| a / band <= b && b <= z / band))
+                    .map(|i| i as u32)
+                    .collect();
+                assert_eq!(&items[offsets[b]..offsets[b + 1]], &expected[..], "band {band}: {b}");
+            }
         }
     }
 
