@@ -1,6 +1,6 @@
 //! Shadow techniques and the shared kernels they use.
 //!
-//! Kernels: [`raster`] (exact CPU rasterizer), [`gbuffer`] (camera G-buffer), [`depth_map`]
+//! Kernels: [`raster`] (exact CPU rasterizer), [`bands`] (parallel binning into bands of rows), [`gbuffer`] (camera G-buffer), [`depth_map`]
 //! (light depth map), [`depth_test`] (map lookups, bias, depth quantization), [`footprint`]
 //! (whether a light map resolves the frame, and its warnings), [`filtered_map`] (the box filter
 //! of the filtered shadow maps), [`pattern`] (sub-pixel sample
@@ -14,6 +14,7 @@
 //! [`registry`] finds them by name, in one table whose entries declare their [`params`].
 
 pub mod afsm;
+pub mod bands;
 pub mod depth_map;
 pub mod depth_test;
 pub mod filtered_map;

@@ -19,8 +19,10 @@
 //!   triangle id, so the result does not depend on thread scheduling.
 //! - Degenerate triangles (zero projected area, non-finite corners) cover nothing.
 //!
-//! Work runs in parallel over bands of rows (rayon); triangles are binned to bands first.
+//! Work runs in parallel over bands of rows (rayon); triangles are binned to bands first, also in
+//! parallel ([`bands`]).
 
+use crate::bands;
 use glam::{DVec2, DVec3};
 use instrumentation::Counters;
 use rayon::prelude::*;
@@ -295,28 +297,33 @@ fn rasterize(
         .into_par_iter()
         .map(|c| {
             let mut included = 0u64;
-            let setups = (c * SETUP_CHUNK..((c + 1) * SETUP_CHUNK).min(n))
-                .filter(|&t| include(t))
-                .filter_map(|t| {
-                    included += 1;
-                    setup(geometry, t, proj, shift)
-                })
-                .collect();
+            let range = c * SETUP_CHUNK..((c + 1) * SETUP_CHUNK).min(n);
+            // Room for the whole chunk: growing the vector as setups come moved each one
+            // about twice; the pages past the last setup are never touched.
+            let mut setups = Vec::with_capacity(range.len());
+            setups.extend(range.filter(|&t| include(t)).filter_map(|t| {
+                included += 1;
+                setup(geometry, t, proj, shift)
+            }));
             (setups, included)
         })
         .collect();
     counters.triangles_rasterized += chunks.iter().map(|c| c.1).sum::<u64>();
 
     let bands = height.div_ceil(BAND_ROWS).max(1);
-    let mut bins: Vec<Vec<&Setup>> = vec![Vec::new(); bands];
-    for s in chunks.iter().flat_map(|c| &c.0) {
-        for bin in &mut bins[s.y0 as usize / BAND_ROWS..=s.y1 as usize / BAND_ROWS] {
-            bin.push(s);
-        }
-    }
+    // Setup `i` of chunk `c` is item `c * SETUP_CHUNK + i`; the bins list items in this order.
+    let at = |item: usize| chunks[item / SETUP_CHUNK].0.get(item % SETUP_CHUNK);
+    let (offsets, items) =
+        bands::bin_by_band(chunks.len() * SETUP_CHUNK, height, BAND_ROWS, |item| {
+            at(item).map(|s| (s.y0 as usize, s.y1 as usize))
+        });
+    let bins: Vec<&[u32]> = offsets.windows(2).map(|w| &items[w[0]..w[1]]).collect();
 
-    let mut depth = vec![f64::INFINITY; width * height];
-    let mut triangle = vec![NO_TRIANGLE; width * height];
+    // Filled in parallel: a light map of 1024 x 1024 is 12 MB.
+    let mut depth = Vec::with_capacity(width * height);
+    depth.par_extend(rayon::iter::repeat_n(f64::INFINITY, width * height));
+    let mut triangle = Vec::with_capacity(width * height);
+    triangle.par_extend(rayon::iter::repeat_n(NO_TRIANGLE, width * height));
     let chunk = (width * BAND_ROWS).max(1);
     let mut normals: Vec<Option<&mut [DVec3]>> = match normal {
         Some(normal) => normal.chunks_mut(chunk).map(Some).collect(),
@@ -332,7 +339,7 @@ fn rasterize(
             let row0 = band * BAND_ROWS;
             let rows = depth.len() / width.max(1);
             let mut tested = 0u64;
-            for s in bin {
+            for s in bin.iter().filter_map(|&item| at(item as usize)) {
                 let outline = &s.outline[..s.corners];
                 for y in (s.y0 as usize).max(row0)..=(s.y1 as usize).min(row0 + rows - 1) {
                     let py = y as f64 + 0.5;

@@ -463,7 +463,7 @@ fn fill_cells(
     let rows = ny.div_ceil(BANDS);
     let band_cells = rows * nx;
     let (band_offsets, band_items) =
-        super::clip::bin_by_band(all.len(), ny, rows, |k| listed(k).map(|r| (r[1], r[3])));
+        methods::bands::bin_by_band(all.len(), ny, rows, |k| listed(k).map(|r| (r[1], r[3])));
     let listed = &listed;
     let in_band = |b: usize| {
         band_items[band_offsets[b]..band_offsets[b + 1]]

@@ -172,10 +172,11 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
     let (width, height) = (frame.width() as usize, frame.height() as usize);
     let projected = Projected::new(frame, &screen);
     let planar: Vec<bool> = frame.scene.objects.iter().map(|o| o.mesh.plane().is_some()).collect();
-    let (offsets, items) = clip::bin_by_band(projected.tri.len(), height, clip::BAND, |k| {
-        let (lo, hi) = clip::range(projected.points(k), 1);
-        clip::overlapped_rows(lo, hi, height)
-    });
+    let (offsets, items) =
+        methods::bands::bin_by_band(projected.tri.len(), height, clip::BAND, |k| {
+            let (lo, hi) = clip::range(projected.points(k), 1);
+            clip::overlapped_rows(lo, hi, height)
+        });
     let bands = height.div_ceil(clip::BAND);
     let ctx = Context { frame, screen: &screen, projected: &projected, planar: &planar };
     let results: Vec<Band> = (0..bands)

@@ -91,7 +91,7 @@ pub(crate) fn union_area(
     if width == 0 || height == 0 || polygons.is_empty() {
         return (area, Work::default());
     }
-    let (offsets, items) = clip::bin_by_band(polygons.len(), height, clip::BAND, |p| {
+    let (offsets, items) = methods::bands::bin_by_band(polygons.len(), height, clip::BAND, |p| {
         let (lo, hi) = clip::range(polygons.contour(p), 1);
         clip::overlapped_rows(lo, hi, height)
     });
