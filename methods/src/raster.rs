@@ -119,10 +119,23 @@ pub(crate) fn clip_near(corners: [DVec3; 3], depths: [f64; 3], near: f64) -> ([D
 }
 
 /// Prepares triangle `t`; the outline is moved by `-shift` so that samples at `i + 0.5` of the
-/// moved outline are the samples at `i + 0.5 + shift` of the projector's image.
-fn setup(geometry: &Geometry, t: usize, proj: &Projector, shift: DVec2) -> Option<Setup> {
+/// moved outline are the samples at `i + 0.5 + shift` of the projector's image. `image` holds
+/// every vertex's [`Projector::project_unclipped`], made once for the triangles sharing it: a
+/// triangle wholly beyond a perspective projector's `near` plane (or any, for an orthographic
+/// one) keeps its corners, so its outline is theirs; one crossing `near` is clipped and its
+/// corners projected here.
+fn setup(
+    geometry: &Geometry,
+    image: &[(DVec2, f64)],
+    t: usize,
+    proj: &Projector,
+    shift: DVec2,
+) -> Option<Setup> {
     let corners = geometry.corners(t);
-    let (world, count) = if proj.is_perspective() {
+    let ids = geometry.triangles[t];
+    let vertex = ids.map(|v| image[v as usize]);
+    let clipped = proj.is_perspective() && !vertex.iter().all(|&(_, d)| d >= proj.near);
+    let (world, count) = if clipped {
         clip_near(corners, corners.map(|c| proj.depth_of(c)), proj.near)
     } else {
         ([corners[0], corners[1], corners[2], DVec3::ZERO], 3)
@@ -133,7 +146,7 @@ fn setup(geometry: &Geometry, t: usize, proj: &Projector, shift: DVec2) -> Optio
     let mut outline = [DVec2::ZERO; 4];
     let (mut depth_min, mut depth_max) = (f64::INFINITY, f64::NEG_INFINITY);
     for i in 0..count {
-        let (xy, d) = proj.project_unclipped(world[i]);
+        let (xy, d) = if clipped { proj.project_unclipped(world[i]) } else { vertex[i] };
         if !xy.is_finite() || !d.is_finite() {
             return None;
         }
@@ -293,6 +306,8 @@ fn rasterize(
 ) -> NearestSurface {
     let (width, height) = (proj.width as usize, proj.height as usize);
     let n = geometry.len();
+    let image: Vec<(DVec2, f64)> =
+        geometry.positions.par_iter().map(|&p| proj.project_unclipped(p)).collect();
     let chunks: Vec<(Vec<Setup>, u64)> = (0..n.div_ceil(SETUP_CHUNK))
         .into_par_iter()
         .map(|c| {
@@ -303,7 +318,7 @@ fn rasterize(
             let mut setups = Vec::with_capacity(range.len());
             setups.extend(range.filter(|&t| include(t)).filter_map(|t| {
                 included += 1;
-                setup(geometry, t, proj, shift)
+                setup(geometry, &image, t, proj, shift)
             }));
             (setups, included)
         })
