@@ -39,7 +39,9 @@ impl GBuffer {
 /// Renders the G-buffer of all triangles of `geometry` through the camera projector.
 pub fn render_gbuffer(geometry: &Geometry, camera: &Projector, counters: &mut Counters) -> GBuffer {
     let (w, h) = (camera.width as usize, camera.height as usize);
-    let mut normal = vec![DVec3::ZERO; w * h];
+    // Filled in parallel: 11 MB at 800 x 600.
+    let mut normal = Vec::with_capacity(w * h);
+    normal.par_extend(rayon::iter::repeat_n(DVec3::ZERO, w * h));
     let nearest = rasterize_nearest_with_normals(geometry, camera, &mut normal, counters);
     let position = nearest
         .triangle

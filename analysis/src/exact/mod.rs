@@ -99,6 +99,7 @@ use crate::raytrace::RayTrace;
 use crate::reference::{Reference, ReferenceError, ReferenceImage};
 use instrumentation::Recorder;
 use methods::Frame;
+use rayon::prelude::*;
 use shadow::Setup;
 use std::ops::Range;
 
@@ -146,7 +147,6 @@ impl ScreenPolygons {
     /// the whole in parallel (joined one contour at a time, `bumpy`'s 530,688 screen
     /// triangles cost as much as projecting them).
     pub(crate) fn concat<'a>(parts: impl IntoIterator<Item = &'a ScreenPolygons>) -> Self {
-        use rayon::prelude::*;
         let parts: Vec<&ScreenPolygons> = parts.into_iter().collect();
         let contours: usize = parts.iter().map(|p| p.len()).sum();
         let points: usize = parts.iter().map(|p| p.points.len()).sum();
@@ -293,10 +293,13 @@ fn evaluate(
                 .map(|((o, _), p)| {
                     let mine = |k: usize| planar_object[k] == Some(*o);
                     let (area, work) = coverage::union_area(p, w, h, mine);
-                    for k in (0..w * h).filter(|&k| mine(k)) {
-                        shadowed[k] = area[k];
-                        evaluated[k] = true;
-                    }
+                    shadowed.par_iter_mut().zip(&mut evaluated).zip(&area).enumerate().for_each(
+                        |(k, ((s, e), &a))| {
+                            if mine(k) {
+                                (*s, *e) = (a, true);
+                            }
+                        },
+                    );
                     work
                 })
                 .collect()
@@ -459,7 +462,6 @@ fn edge_casters(
     grid: &casters::CasterGrid<'_>,
     edge_overlaps: &[(u32, u32)],
 ) -> Vec<bool> {
-    use rayon::prelude::*;
     let g = &frame.geometry;
     let screen = shadow::Screen::new(frame);
     let w = frame.width() as usize;
