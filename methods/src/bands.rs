@@ -7,13 +7,14 @@ use rayon::prelude::*;
 /// Items per run of the parallel binning: each run counts and places its own items.
 pub const RUN: usize = 1 << 14;
 
-/// Bins items `0..count` into bands of `band` rows (at least 1): `rows(item)` gives the inclusive row range an item may touch (already clamped to `0..height`). Returns
-/// `(offsets, items)` in CSR layout: band `b`'s items are `items[offsets[b]..offsets[b + 1]]`,
-/// in ascending order.
+/// Bins items `0..count` into bands of `band` rows (at least 1): `rows(item)` gives the
+/// inclusive row range an item may touch (already clamped to `0..height`). Returns `(offsets,
+/// items)` in CSR layout: band `b`'s items are `items[offsets[b]..offsets[b + 1]]`, in
+/// ascending order.
 ///
-/// In parallel over runs of [`RUN`] items: each run counts its items per band, and writes them into its
-/// own part of every band (the runs' parts follow each other in run order, so each band stays
-/// in item order).
+/// In parallel over runs of [`RUN`] items: each run counts its items per band, and writes them
+/// into its own part of every band (the runs' parts follow each other in run order, so each
+/// band stays in item order).
 pub fn bin_by_band(
     count: usize,
     height: usize,
