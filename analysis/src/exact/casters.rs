@@ -162,7 +162,7 @@ impl<'a> CasterGrid<'a> {
             .reduce(|| empty, join);
         let all: Vec<u32> =
             (0..g.len() as u32).into_par_iter().filter(|&t| frame.is_caster(t as usize)).collect();
-        let (boxes, near, magnitude, images) = per_triangle(frame, &space);
+        let PerTriangle { boxes, near, magnitude, images } = PerTriangle::new(frame, &space);
         let (ex, ey) = (region[2] - region[0], region[3] - region[1]);
         let valid = ex.is_finite() && ey.is_finite() && ex >= 0.0 && ey >= 0.0;
         let target = all.len().clamp(1, MAX_CELLS) as f64;
@@ -400,54 +400,60 @@ impl LitSide {
     }
 }
 
-/// Every triangle's light-space box, nearest depth and the largest magnitude of its box's
-/// coordinates, and under a directional light its image, in one parallel pass over its
-/// corners: the box and depth of its image for a caster with a bounded one; unbounded, `-inf`
-/// and 0 otherwise (a caster without a bounded image goes to the list every receiver scans,
-/// the other triangles are never listed).
-#[allow(clippy::type_complexity)]
-fn per_triangle(
-    frame: &Frame<'_>,
-    space: &Space,
-) -> (Vec<[f64; 4]>, Vec<f64>, Vec<f64>, Vec<[[f64; 2]; 3]>) {
-    const CHUNK: usize = 1 << 12;
-    let g = &frame.geometry;
-    let n = g.len();
-    let directional = matches!(space, Space::Directional { .. });
-    // Zeroed vectors come from fresh zeroed pages, first touched by the pass below.
-    let mut boxes = vec![[0.0; 4]; n];
-    let mut near = vec![0.0; n];
-    let mut magnitude = vec![0.0; n];
-    let mut images = vec![[[0.0; 2]; 3]; if directional { n } else { 0 }];
-    let image_chunks: Vec<Option<&mut [[[f64; 2]; 3]]>> = if directional {
-        images.chunks_mut(CHUNK).map(Some).collect()
-    } else {
-        (0..n.div_ceil(CHUNK)).map(|_| None).collect()
-    };
-    let unbounded = [f64::NEG_INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::INFINITY];
-    boxes
-        .par_chunks_mut(CHUNK)
-        .zip(near.par_chunks_mut(CHUNK))
-        .zip(magnitude.par_chunks_mut(CHUNK))
-        .zip(image_chunks)
-        .enumerate()
-        .for_each(|(k, (((b, z), m), mut im))| {
-            for i in 0..b.len() {
-                let t = k * CHUNK + i;
-                let corners = g.corners(t);
-                if let Some(im) = im.as_deref_mut() {
-                    im[i] = space.image(&corners);
-                }
-                (b[i], z[i], m[i]) = match frame.is_caster(t).then(|| space.bounds(&corners)) {
-                    Some(Some((cb, cz))) => {
-                        let mag = cb.iter().map(|v| v.abs()).filter(|v| v.is_finite());
-                        (cb, cz[0], mag.fold(0.0, f64::max))
+/// The grid's per-triangle arrays (see [`CasterGrid`]'s fields of the same names).
+struct PerTriangle {
+    boxes: Vec<[f64; 4]>,
+    near: Vec<f64>,
+    magnitude: Vec<f64>,
+    images: Vec<[[f64; 2]; 3]>,
+}
+
+impl PerTriangle {
+    /// Every triangle's light-space box, nearest depth and the largest magnitude of its box's
+    /// coordinates, and under a directional light its image, in one parallel pass over its
+    /// corners: the box and depth of its image for a caster with a bounded one; unbounded,
+    /// `-inf` and 0 otherwise (a caster without a bounded image goes to the list every
+    /// receiver scans, the other triangles are never listed).
+    fn new(frame: &Frame<'_>, space: &Space) -> Self {
+        const CHUNK: usize = 1 << 12;
+        let g = &frame.geometry;
+        let n = g.len();
+        let directional = matches!(space, Space::Directional { .. });
+        // Zeroed vectors come from fresh zeroed pages, first touched by the pass below.
+        let mut boxes = vec![[0.0; 4]; n];
+        let mut near = vec![0.0; n];
+        let mut magnitude = vec![0.0; n];
+        let mut images = vec![[[0.0; 2]; 3]; if directional { n } else { 0 }];
+        let image_chunks: Vec<Option<&mut [[[f64; 2]; 3]]>> = if directional {
+            images.chunks_mut(CHUNK).map(Some).collect()
+        } else {
+            (0..n.div_ceil(CHUNK)).map(|_| None).collect()
+        };
+        let unbounded = [f64::NEG_INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::INFINITY];
+        boxes
+            .par_chunks_mut(CHUNK)
+            .zip(near.par_chunks_mut(CHUNK))
+            .zip(magnitude.par_chunks_mut(CHUNK))
+            .zip(image_chunks)
+            .enumerate()
+            .for_each(|(k, (((b, z), m), mut im))| {
+                for i in 0..b.len() {
+                    let t = k * CHUNK + i;
+                    let corners = g.corners(t);
+                    if let Some(im) = im.as_deref_mut() {
+                        im[i] = space.image(&corners);
                     }
-                    _ => (unbounded, f64::NEG_INFINITY, 0.0),
-                };
-            }
-        });
-    (boxes, near, magnitude, images)
+                    (b[i], z[i], m[i]) = match frame.is_caster(t).then(|| space.bounds(&corners)) {
+                        Some(Some((cb, cz))) => {
+                            let mag = cb.iter().map(|v| v.abs()).filter(|v| v.is_finite());
+                            (cb, cz[0], mag.fold(0.0, f64::max))
+                        }
+                        _ => (unbounded, f64::NEG_INFINITY, 0.0),
+                    };
+                }
+            });
+        Self { boxes, near, magnitude, images }
+    }
 }
 
 /// The grid's cells' lists in CSR layout (`offsets`, `items`) over `cells = [nx, ny]`: caster
