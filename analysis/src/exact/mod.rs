@@ -300,13 +300,8 @@ fn evaluate(
     if planar.is_none() {
         rec.stages.skip(planar_stages[0]);
     }
-    let (planar_object, planes, polys) = match planar {
-        Some((planar_object, planes, polys, grazing)) => {
-            grazing_pixels += grazing;
-            (planar_object, planes, polys)
-        }
-        None => (Vec::new(), Vec::new(), Vec::new()),
-    };
+    let (planar_object, planes, polys, grazing) = planar.unwrap_or_default();
+    grazing_pixels += grazing;
     if planes.is_empty() {
         rec.stages.skip(planar_stages[1]);
     } else {
