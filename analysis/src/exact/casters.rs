@@ -18,7 +18,10 @@
 //! bit for bit. The boxes of the casters are binned into a uniform grid over the receivers'
 //! region, about one cell per caster; a caster spanning many cells (a ground plane) and, under
 //! a spot light, a caster reaching behind the light's plane are kept in a list every receiver
-//! scans.
+//! scans. Boxes are clamped to the grid's cells, casters' and queries' alike: clamping is
+//! monotone, so two overlapping boxes keep a cell in common even outside the region (a
+//! caster beyond it is listed in the border cells; a query for a point outside it, as the
+//! rays of `exact`'s edge pixels make, scans the border cell it clamps to).
 //! Receivers reaching behind the spot's plane scan every caster. The test is conservative: it
 //! only skips casters whose shadow cannot fall on the receiver.
 
@@ -112,8 +115,6 @@ pub(crate) struct CasterGrid<'a> {
     space: Space,
     /// Lower corner of the grid.
     origin: [f64; 2],
-    /// Upper corner of the grid.
-    end: [f64; 2],
     /// Cells per unit along x and y.
     scale: [f64; 2],
     /// Cells along x and y.
@@ -192,7 +193,6 @@ impl<'a> CasterGrid<'a> {
             light: &frame.scene.light,
             space,
             origin: [region[0], region[1]],
-            end: [region[2], region[3]],
             scale,
             cells: [nx, ny],
             offsets: Vec::new(),
@@ -205,42 +205,33 @@ impl<'a> CasterGrid<'a> {
             all: Vec::new(),
         };
         let max_span = MAX_SPAN.max(nx * ny / 16);
-        // The cells caster `t` is listed in: `Some(None)` for `global`, `None` for none (it
-        // lies outside the receivers' region and shadows none of them).
-        let span = |t: u32| -> Option<Option<[usize; 4]>> {
+        // The cells caster `t` is listed in; `None` for `global`.
+        let span = |t: u32| -> Option<[usize; 4]> {
             if !valid || grid.near[t as usize] == f64::NEG_INFINITY {
-                return Some(None);
+                return None;
             }
-            grid.cell_range(&grid.boxes[t as usize]).map(|r| {
-                let n = (r[2] - r[0] + 1) * (r[3] - r[1] + 1);
-                (n <= max_span).then_some(r)
-            })
+            let r = grid.cell_range(&grid.boxes[t as usize]);
+            let n = (r[2] - r[0] + 1) * (r[3] - r[1] + 1);
+            (n <= max_span).then_some(r)
         };
-        let spans: Vec<Option<Option<[usize; 4]>>> = all.par_iter().map(|&t| span(t)).collect();
-        let global: Vec<u32> = all
-            .iter()
-            .zip(&spans)
-            .filter(|(_, s)| matches!(s, Some(None)))
-            .map(|(&t, _)| t)
-            .collect();
-        let listed = |k: usize| spans[k].flatten();
+        let spans: Vec<Option<[usize; 4]>> = all.par_iter().map(|&t| span(t)).collect();
+        let global: Vec<u32> =
+            all.iter().zip(&spans).filter(|(_, s)| s.is_none()).map(|(&t, _)| t).collect();
+        let listed = |k: usize| spans[k];
         let (offsets, items) = fill_cells(&all, listed, [nx, ny]);
         (grid.offsets, grid.items, grid.global, grid.all) = (offsets, items, global, all);
         grid
     }
 
-    /// The cells `[x0, y0, x1, y1]` (inclusive) a light-space box overlaps; `None` when it
-    /// misses the grid's region.
-    fn cell_range(&self, b: &[f64; 4]) -> Option<[usize; 4]> {
-        let (lo, hi) = (self.origin, self.end);
-        if b[2] < lo[0] || b[0] > hi[0] || b[3] < lo[1] || b[1] > hi[1] {
-            return None;
-        }
+    /// The cells `[x0, y0, x1, y1]` (inclusive) a light-space box overlaps, the box clamped to
+    /// the grid's region.
+    fn cell_range(&self, b: &[f64; 4]) -> [usize; 4] {
+        let lo = self.origin;
         let cell = |v: f64, axis: usize| -> usize {
             let n = self.cells[axis];
             ((v - lo[axis]) * self.scale[axis]).floor().clamp(0.0, (n - 1) as f64) as usize
         };
-        Some([cell(b[0], 0), cell(b[1], 1), cell(b[2], 0), cell(b[3], 1)])
+        [cell(b[0], 0), cell(b[1], 1), cell(b[2], 0), cell(b[3], 1)]
     }
 
     /// The casters that can shadow receiver triangle `tri`, sorted, without duplicates, into
@@ -280,7 +271,8 @@ impl<'a> CasterGrid<'a> {
                 && b[1] <= cb[3] + m
         };
         out.extend(self.global.iter().copied().filter(|&c| reach(c)));
-        if let Some(r) = self.cell_range(&b) {
+        if b[0] <= b[2] && b[1] <= b[3] {
+            let r = self.cell_range(&b);
             let nx = self.cells[0];
             for y in r[1]..=r[3] {
                 for x in r[0]..=r[2] {
@@ -722,6 +714,36 @@ mod tests {
             queried += 1;
         }
         assert!(queried > 1000 && found > 100, "{queried} queries, {found} casters");
+    }
+
+    /// A grid over a corner of the scene answers queries outside its region (triangles and
+    /// single points, as the edge pixels' shadow rays ask) with the casters a grid over the
+    /// whole scene returns: the boxes of both are clamped to the cells.
+    #[test]
+    fn queries_outside_the_region_find_what_a_covering_grid_finds() {
+        use instrumentation::Recorder;
+        for name in ["bumpy", "spot-spheres"] {
+            let scene = scenes::load(name).expect("built-in");
+            let frame = Frame::new(&scene, 80, 60, &mut Recorder::default());
+            let g = &frame.geometry;
+            let n = g.len() as u32;
+            let corner: Vec<u32> = (0..n / 50).collect();
+            let all: Vec<u32> = (0..n).collect();
+            let (small, whole) = (CasterGrid::new(&frame, &corner), CasterGrid::new(&frame, &all));
+            let (mut a, mut b) = (Candidates::default(), Candidates::default());
+            let mut found = 0;
+            for t in (n / 2..n).step_by(61) {
+                let tri = g.corners(t as usize);
+                let point = [(tri[0] + tri[1] + tri[2]) / 3.0; 4];
+                for part in [None, Some(&point)] {
+                    small.query_part(&tri, part, &mut a);
+                    whole.query_part(&tri, part, &mut b);
+                    assert_eq!(a.casters, b.casters, "{name}: triangle {t}");
+                    found += a.casters.len();
+                }
+            }
+            assert!(found > 100, "{name}: {found} casters found");
+        }
     }
 
     /// A caster whose image is apart from the receiver's, and one the receiver lies on the lit
