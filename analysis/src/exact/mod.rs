@@ -28,14 +28,16 @@
 //!    its plane by the same machinery, and the area their union covers within the receiver's
 //!    screen polygon is computed in each pixel it tiles, by the same cuts; each pixel adds the
 //!    areas of the triangles that tile it. Stages `caster grid`, `surface shadows`.
-//! 4. **Edge pixels**: `raytrace` on the `edge` pixels only (its stages `BVH build`, `ray
-//!    tracing`), when [`ExactCoverage::edge`] is set. When the (pixel, triangle) overlaps of
-//!    the edge pixels are far fewer than the triangles (on `bumpy`, 10,304 of 530,688
-//!    triangles are kept), its BVHs hold only the triangles those rays can meet (stage `edge
-//!    casters`): the triangles overlapping the pixels, where every camera ray's hit lies, and
-//!    the casters the light-space grid returns for the part of each the pixel sees, every
-//!    caster that can shadow a point of it. The lit fractions are those of a trace among all
-//!    triangles, bit for bit (tested); the BVH build on `bumpy` went from 420 to 9 ms.
+//! 4. **Edge pixels**: `raytrace` on the `edge` pixels only, when [`ExactCoverage::edge`] is
+//!    set ([`edges`]). When their sub-samples are few beside the triangles, each ray is tested
+//!    against the triangles overlapping its pixel, where every camera ray's hit lies, and the
+//!    casters the light-space grid returns for its shadow ray's start, without BVHs (stage
+//!    `ray tracing`; on `bunny-plane` at 800 x 600, 2,873 edge pixels: 18 ms of BVH build and
+//!    tracing became 2.4). Otherwise, when the (pixel, triangle) overlaps are far fewer than
+//!    the triangles (on `bumpy` at 64 sub-samples), the BVHs hold only the triangles those
+//!    rays can meet (stage `edge casters`; `bumpy`'s BVH build went from 420 to 9 ms), else
+//!    every triangle (stages `BVH build`, `ray tracing`). The lit fractions are those of a
+//!    trace among all triangles, bit for bit (tested).
 //! 5. **Image assembly**: every pixel's lit fraction from its class's result (stage `image
 //!    assembly`).
 //!
@@ -99,6 +101,7 @@ mod casters;
 pub mod classes;
 mod clip;
 mod coverage;
+mod edges;
 mod shadow;
 mod surface;
 
@@ -340,16 +343,22 @@ fn evaluate(
 
     // Surface triangles.
     let edges: Vec<bool> = class.par_iter().map(|&c| c == PixelClass::Edge).collect();
-    let trace_edges = edge.is_some() && edges.contains(&true);
-    // The edge pixels' rays are traced among the triangles they can meet when finding those
-    // pays: it costs a grid query per (edge pixel, triangle) pair and saves a BVH build over
-    // every triangle, so only when the pairs are far fewer than the triangles.
-    let edge_subset =
-        trace_edges && classes.edge_overlaps.len() * EDGE_SUBSET_RATIO < frame.geometry.len();
+    let edge_pixels = edges.par_iter().filter(|&&e| e).count();
+    // How the edge pixels' rays find the triangles they can meet (see `edges`).
+    let edge_trace = edge.filter(|_| edge_pixels > 0).map(|rt| {
+        let how = edges::EdgeTrace::choose(
+            edge_pixels,
+            rt.pattern.rate() as usize,
+            classes.edge_overlaps.len(),
+            frame.geometry.len(),
+        );
+        (rt, how)
+    });
+    let edge_lists = matches!(edge_trace, Some((_, how)) if how != edges::EdgeTrace::All);
     // The grid serves the surface receivers (the triangles tiling the `surface` pixels) and
     // the triangles the edge pixels' rays can meet. Both lists are marked, then listed in
     // ascending order (sorting the pixels' tiles with their repeats cost 30 ms on bumpy).
-    let built = (class.contains(&PixelClass::Surface) || edge_subset).then(|| {
+    let built = (class.contains(&PixelClass::Surface) || edge_lists).then(|| {
         rec.stages.time("caster grid", || {
             let mut marked = vec![false; frame.geometry.len()];
             for k in (0..w * h).filter(|&k| class[k] == PixelClass::Surface) {
@@ -359,7 +368,13 @@ fn evaluate(
                 (0..marked.len() as u32).into_par_iter().filter(|&t| marked[t as usize]).collect()
             };
             let receivers = listed(&marked);
-            let all = if edge_subset {
+            // The grid's region covers the receivers, and the edge pixels' triangles when the
+            // BVHs are built among the casters of their parts, or when there is no receiver.
+            // The listed tracer's queries are points, which the grid answers outside its
+            // region too: a ground plane's two triangles would stretch the region over the
+            // frame and coarsen every receiver's cells.
+            let among = matches!(edge_trace, Some((_, edges::EdgeTrace::Among)));
+            let all = if among || (edge_lists && receivers.is_empty()) {
                 classes.edge_overlaps.iter().for_each(|&(_, t)| marked[t as usize] = true);
                 listed(&marked)
             } else {
@@ -419,13 +434,22 @@ fn evaluate(
     }
     // Edge pixels, traced among the triangles they overlap and the casters that can shadow
     // those.
-    let traced = match edge {
-        Some(rt) if trace_edges => {
-            let among = match &grid {
-                Some(grid) if edge_subset => {
-                    let among = rec
-                        .stages
-                        .time("edge casters", || edge_casters(frame, grid, &classes.edge_overlaps));
+    let traced = match (edge_trace, &grid) {
+        (Some((rt, edges::EdgeTrace::Listed)), Some(grid)) => {
+            rec.stages.skip("edge casters");
+            rec.notes.push(format!(
+                "exact: {edge_pixels} edge pixels traced against the triangles each overlaps \
+                 and the casters the grid lists for each, without BVHs"
+            ));
+            let lists = edges::EdgeLists::new(frame, grid, &classes.edge_overlaps);
+            Some(rt.evaluate_pixels_listed(frame, &edges, &lists, rec)?)
+        }
+        (Some((rt, how)), grid) => {
+            let among = match grid {
+                Some(grid) if how == edges::EdgeTrace::Among => {
+                    let among = rec.stages.time("edge casters", || {
+                        edges::edge_casters(frame, grid, &classes.edge_overlaps)
+                    });
                     rec.notes.push(format!(
                         "exact: edge pixels traced among {} of {} triangles",
                         among.iter().filter(|&&a| a).count(),
@@ -440,7 +464,7 @@ fn evaluate(
             };
             Some(rt.evaluate_pixels_among(frame, Some(&edges), among.as_deref(), rec)?)
         }
-        _ => {
+        (None, _) => {
             rec.stages.skip("edge pixels (raytrace)");
             None
         }
@@ -481,92 +505,9 @@ fn evaluate(
     })
 }
 
-/// Edge pixels are traced among the triangles they can meet when the (pixel, triangle)
-/// overlaps of the edge pixels, times this, are fewer than the triangles.
-const EDGE_SUBSET_RATIO: usize = 8;
-
-/// The triangles the rays of the edge pixels can meet, as a mask over the triangles: those
-/// overlapping the pixels (`edge_overlaps`, `(pixel, triangle)`: every camera ray's hit lies
-/// on one of them) and the casters the grid returns for the part of each such triangle the
-/// pixel sees (every caster that can shadow a point of it). That part lies within the
-/// quadrilateral where the rays through the pixel's corners meet the triangle's plane, when
-/// all four meet it in front of the camera; otherwise the whole triangle is asked for.
-fn edge_casters(
-    frame: &Frame<'_>,
-    grid: &casters::CasterGrid<'_>,
-    edge_overlaps: &[(u32, u32)],
-) -> Vec<bool> {
-    let g = &frame.geometry;
-    let screen = shadow::Screen::new(frame);
-    let w = frame.width() as usize;
-    let found: Vec<Vec<u32>> = edge_overlaps
-        .par_chunks(256)
-        .map_init(casters::Candidates::default, |candidates, run| {
-            let mut found = Vec::new();
-            for &(k, t) in run {
-                let tri = g.corners(t as usize);
-                let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
-                let part = screen.corner_rays(k as usize % w, k as usize / w).map(|ray| {
-                    let depth = shadow::plane_depth(&ray, n, tri[0]);
-                    (depth.is_finite() && depth > 0.0).then(|| ray.origin + depth * ray.direction)
-                });
-                let part = match part {
-                    [Some(a), Some(b), Some(c), Some(d)] => Some([a, b, c, d]),
-                    _ => None,
-                };
-                grid.query_part(&tri, part.as_ref(), candidates);
-                found.push(t);
-                found.extend_from_slice(&candidates.casters);
-            }
-            found
-        })
-        .collect();
-    let mut among = vec![false; g.len()];
-    for &t in found.iter().flatten() {
-        among[t as usize] = true;
-    }
-    among
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// The edge pixels traced among the triangles `edge_casters` keeps give the same lit
-    /// fractions, bit for bit, as traced among all triangles: directional and spot lights,
-    /// self-shadowing surfaces, planes seen at grazing angles, 16 sub-samples per pixel.
-    #[test]
-    fn edge_pixels_among_their_triangles_equal_all_triangles() {
-        let pattern = methods::pattern::SamplePattern::new(16, methods::pattern::PatternKind::Grid)
-            .expect("rate");
-        let rt = RayTrace { pattern };
-        for name in ["bumpy", "cage", "spot-spheres", "plane-square"] {
-            let scene = scenes::load(name).expect("built-in");
-            let frame = Frame::new(&scene, 160, 120, &mut Recorder::default());
-            let classes = classify(&frame);
-            let edges: Vec<bool> = classes.class.iter().map(|&c| c == PixelClass::Edge).collect();
-            let mut triangles: Vec<u32> = classes.edge_overlaps.iter().map(|&(_, t)| t).collect();
-            triangles.sort_unstable();
-            triangles.dedup();
-            let grid = casters::CasterGrid::new(&frame, &triangles);
-            let among = edge_casters(&frame, &grid, &classes.edge_overlaps);
-            let kept = among.iter().filter(|&&a| a).count();
-            let mut rec = Recorder::default();
-            let some = rt.evaluate_pixels_among(&frame, Some(&edges), Some(&among), &mut rec);
-            let all = rt.evaluate_pixels(&frame, Some(&edges), &mut Recorder::default());
-            let (some, all) = (some.expect("traces"), all.expect("traces"));
-            let traced = edges.iter().filter(|&&e| e).count();
-            assert!(traced > 50, "{name}: {traced} edge pixels");
-            assert!(some.lit == all.lit && some.evaluated == all.evaluated, "{name}");
-            assert!(
-                some.lit.iter().zip(&edges).any(|(&l, &e)| e && l < 1.0),
-                "{name}: some edge pixel is shadowed"
-            );
-            if name == "bumpy" {
-                assert!(kept * 4 < among.len(), "{name}: {kept} of {}", among.len());
-            }
-        }
-    }
 
     /// On the scene's main planar receiver, `exact` takes the values of the covered areas of
     /// every caster's shadow on the receiver's plane over the whole frame, as when it covered

@@ -85,7 +85,7 @@ fn corners_box(c: [DVec3; 3]) -> (DVec3, DVec3) {
 }
 
 /// Whether triangle `t` of `geometry` can be hit: finite corners and a non-zero area.
-fn hittable(geometry: &Geometry, t: usize) -> bool {
+pub(crate) fn hittable(geometry: &Geometry, t: usize) -> bool {
     let [a, b, c] = geometry.corners(t);
     if !(a.is_finite() && b.is_finite() && c.is_finite()) {
         return false;

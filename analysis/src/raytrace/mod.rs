@@ -23,7 +23,8 @@
 //! a surface. With transparency, `transmittance` is the per-pixel mean RGB transmittance.
 //!
 //! [`RayTrace::sample_image`] returns every sub-sample's hit triangle and light instead, for
-//! comparisons sample by sample.
+//! comparisons sample by sample. `exact` traces its few `edge` pixels by [`listed`]: each ray
+//! tested against the triangles it lists for it, without BVHs, every decision the same.
 //!
 //! Stages: [`STAGE_BVH_BUILD`] ("BVH build": binary BVHs built by obvhs over all triangles
 //! for camera rays and, when some triangle does not cast shadows, over the casters, each set
@@ -176,10 +177,12 @@
 
 mod accel;
 mod bvh;
+mod listed;
 mod memory;
 mod packet;
 mod ray;
 
+pub(crate) use listed::TriangleLists;
 pub use memory::{memory_estimate, AllocationError};
 
 use crate::reference::{Reference, ReferenceError, ReferenceImage};
@@ -249,27 +252,25 @@ struct Tracer<'a> {
     camera_accel: Accel,
     /// The casters' BVH, when some triangle does not cast shadows (else the camera's).
     caster_accel: Option<Accel>,
+    rays: RaySetup,
+    /// The run's buffers, allocated fallibly.
+    alloc: Allocator,
+}
+
+/// How a frame's camera and shadow rays are made: the same numbers whether they are traced
+/// through BVHs ([`Tracer`]) or against listed triangles ([`listed`]).
+#[derive(Debug, Clone, Copy)]
+struct RaySetup {
     light: LightSource,
     /// Camera rays start this far along their direction (orthographic cameras start behind
     /// the scene), and accept hits from `camera_tmin`.
     start_shift: f64,
     camera_tmin: f64,
-    /// The run's buffers, allocated fallibly.
-    alloc: Allocator,
 }
 
-impl<'a> Tracer<'a> {
-    /// Builds the BVHs (stage [`STAGE_BVH_BUILD`]) and the ray set-up for `frame`, whose rays
-    /// will trace `samples` sub-samples, over the triangles `t` with `among[t]` (all with
-    /// `None`).
-    fn new(
-        frame: &'a Frame<'a>,
-        pattern: &'a SamplePattern,
-        samples: u64,
-        among: Option<&[bool]>,
-        rec: &mut Recorder,
-    ) -> Result<Self, ReferenceError> {
-        let among = |t: usize| among.is_none_or(|a| a[t]);
+impl RaySetup {
+    /// The set-up of `frame`'s rays; an error when its light has no direction or position.
+    fn new(frame: &Frame<'_>) -> Result<Self, ReferenceError> {
         let light = match frame.scene.light {
             Light::Directional { direction } => {
                 let towards =
@@ -292,9 +293,66 @@ impl<'a> Tracer<'a> {
                 LightSource::At(position)
             }
         };
+        // Camera rays: perspective from depth `near`; orthographic from behind the scene.
+        let camera = &frame.camera;
+        let (start_shift, camera_tmin) = match camera.kind {
+            ProjectionKind::Perspective { .. } => (0.0, camera.near),
+            ProjectionKind::Orthographic { .. } => {
+                let (lo, hi) = bounds(&frame.geometry).unwrap_or((DVec3::ZERO, DVec3::ZERO));
+                let nearest = scenes::mesh::box_corners(lo, hi)
+                    .iter()
+                    .map(|&c| camera.depth_of(c))
+                    .fold(f64::INFINITY, f64::min);
+                (nearest.min(0.0) - (hi - lo).length() * 1e-3, 0.0)
+            }
+        };
+        Ok(Self { light, start_shift, camera_tmin })
+    }
+
+    /// The camera ray of sub-sample `s` of pixel `(i, j)`; `None` when it has none (the
+    /// sub-sample is background).
+    #[inline]
+    fn camera(
+        &self,
+        frame: &Frame<'_>,
+        pattern: &SamplePattern,
+        (i, j, s): (u32, u32, usize),
+    ) -> Option<TraceRay> {
+        let r = frame.camera.ray(pattern.point(i, j, s));
+        TraceRay::new(r.origin + self.start_shift * r.direction, r.direction)
+    }
+
+    /// The shadow ray from the point where `camera` meets a surface at `t`, with the range
+    /// `(tmin, tmax)` of the hits that block it; `None` when the point is lit without a ray
+    /// (it lies at the light, or the ray is degenerate).
+    #[inline]
+    fn shadow(&self, camera: &TraceRay, t: f64) -> Option<(TraceRay, (f64, f64))> {
+        let (origin, p) = (camera.origin, camera.at(t));
+        let (ray, tmax) = match self.light {
+            LightSource::Towards(towards) => (towards.from(p), f64::INFINITY),
+            LightSource::At(q) => {
+                (scenes::direction::unit(q - p).and_then(|d| TraceRay::new(p, d)), (q - p).length())
+            }
+        };
+        let tmin = shadow_offset(origin, p);
+        ray.filter(|_| tmax > tmin).map(|ray| (ray, (tmin, tmax)))
+    }
+}
+
+impl<'a> Tracer<'a> {
+    /// Builds the BVHs (stage [`STAGE_BVH_BUILD`]) and the ray set-up for `frame`, whose rays
+    /// will trace `samples` sub-samples, over the triangles `t` with `among[t]` (all with
+    /// `None`).
+    fn new(
+        frame: &'a Frame<'a>,
+        pattern: &'a SamplePattern,
+        samples: u64,
+        among: Option<&[bool]>,
+        rec: &mut Recorder,
+    ) -> Result<Self, ReferenceError> {
+        let among = |t: usize| among.is_none_or(|a| a[t]);
+        let rays = RaySetup::new(frame)?;
         let geometry = &frame.geometry;
-        let (lo, hi) = bounds(geometry).unwrap_or((DVec3::ZERO, DVec3::ZERO));
-        let diagonal = (hi - lo).length();
         let transparency = frame.effects.transparency;
         let objects = &frame.scene.objects;
         let pass = |t: usize| {
@@ -302,19 +360,6 @@ impl<'a> Tracer<'a> {
                 objects.get(geometry.object[t] as usize).map_or(0.0, |o| 1.0 - o.material.opacity)
             } else {
                 0.0
-            }
-        };
-
-        // Camera rays: perspective from depth `near`; orthographic from behind the scene.
-        let camera = &frame.camera;
-        let (start_shift, camera_tmin) = match camera.kind {
-            ProjectionKind::Perspective { .. } => (0.0, camera.near),
-            ProjectionKind::Orthographic { .. } => {
-                let nearest = scenes::mesh::box_corners(lo, hi)
-                    .iter()
-                    .map(|&c| camera.depth_of(c))
-                    .fold(f64::INFINITY, f64::min);
-                (nearest.min(0.0) - diagonal * 1e-3, 0.0)
             }
         };
 
@@ -333,16 +378,7 @@ impl<'a> Tracer<'a> {
             Ok::<_, AllocationError>((all, casters))
         })?;
 
-        Ok(Self {
-            frame,
-            pattern,
-            camera_accel,
-            caster_accel,
-            light,
-            start_shift,
-            camera_tmin,
-            alloc,
-        })
+        Ok(Self { frame, pattern, camera_accel, caster_accel, rays, alloc })
     }
 
     /// Pixels per packet tile `(width, height)` at `rate` sub-samples per pixel: `PACKET /
@@ -396,10 +432,8 @@ impl<'a> Tracer<'a> {
         rays.clear();
         of.clear();
         hits.clear();
-        for &(i, j, s) in ids.iter() {
-            let r = self.frame.camera.ray(self.pattern.point(i, j, s));
-            let origin = r.origin + self.start_shift * r.direction;
-            if let Some(ray) = TraceRay::new(origin, r.direction) {
+        for &id in ids.iter() {
+            if let Some(ray) = self.rays.camera(self.frame, self.pattern, id) {
                 rays.push(ray);
                 of.push(hits.len());
             }
@@ -407,7 +441,7 @@ impl<'a> Tracer<'a> {
         }
         best.clear();
         best.resize(rays.len(), None);
-        let camera_limits = (self.camera_tmin, f64::INFINITY);
+        let camera_limits = (self.rays.camera_tmin, f64::INFINITY);
         self.camera_accel.closest(rays, camera_limits, best, scratch, tests);
 
         // The shadow rays replace the camera rays in `rays` and `of`.
@@ -416,21 +450,12 @@ impl<'a> Tracer<'a> {
         skip.clear();
         for c in 0..rays.len() {
             let Some((t, id)) = best[c] else { continue };
-            let (origin, p) = (rays[c].origin, rays[c].at(t));
             let k = of[c];
             hits[k] = SampleHit { triangle: Some(id), light: 1.0, rays: 2 };
-            let (ray, tmax) = match self.light {
-                LightSource::Towards(towards) => (towards.from(p), f64::INFINITY),
-                LightSource::At(q) => (
-                    scenes::direction::unit(q - p).and_then(|d| TraceRay::new(p, d)),
-                    (q - p).length(),
-                ),
-            };
-            let tmin = shadow_offset(origin, p);
             // A point at the light (or a degenerate ray) is lit.
-            if let Some(ray) = ray.filter(|_| tmax > tmin) {
+            if let Some((ray, range)) = self.rays.shadow(&rays[c], t) {
                 (rays[n], of[n]) = (ray, k);
-                limits.push((tmin, tmax));
+                limits.push(range);
                 skip.push(id);
                 n += 1;
             }
