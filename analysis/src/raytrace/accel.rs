@@ -331,7 +331,9 @@ fn split(
 /// Cuts `order` (indices into `boxes`, the triangles of `order[0]` onwards being slots
 /// `start` onwards) into parts of at most `max_part` triangles, halving it at the median
 /// of the box centres along the axis where they spread most, and again each half; each part's
-/// range of slots goes to `parts`, each halving to `splits` (its halves, in pre-order).
+/// range of slots goes to `parts`, each halving to `splits` (its halves, in pre-order). The
+/// halves are cut in parallel (on random-1m the serial cuts took 72 ms of the 345 of the
+/// BVH build at 2 threads), each into lists of its own, appended in order.
 fn cut(
     boxes: &[Aabb],
     order: &mut [u32],
@@ -345,9 +347,14 @@ fn cut(
         return Piece::Part(parts.len() - 1);
     }
     let centre = |k: u32| boxes[k as usize].min + boxes[k as usize].max;
-    let (lo, hi) = order.iter().fold((Vec3A::INFINITY, Vec3A::NEG_INFINITY), |(lo, hi), &k| {
-        (lo.min(centre(k)), hi.max(centre(k)))
-    });
+    // Minima and maxima: the same in any order of reduction.
+    let (lo, hi) = order
+        .par_iter()
+        .fold(
+            || (Vec3A::INFINITY, Vec3A::NEG_INFINITY),
+            |(lo, hi), &k| (lo.min(centre(k)), hi.max(centre(k))),
+        )
+        .reduce(|| (Vec3A::INFINITY, Vec3A::NEG_INFINITY), |a, b| (a.0.min(b.0), a.1.max(b.1)));
     let spread = hi - lo;
     let axis = if spread.x >= spread.y && spread.x >= spread.z {
         0
@@ -361,10 +368,33 @@ fn cut(
     let s = splits.len();
     splits.push([Piece::Part(0); 2]);
     let (left, right) = order.split_at_mut(half);
-    let l = cut(boxes, left, start, max_part, parts, splits);
-    let r = cut(boxes, right, start + half, max_part, parts, splits);
+    let alone = |order: &mut [u32], start: usize| {
+        let (mut parts, mut splits) = (Vec::new(), Vec::new());
+        let piece = cut(boxes, order, start, max_part, &mut parts, &mut splits);
+        (piece, parts, splits)
+    };
+    let (l, r) = rayon::join(|| alone(left, start), || alone(right, start + half));
+    let l = append(parts, splits, l);
+    let r = append(parts, splits, r);
     splits[s] = [l, r];
     Piece::Split(s)
+}
+
+/// Appends a subtree cut alone (its piece, parts and splits, numbered from 0) to `parts` and
+/// `splits`, renumbered; its piece, renumbered.
+fn append(
+    parts: &mut Vec<std::ops::Range<usize>>,
+    splits: &mut Vec<[Piece; 2]>,
+    (piece, more_parts, more_splits): (Piece, Vec<std::ops::Range<usize>>, Vec<[Piece; 2]>),
+) -> Piece {
+    let (p, s) = (parts.len(), splits.len());
+    let shift = |piece: Piece| match piece {
+        Piece::Split(k) => Piece::Split(k + s),
+        Piece::Part(k) => Piece::Part(k + p),
+    };
+    parts.extend(more_parts);
+    splits.extend(more_splits.into_iter().map(|[a, b]| [shift(a), shift(b)]));
+    shift(piece)
 }
 
 /// BVHs over some triangles, one per cluster, with their `f64` corners in slot order.

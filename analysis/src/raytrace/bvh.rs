@@ -14,6 +14,7 @@
 
 use super::memory::{AllocationError, Allocator};
 use obvhs::{aabb::Aabb, bvh2::Bvh2};
+use rayon::prelude::*;
 
 /// `Node::count` of a missing child (the other child of a tree that is a single leaf).
 pub(crate) const EMPTY: u32 = u32::MAX;
@@ -119,10 +120,12 @@ pub(crate) fn join(
     let mut nodes: Vec<Node> = alloc.vec(splits.len() + inner, "the BVH's nodes")?;
     let empty = Bounds { lo: [0.0; 3], hi: [0.0; 3] };
     nodes.resize(splits.len(), Node { boxes: [empty; 2], child: [0; 2], count: [0; 2] });
-    // Each part's reference from its split: (box, child, count) as in a `Node`.
+    // Each part's reference from its split: (box, child, count) as in a `Node`; and each
+    // inner part's place (first node among the parts' nodes, part, node offset, first slot).
     let mut refs = Vec::with_capacity(parts.len());
-    let mut first_slot = 0u32;
-    for (part, &len) in parts.iter().zip(slots) {
+    let mut places = Vec::with_capacity(parts.len());
+    let (mut first_slot, mut first_node) = (0u32, 0usize);
+    for (k, (part, &len)) in parts.iter().zip(slots).enumerate() {
         let Some(root) = part.first() else {
             refs.push((empty, 0, EMPTY));
             continue;
@@ -130,22 +133,27 @@ pub(crate) fn join(
         if is_leaf(part) {
             refs.push((root.boxes[0], root.child[0] + first_slot, root.count[0]));
         } else {
-            let offset = nodes.len() as u32;
+            let offset = (splits.len() + first_node) as u32;
             refs.push((union(&root.boxes[0], &root.boxes[1]), offset, 0));
-            nodes.extend(part.iter().map(|n| {
-                let mut n = *n;
-                for c in 0..2 {
-                    if n.count[c] == 0 {
-                        n.child[c] += offset;
-                    } else if n.count[c] != EMPTY {
-                        n.child[c] += first_slot;
-                    }
-                }
-                n
-            }));
+            places.push((first_node, k, offset, first_slot));
+            first_node += part.len();
         }
         first_slot += len as u32;
     }
+    // The parts' nodes, their references moved, copied in parallel straight into place (on
+    // random-1m, a million nodes: 30 ms copied in turn at 2 threads).
+    nodes.par_extend((0..inner).into_par_iter().map(|x| {
+        let (first, k, offset, first_slot) = places[places.partition_point(|p| p.0 <= x) - 1];
+        let mut n = parts[k][x - first];
+        for c in 0..2 {
+            if n.count[c] == 0 {
+                n.child[c] += offset;
+            } else if n.count[c] != EMPTY {
+                n.child[c] += first_slot;
+            }
+        }
+        n
+    }));
     // The splits from the last (whose children come after it) to the root.
     let mut boxes = vec![empty; splits.len()];
     for s in (0..splits.len()).rev() {
