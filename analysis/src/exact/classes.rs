@@ -40,8 +40,11 @@
 //! # Cost
 //!
 //! One exact pixel-grid clip per triangle (the `pixel_triangle_overlaps` counter counts the
-//! overlaps found), then per pixel a few tests between the triangles overlapping it, in
-//! parallel over bands of rows.
+//! overlaps found; the columns of a row a triangle covers wholly are taken without a cut),
+//! then per pixel a few tests between the triangles overlapping it, in parallel over bands of
+//! rows. A pixel's first whole cover is kept apart from the list that is grouped by pixel (on
+//! `bunny-plane`, 315,077 of 866,761 overlaps, mostly the ground's) and put back in contour
+//! order where the pixel has other overlaps.
 
 use super::clip::{self, Poly, Pt};
 use super::shadow::{plane_depth, Screen};
@@ -159,6 +162,9 @@ impl Projected {
     }
 }
 
+/// No contour (of [`Projected`]).
+const NO_CONTOUR: u32 = u32::MAX;
+
 /// One triangle overlapping a pixel: its contour in [`Projected`] and the overlap's area.
 #[derive(Clone, Copy)]
 struct Overlap {
@@ -188,6 +194,10 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
             let mut entries: Vec<(u32, Overlap)> = Vec::new();
             // How many overlaps each pixel has, at `starts[local + 1]`.
             let mut starts = vec![0u32; count + 1];
+            // The first contour covering each pixel wholly (area exactly 1), kept apart from
+            // the entries: on bunny-plane 315,077 of 866,761 overlaps, most of them the
+            // ground's, whose pixels need no grouping.
+            let mut whole = vec![NO_CONTOUR; count];
             let (mut poly, mut bufs) = (Poly::new(), clip::PixelBufs::new());
             for &k in &items[offsets[band]..offsets[band + 1]] {
                 poly.assign_points(projected.points(k as usize));
@@ -195,8 +205,12 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
                 // `MIN_OVERLAP`, the edge pixels' rays may meet any.
                 clip::for_each_pixel_in(&poly, r0, r1, width, &mut bufs, |i, j, area| {
                     let local = (j - r0) * width + i;
-                    starts[local + 1] += 1;
-                    entries.push((local as u32, Overlap { contour: k, area }));
+                    if area == 1.0 && whole[local] == NO_CONTOUR {
+                        whole[local] = k;
+                    } else {
+                        starts[local + 1] += 1;
+                        entries.push((local as u32, Overlap { contour: k, area }));
+                    }
                 });
             }
             // The overlaps grouped by pixel (a counting sort): the band's contours come in
@@ -216,8 +230,19 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
             let mut group: Vec<Overlap> = Vec::new();
             let mut scratch = Scratch::default();
             let (mut overlaps, mut edge_overlaps) = (0, Vec::new());
+            let mut merged: Vec<Overlap> = Vec::new();
             for local in 0..count {
-                let all = &by_pixel[starts[local] as usize..starts[local + 1] as usize];
+                let mut all = &by_pixel[starts[local] as usize..starts[local + 1] as usize];
+                if whole[local] != NO_CONTOUR {
+                    // The whole cover among the others, in contour order.
+                    let full = Overlap { contour: whole[local], area: 1.0 };
+                    let at = all.partition_point(|o| o.contour < full.contour);
+                    merged.clear();
+                    merged.extend_from_slice(&all[..at]);
+                    merged.push(full);
+                    merged.extend_from_slice(&all[at..]);
+                    all = &merged;
+                }
                 group.clear();
                 group.extend(all.iter().filter(|o| o.area > MIN_OVERLAP));
                 if group.is_empty() {

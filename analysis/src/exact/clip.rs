@@ -286,9 +286,26 @@ fn sweep_row(
     }
     let i_start = xmin.floor().max(0.0) as usize;
     let i_end = (xmax.ceil() as usize).min(width);
-    for i in i_start..i_end {
+    // The columns wholly inside `row` (both cross-sections span them): their pieces would be
+    // the pixel square exactly (corners set to the row and column lines), so their area is
+    // exactly 1 without a cut, and the part right of them is one cut away.
+    let (inner_from, inner_to) = interior_columns(row, fj, width).unwrap_or((usize::MAX, 0));
+    let mut i = i_start;
+    while i < i_end {
         if cur.n < 3 {
             break;
+        }
+        if i == inner_from && inner_to > i {
+            for k in i..inner_to {
+                f(k, j, 1.0);
+            }
+            i = inner_to;
+            if xmax <= i as f64 {
+                break;
+            }
+            keep_into(cur, 0, i as f64, true, spare);
+            std::mem::swap(&mut cur, &mut spare);
+            continue;
         }
         let fi = i as f64;
         if xmax > fi + 1.0 {
@@ -299,7 +316,31 @@ fn sweep_row(
             f(i, j, 0.5 * cur.area2_rel(fi, fj));
             break;
         }
+        i += 1;
     }
+}
+
+/// The columns `[from, to)` of `0..width` that the convex polygon `row` (inside the row strip
+/// at `y = fj`) covers wholly: those within the cross-sections of both its top and bottom
+/// lines (its vertices on them, whose `y` the strip's cuts set exactly); `None` when there are
+/// none.
+#[inline]
+fn interior_columns(row: &Poly, fj: f64, width: usize) -> Option<(usize, usize)> {
+    let (mut a, mut b) = (f64::NEG_INFINITY, f64::INFINITY);
+    for c in [fj, fj + 1.0] {
+        let (lo, hi) = row
+            .points()
+            .iter()
+            .filter(|p| p[1] == c)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p[0]), hi.max(p[0])));
+        (a, b) = (a.max(lo), b.min(hi));
+    }
+    if (b - a).is_nan() || b - a < 1.0 {
+        return None;
+    }
+    let from = a.ceil().max(0.0) as usize;
+    let to = (b.floor().min(width as f64)) as usize;
+    (to > from).then_some((from, to))
 }
 
 /// The part of the convex polygon `poly` on the left of the directed line `a -> b` (the
@@ -434,6 +475,39 @@ mod tests {
         let sum: f64 = acc.iter().sum();
         assert!((sum - area).abs() < 1e-12, "{sum} vs {area}");
         assert!(acc.iter().all(|&a| (-1e-15..=1.0 + 1e-15).contains(&a)));
+    }
+
+    /// Large polygons, whose rows have columns wholly inside (taken without a cut), give
+    /// every pixel once, with the area of the polygon clipped to that pixel alone, and their
+    /// wholly covered pixels exactly 1: triangles and a quadrilateral with corners on the
+    /// grid lines, off the frame and at fractions.
+    #[test]
+    fn wholly_covered_columns_take_the_area_of_their_pixel() {
+        let shapes: [&[Pt]; 4] = [
+            &[[0.3, 0.7], [57.9, 3.2], [25.5, 41.6]],
+            &[[-10.0, -5.0], [70.0, 2.0], [3.0, 60.0]],
+            &[[2.0, 3.0], [40.0, 3.0], [40.0, 30.0], [2.0, 30.0]],
+            &[[5.25, 1.0], [50.0, 20.5], [30.0, 44.0], [1.0, 17.0]],
+        ];
+        let (width, height) = (48, 40);
+        for shape in shapes {
+            let poly = oriented(shape);
+            let mut seen = vec![0u32; width * height];
+            let mut whole = 0;
+            for_each_pixel(&poly, 0, height, width, |i, j, a| {
+                seen[j * width + i] += 1;
+                let alone = clip_to_pixel(&poly, i, j);
+                let expect =
+                    if alone.n >= 3 { 0.5 * alone.area2_rel(i as f64, j as f64) } else { 0.0 };
+                assert!((a - expect).abs() <= 1e-13, "pixel ({i}, {j}): {a} vs {expect}");
+                if expect == 1.0 {
+                    assert_eq!(a, 1.0, "pixel ({i}, {j})");
+                    whole += 1;
+                }
+            });
+            assert!(seen.iter().all(|&n| n <= 1), "every pixel at most once");
+            assert!(whole > 100, "{whole} pixels wholly covered");
+        }
     }
 
     fn oriented(points: &[Pt]) -> Poly {
