@@ -11,7 +11,9 @@
 //!
 //! 1. **Pixel classes** ([`classes`]), with the triangles that tile each evaluated square.
 //! 2. **Planar objects** (a mesh with one plane, `Mesh::plane`), for their `planar` pixels:
-//!    every caster triangle of another object is clipped to the part strictly between the
+//!    every caster triangle of another object (of a closed object on the light's side of the
+//!    plane, only those facing the light, whose shadows' union is the same: [`closed`]) is
+//!    clipped to the part strictly between the
 //!    light and the plane and projected along light rays onto the plane (directional:
 //!    parallel; spot: central from the light), then through the camera onto the screen and
 //!    clipped to the frame ([`shadow`](self)): both maps are composed in homogeneous
@@ -100,6 +102,7 @@
 mod casters;
 pub mod classes;
 mod clip;
+mod closed;
 mod coverage;
 mod edges;
 mod shadow;

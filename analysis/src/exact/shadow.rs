@@ -127,6 +127,28 @@ impl Setup {
         self.light_side * (self.n.dot(p) - self.d)
     }
 
+    /// Whether `p` lies on the light's side of the receiver plane or in it, and for a spot
+    /// light strictly below the plane through the light parallel to the receiver.
+    #[inline]
+    pub fn toward_light(&self, p: DVec3) -> bool {
+        let h = self.light_height(p);
+        match self.light {
+            LightSetup::Directional { .. } => h >= 0.0,
+            LightSetup::Spot { big_h, .. } => h >= 0.0 && h < big_h,
+        }
+    }
+
+    /// Whether triangle `tri` faces the light: the normal its corners' order gives it points
+    /// to the light's side of its plane (for a spot light, towards the light's position).
+    #[inline]
+    pub fn faces_light(&self, tri: &[DVec3; 3]) -> bool {
+        let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+        match self.light {
+            LightSetup::Directional { dir, .. } => n.dot(dir) < 0.0,
+            LightSetup::Spot { pos, .. } => n.dot(pos - tri[0]) > 0.0,
+        }
+    }
+
     /// The shadow of caster triangle `tri` on the receiver plane, in screen space, clipped to
     /// the frame; `None` when empty or degenerate.
     pub fn caster(&self, tri: [DVec3; 3]) -> Option<Poly> {
@@ -171,12 +193,20 @@ impl Setup {
     }
 
     /// Shadow polygons of every caster triangle of `frame` of an object other than
-    /// `receiver` (a plane cannot shadow itself), in triangle order.
+    /// `receiver` (a plane cannot shadow itself), in triangle order; of a closed object
+    /// strictly between the plane and the light, those of its triangles facing the light only
+    /// ([`super::closed`]: their union is the same).
     pub fn shadow_polygons(&self, frame: &Frame<'_>, receiver: usize) -> ScreenPolygons {
         let g = &frame.geometry;
+        let casters: Vec<bool> = (0..frame.scene.objects.len())
+            .map(|o| o != receiver && frame.object_casts_shadows(o))
+            .collect();
+        let facing_only = super::closed::facing_suffices(frame, self, &casters);
         collect(g.len(), |t| {
-            if g.object[t] as usize != receiver && frame.is_caster(t) {
-                self.caster(g.corners(t))
+            let o = g.object[t] as usize;
+            let corners = g.corners(t);
+            if casters[o] && (!facing_only[o] || self.faces_light(&corners)) {
+                self.caster(corners)
             } else {
                 None
             }

@@ -118,7 +118,9 @@ fn exact_finishes_on_slivers_of_a_light_in_the_bars_plane() {
     let mut rec = Recorder::default();
     let img = ExactCoverage::default().evaluate(&frame, &mut rec).expect("exact");
     check(&img);
-    assert!(rec.counters.shadow_polygons > 1000);
+    // The bars' slivers: on the ground those of their faces toward the light (the bars are
+    // closed), and on the bars themselves.
+    assert!(rec.counters.shadow_polygons > 500, "{}", rec.counters.shadow_polygons);
     assert!(rec.counters.pixel_polygon_pairs > 0);
     // The ground's shadows are those of the same light without the rounding.
     let plain = cage(DVec3::new(0.0, -1.0, -1.0));
