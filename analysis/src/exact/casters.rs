@@ -20,8 +20,11 @@
 //! a spot light, a caster reaching behind the light's plane are kept in a list every receiver
 //! scans. Boxes are clamped to the grid's cells, casters' and queries' alike: clamping is
 //! monotone, so two overlapping boxes keep a cell in common even outside the region (a
-//! caster beyond it is listed in the border cells; a query for a point outside it, as the
-//! rays of `exact`'s edge pixels make, scans the border cell it clamps to).
+//! caster beyond it, within a cell of it, is listed in the border cells; a query for a point
+//! outside it, as the rays of `exact`'s edge pixels make, scans the border cell it clamps
+//! to). A caster farther out is kept in a list that only queries reaching that far scan
+//! (on `bumpy`, the heightfield beyond the receivers' region: listed in the border cells,
+//! it made the cells of the receivers there crowded).
 //! Receivers reaching behind the spot's plane scan every caster. The test is conservative: it
 //! only skips casters whose shadow cannot fall on the receiver.
 
@@ -115,6 +118,8 @@ pub(crate) struct CasterGrid<'a> {
     space: Space,
     /// Lower corner of the grid.
     origin: [f64; 2],
+    /// Upper corner of the grid.
+    end: [f64; 2],
     /// Cells per unit along x and y.
     scale: [f64; 2],
     /// Cells along x and y.
@@ -124,6 +129,8 @@ pub(crate) struct CasterGrid<'a> {
     items: Vec<u32>,
     /// Casters every receiver scans.
     global: Vec<u32>,
+    /// Casters more than a cell beyond the region, which only queries reaching there scan.
+    outside: Vec<u32>,
     /// Nearest light-space depth of every caster (`-inf` for those without a bounded image, and
     /// for triangles that cast no shadow).
     near: Vec<f64>,
@@ -193,11 +200,13 @@ impl<'a> CasterGrid<'a> {
             light: &frame.scene.light,
             space,
             origin: [region[0], region[1]],
+            end: [region[2], region[3]],
             scale,
             cells: [nx, ny],
             offsets: Vec::new(),
             items: Vec::new(),
             global: Vec::new(),
+            outside: Vec::new(),
             near,
             boxes,
             magnitude,
@@ -206,21 +215,60 @@ impl<'a> CasterGrid<'a> {
         };
         let max_span = MAX_SPAN.max(nx * ny / 16);
         // The cells caster `t` is listed in; `None` for `global`.
-        let span = |t: u32| -> Option<[usize; 4]> {
+        // The cells caster `t` is listed in: `Some(None)` for `global`, `None` for `outside`.
+        let span = |t: u32| -> Option<Option<[usize; 4]>> {
             if !valid || grid.near[t as usize] == f64::NEG_INFINITY {
+                return Some(None);
+            }
+            let b = &grid.boxes[t as usize];
+            if !grid.near_region(b, grid.magnitude[t as usize]) {
                 return None;
             }
-            let r = grid.cell_range(&grid.boxes[t as usize]);
+            let r = grid.cell_range(b);
             let n = (r[2] - r[0] + 1) * (r[3] - r[1] + 1);
-            (n <= max_span).then_some(r)
+            Some((n <= max_span).then_some(r))
         };
-        let spans: Vec<Option<[usize; 4]>> = all.par_iter().map(|&t| span(t)).collect();
-        let global: Vec<u32> =
-            all.iter().zip(&spans).filter(|(_, s)| s.is_none()).map(|(&t, _)| t).collect();
-        let listed = |k: usize| spans[k];
+        let spans: Vec<Option<Option<[usize; 4]>>> = all.par_iter().map(|&t| span(t)).collect();
+        let pick = |keep: fn(&Option<Option<[usize; 4]>>) -> bool| -> Vec<u32> {
+            all.iter().zip(&spans).filter(|(_, s)| keep(s)).map(|(&t, _)| t).collect()
+        };
+        let global = pick(|s| matches!(s, Some(None)));
+        let outside = pick(|s| s.is_none());
+        let listed = |k: usize| spans[k].flatten();
         let (offsets, items) = fill_cells(&all, listed, [nx, ny]);
-        (grid.offsets, grid.items, grid.global, grid.all) = (offsets, items, global, all);
+        (grid.offsets, grid.items, grid.global, grid.outside, grid.all) =
+            (offsets, items, global, outside, all);
         grid
+    }
+
+    /// The grid's region widened by a cell and by `margin` on every side.
+    fn widened(&self, margin: f64) -> [f64; 4] {
+        let (lo, hi) = (self.origin, self.end);
+        let cell = |axis: usize| {
+            if self.scale[axis] > 0.0 {
+                1.0 / self.scale[axis]
+            } else {
+                0.0
+            }
+        };
+        let (cx, cy) = (cell(0) + margin, cell(1) + margin);
+        [lo[0] - cx, lo[1] - cy, hi[0] + cx, hi[1] + cy]
+    }
+
+    /// Whether caster box `b` (of coordinate magnitude `magnitude`) reaches the grid's region
+    /// widened by a cell and by 64 roundings of both magnitudes: a query box within the region
+    /// widened by a cell (its magnitude at most three times the region's) then compares with
+    /// a margin smaller than the gap to any caster that does not.
+    fn near_region(&self, b: &[f64; 4], magnitude: f64) -> bool {
+        let region = self.origin.iter().chain(&self.end).map(|v| v.abs()).fold(0.0, f64::max);
+        let w = self.widened(64.0 * f64::EPSILON * (magnitude + region));
+        b[2] >= w[0] && b[0] <= w[2] && b[3] >= w[1] && b[1] <= w[3]
+    }
+
+    /// Whether the query box `b` lies within the grid's region widened by a cell.
+    fn within_reach(&self, b: &[f64; 4]) -> bool {
+        let w = self.widened(0.0);
+        b[0] >= w[0] && b[1] >= w[1] && b[2] <= w[2] && b[3] <= w[3]
     }
 
     /// The cells `[x0, y0, x1, y1]` (inclusive) a light-space box overlaps, the box clamped to
@@ -271,6 +319,11 @@ impl<'a> CasterGrid<'a> {
                 && b[1] <= cb[3] + m
         };
         out.extend(self.global.iter().copied().filter(|&c| reach(c)));
+        // A box within a cell of the region reaches no caster of `outside` (see
+        // `near_region`).
+        if !self.within_reach(&b) {
+            out.extend(self.outside.iter().copied().filter(|&c| reach(c)));
+        }
         if b[0] <= b[2] && b[1] <= b[3] {
             let r = self.cell_range(&b);
             let nx = self.cells[0];
