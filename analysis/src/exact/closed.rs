@@ -31,8 +31,19 @@
 //! repeated under several numbers, by their positions.
 
 use super::shadow::Setup;
+use super::ScreenPolygons;
 use methods::Frame;
 use rayon::prelude::*;
+
+/// The shadow polygons of the casters of `frame` on the plane of `setup`, that of object
+/// `receiver` ([`Setup::shadow_polygons`]): of a closed object toward the light, those of its
+/// triangles facing the light only ([`facing_suffices`]).
+pub(crate) fn shadow_polygons(frame: &Frame<'_>, setup: &Setup, receiver: usize) -> ScreenPolygons {
+    let casters: Vec<bool> = (0..frame.scene.objects.len())
+        .map(|o| o != receiver && frame.object_casts_shadows(o))
+        .collect();
+    setup.shadow_polygons(frame, receiver, &facing_suffices(frame, setup, &casters))
+}
 
 /// For each object of `frame`: whether its shadow on the plane of `setup` is that of its
 /// triangles facing the light alone. It must be one of the `casters` (others are not looked
@@ -199,7 +210,7 @@ mod tests {
             };
             let frame = Frame::new(&scene, 200, 150, &mut Recorder::default());
             let (receiver, setup) = Setup::main_receiver(&frame).expect("planar receiver");
-            let facing = setup.shadow_polygons(&frame, receiver);
+            let facing = shadow_polygons(&frame, &setup, receiver);
             let g = &frame.geometry;
             let mut all = crate::exact::ScreenPolygons::default();
             for t in (0..g.len()).filter(|&t| g.object[t] as usize != receiver) {

@@ -228,7 +228,7 @@ impl Reference for ExactCoverage {
 /// (`sum x_k y_(k+1) - x_(k+1) y_k > 0`). Their union is the receiver's shadow.
 pub fn shadow_polygons(frame: &Frame<'_>) -> Result<ScreenPolygons, ReferenceError> {
     let (receiver, setup) = Setup::main_receiver(frame)?;
-    Ok(setup.shadow_polygons(frame, receiver))
+    Ok(closed::shadow_polygons(frame, &setup, receiver))
 }
 
 /// Distance from 0 or 1 within which a lit fraction is taken as exactly 0 or 1.
@@ -298,8 +298,10 @@ fn evaluate(
                     }
                 }
             }
-            let polys: Vec<ScreenPolygons> =
-                planes.iter().map(|(o, s)| s.shadow_polygons(frame, *o as usize)).collect();
+            let polys: Vec<ScreenPolygons> = planes
+                .iter()
+                .map(|(o, s)| closed::shadow_polygons(frame, s, *o as usize))
+                .collect();
             (planar_object, planes, polys, grazing)
         })
     });
@@ -522,7 +524,7 @@ mod tests {
             let scene = scenes::load(name).expect("built-in");
             let frame = Frame::new(&scene, 200, 150, &mut Recorder::default());
             let (receiver, setup) = Setup::main_receiver(&frame).expect("planar receiver");
-            let polys = setup.shadow_polygons(&frame, receiver);
+            let polys = closed::shadow_polygons(&frame, &setup, receiver);
             let (whole, _) = coverage::union_area(&polys, 200, 150, |_| true);
             let img = evaluate(&frame, None, &mut Recorder::default()).expect("applies");
             let classes = img.classes.as_deref().expect("classes");

@@ -193,19 +193,22 @@ impl Setup {
     }
 
     /// Shadow polygons of every caster triangle of `frame` of an object other than
-    /// `receiver` (a plane cannot shadow itself), in triangle order; of a closed object
-    /// strictly between the plane and the light, those of its triangles facing the light only
-    /// ([`super::closed`]: their union is the same).
-    pub fn shadow_polygons(&self, frame: &Frame<'_>, receiver: usize) -> ScreenPolygons {
+    /// `receiver` (a plane cannot shadow itself), in triangle order; of an object `o` with
+    /// `facing_only[o]`, those of its triangles facing the light only ([`Self::faces_light`];
+    /// the caller knows when their union is the whole shadow).
+    pub fn shadow_polygons(
+        &self,
+        frame: &Frame<'_>,
+        receiver: usize,
+        facing_only: &[bool],
+    ) -> ScreenPolygons {
         let g = &frame.geometry;
-        let casters: Vec<bool> = (0..frame.scene.objects.len())
-            .map(|o| o != receiver && frame.object_casts_shadows(o))
-            .collect();
-        let facing_only = super::closed::facing_suffices(frame, self, &casters);
         collect(g.len(), |t| {
             let o = g.object[t] as usize;
             let corners = g.corners(t);
-            if casters[o] && (!facing_only[o] || self.faces_light(&corners)) {
+            let facing =
+                !facing_only.get(o).copied().unwrap_or(false) || self.faces_light(&corners);
+            if o != receiver && frame.is_caster(t) && facing {
                 self.caster(corners)
             } else {
                 None
