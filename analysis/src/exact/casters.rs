@@ -119,17 +119,10 @@ pub(crate) struct CasterGrid<'a> {
     /// The frame's light.
     light: &'a Light,
     space: Space,
-    /// Lower corner of the grid.
-    origin: [f64; 2],
-    /// Upper corner of the grid.
+    /// The cells over the receivers' region.
+    grid: Cells,
+    /// Upper corner of the region.
     end: [f64; 2],
-    /// Cells per unit along x and y.
-    scale: [f64; 2],
-    /// Cells along x and y.
-    cells: [usize; 2],
-    /// CSR: cell `c`'s casters are `items[offsets[c]..offsets[c + 1]]`.
-    offsets: Vec<u32>,
-    items: Vec<u32>,
     /// Casters every receiver scans.
     global: Vec<u32>,
     /// Casters more than a cell beyond the region, which only queries reaching there scan,
@@ -185,12 +178,14 @@ impl<'a> CasterGrid<'a> {
             geometry: g,
             light: &frame.scene.light,
             space,
-            origin: [region[0], region[1]],
+            grid: Cells {
+                origin: [region[0], region[1]],
+                scale,
+                cells: [nx, ny],
+                offsets: Vec::new(),
+                items: Vec::new(),
+            },
             end: [region[2], region[3]],
-            scale,
-            cells: [nx, ny],
-            offsets: Vec::new(),
-            items: Vec::new(),
             global: Vec::new(),
             outside: Vec::new(),
             outer: OnceLock::new(),
@@ -210,7 +205,7 @@ impl<'a> CasterGrid<'a> {
             if !grid.near_region(b, grid.magnitude[t as usize]) {
                 return None;
             }
-            let r = grid.cell_range(b);
+            let r = grid.grid.range(b);
             let n = (r[2] - r[0] + 1) * (r[3] - r[1] + 1);
             Some((n <= max_span).then_some(r))
         };
@@ -222,17 +217,17 @@ impl<'a> CasterGrid<'a> {
         let outside = pick(|s| s.is_none());
         let listed = |k: usize| spans[k].flatten();
         let (offsets, items) = fill_cells(&all, listed, [nx, ny]);
-        (grid.offsets, grid.items, grid.global, grid.outside, grid.all) =
+        (grid.grid.offsets, grid.grid.items, grid.global, grid.outside, grid.all) =
             (offsets, items, global, outside, all);
         grid
     }
 
     /// The grid's region widened by a cell and by `margin` on every side.
     fn widened(&self, margin: f64) -> [f64; 4] {
-        let (lo, hi) = (self.origin, self.end);
+        let (lo, hi) = (self.grid.origin, self.end);
         let cell = |axis: usize| {
-            if self.scale[axis] > 0.0 {
-                1.0 / self.scale[axis]
+            if self.grid.scale[axis] > 0.0 {
+                1.0 / self.grid.scale[axis]
             } else {
                 0.0
             }
@@ -246,7 +241,7 @@ impl<'a> CasterGrid<'a> {
     /// widened by a cell (its magnitude at most three times the region's) then compares with
     /// a margin smaller than the gap to any caster that does not.
     fn near_region(&self, b: &[f64; 4], magnitude: f64) -> bool {
-        let region = self.origin.iter().chain(&self.end).map(|v| v.abs()).fold(0.0, f64::max);
+        let region = self.grid.origin.iter().chain(&self.end).map(|v| v.abs()).fold(0.0, f64::max);
         let w = self.widened(64.0 * f64::EPSILON * (magnitude + region));
         b[2] >= w[0] && b[0] <= w[2] && b[3] >= w[1] && b[1] <= w[3]
     }
@@ -255,12 +250,6 @@ impl<'a> CasterGrid<'a> {
     fn within_reach(&self, b: &[f64; 4]) -> bool {
         let w = self.widened(0.0);
         b[0] >= w[0] && b[1] >= w[1] && b[2] <= w[2] && b[3] <= w[3]
-    }
-
-    /// The cells `[x0, y0, x1, y1]` (inclusive) a light-space box overlaps, the box clamped to
-    /// the grid's region.
-    fn cell_range(&self, b: &[f64; 4]) -> [usize; 4] {
-        clamped_cells(self.origin, self.scale, self.cells, b)
     }
 
     /// The casters that can shadow receiver triangle `tri`, sorted, without duplicates, into
@@ -305,37 +294,9 @@ impl<'a> CasterGrid<'a> {
         if !self.within_reach(&b) && !self.outside.is_empty() {
             let o = self.outer.get_or_init(|| Outer::new(&self.outside, &self.boxes));
             out.extend(o.wide.iter().copied().filter(|&c| reach(c)));
-            if b[0] <= b[2] && b[1] <= b[3] && !o.items.is_empty() {
-                let r = clamped_cells(o.origin, o.scale, o.cells, &b);
-                for y in r[1]..=r[3] {
-                    for x in r[0]..=r[2] {
-                        let c = y * o.cells[0] + x;
-                        let cell = &o.items[o.offsets[c] as usize..o.offsets[c + 1] as usize];
-                        out.extend(cell.iter().copied().filter(|&c| {
-                            let first = seen[c as usize] != stamp;
-                            seen[c as usize] = stamp;
-                            first && reach(c)
-                        }));
-                    }
-                }
-            }
+            o.grid.scan(&b, stamp, seen, &reach, out);
         }
-        if b[0] <= b[2] && b[1] <= b[3] {
-            let r = self.cell_range(&b);
-            let nx = self.cells[0];
-            for y in r[1]..=r[3] {
-                for x in r[0]..=r[2] {
-                    let c = y * nx + x;
-                    let cell = &self.items[self.offsets[c] as usize..self.offsets[c + 1] as usize];
-                    // A caster listed in several of these cells is tested once.
-                    out.extend(cell.iter().copied().filter(|&c| {
-                        let first = seen[c as usize] != stamp;
-                        seen[c as usize] = stamp;
-                        first && reach(c)
-                    }));
-                }
-            }
-        }
+        self.grid.scan(&b, stamp, seen, &reach, out);
         // Then, once per caster: the receiver must reach beyond the caster's lit side, and under
         // a directional light the images must overlap (see `images_separated`).
         let image = (!self.images.is_empty()).then(|| self.space.image(tri));
@@ -365,11 +326,7 @@ impl<'a> CasterGrid<'a> {
 /// more than [`MAX_SPAN`] of its cells is in `wide`, which every query reaching there scans.
 #[derive(Debug, Clone, Default)]
 struct Outer {
-    origin: [f64; 2],
-    scale: [f64; 2],
-    cells: [usize; 2],
-    offsets: Vec<u32>,
-    items: Vec<u32>,
+    grid: Cells,
     wide: Vec<u32>,
 }
 
@@ -392,14 +349,14 @@ impl Outer {
         let spans: Vec<Option<[usize; 4]>> = outside
             .par_iter()
             .map(|&t| {
-                let r = clamped_cells(origin, scale, cells, &boxes[t as usize]);
+                let r = Cells::clamped(origin, scale, cells, &boxes[t as usize]);
                 ((r[2] - r[0] + 1) * (r[3] - r[1] + 1) <= MAX_SPAN).then_some(r)
             })
             .collect();
         let wide =
             outside.iter().zip(&spans).filter(|(_, s)| s.is_none()).map(|(&t, _)| t).collect();
         let (offsets, items) = fill_cells(outside, |k| spans[k], cells);
-        Self { origin, scale, cells, offsets, items, wide }
+        Self { grid: Cells { origin, scale, cells, offsets, items }, wide }
     }
 }
 
@@ -428,14 +385,64 @@ fn scales(e: [f64; 2], cells: [usize; 2]) -> [f64; 2] {
     [0, 1].map(|k| if e[k] > 0.0 { cells[k] as f64 / e[k] } else { 0.0 })
 }
 
-/// The cells `[x0, y0, x1, y1]` (inclusive) of a grid (`origin`, `scale`, `cells`) the box
-/// `b` overlaps, clamped to the grid.
-fn clamped_cells(origin: [f64; 2], scale: [f64; 2], cells: [usize; 2], b: &[f64; 4]) -> [usize; 4] {
-    let cell = |v: f64, axis: usize| -> usize {
-        let n = cells[axis];
-        ((v - origin[axis]) * scale[axis]).floor().clamp(0.0, (n - 1) as f64) as usize
-    };
-    [cell(b[0], 0), cell(b[1], 1), cell(b[2], 0), cell(b[3], 1)]
+/// A uniform grid of cells over a light-space region, each listing casters.
+#[derive(Debug, Clone, Default)]
+struct Cells {
+    /// Lower corner of the region.
+    origin: [f64; 2],
+    /// Cells per unit along x and y.
+    scale: [f64; 2],
+    /// Cells along x and y.
+    cells: [usize; 2],
+    /// CSR: cell `c`'s casters are `items[offsets[c]..offsets[c + 1]]`.
+    offsets: Vec<u32>,
+    items: Vec<u32>,
+}
+
+impl Cells {
+    /// The cells `[x0, y0, x1, y1]` (inclusive) of a grid (`origin`, `scale`, `cells`) the box
+    /// `b` overlaps, the box clamped to the grid (clamping is monotone, so two overlapping
+    /// boxes keep a cell in common).
+    fn clamped(origin: [f64; 2], scale: [f64; 2], cells: [usize; 2], b: &[f64; 4]) -> [usize; 4] {
+        let cell = |v: f64, axis: usize| -> usize {
+            let n = cells[axis];
+            ((v - origin[axis]) * scale[axis]).floor().clamp(0.0, (n - 1) as f64) as usize
+        };
+        [cell(b[0], 0), cell(b[1], 1), cell(b[2], 0), cell(b[3], 1)]
+    }
+
+    /// [`Self::clamped`] on this grid.
+    fn range(&self, b: &[f64; 4]) -> [usize; 4] {
+        Self::clamped(self.origin, self.scale, self.cells, b)
+    }
+
+    /// Appends to `out` the casters `c` of the cells the box `b` covers with `keep(c)`, each
+    /// once: a caster listed in several of them, or already looked at by the current query,
+    /// carries its stamp in `seen`.
+    fn scan(
+        &self,
+        b: &[f64; 4],
+        stamp: u32,
+        seen: &mut [u32],
+        keep: &impl Fn(u32) -> bool,
+        out: &mut Vec<u32>,
+    ) {
+        if self.items.is_empty() || !(b[0] <= b[2] && b[1] <= b[3]) {
+            return;
+        }
+        let r = self.range(b);
+        for y in r[1]..=r[3] {
+            for x in r[0]..=r[2] {
+                let c = y * self.cells[0] + x;
+                let cell = &self.items[self.offsets[c] as usize..self.offsets[c + 1] as usize];
+                out.extend(cell.iter().copied().filter(|&c| {
+                    let first = seen[c as usize] != stamp;
+                    seen[c as usize] = stamp;
+                    first && keep(c)
+                }));
+            }
+        }
+    }
 }
 
 /// What a grid query reuses from call to call: the casters it found, and a stamp per caster
