@@ -158,15 +158,11 @@ impl<'a> CasterGrid<'a> {
     pub fn new(frame: &'a Frame<'a>, receivers: &[u32]) -> Self {
         let space = Space::new(&frame.scene.light);
         let g = &frame.geometry;
-        let empty = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
-        let join = |a: [f64; 4], b: [f64; 4]| {
-            [a[0].min(b[0]), a[1].min(b[1]), a[2].max(b[2]), a[3].max(b[3])]
-        };
         // Minima and maxima: the same region in any order of reduction.
         let region = receivers
             .par_iter()
             .filter_map(|&r| space.bounds(&g.corners(r as usize)).map(|(b, _)| b))
-            .reduce(|| empty, join);
+            .reduce(|| EMPTY_BOX, join_boxes);
         let all: Vec<u32> =
             (0..g.len() as u32).into_par_iter().filter(|&t| frame.is_caster(t as usize)).collect();
         let PerTriangle { boxes, near, magnitude, images } = PerTriangle::new(frame, &space);
@@ -333,12 +329,9 @@ struct Outer {
 impl Outer {
     /// The grid of the casters `outside`, whose light-space boxes are in `boxes`.
     fn new(outside: &[u32], boxes: &[[f64; 4]]) -> Self {
-        let empty = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
         // Minima and maxima: the same region in any order of reduction.
-        let region = outside.par_iter().map(|&t| boxes[t as usize]).reduce(
-            || empty,
-            |a, b| [a[0].min(b[0]), a[1].min(b[1]), a[2].max(b[2]), a[3].max(b[3])],
-        );
+        let region =
+            outside.par_iter().map(|&t| boxes[t as usize]).reduce(|| EMPTY_BOX, join_boxes);
         let (ex, ey) = (region[2] - region[0], region[3] - region[1]);
         if outside.is_empty() || !(ex.is_finite() && ey.is_finite()) {
             return Self { wide: outside.to_vec(), ..Self::default() };
@@ -358,6 +351,14 @@ impl Outer {
         let (offsets, items) = fill_cells(outside, |k| spans[k], cells);
         Self { grid: Cells { origin, scale, cells, offsets, items }, wide }
     }
+}
+
+/// The light-space box `[x0, y0, x1, y1]` that holds nothing.
+const EMPTY_BOX: [f64; 4] = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+
+/// The smallest box holding the light-space boxes `a` and `b`.
+fn join_boxes(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
+    [a[0].min(b[0]), a[1].min(b[1]), a[2].max(b[2]), a[3].max(b[3])]
 }
 
 /// Cells along x and y for about `count` cells over a region `ex` by `ey` (one row when it

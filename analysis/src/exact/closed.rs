@@ -26,9 +26,11 @@
 //!
 //! On `bunny-plane` at 800 x 600 the ground's shadow polygons go from 75,408 to 35,672 and
 //! the cuts of their union from 138,872 to 67,974 (stage `pixel unions` 30 -> 18 ms); on
-//! `cage` from 1,584 to 792 polygons. Whether an object qualifies is decided per frame, in the stage that projects
-//! the polygons: its edges sorted by their corners' vertex numbers, or, when a corner is
-//! repeated under several numbers, by their positions.
+//! `cage` from 1,584 to 792 polygons. Whether an object qualifies is decided per frame, in
+//! the stage that projects the polygons: one parallel pass sums a hash of its directed edges
+//! (non-zero proves it open), then only an object that may be closed has its edges sorted,
+//! by their corners' vertex numbers or, when a corner is repeated under several numbers, by
+//! their positions.
 
 use super::shadow::Setup;
 use super::ScreenPolygons;

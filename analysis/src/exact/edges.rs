@@ -2,18 +2,20 @@
 //!
 //! `exact` leaves its `edge` pixels to `raytrace` and knows, for each, the triangles whose
 //! screen polygon overlaps it (`Classes::edge_overlaps`: every camera ray through the pixel
-//! hits one of them or none) and, through the light-space grid, the casters that can shadow
-//! a point of each such triangle within the pixel ([`pixel_part`], [`CasterGrid::query_part`]).
-//! Those lists serve in one of two ways, chosen by [`EdgeTrace::choose`]:
+//! hits one of them or none), and the light-space grid gives the casters that can shadow a
+//! point ([`CasterGrid::query_part`]). The edge pixels are traced in one of three ways,
+//! chosen by [`EdgeTrace::choose`]:
 //!
-//! - **Listed**: each ray is tested against its lists, with no BVH ([`EdgeLists`],
-//!   `raytrace`'s listed tracer), when the edge pixels' sub-samples are few beside the
-//!   triangles: on `bunny-plane` at 800 x 600 and one sample per pixel, 5,263 edge pixels
+//! - **Listed**: each ray is tested against its pixel's triangles and the casters the grid
+//!   returns for its shadow ray's start, with no BVH ([`EdgeLists`], `raytrace`'s listed
+//!   tracer), when the edge pixels' sub-samples are few beside the triangles: on
+//!   `bunny-plane` at 800 x 600 and one sample per pixel, 2,873 edge pixels (5,263 rays)
 //!   among 75,410 triangles, where the BVH build over every triangle took 15 ms of `exact`'s
 //!   255.
-//! - **Among**: the BVHs are built over the union of the lists only ([`edge_casters`]), when
-//!   the (pixel, triangle) overlaps are far fewer than the triangles (on `bumpy`, 10,304 of
-//!   530,688 triangles are kept).
+//! - **Among**: the BVHs are built over the pixels' triangles and the casters the grid
+//!   returns for the part of each a pixel sees ([`edge_casters`]), when the (pixel, triangle)
+//!   overlaps are far fewer than the triangles (on `bumpy`, 10,304 of 530,688 triangles are
+//!   kept).
 //! - Otherwise the BVHs hold every triangle.
 //!
 //! The three give the same lit fractions bit for bit (tested below): the lists hold every

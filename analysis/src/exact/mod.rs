@@ -13,8 +13,8 @@
 //! 2. **Planar objects** (a mesh with one plane, `Mesh::plane`), for their `planar` pixels:
 //!    every caster triangle of another object (of a closed object on the light's side of the
 //!    plane, only those facing the light, whose shadows' union is the same: [`closed`]) is
-//!    clipped to the part strictly between the
-//!    light and the plane and projected along light rays onto the plane (directional:
+//!    clipped to the part strictly between the light and the plane and projected along
+//!    light rays onto the plane (directional:
 //!    parallel; spot: central from the light), then through the camera onto the screen and
 //!    clipped to the frame ([`shadow`](self)): both maps are composed in homogeneous
 //!    coordinates, so every clip is a linear inequality on the triangle and happens before any
@@ -34,8 +34,8 @@
 //!    set ([`edges`]). When their sub-samples are few beside the triangles, each ray is tested
 //!    against the triangles overlapping its pixel, where every camera ray's hit lies, and the
 //!    casters the light-space grid returns for its shadow ray's start, without BVHs (stage
-//!    `ray tracing`; on `bunny-plane` at 800 x 600, 2,873 edge pixels: 18 ms of BVH build and
-//!    tracing became 2.4). Otherwise, when the (pixel, triangle) overlaps are far fewer than
+//!    `ray tracing`; on `bunny-plane` at 800 x 600, 2,873 edge pixels: 19-28 ms of BVH build
+//!    and tracing became 3.1-3.7). Otherwise, when the (pixel, triangle) overlaps are far fewer than
 //!    the triangles (on `bumpy` at 64 sub-samples), the BVHs hold only the triangles those
 //!    rays can meet (stage `edge casters`; `bumpy`'s BVH build went from 420 to 9 ms), else
 //!    every triangle (stages `BVH build`, `ray tracing`). The lit fractions are those of a
