@@ -43,6 +43,11 @@ const MAX_FRAME_COORDINATE: f64 = 1e15;
 const BUILD: BvhBuildParams =
     BvhBuildParams { max_prims_per_leaf: 2, ..BvhBuildParams::fastest_build() };
 
+/// Boxes a cluster's frame is placed by: its medians are taken over every `n / FRAME_SAMPLE`-th
+/// of the `n` boxes (the frame only places the `f32` search, which decides nothing), unless
+/// they keep less than half of the triangles in the cluster.
+const FRAME_SAMPLE: usize = 1 << 12;
+
 /// Most triangles of a cluster that obvhs builds one BVH over: a larger cluster is halved at
 /// the median of its box centres along their widest axis until its parts are this small, the
 /// parts' BVHs are built in parallel (rayon) and joined under the halving nodes (`bvh::join`).
@@ -121,7 +126,8 @@ fn power_of_two_near(x: f64) -> f64 {
 /// or position.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct BvhFrame {
-    /// World point mapped to the origin (per-axis median of the triangles' box centres).
+    /// World point mapped to the origin (per-axis median of the triangles' box centres, or of
+    /// a sample of them: [`FRAME_SAMPLE`]).
     centre: DVec3,
     /// World-to-frame scale, a power of two (exact in `f64`).
     scale: f64,
@@ -298,21 +304,42 @@ fn split(
     let mut boxes: Vec<(DVec3, DVec3)> = alloc.vec(tris.len(), "the BVH frame's boxes")?;
     boxes.par_extend(tris.par_iter().map(|&t| corners_box(geometry.corners(t as usize))));
     let mut values: Vec<f64> = alloc.vec(tris.len(), "the BVH frame's medians")?;
-    let mut middle = |f: &(dyn Fn(&(DVec3, DVec3)) -> f64 + Sync)| {
-        values.clear();
-        values.par_extend(boxes.par_iter().map(f));
-        select_middle(&mut values)
+    // The medians over every `stride`-th box.
+    let mut place = |stride: usize| {
+        let mut middle = |f: &(dyn Fn(&(DVec3, DVec3)) -> f64 + Sync)| {
+            values.clear();
+            values.par_extend(boxes.par_iter().step_by(stride).map(f));
+            select_middle(&mut values)
+        };
+        let mut centre = DVec3::ZERO;
+        for k in 0..3 {
+            centre[k] = middle(&|(lo, hi)| 0.5 * lo[k] + 0.5 * hi[k]);
+        }
+        let typical = middle(&|(lo, hi)| (*hi - *lo).max_element());
+        let radius =
+            |&(lo, hi): &(DVec3, DVec3)| (lo - centre).abs().max(hi - centre).max_element();
+        let median_radius = middle(&radius);
+        (centre, typical, OUTLIER_FACTOR * (median_radius + typical))
     };
-    let mut centre = DVec3::ZERO;
-    for k in 0..3 {
-        centre[k] = middle(&|(lo, hi)| 0.5 * lo[k] + 0.5 * hi[k]);
-    }
-    let typical = middle(&|(lo, hi)| (*hi - *lo).max_element());
-    let radius = |&(lo, hi): &(DVec3, DVec3)| (lo - centre).abs().max(hi - centre).max_element();
-    let median_radius = middle(&radius);
+    let sampled = place((tris.len() / FRAME_SAMPLE).max(1));
+    let radius = |centre: DVec3, &(lo, hi): &(DVec3, DVec3)| {
+        (lo - centre).abs().max(hi - centre).max_element()
+    };
+    let within = |(centre, _, limit): (DVec3, f64, f64)| {
+        boxes.par_iter().filter(|b| radius(centre, b) <= limit).count()
+    };
+    let mut count = within(sampled);
+    // A sample's medians keep less than half the boxes only by bad luck; the whole set's
+    // always keep at least half.
+    let (centre, typical, limit) = if 2 * count >= tris.len() {
+        sampled
+    } else {
+        let exact = place(1);
+        count = within(exact);
+        exact
+    };
     drop(values);
-    let limit = OUTLIER_FACTOR * (median_radius + typical);
-    let count = boxes.par_iter().filter(|b| radius(b) <= limit).count();
+    let radius = |b: &(DVec3, DVec3)| radius(centre, b);
     let mut main = alloc.vec(count, "the BVH's triangle lists")?;
     let mut rest = alloc.vec(tris.len() - count, "the BVH's triangle lists")?;
     let pairs = || tris.par_iter().zip(boxes.par_iter());
@@ -685,6 +712,26 @@ mod tests {
     /// The clusters over every triangle of `g`, each letting `pass` through.
     fn build(g: &Geometry, pass: f64) -> Accel {
         Accel::build(g, |_| true, |_| pass, &Allocator { estimate: 0 }).expect("small")
+    }
+
+    /// The first cluster holds at least half the triangles also when the sample its frame is
+    /// placed by sees only the far ones: every `stride`-th of 3 * 8192 small triangles lies
+    /// 1e6 away, and those are the sample.
+    #[test]
+    fn a_misleading_sample_still_leaves_half_in_the_first_cluster() {
+        let n = 3 * 8192;
+        let stride = n / FRAME_SAMPLE;
+        let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+        for t in 0..n {
+            let base = if t % stride == 0 { DVec3::new(1e6, 0.0, 0.0) } else { DVec3::ZERO };
+            let p = base + DVec3::new((t % 97) as f64, (t / 97) as f64, 0.0) * 0.01;
+            let k = positions.len() as u32;
+            positions.extend([p, p + DVec3::X * 0.01, p + DVec3::Y * 0.01]);
+            triangles.push([k, k + 1, k + 2]);
+        }
+        let accel = build(&geometry(positions, triangles), 0.0);
+        assert!(2 * accel.clusters[0].len >= n, "{} of {n}", accel.clusters[0].len);
+        assert_eq!(accel.clusters.iter().map(|c| c.len).sum::<usize>(), n);
     }
 
     /// The closest hit of `ray` alone (a packet of one).

@@ -107,10 +107,12 @@
 //!
 //! - **Clusters**: the triangles are split around the per-axis median of their box centres;
 //!   those whose farthest corner lies within 64 (median radius + median triangle size) of it
-//!   form one cluster (at least half of them), the others are split again the same way. A far
-//!   object is a cluster of its own, so it neither stretches the main cluster's box padding
-//!   nor the resolution of obvhs' Morton codes (one triangle 1e6 away once made every ray test
-//!   a large part of the scene).
+//!   form one cluster (at least half of them), the others are split again the same way. The
+//!   medians are those of a sample of 4,096 boxes, evenly strided, or of all when the sample's
+//!   keep fewer than half (the medians of every box took 18 ms of random-1m's 496 ms build at
+//!   one thread, and 1.4 of bunny-plane's 22.5). A far object is a cluster of its own, so it
+//!   neither stretches the main cluster's box padding nor the resolution of obvhs' Morton
+//!   codes (one triangle 1e6 away once made every ray test a large part of the scene).
 //! - **Its own frame** per cluster: its BVH is built and traversed in world coordinates minus
 //!   the cluster's centre times a power of two near the inverse of its median triangle size.
 //!   Every cluster looks to obvhs like one of unit triangles near the origin. Frame coordinates
