@@ -409,6 +409,16 @@ pub(crate) fn intersect(a: &Poly, b: &Poly) -> Poly {
     cur
 }
 
+/// Whether the convex polygon `points` (positive [`Poly::area2_rel`]) holds `q`, on or inside
+/// every edge, in floating point (a filter: a point within a rounding of an edge may come out
+/// either way).
+pub(crate) fn holds(points: &[Pt], q: Pt) -> bool {
+    (0..points.len()).all(|k| {
+        let (s, e) = (points[k], points[if k + 1 == points.len() { 0 } else { k + 1 }]);
+        (e[0] - s[0]) * (q[1] - s[1]) - (e[1] - s[1]) * (q[0] - s[0]) >= 0.0
+    })
+}
+
 /// Whether the convex polygons `a` and `b` (vertex lists with positive [`Poly::area2_rel`])
 /// have disjoint interiors by a separating line through an edge of one of them (the separating
 /// axis test; touching counts as disjoint). `false` means they may overlap.

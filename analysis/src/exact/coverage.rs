@@ -56,7 +56,8 @@ pub(crate) struct Scratch {
     full: Vec<bool>,
     /// (column, rank of the strip) pairs of polygons partly covering a pixel.
     pairs: Vec<(u32, u32)>,
-    /// The strips by decreasing area (`order[rank]` is a strip), and each strip's rank.
+    /// The strips by decreasing area (`order[rank]` is a strip), and each strip's rank; in
+    /// [`Scratch::covers`], the polygons by decreasing area.
     order: Vec<(f64, u32)>,
     rank: Vec<u32>,
     pieces: Vec<Poly>,
@@ -399,7 +400,7 @@ impl Scratch {
         let inv = 1.0 / points.len() as f64;
         let centre = points.iter().fold([0.0, 0.0], |c, p| [c[0] + p[0] * inv, c[1] + p[1] * inv]);
         let toward = |p: Pt, f: f64| [p[0] + (centre[0] - p[0]) * f, p[1] + (centre[1] - p[1]) * f];
-        let held = |q: Pt| polygons.contours().any(|poly| holds(poly, q));
+        let held = |q: Pt| polygons.contours().any(|poly| clip::holds(poly, q));
         let mid = |k: usize| {
             let (p, q) = (points[k], points[if k + 1 == points.len() { 0 } else { k + 1 }]);
             [0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1])]
@@ -436,15 +437,6 @@ impl Scratch {
         }
         pieces.iter().map(|q| q.area2_rel(0.0, 0.0)).sum::<f64>() <= COVER_SLACK2
     }
-}
-
-/// Whether the convex polygon `points` (positive [`Poly::area2_rel`]) holds `q`, in floating
-/// point (a filter: [`Scratch::covers`] decides by cutting).
-fn holds(points: &[Pt], q: Pt) -> bool {
-    (0..points.len()).all(|k| {
-        let (s, e) = (points[k], points[if k + 1 == points.len() { 0 } else { k + 1 }]);
-        (e[0] - s[0]) * (q[1] - s[1]) - (e[1] - s[1]) * (q[0] - s[0]) >= 0.0
-    })
 }
 
 /// Vertex count at which a piece is halved before it is stored or cut again, so that no cut

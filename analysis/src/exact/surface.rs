@@ -193,9 +193,5 @@ fn receiver(
 /// Whether the convex polygon `outer` contains every vertex of `inner` (both with positive
 /// [`Poly::area2_rel`]).
 fn contains(outer: &Poly, inner: &Poly) -> bool {
-    (0..outer.n).all(|k| {
-        let (s, e) = (outer.v[k], outer.v[if k + 1 == outer.n { 0 } else { k + 1 }]);
-        let (ex, ey) = (e[0] - s[0], e[1] - s[1]);
-        inner.points().iter().all(|v| ex * (v[1] - s[1]) - ey * (v[0] - s[0]) >= 0.0)
-    })
+    inner.points().iter().all(|&v| clip::holds(outer.points(), v))
 }

@@ -304,6 +304,9 @@ fn split(
     let mut boxes: Vec<(DVec3, DVec3)> = alloc.vec(tris.len(), "the BVH frame's boxes")?;
     boxes.par_extend(tris.par_iter().map(|&t| corners_box(geometry.corners(t as usize))));
     let mut values: Vec<f64> = alloc.vec(tris.len(), "the BVH frame's medians")?;
+    let radius = |centre: DVec3, &(lo, hi): &(DVec3, DVec3)| {
+        (lo - centre).abs().max(hi - centre).max_element()
+    };
     // The medians over every `stride`-th box.
     let mut place = |stride: usize| {
         let mut middle = |f: &(dyn Fn(&(DVec3, DVec3)) -> f64 + Sync)| {
@@ -316,15 +319,10 @@ fn split(
             centre[k] = middle(&|(lo, hi)| 0.5 * lo[k] + 0.5 * hi[k]);
         }
         let typical = middle(&|(lo, hi)| (*hi - *lo).max_element());
-        let radius =
-            |&(lo, hi): &(DVec3, DVec3)| (lo - centre).abs().max(hi - centre).max_element();
-        let median_radius = middle(&radius);
+        let median_radius = middle(&|b| radius(centre, b));
         (centre, typical, OUTLIER_FACTOR * (median_radius + typical))
     };
     let sampled = place((tris.len() / FRAME_SAMPLE).max(1));
-    let radius = |centre: DVec3, &(lo, hi): &(DVec3, DVec3)| {
-        (lo - centre).abs().max(hi - centre).max_element()
-    };
     let within = |(centre, _, limit): (DVec3, f64, f64)| {
         boxes.par_iter().filter(|b| radius(centre, b) <= limit).count()
     };
