@@ -416,9 +416,11 @@ impl Context<'_> {
         // Rule 5: nothing else in front of C. A triangle whose nearest corner is no nearer
         // than the farthest corner of `t` is behind `t` wherever both are seen (a point's
         // depth along a camera ray is its camera depth, and a triangle's points lie between
-        // its corners' depths), so it needs no overlap.
+        // its corners' depths), so it needs no overlap; one no nearer than the farthest
+        // corner of all of C (on `bunny-plane`, the far side of the bunny) is behind each.
         let depth = |f: usize| p.depth[group[f].contour as usize];
-        for u in (0..group.len()).filter(|&f| !in_c[f]) {
+        let far = members.iter().map(|&t| depth(t)[1]).fold(f64::NEG_INFINITY, f64::max);
+        for u in (0..group.len()).filter(|&f| !in_c[f] && depth(f)[0] < far) {
             for &t in members.iter() {
                 if depth(u)[0] >= depth(t)[1]
                     || behind_on_square(
