@@ -417,10 +417,18 @@ impl Context<'_> {
         // than the farthest corner of `t` is behind `t` wherever both are seen (a point's
         // depth along a camera ray is its camera depth, and a triangle's points lie between
         // its corners' depths), so it needs no overlap; one no nearer than the farthest
-        // corner of all of C (on `bunny-plane`, the far side of the bunny) is behind each.
+        // corner of all of C (on `bunny-plane`, the far side of the bunny) is behind each. A
+        // NaN depth decides nothing here, as in the comparison tile by tile.
         let depth = |f: usize| p.depth[group[f].contour as usize];
-        let far = members.iter().map(|&t| depth(t)[1]).fold(f64::NEG_INFINITY, f64::max);
-        for u in (0..group.len()).filter(|&f| !in_c[f] && depth(f)[0] < far) {
+        let far = members.iter().map(|&t| depth(t)[1]).fold(f64::NEG_INFINITY, |far, d| {
+            if d.is_nan() {
+                f64::INFINITY
+            } else {
+                far.max(d)
+            }
+        });
+        let nearer = |f: usize| depth(f)[0] < far || depth(f)[0].is_nan();
+        for u in (0..group.len()).filter(|&f| !in_c[f] && nearer(f)) {
             for &t in members.iter() {
                 if depth(u)[0] >= depth(t)[1]
                     || behind_on_square(
