@@ -331,8 +331,13 @@ fn pixel_area<'a>(
             break;
         }
     }
-    let left: f64 = pieces.iter().map(|q| q.area2_rel(0.0, 0.0)).sum();
+    let left = area2(pieces);
     (0.5 * (total2 - left)).clamp(0.0, 0.5 * total2)
+}
+
+/// Twice the area of `pieces` (in local coordinates), summed.
+fn area2(pieces: &[Poly]) -> f64 {
+    pieces.iter().map(|q| q.area2_rel(0.0, 0.0)).sum()
 }
 
 /// Cuts the convex polygon `p` (made strictly convex first) out of the disjoint convex
@@ -424,18 +429,19 @@ impl Scratch {
         order.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
         pieces.clear();
         pieces.push(local(points));
-        let mut rest2 = sum2;
+        // `order` is not empty, so what is left is measured at least once.
+        let (mut rest2, mut left2) = (sum2, total2);
         for &(a2, k) in order.iter() {
             if cut_pieces(pieces, &mut local(polygons.contour(k as usize)), next) {
                 return true;
             }
             rest2 -= a2;
-            let left2: f64 = pieces.iter().map(|q| q.area2_rel(0.0, 0.0)).sum();
+            left2 = area2(pieces);
             if left2 > rest2 + COVER_SLACK2 {
                 return false;
             }
         }
-        pieces.iter().map(|q| q.area2_rel(0.0, 0.0)).sum::<f64>() <= COVER_SLACK2
+        left2 <= COVER_SLACK2
     }
 }
 
