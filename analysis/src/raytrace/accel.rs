@@ -33,15 +33,15 @@ const OUTLIER_FACTOR: f64 = 64.0;
 /// Largest frame-space coordinate magnitude: keeps obvhs' `f32` areas and costs finite.
 const MAX_FRAME_COORDINATE: f64 = 1e15;
 
-/// obvhs' build: its `fastest_build` (PLOC with search distance 1, no reinsertion), with
-/// leaves of at most 2 triangles. The build is part of the run: on bunny-plane (75 k
+/// obvhs' build: its `fastest_build` (PLOC with search distance 1, no reinsertion, leaves of
+/// one triangle), whose leaves [`bvh::convert`] collapses into leaves of at most 2 triangles
+/// as obvhs' own collapse would. The build is part of the run: on bunny-plane (75 k
 /// triangles) at rate 1, side by side with Embree at one thread (load 4.3-5), our time over
 /// Embree's per-ray time was 1.39 with `medium_build`, 1.26 `fast_build`, 1.20
 /// `very_fast_build` and 1.17 with this one, and at rate 64 (4.9 M samples) no worse (0.95,
 /// 0.94, 0.71, 0.90): packets share the node tests, so a better tree saves little, while every
 /// triangle in a leaf costs each ray that reaches it an `f64` test.
-const BUILD: BvhBuildParams =
-    BvhBuildParams { max_prims_per_leaf: 2, ..BvhBuildParams::fastest_build() };
+const BUILD: BvhBuildParams = BvhBuildParams::fastest_build();
 
 /// Boxes a cluster's frame is placed by: its medians are taken over every `n / FRAME_SAMPLE`-th
 /// of the `n` boxes (the frame only places the `f32` search, which decides nothing), unless
@@ -492,46 +492,41 @@ impl Accel {
                 order.extend(0..main.len() as u32);
                 let (mut parts, mut splits) = (Vec::new(), Vec::new());
                 cut(&boxes, &mut order, 0, max_part, &mut parts, &mut splits);
-                // Each part's slots, filled in by its own build.
-                let len = first + main.len();
-                accel.ids.resize(len, 0);
-                accel.corners.resize(len, [DVec3::ZERO; 3]);
-                accel.pass.resize(len, 0.0);
-                let mut jobs = Vec::with_capacity(parts.len());
-                let (mut ids, mut corners, mut passes) = (
-                    &mut accel.ids[first..],
-                    &mut accel.corners[first..],
-                    &mut accel.pass[first..],
-                );
-                for r in &parts {
-                    let (i, rest_i) = std::mem::take(&mut ids).split_at_mut(r.len());
-                    let (c, rest_c) = std::mem::take(&mut corners).split_at_mut(r.len());
-                    let (p, rest_p) = std::mem::take(&mut passes).split_at_mut(r.len());
-                    (ids, corners, passes) = (rest_i, rest_c, rest_p);
-                    jobs.push((&order[r.clone()], i, c, p));
-                }
-                // Each part: its boxes in `order`'s order, obvhs' build, its slots in the order
-                // of `primitive_indices`, its nodes.
-                let (boxes, main, pass) = (&boxes, &main, &pass);
-                let trees = jobs
-                    .into_par_iter()
-                    .map(|(order, ids, corners, passes)| {
+                // Each part: its boxes in `order`'s order, obvhs' build, our nodes and the
+                // triangle in each of its slots.
+                let (boxes, main) = (&boxes, &main);
+                let trees = parts
+                    .par_iter()
+                    .map(|r| {
+                        let order = &order[r.clone()];
                         let mut part_boxes = alloc.vec(order.len(), "the BVH's boxes")?;
                         part_boxes.extend(order.iter().map(|&k| boxes[k as usize]));
                         alloc.probe_bvh_build(order.len())?;
                         let bvh = build_bvh2(&part_boxes, BUILD, &mut Default::default());
                         drop(part_boxes);
-                        for (s, &p) in bvh.primitive_indices.iter().enumerate() {
-                            let t = main[order[p as usize] as usize];
-                            ids[s] = t;
-                            corners[s] = geometry.corners(t as usize);
-                            passes[s] = pass(t as usize).clamp(0.0, 1.0);
+                        let tree = bvh::convert(&bvh, alloc)?;
+                        drop(bvh);
+                        let mut ids = tree.prims;
+                        for p in &mut ids {
+                            *p = main[order[*p as usize] as usize];
                         }
-                        bvh::convert(&bvh, alloc)
+                        Ok((tree.nodes, ids))
                     })
-                    .collect::<Result<Vec<_>, _>>()?;
+                    .collect::<Result<Vec<_>, AllocationError>>()?;
+                // The slots' triangles in part order; their corners and transmittance written
+                // straight into place (no zeroed buffer to overwrite).
+                let mut nodes = Vec::with_capacity(trees.len());
+                for (tree, ids) in trees {
+                    nodes.push(tree);
+                    accel.ids.extend_from_slice(&ids);
+                }
+                let slotted = &accel.ids[first..];
+                accel.corners.par_extend(slotted.par_iter().map(|&t| geometry.corners(t as usize)));
+                accel
+                    .pass
+                    .par_extend(slotted.par_iter().map(|&t| pass(t as usize).clamp(0.0, 1.0)));
                 let slots: Vec<usize> = parts.iter().map(|r| r.len()).collect();
-                Some(bvh::join(&splits, trees, &slots, alloc)?)
+                Some(bvh::join(&splits, nodes, &slots, alloc)?)
             } else {
                 for &t in &main {
                     push(&mut accel, t);

@@ -43,21 +43,73 @@ pub(crate) struct Node {
     pub(crate) count: [u32; 2],
 }
 
+/// Most triangles in a leaf: obvhs builds leaves of one, [`convert`] joins pairs.
+const MAX_LEAF: u32 = 2;
+
+/// The cost of a node's traversal relative to a triangle test, in the collapse rule.
+const TRAVERSAL_COST: f32 = 1.0;
+
+/// A tree [`convert`]ed: its nodes, and the primitive (index into the boxes obvhs built over)
+/// in each slot, leaf after leaf.
+pub(crate) struct Converted {
+    pub(crate) nodes: Vec<Node>,
+    pub(crate) prims: Vec<u32>,
+}
+
 /// `bvh`'s inner nodes as [`Node`]s in depth-first order (root first); a tree that is a single
-/// leaf becomes one node with an [`EMPTY`] second child; no node for an empty tree.
-pub(crate) fn convert(bvh: &Bvh2, alloc: &Allocator) -> Result<Vec<Node>, AllocationError> {
-    let Some(root) = bvh.nodes.first() else { return Ok(Vec::new()) };
-    let inner = bvh.nodes.iter().filter(|n| n.prim_count == 0).count().max(1);
-    let mut nodes: Vec<Node> = alloc.vec(inner, "the BVH's nodes")?;
+/// leaf becomes one node with an [`EMPTY`] second child; no node for an empty tree. Each leaf
+/// takes the next slots, so a leaf's primitives are consecutive in [`Converted::prims`].
+///
+/// Leaves are collapsed here as obvhs' `leaf_collapser::collapse` collapses them with at most
+/// [`MAX_LEAF`] primitives per leaf and traversal cost [`TRAVERSAL_COST`]: a node whose two
+/// children are leaves holding at most [`MAX_LEAF`] primitives together becomes one leaf
+/// (left child's primitives first) when its half area times `count - TRAVERSAL_COST` is at
+/// most the children's half areas times their counts, the same `f32` operations, and not in a
+/// tree of at most `2 * MAX_LEAF + 1` nodes, which obvhs leaves as it is; so the tree is the
+/// one obvhs' collapse makes. Its collapse copies every node and primitive index once more and
+/// was a sixth of the BVH build on bunny-plane (one thread).
+pub(crate) fn convert(bvh: &Bvh2, alloc: &Allocator) -> Result<Converted, AllocationError> {
+    let Some(root) = bvh.nodes.first() else {
+        return Ok(Converted { nodes: Vec::new(), prims: Vec::new() });
+    };
+    let mut prims: Vec<u32> = alloc.vec(bvh.primitive_indices.len(), "the BVH's triangle lists")?;
     let empty = Bounds { lo: [0.0; 3], hi: [0.0; 3] };
     if root.prim_count > 0 {
+        let mut nodes: Vec<Node> = alloc.vec(1, "the BVH's nodes")?;
+        let first = root.first_index as usize;
+        prims.extend_from_slice(&bvh.primitive_indices[first..first + root.prim_count as usize]);
         nodes.push(Node {
             boxes: [Bounds::from(&root.aabb), empty],
-            child: [root.first_index, 0],
+            child: [0, 0],
             count: [root.prim_count, EMPTY],
         });
-        return Ok(nodes);
+        return Ok(Converted { nodes, prims });
     }
+    let collapsing = bvh.nodes.len() > (2 * MAX_LEAF + 1) as usize
+        && bvh.primitive_indices.len() > MAX_LEAF as usize;
+    // The leaf node `i` is or becomes: its leaves' `(first index, count)` in
+    // `primitive_indices`, one or two runs; `None` for an inner node.
+    let leaf = |i: usize| -> Option<[(u32, u32); 2]> {
+        let n = &bvh.nodes[i];
+        if n.prim_count > 0 {
+            return Some([(n.first_index, n.prim_count), (0, 0)]);
+        }
+        if !collapsing {
+            return None;
+        }
+        let (a, b) = (&bvh.nodes[n.first_index as usize], &bvh.nodes[n.first_index as usize + 1]);
+        let total = a.prim_count + b.prim_count;
+        if a.prim_count == 0 || b.prim_count == 0 || total > MAX_LEAF {
+            return None;
+        }
+        let collapsed = n.aabb.half_area() * (total as f32 - TRAVERSAL_COST);
+        let apart =
+            a.aabb.half_area() * a.prim_count as f32 + b.aabb.half_area() * b.prim_count as f32;
+        (collapsed <= apart)
+            .then_some([(a.first_index, a.prim_count), (b.first_index, b.prim_count)])
+    };
+    // A binary tree of `m` nodes has `(m - 1) / 2` inner ones; collapses leave fewer.
+    let mut nodes: Vec<Node> = alloc.vec((bvh.nodes.len() / 2).max(1), "the BVH's nodes")?;
     // (obvhs node, our node) pairs whose children are still to be filled in. A node's two
     // children are numbered together when it is filled in, and the first child's subtree is
     // filled in before the second's: siblings lie side by side, subtrees close together.
@@ -70,20 +122,28 @@ pub(crate) fn convert(bvh: &Bvh2, alloc: &Allocator) -> Result<Vec<Node>, Alloca
         let mut inner_children = [None; 2];
         for (c, inner_child) in inner_children.iter_mut().enumerate() {
             let n = &bvh.nodes[first + c];
-            let (child, count) = if n.prim_count > 0 {
-                (n.first_index, n.prim_count)
-            } else {
-                let index = nodes.len();
-                nodes.push(blank);
-                *inner_child = Some((first + c, index));
-                (index as u32, 0)
+            let (child, count) = match leaf(first + c) {
+                Some(runs) => {
+                    let slot = prims.len() as u32;
+                    for (start, count) in runs {
+                        let run = start as usize..(start + count) as usize;
+                        prims.extend_from_slice(&bvh.primitive_indices[run]);
+                    }
+                    (slot, prims.len() as u32 - slot)
+                }
+                None => {
+                    let index = nodes.len();
+                    nodes.push(blank);
+                    *inner_child = Some((first + c, index));
+                    (index as u32, 0)
+                }
             };
             let node = &mut nodes[ours];
             (node.boxes[c], node.child[c], node.count[c]) = (Bounds::from(&n.aabb), child, count);
         }
         todo.extend(inner_children.into_iter().rev().flatten());
     }
-    Ok(nodes)
+    Ok(Converted { nodes, prims })
 }
 
 /// A subtree of a BVH built in parts ([`join`]): a node that splits two subtrees, or a part.
@@ -168,4 +228,63 @@ pub(crate) fn join(
         nodes[s] = node;
     }
     Ok(nodes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3A;
+    use obvhs::{bvh2::builder::build_bvh2, BvhBuildParams};
+    use proptest::prelude::*;
+
+    /// Boxes of `n` triangles scattered by `seed`, sizes spread over two orders of magnitude.
+    fn boxes(n: usize, seed: u64) -> Vec<Aabb> {
+        let mut state = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        let mut next = || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        (0..n)
+            .map(|_| {
+                let c = Vec3A::new(next(), next(), next()) * 10.0;
+                let h = Vec3A::new(next(), next(), next()) * (0.01 + next());
+                Aabb::new(c - h, c + h)
+            })
+            .collect()
+    }
+
+    proptest! {
+        /// The tree `convert` collapses from obvhs' leaves of one is the one obvhs' own
+        /// collapse makes with leaves of at most two, node for node and slot for slot.
+        #[test]
+        fn collapsing_here_makes_obvhs_collapsed_tree(n in 1usize..400, seed in any::<u64>()) {
+            let boxes = boxes(n, seed);
+            let alloc = Allocator { estimate: 0 };
+            let ones = build_bvh2(&boxes, BvhBuildParams::fastest_build(), &mut Default::default());
+            let twos = BvhBuildParams { max_prims_per_leaf: 2, ..BvhBuildParams::fastest_build() };
+            let collapsed = build_bvh2(&boxes, twos, &mut Default::default());
+            let here = convert(&ones, &alloc).expect("small");
+            let theirs = convert(&collapsed, &alloc).expect("small");
+            prop_assert_eq!(&here.nodes, &theirs.nodes);
+            prop_assert_eq!(&here.prims, &theirs.prims);
+            let mut prims = here.prims.clone();
+            prims.sort_unstable();
+            prop_assert_eq!(prims, (0..n as u32).collect::<Vec<_>>());
+            let leaves: Vec<u32> =
+                here.nodes.iter().flat_map(|n| n.count).filter(|&c| c != 0 && c != EMPTY).collect();
+            prop_assert!(leaves.iter().all(|&c| c <= MAX_LEAF));
+        }
+    }
+
+    /// The rule is not idle: on a thousand scattered boxes many pairs collapse, and many do
+    /// not.
+    #[test]
+    fn some_pairs_collapse_and_some_do_not() {
+        let boxes = boxes(1000, 7);
+        let ones = build_bvh2(&boxes, BvhBuildParams::fastest_build(), &mut Default::default());
+        let tree = convert(&ones, &Allocator { estimate: 0 }).expect("small");
+        let leaves =
+            |count: u32| tree.nodes.iter().flat_map(|n| n.count).filter(|&c| c == count).count();
+        assert!(leaves(2) > 10 && leaves(1) > 10, "{} pairs, {} single", leaves(2), leaves(1));
+    }
 }
