@@ -35,6 +35,9 @@ pub const NO_TRIANGLE: u32 = u32::MAX;
 /// Rows per band of parallel work.
 const BAND_ROWS: usize = 8;
 
+/// Sample rectangles narrower than this many columns are tested whole, row by row.
+const NARROW: u32 = 3;
+
 /// Triangles per chunk of parallel setup work: each chunk keeps its own setups, so that no
 /// vector of every setup is assembled (for a million triangles it would be some 40 MB moved
 /// and faulted in).
@@ -356,9 +359,17 @@ fn rasterize(
             let mut tested = 0u64;
             for s in bin.iter().filter_map(|&item| at(item as usize)) {
                 let outline = &s.outline[..s.corners];
+                // A triangle at most `NARROW` samples wide tests its whole sample rectangle:
+                // finding each row's span would cost more than the tests it saves.
+                let narrow = s.x1 - s.x0 < NARROW;
                 for y in (s.y0 as usize).max(row0)..=(s.y1 as usize).min(row0 + rows - 1) {
                     let py = y as f64 + 0.5;
-                    let Some((x0, x1)) = row_span(outline, py, s.x0 as usize, s.x1 as usize) else {
+                    let span = if narrow {
+                        Some((s.x0 as usize, s.x1 as usize))
+                    } else {
+                        row_span(outline, py, s.x0 as usize, s.x1 as usize)
+                    };
+                    let Some((x0, x1)) = span else {
                         continue;
                     };
                     for x in x0..=x1 {
@@ -553,6 +564,45 @@ pub(crate) mod tests {
             f64::NAN,
         ] {
             rounds_as_libm(u);
+        }
+    }
+
+    proptest::proptest! {
+        /// A triangle covers exactly the sample points strictly inside its edges (ties by the
+        /// top-left rule), whether its rows are narrowed to their spans or, for a triangle
+        /// under [`NARROW`] columns wide, tested across its whole sample rectangle.
+        #[test]
+        fn coverage_is_the_edge_tests_at_every_width(
+            corners in proptest::array::uniform3(proptest::array::uniform2(-2.0f64..18.0)),
+            narrow in proptest::bool::ANY,
+        ) {
+            let mut tri = corners;
+            if narrow {
+                // Squeezed to at most two columns of sample points.
+                for p in &mut tri {
+                    p[0] = 4.25 + p[0] / 10.0;
+                }
+            }
+            let (w, h) = (16, 16);
+            let g = flat(&[tri], h);
+            let s = rasterize_nearest(&g, |_| true, &pixel_projector(w, h), &mut Counters::default());
+            let image = |p: [f64; 2]| DVec2::new(p[0], p[1]);
+            let (mut a, b, mut c) = (image(tri[0]), image(tri[1]), image(tri[2]));
+            let area = orient2d(coord(a), coord(b), coord(c));
+            if area < 0.0 {
+                std::mem::swap(&mut a, &mut c);
+            }
+            for y in 0..h {
+                for x in 0..w {
+                    let p = DVec2::new(f64::from(x) + 0.5, f64::from(y) + 0.5);
+                    let inside = area != 0.0
+                        && inside_edge(a, b, p)
+                        && inside_edge(b, c, p)
+                        && inside_edge(c, a, p);
+                    let k = (y * w + x) as usize;
+                    proptest::prop_assert_eq!(s.triangle[k] == 0, inside, "sample ({}, {})", x, y);
+                }
+            }
         }
     }
 
