@@ -313,7 +313,7 @@ impl RaySetup {
 
     /// The camera ray of sub-sample `s` of pixel `(i, j)`; `None` when it has none (the
     /// sub-sample is background).
-    #[inline]
+    #[inline(always)]
     fn camera(
         &self,
         frame: &Frame<'_>,
@@ -327,7 +327,7 @@ impl RaySetup {
     /// The shadow ray from the point where `camera` meets a surface at `t`, with the range
     /// `(tmin, tmax)` of the hits that block it; `None` when the point is lit without a ray
     /// (it lies at the light, or the ray is degenerate).
-    #[inline]
+    #[inline(always)]
     fn shadow(&self, camera: &TraceRay, t: f64) -> Option<(TraceRay, (f64, f64))> {
         let (origin, p) = (camera.origin, camera.at(t));
         let (ray, tmax) = match self.light {
