@@ -58,26 +58,29 @@
 //! a quarter of the traversal's time on bunny-plane with obvhs' own nodes); its per-ray slab
 //! test is obvhs' own, lane by lane.
 //!
-//! Measured against Embree 3's per-ray API (`embree-side-by-side --threads 1`, pinned to one
-//! core, BVH build + camera + shadow rays on both sides, wall-clock medians, ours / Embree;
-//! load 5.5 on two shared cores, so the process CPU times beside are the steadier figures):
-//! at rate 64 (320 x 240) 0.74 on bunny-plane and 0.63 on cage; at rate 1 (800 x 600) 1.09 on
-//! bunny-plane (CPU 89 / 82 ms) and 1.27 on cage (CPU 47 / 44 ms). What bounds rate 1, from
-//! the profile of bunny-plane: the per-ray set-up (camera ray, `f64` ray set-up, the `f64`
-//! clip to the cluster, the packet's `f32` rays) is about half of our time, the `f64` triangle
-//! tests a fifth, the shared node tests a quarter, the build a twentieth. Pixel centres 1/800
-//! apart share fewer nodes than a pixel's sub-samples, so the shared tests save less there,
-//! and the `f64` set-up and tests, which the exact decisions need, cost more per ray than
-//! Embree's `f32` ones. Packets of 64 or 128 rays (tiles of 8 x 8 or 16 x 8 pixel centres)
-//! instead of 256 made random-1m's rate 1 tracing slower (1237-1297 and 1147-1176 ms of CPU
+//! Measured against Embree 3's per-ray API (`scripts/embree-bench`, one run, `--threads 1`
+//! pinned to one core, BVH build + camera + shadow rays on both sides, wall-clock medians,
+//! ours / Embree; load 1.4-1.9 on two cores, the bench's own): at rate 64 (320 x 240) 0.68 on
+//! bunny-plane and 0.64 on cage; at rate 1 (800 x 600) 1.05 on bunny-plane (80.0 / 76.3 ms)
+//! and 1.01 on cage (42.9 / 42.6 ms). Embree's build of bunny-plane takes 22 ms of its time,
+//! ours 16; its camera and shadow rays 58, our tracing 64. What bounds rate 1, from the
+//! profile of bunny-plane's tracing: the camera rays' packets (`Accel::closest`, with the `f64`
+//! clip to the cluster and the `f64` triangle tests) are 43 % of it, the shadow rays'
+//! (`Accel::transmittance`) 33 %, making the rays 6 %, the packets' bookkeeping the rest.
+//! Pixel centres 1/800 apart share fewer nodes than a pixel's sub-samples, so the shared tests
+//! save less there, and the `f64` set-up and tests, which the exact decisions need, cost more
+//! per ray than Embree's `f32` ones. Packets of 64 or 128 rays (tiles of 8 x 8 or 16 x 8 pixel
+//! centres) instead of 256 made random-1m's rate 1 tracing slower (1237-1297 and 1147-1176 ms of CPU
 //! against 1049-1111, load 5-6) and changed bunny-plane and cage within the noise. On
-//! random-1m (a million scattered triangles, 1024 x 768) the ratio is 1.22 at rate 1 (CPU 1535
+//! random-1m (a million scattered triangles, 1024 x 768) the ratio was 1.22 at rate 1 (CPU 1535
 //! / 1314 ms) and 1.23 at rate 64 (CPU 4457 / 3687 ms), from 1.32 and 1.39 (CPU 1838 / 1425
-//! and 5693 / 4060) before the BVH was built in parts. There (`perf`, `render --method
+//! and 5693 / 4060) before the BVH was built in parts, and is 0.93 and 1.25 in the run above
+//! (its leaves collapsed while converting, see `bvh`). There (`perf`, `render --method
 //! raytrace --rate 1`, 2 threads) the packets' node tests are 39 % of the samples (the boxes
 //! of random triangles overlap, and a million nodes do not stay in cache), the `f64` triangle
-//! tests 4 %, and the build about 18 %: obvhs' own work (PLOC, sort, leaf collapse) 7 %, ours
-//! (clusters, padded boxes, the triangles' copies in slot order, node conversion) 10 %.
+//! tests 4 %, and the build about 18 %: obvhs' own work (PLOC, sort, leaf collapse, the last
+//! now made in our conversion) 7 %, ours (clusters, padded boxes, the triangles' copies in slot
+//! order, node conversion) 10 %.
 //! Computing each triangle's box once for the clusters' seven passes instead of gathering its
 //! corners at each saved 0-40 ms of 600 (within the noise) and was left out.
 //!
