@@ -8,8 +8,8 @@
 //!
 //! Timing: every figure is measured by the workbench's one timing loop,
 //! `instrumentation::measure::measure_all`, under `Protocol::fixed(1, R)`: one untimed warm-up,
-//! then exactly `R` timed runs (`--repeats`, default 3), the runs of one frame (ours and
-//! Embree's, every row of the frame) interleaved round by round. Embree's BVH build, camera
+//! then exactly `R` timed runs (`--repeats`, default 3; the exact table at least 7), the runs
+//! of one frame (ours and Embree's, every row of the frame) interleaved round by round. Embree's BVH build, camera
 //! rays and shadow rays are stages of its runs (`bench::embree_tracer`), as ours are of our
 //! methods', so both sides' times are the wall-clock medians of the per-run stage sums
 //! (`Measured::wall_ms`), with the median CPU time of the process's threads over a run beside
@@ -322,16 +322,23 @@ mod side_by_side {
                 }
             }
         }
-        exact_table(&a.scenes, &protocol)
+        let repeats = u32::try_from(a.repeats).context("--repeats")?.max(EXACT_REPEATS);
+        exact_table(&a.scenes, &Protocol::fixed(1, repeats))
     }
 
     /// The scenes of the exact reference's table (issue table of `exact`'s cost), at their
     /// own frame sizes.
     const EXACT_SCENES: [&str; 4] = ["bunny-plane", "bumpy", "cage", "random-1m"];
 
+    /// Fewest timed runs of the exact table (more when `--repeats` asks): with three, `sm`'s
+    /// median at map 1024 on cage moved from 14.7 to 22.7 ms between runs of the bench, and the
+    /// ratio `exact / sm` with it; the table's runs cost seconds, not the minutes of the rows
+    /// above.
+    const EXACT_REPEATS: u32 = 7;
+
     /// The second table: what the references cost beside a shadow map on the same frame.
     /// `exact` (edge pixels ray traced at rate 1, as `render --method exact`) and `sm` at map
-    /// 1024 interleaved under `protocol`; `raytrace` at rate 64 once (one cold run: seconds a
+    /// 1024 interleaved under `protocol` (at least [`EXACT_REPEATS`] timed runs); `raytrace` at rate 64 once (one cold run: seconds a
     /// frame), on the frames up to 800x600. Ratios are given without and with the frame's camera
     /// G-buffer (which `render` counts in a run's total and the methods share), itself made
     /// under `protocol` interleaved with the two: one cold G-buffer, as this table took before,
@@ -344,8 +351,9 @@ mod side_by_side {
         }
         println!(
             "\n# The references beside a shadow map: `exact`, `sm` (map 1024) and the camera \
-             G-buffer interleaved, wall-clock medians as above; `raytrace --rate 64` one cold \
-             run\n"
+             G-buffer interleaved, wall-clock medians of {} runs after one warm-up; `raytrace \
+             --rate 64` one cold run\n",
+            protocol.min_repeats
         );
         println!("| scene | frame | triangles | camera G-buffer ms | exact ms | exact CPU ms | exact's largest stages (ms) | sm ms | exact / sm | exact / sm with G-buffer | raytrace rate 64 ms |");
         println!("|---|---|---|---|---|---|---|---|---|---|---|");
