@@ -9,10 +9,10 @@
 //! Timing: every figure is measured by the workbench's one timing loop,
 //! `instrumentation::measure::measure_all`, under `Protocol::fixed(1, R)`: one untimed warm-up,
 //! then exactly `R` timed runs (`--repeats`, default 3; the exact table at least 7), the runs
-//! of one frame (ours and Embree's, every row of the frame) interleaved round by round. Embree's BVH build, camera
-//! rays and shadow rays are stages of its runs (`bench::embree_tracer`), as ours are of our
-//! methods', so both sides' times are the wall-clock medians of the per-run stage sums
-//! (`Measured::wall_ms`), with the median CPU time of the process's threads over a run beside
+//! of one frame (ours and Embree's, every row of the frame) interleaved round by round.
+//! Embree's BVH build, camera rays and shadow rays are stages of its runs
+//! (`bench::embree_tracer`), as ours are of our methods', so both sides' times are the
+//! wall-clock medians of the per-run stage sums (`Measured::wall_ms`), with the median CPU time of the process's threads over a run beside
 //! them (`Measured::cpu_ms`: the rayon pool and Embree's own threads included). Rays per
 //! second divide the median run's rays by the median time of its ray stages (in the `afsm` row,
 //! Embree's BVH build and shadow rays together).
@@ -338,8 +338,8 @@ mod side_by_side {
 
     /// The second table: what the references cost beside a shadow map on the same frame.
     /// `exact` (edge pixels ray traced at rate 1, as `render --method exact`) and `sm` at map
-    /// 1024 interleaved under `protocol` (at least [`EXACT_REPEATS`] timed runs); `raytrace` at rate 64 once (one cold run: seconds a
-    /// frame), on the frames up to 800x600. Ratios are given without and with the frame's camera
+    /// 1024 interleaved under `protocol` (at least [`EXACT_REPEATS`] timed runs); `raytrace` at
+    /// rate 64 once (one cold run: seconds a frame), on the frames up to 800x600. Ratios are given without and with the frame's camera
     /// G-buffer (which `render` counts in a run's total and the methods share), itself made
     /// under `protocol` interleaved with the two: one cold G-buffer, as this table took before,
     /// moved cage's ratio with it from 2.92 to 3.34 between two runs (17.0 and 10.2 ms).
@@ -370,8 +370,8 @@ mod side_by_side {
                     continue;
                 }
             };
-            let frame = Frame::new(&scene, scene.width, scene.height, &mut Recorder::default());
             let (w, h) = (scene.width, scene.height);
+            let frame = Frame::new(&scene, w, h, &mut Recorder::default());
             let mut subjects = vec![
                 ours(&frame, exact.as_ref()),
                 ours(&frame, sm.as_ref()),
@@ -391,7 +391,7 @@ mod side_by_side {
             stages.sort_by(|a, b| b.1.total_cmp(&a.1));
             let largest: Vec<String> =
                 stages.iter().take(3).map(|(n, ms)| format!("{n} {ms:.0}")).collect();
-            let brute = if scene.width * scene.height <= 800 * 600 {
+            let brute = if w * h <= 800 * 600 {
                 let once = Protocol::fixed(0, 1);
                 let m = measure_frame(&once, &mut [ours(&frame, rt64.as_ref())])?;
                 m.first().map_or_else(|| "–".into(), |m| format!("{:.0}", m.wall_ms.median))
@@ -401,9 +401,7 @@ mod side_by_side {
             let (ew, sw) = (e.wall_ms.median, s.wall_ms.median);
             let cpu = e.cpu_ms.map_or_else(|| "–".into(), |c| format!("{:.1}", c.median));
             println!(
-                "| {name} | {}x{} | {} | {gbuffer:.1} | {ew:.1} | {cpu} | {} | {sw:.1} | {:.2} | {:.2} | {brute} |",
-                scene.width,
-                scene.height,
+                "| {name} | {w}x{h} | {} | {gbuffer:.1} | {ew:.1} | {cpu} | {} | {sw:.1} | {:.2} | {:.2} | {brute} |",
                 frame.geometry.len(),
                 largest.join(", "),
                 ew / sw,

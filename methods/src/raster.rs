@@ -585,7 +585,8 @@ pub(crate) mod tests {
             }
             let (w, h) = (16, 16);
             let g = flat(&[tri], h);
-            let s = rasterize_nearest(&g, |_| true, &pixel_projector(w, h), &mut Counters::default());
+            let proj = pixel_projector(w, h);
+            let s = rasterize_nearest(&g, |_| true, &proj, &mut Counters::default());
             let image = |p: [f64; 2]| DVec2::new(p[0], p[1]);
             let (mut a, b, mut c) = (image(tri[0]), image(tri[1]), image(tri[2]));
             let area = orient2d(coord(a), coord(b), coord(c));

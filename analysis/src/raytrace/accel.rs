@@ -473,11 +473,6 @@ impl Accel {
             ids: alloc.vec(n, "the triangle ids")?,
             pass: alloc.vec(n, "the triangles' transmittance")?,
         };
-        let push = |accel: &mut Self, t: u32| {
-            accel.ids.push(t);
-            accel.corners.push(geometry.corners(t as usize));
-            accel.pass.push(pass(t as usize).clamp(0.0, 1.0));
-        };
         while !tris.is_empty() {
             let (frame, main, rest) = split(geometry, &tris, alloc)?;
             drop(tris);
@@ -513,26 +508,23 @@ impl Accel {
                         Ok((tree.nodes, ids))
                     })
                     .collect::<Result<Vec<_>, AllocationError>>()?;
-                // The slots' triangles in part order; their corners and transmittance written
-                // straight into place (no zeroed buffer to overwrite).
+                // The slots' triangles, part after part.
                 let mut nodes = Vec::with_capacity(trees.len());
                 for (tree, ids) in trees {
                     nodes.push(tree);
                     accel.ids.extend_from_slice(&ids);
                 }
-                let slotted = &accel.ids[first..];
-                accel.corners.par_extend(slotted.par_iter().map(|&t| geometry.corners(t as usize)));
-                accel
-                    .pass
-                    .par_extend(slotted.par_iter().map(|&t| pass(t as usize).clamp(0.0, 1.0)));
                 let slots: Vec<usize> = parts.iter().map(|r| r.len()).collect();
                 Some(bvh::join(&splits, nodes, &slots, alloc)?)
             } else {
-                for &t in &main {
-                    push(&mut accel, t);
-                }
+                accel.ids.extend_from_slice(&main);
                 None
             };
+            // The cluster's slots' corners and transmittance, written straight into place (no
+            // zeroed buffer to overwrite).
+            let slotted = &accel.ids[first..];
+            accel.corners.par_extend(slotted.par_iter().map(|&t| geometry.corners(t as usize)));
+            accel.pass.par_extend(slotted.par_iter().map(|&t| pass(t as usize).clamp(0.0, 1.0)));
             let len = accel.ids.len() - first;
             accel.clusters.push(Cluster { frame, bvh, first, len });
             tris = rest;

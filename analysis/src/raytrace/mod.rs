@@ -70,8 +70,8 @@
 //! Pixel centres 1/800 apart share fewer nodes than a pixel's sub-samples, so the shared tests
 //! save less there, and the `f64` set-up and tests, which the exact decisions need, cost more
 //! per ray than Embree's `f32` ones. Packets of 64 or 128 rays (tiles of 8 x 8 or 16 x 8 pixel
-//! centres) instead of 256 made random-1m's rate 1 tracing slower (1237-1297 and 1147-1176 ms of CPU
-//! against 1049-1111, load 5-6) and changed bunny-plane and cage within the noise. On
+//! centres) instead of 256 made random-1m's rate 1 tracing slower (1237-1297 and 1147-1176 ms
+//! of CPU against 1049-1111, load 5-6) and changed bunny-plane and cage within the noise. On
 //! random-1m (a million scattered triangles, 1024 x 768) the ratio was 1.22 at rate 1 (CPU 1535
 //! / 1314 ms) and 1.23 at rate 64 (CPU 4457 / 3687 ms), from 1.32 and 1.39 (CPU 1838 / 1425
 //! and 5693 / 4060) before the BVH was built in parts, and is 0.93 and 1.25 in the run above
