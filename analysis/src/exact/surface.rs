@@ -20,8 +20,15 @@
 //! it) receives light only at grazing incidence and has no projection: its pixels are not
 //! evaluated, and the run says how many.
 //!
-//! Receivers are processed in parallel, results kept in receiver order, so the output does not
-//! depend on the thread count.
+//! Receivers are processed in parallel, results kept in the order they are processed in, so
+//! the output does not depend on the thread count. That order is the Z order of the grid cells
+//! holding the centres of their light-space boxes ([`CasterGrid::order_key`]), so that
+//! consecutive receivers ask for the same casters and find them in cache, unless their own
+//! order already is local (a heightfield's rows; see `light_order`). On `bunny-plane`, whose
+//! triangles' order is not (77 % of consecutive receivers lie in cells apart), the stage went
+//! from 152 to 133 ms of CPU time at one thread; `bumpy` keeps its order. Each pixel adds
+//! the areas of the receivers that tile it in that order; the images came out the same bit for
+//! bit on the built-in scenes.
 
 use super::casters::{Candidates, CasterGrid};
 use super::clip::{self, Poly};
@@ -65,6 +72,10 @@ pub(crate) fn shadows(
     // enough that a receiver with many pixels does not hold a thread while the other waits.
     const RUN: usize = 16;
     let shared = Shared { frame, screen: Screen::new(frame), grid };
+    // The receivers in the Z order of their light-space cells, where their own order is not
+    // local (see the module doc).
+    let ordered = light_order(grid, receivers);
+    let receivers = ordered.as_deref().unwrap_or(receivers);
     let runs: Vec<SurfaceShadows> = receivers
         .par_chunks(RUN)
         .map_init(Scratch::default, |scratch, run| {
@@ -85,6 +96,28 @@ pub(crate) fn shadows(
         out.work += run.work;
     }
     out
+}
+
+/// Consecutive pairs of receivers sampled by [`light_order`].
+const ORDER_SAMPLES: usize = 1024;
+
+/// The receivers in the Z order of their light-space cells ([`CasterGrid::order_key`]), or
+/// `None` to keep their own order: when at most a quarter of [`ORDER_SAMPLES`] pairs of
+/// consecutive receivers, evenly spaced, lie in cells that are not neighbours (a heightfield's
+/// triangles, numbered row by row: 3 % of all pairs on `bumpy`, against 77 % on `bunny-plane`).
+fn light_order(grid: &CasterGrid<'_>, receivers: &[u32]) -> Option<Vec<u32>> {
+    let step = (receivers.len() / ORDER_SAMPLES).max(1);
+    let pairs = receivers.windows(2).step_by(step);
+    let far = pairs.clone().filter(|p| {
+        let ([ax, ay], [bx, by]) = (grid.cell_of(p[0]), grid.cell_of(p[1]));
+        ax.abs_diff(bx) > 1 || ay.abs_diff(by) > 1
+    });
+    if 4 * far.count() <= pairs.count() {
+        return None;
+    }
+    let mut keys: Vec<u64> = receivers.par_iter().map(|&r| grid.order_key(r)).collect();
+    keys.par_sort_unstable();
+    Some(keys.iter().map(|&k| k as u32).collect())
 }
 
 /// Buffers a worker reuses from receiver to receiver.
@@ -194,4 +227,30 @@ fn receiver(
 /// [`Poly::area2_rel`]).
 fn contains(outer: &Poly, inner: &Poly) -> bool {
     inner.points().iter().all(|&v| clip::holds(outer.points(), v))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use instrumentation::Recorder;
+
+    /// A heightfield's triangles, numbered row by row, keep their order; every 97th of them
+    /// (consecutive ones far apart) are put in the Z order of their light-space cells, a
+    /// permutation of them.
+    #[test]
+    fn receivers_are_reordered_only_when_their_order_is_not_local() {
+        let scene = scenes::load("bumpy").expect("built-in");
+        let frame = Frame::new(&scene, 80, 60, &mut Recorder::default());
+        let all: Vec<u32> = (0..frame.geometry.len() as u32).collect();
+        let grid = CasterGrid::new(&frame, &all);
+        assert_eq!(light_order(&grid, &all), None);
+        let spaced: Vec<u32> = all.iter().copied().step_by(97).collect();
+        let ordered = light_order(&grid, &spaced).expect("reordered");
+        let keys: Vec<u64> = ordered.iter().map(|&r| grid.order_key(r)).collect();
+        assert!(keys.windows(2).all(|k| k[0] < k[1]), "in the order of their keys");
+        let mut sorted = ordered.clone();
+        sorted.sort_unstable();
+        assert_eq!(sorted, spaced, "a permutation");
+        assert_ne!(ordered, spaced);
+    }
 }
