@@ -12,8 +12,9 @@
 //! of one frame (ours and Embree's, every row of the frame) interleaved round by round.
 //! Embree's BVH build, camera rays and shadow rays are stages of its runs
 //! (`bench::embree_tracer`), as ours are of our methods', so both sides' times are the
-//! wall-clock medians of the per-run stage sums (`Measured::wall_ms`), with the median CPU time of the process's threads over a run beside
-//! them (`Measured::cpu_ms`: the rayon pool and Embree's own threads included). Rays per
+//! wall-clock medians of the per-run stage sums (`Measured::wall_ms`), with the median CPU
+//! time of the process's threads over a run beside them (`Measured::cpu_ms`: the rayon pool
+//! and Embree's own threads included). Rays per
 //! second divide the median run's rays by the median time of its ray stages (in the `afsm` row,
 //! Embree's BVH build and shadow rays together).
 //!
@@ -339,10 +340,11 @@ mod side_by_side {
     /// The second table: what the references cost beside a shadow map on the same frame.
     /// `exact` (edge pixels ray traced at rate 1, as `render --method exact`) and `sm` at map
     /// 1024 interleaved under `protocol` (at least [`EXACT_REPEATS`] timed runs); `raytrace` at
-    /// rate 64 once (one cold run: seconds a frame), on the frames up to 800x600. Ratios are given without and with the frame's camera
-    /// G-buffer (which `render` counts in a run's total and the methods share), itself made
-    /// under `protocol` interleaved with the two: one cold G-buffer, as this table took before,
-    /// moved cage's ratio with it from 2.92 to 3.34 between two runs (17.0 and 10.2 ms).
+    /// rate 64 once (one cold run: seconds a frame), on the frames up to 800x600. Ratios are
+    /// given without and with the frame's camera G-buffer (which `render` counts in a run's
+    /// total and the methods share), itself made under `protocol` interleaved with the two:
+    /// one cold G-buffer, as this table took before, moved cage's ratio with it from 2.92 to
+    /// 3.34 between two runs (17.0 and 10.2 ms).
     fn exact_table(names: &[String], protocol: &Protocol) -> anyhow::Result<()> {
         let chosen: Vec<&String> =
             names.iter().filter(|n| EXACT_SCENES.contains(&n.as_str())).collect();

@@ -849,7 +849,9 @@ mod tests {
             let r = cells.range(&b);
             let mut want: Vec<u32> = (r[1]..=r[3])
                 .flat_map(|y| (r[0]..=r[2]).map(move |x| y * nx + x))
-                .flat_map(|c| cells.items[cells.offsets[c] as usize..cells.offsets[c + 1] as usize].to_vec())
+                .flat_map(|c| {
+                    cells.items[cells.offsets[c] as usize..cells.offsets[c + 1] as usize].to_vec()
+                })
                 .filter(|&c| keep(c))
                 .collect();
             want.sort_unstable();
