@@ -374,6 +374,12 @@ fn rasterize(
                     };
                     for x in x0..=x1 {
                         tested += 1;
+                        let k = (y - row0) * width + x;
+                        // The depth below is at least `depth_min`: where the nearest surface
+                        // so far is no farther, the triangle cannot replace it, covered or not.
+                        if !(s.depth_min < depth[k]) {
+                            continue;
+                        }
                         let p = DVec2::new(x as f64 + 0.5, py);
                         let covered = (0..s.corners)
                             .all(|e| inside_edge(outline[e], outline[(e + 1) % s.corners], p));
@@ -385,7 +391,6 @@ fn rasterize(
                             .intersect_plane(s.normal, s.offset)
                             .unwrap_or(s.depth_min)
                             .clamp(s.depth_min, s.depth_max);
-                        let k = (y - row0) * width + x;
                         if d < depth[k] {
                             depth[k] = d;
                             triangle[k] = s.id;
@@ -629,6 +634,43 @@ pub(crate) mod tests {
         assert_eq!(s.triangle[0], 1);
         let s = rasterize_nearest(&g, |t| t != 1, &pixel_projector(8, 8), &mut Counters::default());
         assert_eq!(s.triangle[0], 0);
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(300))]
+
+        /// Inclined triangles crossing one another, in any order: every sample keeps the
+        /// nearest of the depths each triangle has there alone, the lower id on ties. The
+        /// farther ones' depth ranges overlap the nearest's, so a sample is skipped only where
+        /// a triangle's nearest corner is no nearer than the surface kept.
+        #[test]
+        fn the_nearest_of_crossing_triangles_is_each_alone_at_its_nearest(
+            corners in proptest::collection::vec((0.0..8.0f64, 0.0..8.0f64, -3.0..3.0f64), 12),
+        ) {
+            let (w, h) = (8, 8);
+            let tris: Vec<[[f64; 2]; 3]> = corners
+                .chunks(3)
+                .map(|c| [[c[0].0, c[0].1], [c[1].0, c[1].1], [c[2].0, c[2].1]])
+                .collect();
+            let mut g = flat(&tris, h);
+            for (p, c) in g.positions.iter_mut().zip(&corners) {
+                p.z = c.2;
+            }
+            let proj = pixel_projector(w, h);
+            let all = rasterize_nearest(&g, |_| true, &proj, &mut Counters::default());
+            let alone: Vec<NearestSurface> = (0..tris.len())
+                .map(|t| rasterize_nearest(&g, |i| i == t, &proj, &mut Counters::default()))
+                .collect();
+            for k in 0..(w * h) as usize {
+                let mut best = (f64::INFINITY, NO_TRIANGLE);
+                for (t, a) in alone.iter().enumerate() {
+                    if a.triangle[k] != NO_TRIANGLE && a.depth[k] < best.0 {
+                        best = (a.depth[k], t as u32);
+                    }
+                }
+                proptest::prop_assert_eq!((all.depth[k], all.triangle[k]), best, "sample {}", k);
+            }
+        }
     }
 
     #[test]

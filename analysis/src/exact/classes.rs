@@ -42,9 +42,12 @@
 //! One exact pixel-grid clip per triangle (the `pixel_triangle_overlaps` counter counts the
 //! overlaps found; the columns of a row a triangle covers wholly are taken without a cut),
 //! then per pixel a few tests between the triangles overlapping it, in parallel over bands of
-//! rows. A pixel's first whole cover is kept apart from the list that is grouped by pixel (on
-//! `bunny-plane`, 315,077 of 866,761 overlaps, mostly the ground's) and put back in contour
-//! order where the pixel has other overlaps.
+//! rows. Those tests grow with the square of the triangles a pixel overlaps: on `bunny-plane`
+//! 79,083 of the bunny's pixels overlap 4 to 15 triangles or more (5 to 9 most often), and
+//! rule 3 finds which pairs share an edge once for rules 3 and 4. A pixel's first whole cover
+//! is kept apart from the list that is grouped by pixel (on `bunny-plane`, 315,077 of 866,761
+//! overlaps, mostly the ground's) and put back in contour order where the pixel has other
+//! overlaps.
 
 use super::clip::{self, Poly, Pt};
 use super::shadow::{plane_depth, Screen};
@@ -297,7 +300,10 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
 struct Scratch {
     corners: Vec<[DVec3; 3]>,
     normals: Vec<DVec3>,
+    eligible: Vec<bool>,
     in_c: Vec<bool>,
+    done: Vec<bool>,
+    adjacent: Vec<u64>,
     stack: Vec<usize>,
     members: Vec<usize>,
 }
@@ -358,27 +364,44 @@ impl Context<'_> {
             return class;
         }
         let winding = p.winding[group[seed].contour as usize];
-        let Scratch { corners, normals, in_c, stack, members } = scratch;
+        let Scratch { corners, normals, eligible, in_c, done, adjacent, stack, members } = scratch;
+        let n = group.len();
         corners.clear();
         corners.extend(group.iter().map(|o| g.corners(tri(o))));
         normals.clear();
         normals.extend(corners.iter().map(|c| (c[1] - c[0]).cross(c[2] - c[0])));
         let mut rays = None;
-        // Rule 3: the continuous surface through the seed.
+        // Rule 3: the continuous surface through the seed, found by a flood from it. A
+        // triangle of the square may join when it has the seed's object and winding
+        // (`eligible`). Each pair of a member and an eligible triangle is tested once, when
+        // the first of the two leaves the stack (`done`), and a shared edge is kept in
+        // `adjacent` (a row of `words` bits per triangle) for rule 4's pairs.
+        let words = n.div_ceil(64);
+        eligible.clear();
+        eligible.extend(
+            group
+                .iter()
+                .map(|o| g.object[tri(o)] == object && p.winding[o.contour as usize] == winding),
+        );
+        adjacent.clear();
+        adjacent.resize(n * words, 0);
         in_c.clear();
-        in_c.resize(group.len(), false);
+        in_c.resize(n, false);
+        done.clear();
+        done.resize(n, false);
         in_c[seed] = true;
         stack.clear();
         stack.push(seed);
         while let Some(m) = stack.pop() {
-            for f in 0..group.len() {
-                if !in_c[f]
-                    && g.object[tri(&group[f])] == object
-                    && p.winding[group[f].contour as usize] == winding
-                    && shares_edge(&corners[m], &corners[f])
-                {
-                    in_c[f] = true;
-                    stack.push(f);
+            done[m] = true;
+            for f in 0..n {
+                if eligible[f] && !done[f] && shares_edge(&corners[m], &corners[f]) {
+                    adjacent[m * words + f / 64] |= 1 << (f % 64);
+                    adjacent[f * words + m / 64] |= 1 << (m % 64);
+                    if !in_c[f] {
+                        in_c[f] = true;
+                        stack.push(f);
+                    }
                 }
             }
         }
@@ -403,7 +426,7 @@ impl Context<'_> {
         };
         for (x, &a) in members.iter().enumerate() {
             for &b in &members[x + 1..] {
-                if shares_edge(&corners[a], &corners[b]) {
+                if adjacent[a * words + b / 64] >> (b % 64) & 1 == 1 {
                     continue;
                 }
                 if let Some(r) = overlap(a, b) {
