@@ -383,8 +383,9 @@ fn rasterize(
                         tested += 1;
                         let k = (y - row0) * width + x;
                         // The depth below is at least `depth_min`: where the nearest surface
-                        // so far is no farther, the triangle cannot replace it, covered or not.
-                        if !(s.depth_min < depth[k]) {
+                        // so far is no farther, the triangle cannot replace it, covered or not
+                        // (both are numbers: setups have finite depths, a NaN is never kept).
+                        if s.depth_min >= depth[k] {
                             continue;
                         }
                         let p = DVec2::new(x as f64 + 0.5, py);
