@@ -2,8 +2,9 @@
 //! the pixel centre's ray meets it, and its face normal.
 //!
 //! Positions are computed as `ray(centre).at(depth)` with the depth from the ray-plane
-//! intersection, so they reproject to their pixel centres up to `f64` rounding. Normals are
-//! the rasterizer's own (the plane it intersects), written where a triangle wins a pixel.
+//! intersection, so they reproject to their pixel centres up to `f64` rounding. Both the
+//! positions and the normals (the plane the rasterizer intersects) are the rasterizer's own,
+//! written with the depth where a triangle wins a pixel, on the ray that gave the depth.
 
 use crate::raster::{rasterize_nearest_with_surface, NO_TRIANGLE};
 use glam::DVec3;
