@@ -14,9 +14,9 @@
 //! (`bench::embree_tracer`), as ours are of our methods', so both sides' times are the
 //! wall-clock medians of the per-run stage sums (`Measured::wall_ms`), with the median CPU
 //! time of the process's threads over a run beside them (`Measured::cpu_ms`: the rayon pool
-//! and Embree's own threads included). Rays per
-//! second divide the median run's rays by the median time of its ray stages (in the `afsm` row,
-//! Embree's BVH build and shadow rays together).
+//! and Embree's own threads included). Rays per second divide the median run's rays by the
+//! median time of its ray stages (in the `afsm` row, Embree's BVH build and shadow rays
+//! together).
 //!
 //! Usage: `embree-side-by-side [--threads N] [--repeats R] [--scenes a,b,...]` (built with
 //! `--features embree`; `scripts/embree-bench` runs it at 1 and 2 threads), or
