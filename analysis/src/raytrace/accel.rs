@@ -13,9 +13,10 @@ use super::memory::{AllocationError, Allocator};
 use super::packet::{self, FramePacket, PACKET};
 use super::ray::TraceRay;
 use glam::{DVec3, Vec3A};
-use obvhs::{aabb::Aabb, bvh2::builder::build_bvh2, BvhBuildParams};
+use obvhs::{aabb::Aabb, bvh2::builder::build_bvh2, Boundable, BvhBuildParams};
 use rayon::prelude::*;
 use scenes::Geometry;
+use std::ops::Range;
 
 /// Box padding in units of `f32::EPSILON` times (reach + box magnitude): covers the `f32`
 /// rounding of the ray's start and direction, obvhs' clamped reciprocal of direction components
@@ -293,17 +294,19 @@ impl Cluster {
     }
 }
 
-/// The world boxes of `tris` split into a cluster around their median and the rest: the
-/// cluster's frame, its triangles and the others (at most half of `tris`).
+/// The triangles `tris` split into a cluster around their median and the rest: the cluster's
+/// frame, its triangles and the others (at most half of `tris`); where the cluster holds every
+/// triangle, `tris` itself. The world boxes are made from the corners in each pass, not kept:
+/// on random-1m (a million triangles) a kept vector of them was 48 MB of fresh pages, whose
+/// faults cost more than reading the corners again.
 fn split(
     geometry: &Geometry,
-    tris: &[u32],
+    tris: Vec<u32>,
     alloc: &Allocator,
 ) -> Result<(BvhFrame, Vec<u32>, Vec<u32>), AllocationError> {
-    // The boxes once, in parallel; every pass below reads them in order.
-    let mut boxes: Vec<(DVec3, DVec3)> = alloc.vec(tris.len(), "the BVH frame's boxes")?;
-    boxes.par_extend(tris.par_iter().map(|&t| corners_box(geometry.corners(t as usize))));
-    let mut values: Vec<f64> = alloc.vec(tris.len(), "the BVH frame's medians")?;
+    let world = |&t: &u32| corners_box(geometry.corners(t as usize));
+    let n = tris.len();
+    let mut values: Vec<f64> = alloc.vec(n, "the BVH frame's medians")?;
     let radius = |centre: DVec3, &(lo, hi): &(DVec3, DVec3)| {
         (lo - centre).abs().max(hi - centre).max_element()
     };
@@ -311,7 +314,7 @@ fn split(
     let mut place = |stride: usize| {
         let mut middle = |f: &(dyn Fn(&(DVec3, DVec3)) -> f64 + Sync)| {
             values.clear();
-            values.par_extend(boxes.par_iter().step_by(stride).map(f));
+            values.par_extend(tris.par_iter().step_by(stride).map(|t| f(&world(t))));
             select_middle(&mut values)
         };
         let mut centre = DVec3::ZERO;
@@ -322,62 +325,91 @@ fn split(
         let median_radius = middle(&|b| radius(centre, b));
         (centre, typical, OUTLIER_FACTOR * (median_radius + typical))
     };
-    let sampled = place((tris.len() / FRAME_SAMPLE).max(1));
+    // How many boxes lie within the limit, and their minima, maxima and largest radius: the
+    // same in any order of reduction.
     let within = |(centre, _, limit): (DVec3, f64, f64)| {
-        boxes.par_iter().filter(|b| radius(centre, b) <= limit).count()
+        let empty = (0usize, DVec3::INFINITY, DVec3::NEG_INFINITY, 0.0f64);
+        tris.par_iter()
+            .map(world)
+            .filter(|b| radius(centre, b) <= limit)
+            .map(|b| (1, b.0 - centre, b.1 - centre, radius(centre, &b)))
+            .reduce(|| empty, |a, b| (a.0 + b.0, a.1.min(b.1), a.2.max(b.2), a.3.max(b.3)))
     };
-    let mut count = within(sampled);
+    let sampled = place((n / FRAME_SAMPLE).max(1));
+    let mut kept = within(sampled);
     // A sample's medians keep less than half the boxes only by bad luck; the whole set's
     // always keep at least half.
-    let (centre, typical, limit) = if 2 * count >= tris.len() {
+    let (centre, typical, limit) = if 2 * kept.0 >= n {
         sampled
     } else {
         let exact = place(1);
-        count = within(exact);
+        kept = within(exact);
         exact
     };
     drop(values);
-    let radius = |b: &(DVec3, DVec3)| radius(centre, b);
+    let (count, lo, hi, extent) = kept;
+    let frame = BvhFrame::new(centre, typical, lo, hi, extent);
+    if count == n {
+        return Ok((frame, tris, Vec::new()));
+    }
+    let inside = |t: &&u32| radius(centre, &world(t)) <= limit;
     let mut main = alloc.vec(count, "the BVH's triangle lists")?;
-    let mut rest = alloc.vec(tris.len() - count, "the BVH's triangle lists")?;
-    let pairs = || tris.par_iter().zip(boxes.par_iter());
-    main.par_extend(pairs().filter(|(_, b)| radius(b) <= limit).map(|(&t, _)| t));
-    rest.par_extend(pairs().filter(|(_, b)| radius(b) > limit).map(|(&t, _)| t));
-    // Minima, maxima and the largest radius: the same in any order of reduction.
-    let empty = (DVec3::INFINITY, DVec3::NEG_INFINITY, 0.0f64);
-    let (lo, hi, extent) = boxes
-        .par_iter()
-        .filter(|b| radius(b) <= limit)
-        .map(|b| (b.0 - centre, b.1 - centre, radius(b)))
-        .reduce(|| empty, |a, b| (a.0.min(b.0), a.1.max(b.1), a.2.max(b.2)));
-    Ok((BvhFrame::new(centre, typical, lo, hi, extent), main, rest))
+    let mut rest = alloc.vec(n - count, "the BVH's triangle lists")?;
+    main.par_extend(tris.par_iter().filter(inside).copied());
+    rest.par_extend(tris.par_iter().filter(|t| !inside(t)).copied());
+    Ok((frame, main, rest))
 }
 
-/// Cuts `order` (indices into `boxes`, the triangles of `order[0]` onwards being slots
-/// `start` onwards) into parts of at most `max_part` triangles, halving it at the median
-/// of the box centres along the axis where they spread most, and again each half; each part's
-/// range of slots goes to `parts`, each halving to `splits` (its halves, in pre-order). The
-/// halves are cut in parallel (on random-1m the serial cuts took 72 ms of the 345 of the
-/// BVH build at 2 threads), each into lists of its own, appended in order.
+/// A triangle's padded `f32` box in its cluster's frame, and its place in the cluster's list
+/// of triangles: what the halvings ([`cut`]) reorder and obvhs builds over, 28 bytes, so that
+/// the halvings read the boxes in order and each part's build reads its own range of them.
+#[derive(Debug, Clone, Copy)]
+struct Placed {
+    lo: [f32; 3],
+    /// Index into the cluster's list of triangles.
+    at: u32,
+    hi: [f32; 3],
+}
+
+impl Placed {
+    /// Twice the box's centre along `axis`, as an `f32`.
+    #[inline]
+    fn centre(&self, axis: usize) -> f32 {
+        self.lo[axis] + self.hi[axis]
+    }
+}
+
+impl Boundable for Placed {
+    #[inline]
+    fn aabb(&self) -> Aabb {
+        Aabb::new(Vec3A::from_array(self.lo), Vec3A::from_array(self.hi))
+    }
+}
+
+/// Cuts `boxes` (the triangles of `boxes[0]` onwards being slots `start` onwards) into parts
+/// of at most `max_part` triangles, halving it at the median of the box centres along the axis
+/// where they spread most, and again each half; each part's range of slots goes to `parts`,
+/// each halving to `splits` (its halves, in pre-order). The halves are cut in parallel (on
+/// random-1m the serial cuts took 72 ms of the 345 of the BVH build at 2 threads), each into
+/// lists of its own, appended in order.
 fn cut(
-    boxes: &[Aabb],
-    order: &mut [u32],
+    boxes: &mut [Placed],
     start: usize,
     max_part: usize,
-    parts: &mut Vec<std::ops::Range<usize>>,
+    parts: &mut Vec<Range<usize>>,
     splits: &mut Vec<[Piece; 2]>,
 ) -> Piece {
-    if order.len() <= max_part.max(1) {
-        parts.push(start..start + order.len());
+    if boxes.len() <= max_part.max(1) {
+        parts.push(start..start + boxes.len());
         return Piece::Part(parts.len() - 1);
     }
-    let centre = |k: u32| boxes[k as usize].min + boxes[k as usize].max;
+    let centre = |b: &Placed| Vec3A::from_array(b.lo) + Vec3A::from_array(b.hi);
     // Minima and maxima: the same in any order of reduction.
-    let (lo, hi) = order
+    let (lo, hi) = boxes
         .par_iter()
         .fold(
             || (Vec3A::INFINITY, Vec3A::NEG_INFINITY),
-            |(lo, hi), &k| (lo.min(centre(k)), hi.max(centre(k))),
+            |(lo, hi), b| (lo.min(centre(b)), hi.max(centre(b))),
         )
         .reduce(|| (Vec3A::INFINITY, Vec3A::NEG_INFINITY), |a, b| (a.0.min(b.0), a.1.max(b.1)));
     let spread = hi - lo;
@@ -388,14 +420,14 @@ fn cut(
     } else {
         2
     };
-    let half = order.len() / 2;
-    order.select_nth_unstable_by(half, |&a, &b| centre(a)[axis].total_cmp(&centre(b)[axis]));
+    let half = boxes.len() / 2;
+    boxes.select_nth_unstable_by(half, |a, b| a.centre(axis).total_cmp(&b.centre(axis)));
     let s = splits.len();
     splits.push([Piece::Part(0); 2]);
-    let (left, right) = order.split_at_mut(half);
-    let alone = |order: &mut [u32], start: usize| {
+    let (left, right) = boxes.split_at_mut(half);
+    let alone = |boxes: &mut [Placed], start: usize| {
         let (mut parts, mut splits) = (Vec::new(), Vec::new());
-        let piece = cut(boxes, order, start, max_part, &mut parts, &mut splits);
+        let piece = cut(boxes, start, max_part, &mut parts, &mut splits);
         (piece, parts, splits)
     };
     let (l, r) = rayon::join(|| alone(left, start), || alone(right, start + half));
@@ -408,9 +440,9 @@ fn cut(
 /// Appends a subtree cut alone (its piece, parts and splits, numbered from 0) to `parts` and
 /// `splits`, renumbered; its piece, renumbered.
 fn append(
-    parts: &mut Vec<std::ops::Range<usize>>,
+    parts: &mut Vec<Range<usize>>,
     splits: &mut Vec<[Piece; 2]>,
-    (piece, more_parts, more_splits): (Piece, Vec<std::ops::Range<usize>>, Vec<[Piece; 2]>),
+    (piece, more_parts, more_splits): (Piece, Vec<Range<usize>>, Vec<[Piece; 2]>),
 ) -> Piece {
     let (p, s) = (parts.len(), splits.len());
     let shift = |piece: Piece| match piece {
@@ -474,48 +506,27 @@ impl Accel {
             pass: alloc.vec(n, "the triangles' transmittance")?,
         };
         while !tris.is_empty() {
-            let (frame, main, rest) = split(geometry, &tris, alloc)?;
-            drop(tris);
+            let (frame, main, rest) = split(geometry, tris, alloc)?;
             let first = accel.ids.len();
             let bvh = if frame.traversable() {
-                let mut boxes = alloc.vec(main.len(), "the BVH's boxes")?;
-                boxes.par_extend(
-                    main.par_iter()
-                        .map(|&t| frame.padded_box(corners_box(geometry.corners(t as usize)))),
-                );
-                let mut order: Vec<u32> = alloc.vec(main.len(), "the BVH's triangle lists")?;
-                order.extend(0..main.len() as u32);
+                let mut boxes: Vec<Placed> = alloc.vec(main.len(), "the BVH's boxes")?;
+                boxes.par_extend(main.par_iter().enumerate().map(|(at, &t)| {
+                    let b = frame.padded_box(corners_box(geometry.corners(t as usize)));
+                    Placed { lo: b.min.to_array(), at: at as u32, hi: b.max.to_array() }
+                }));
                 let (mut parts, mut splits) = (Vec::new(), Vec::new());
-                cut(&boxes, &mut order, 0, max_part, &mut parts, &mut splits);
-                // Each part: its boxes in `order`'s order, obvhs' build, our nodes and the
-                // triangle in each of its slots.
-                let (boxes, main) = (&boxes, &main);
-                let trees = parts
-                    .par_iter()
-                    .map(|r| {
-                        let order = &order[r.clone()];
-                        let mut part_boxes = alloc.vec(order.len(), "the BVH's boxes")?;
-                        part_boxes.extend(order.iter().map(|&k| boxes[k as usize]));
-                        alloc.probe_bvh_build(order.len())?;
-                        let bvh = build_bvh2(&part_boxes, BUILD, &mut Default::default());
-                        drop(part_boxes);
-                        let tree = bvh::convert(&bvh, alloc)?;
-                        drop(bvh);
-                        let mut ids = tree.prims;
-                        for p in &mut ids {
-                            *p = main[order[*p as usize] as usize];
-                        }
-                        Ok((tree.nodes, ids))
-                    })
-                    .collect::<Result<Vec<_>, AllocationError>>()?;
-                // The slots' triangles, part after part.
-                let mut nodes = Vec::with_capacity(trees.len());
-                for (tree, ids) in trees {
-                    nodes.push(tree);
-                    accel.ids.extend_from_slice(&ids);
-                }
-                let slots: Vec<usize> = parts.iter().map(|r| r.len()).collect();
-                Some(bvh::join(&splits, nodes, &slots, alloc)?)
+                cut(&mut boxes, 0, max_part, &mut parts, &mut splits);
+                // Each part: obvhs' build over its range of boxes; then the trees joined, and
+                // the triangle in each slot.
+                let build = |r: Range<usize>| {
+                    alloc.probe_bvh_build(r.len())?;
+                    Ok(build_bvh2(&boxes[r], BUILD, &mut Default::default()))
+                };
+                let tree = bvh::join(&splits, &parts, build, alloc)?;
+                accel.ids.par_extend(
+                    tree.prims.par_iter().map(|&b| main[boxes[b as usize].at as usize]),
+                );
+                Some(tree.nodes)
             } else {
                 accel.ids.extend_from_slice(&main);
                 None

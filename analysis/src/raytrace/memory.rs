@@ -11,16 +11,17 @@
 
 /// Bytes per triangle the BVH build allocates at its peak, from its arrays' sizes: obvhs 0.4's
 /// PLOC holds two node arrays, the Morton codes (32 bytes each) and the binary BVH (two 32-byte
-/// nodes per triangle), 164 bytes; the conversion to the tracer's nodes then holds the binary
-/// BVH (two 48-byte nodes per triangle) and at most one 64-byte node per triangle, 160. 200
-/// bounds both, as it bounded obvhs' wide BVH conversion before.
+/// nodes per triangle), 164 bytes; while it is converted to the tracer's nodes the binary BVH
+/// (two 48-byte nodes per triangle) is held, 96. 200 bounds both, as it bounded obvhs' wide
+/// BVH conversion before.
 pub(crate) const OBVHS_BYTES_PER_TRIANGLE: u64 = 200;
 
 /// Bytes per triangle of the tracer's own arrays kept beside the BVH: the `f64` corners (72),
-/// the triangle id (4) and the light it lets through (8) per slot, plus the build's temporary
-/// triangle list, radii and `f32` boxes (4 + 8 + 8 + 32), and, for a cluster built in parts,
-/// the order of its triangles and each part's copy of its boxes (4 + 32).
-const OWN_BYTES_PER_TRIANGLE: u64 = 172;
+/// the triangle id (4) and the light it lets through (8) per slot, the tracer's nodes (at most
+/// one of 64 bytes per triangle, allocated before the parts are built and converted into it)
+/// and each slot's box (4), plus the build's temporary triangle list, medians and placed `f32`
+/// boxes (4 + 8 + 28).
+const OWN_BYTES_PER_TRIANGLE: u64 = 192;
 
 /// Bytes per sub-sample of the per-sample buffers: [`super::RayTrace::sample_image`] keeps a
 /// triangle id and a light value (12 bytes) per sub-sample twice (the rows and the image);
@@ -32,10 +33,11 @@ const BYTES_PER_SAMPLE: u64 = 48;
 /// BVHs (the scene's, plus its casters again when some triangle casts no shadow, which gets a
 /// BVH of its own) and `samples` sub-samples (pixels times rate): the BVH build and the tracer's
 /// copies of the triangles, then the per-sample buffers. It counts what is allocated, an upper
-/// bound of what is touched: against peak RSS (release build, `render --method raytrace` minus
-/// `render --method sm` on the same scene at 320 x 240), random-1m took 248 MB at rate 1 and
-/// 16 (estimate 340 and 395 MB), random-100k 15 MB (estimate 37 and 93 MB: the per-sample
-/// term is what `sample_image` keeps; `evaluate` keeps per-pixel values only).
+/// bound of what is touched (the per-sample term is what `sample_image` keeps; `evaluate`
+/// keeps per-pixel values only). Peak RSS of a release build at 320 x 240: `render --method
+/// raytrace` on random-1m peaked 343 MB at rates 1 and 16, 65 MB above `render --method sm`
+/// on the same frame (estimate 396 and 451 MB; the ray tracer's peak comes when the scene's
+/// own buffers are partly gone); on random-100k it stays below `sm`'s peak.
 pub fn memory_estimate(triangles: u64, samples: u64) -> u64 {
     triangles
         .saturating_mul(OBVHS_BYTES_PER_TRIANGLE + OWN_BYTES_PER_TRIANGLE)
@@ -81,6 +83,17 @@ impl Allocator {
         let mut v = Vec::new();
         v.try_reserve_exact(count).map_err(|_| self.error::<T>(what, count))?;
         Ok(v)
+    }
+
+    /// A vector of `count` zeroed items, or the error naming `what`. The allocator's zeroed
+    /// pages are first touched where the items are written, in parallel, not in a fill of its
+    /// own; pages never written are never touched.
+    pub(crate) fn zeroed<T: bytemuck::Zeroable>(
+        &self,
+        count: usize,
+        what: &'static str,
+    ) -> Result<Vec<T>, AllocationError> {
+        bytemuck::allocation::try_zeroed_vec(count).map_err(|()| self.error::<T>(what, count))
     }
 
     /// Whether a block of obvhs' build size for `triangles` triangles can be had: reserves it
