@@ -4,7 +4,11 @@
 //! faster); on `bunny-plane` also `spsm` against `sm` at 1920x1080 (there the ratio is
 //! `spsm / sm`, the "Embree" column holding `sm`'s time). Then, for `bunny-plane`, `bumpy`,
 //! `cage` and `random-1m` among the scenes, a second table: the exact reference beside `sm`
-//! at map 1024 on the same frame, its largest stages, and `raytrace` at rate 64.
+//! at map 1024 on the same frame, its largest stages, and `raytrace` at rate 64. Each table
+//! names the machine (its CPU model and the 1-minute load average at its start) and ends with
+//! the load average at its end, the largest share of the cores other processes took over one
+//! subject's timed runs (`Conditions::others_share`) and how many runs were contended: ratios
+//! of two machines, or of a busy one, are not comparable.
 //!
 //! Timing: every figure is measured by the workbench's one timing loop,
 //! `instrumentation::measure::measure_all`, under `Protocol::fixed(1, R)`: one untimed warm-up,
@@ -113,6 +117,7 @@ mod side_by_side {
     };
     use bench::Samples;
     use embree::Device;
+    use instrumentation::clock::Load;
     use instrumentation::measure::{measure_all, Measured, Protocol};
     use instrumentation::Recorder;
     use methods::pattern::{PatternKind, SamplePattern};
@@ -180,12 +185,66 @@ mod side_by_side {
         m.stages.iter().filter(|s| names.contains(&s.name.as_str())).map(|s| s.ms.median).sum()
     }
 
-    /// Measures `subjects` interleaved under `protocol`; the first failure is the error.
+    /// Measures `subjects` interleaved under `protocol`, noting the machine's condition over
+    /// their runs in `machine`; the first failure is the error.
     fn measure_frame(
         protocol: &Protocol,
         subjects: &mut [Subject<'_>],
+        machine: &mut Machine,
     ) -> anyhow::Result<Vec<Measured<()>>> {
-        measure_all(protocol, subjects, |_, _| {}).into_iter().collect()
+        let measured: Vec<_> =
+            measure_all(protocol, subjects, |_, _| {}).into_iter().collect::<Result<_, _>>()?;
+        for m in &measured {
+            machine.note(m);
+        }
+        Ok(measured)
+    }
+
+    /// What the machine did while a table was measured, for the line under it: a ratio taken
+    /// while other processes held cores is not one of a quiet machine.
+    struct Machine {
+        /// The 1-minute load average before the table's first run.
+        load_before: Option<f64>,
+        /// The largest share of the cores other processes took over one subject's timed runs.
+        others: f64,
+        /// Timed runs kept, and those of them contended (their threads held less than
+        /// `Protocol::min_share` of their time, also when run again).
+        runs: usize,
+        contended: usize,
+    }
+
+    impl Machine {
+        /// Starts a table: prints the CPU and the load average now.
+        fn start() -> Self {
+            let load_before = Load::now().map(|l| l.loadavg);
+            let load = load_before.map_or_else(|| "unknown".into(), |l| format!("{l:.2}"));
+            println!(
+                "Machine: {}; 1-minute load average {load} at the start\n",
+                instrumentation::cpu_model(),
+            );
+            Machine { load_before, others: 0.0, runs: 0, contended: 0 }
+        }
+
+        fn note(&mut self, m: &Measured<()>) {
+            self.others = self.others.max(m.conditions.others_share.unwrap_or(0.0));
+            self.runs += m.samples.len();
+            self.contended += m.samples.iter().filter(|s| s.contended).count();
+        }
+
+        /// Ends a table: prints the load average now and what others took during its runs.
+        fn end(self) {
+            let load = |l: Option<f64>| l.map_or_else(|| "unknown".into(), |l| format!("{l:.2}"));
+            println!(
+                "\nLoad average {} at the start, {} at the end (this process's own threads \
+                 count in it); other processes took at most {:.0} % of the cores over one \
+                 subject's timed runs; {} of {} timed runs contended",
+                load(self.load_before),
+                load(Load::now().map(|l| l.loadavg)),
+                100.0 * self.others,
+                self.contended,
+                self.runs,
+            );
+        }
     }
 
     pub fn run() -> anyhow::Result<()> {
@@ -200,6 +259,7 @@ mod side_by_side {
              the process's threads beside (Embree's threads included)\n",
             a.threads, a.repeats
         );
+        let mut machine = Machine::start();
         println!("| scene | frame | triangles | camera G-buffer ms | measure | ours ms | Embree ms | ours / Embree | ours Mrays/s | Embree Mrays/s | ours CPU ms | Embree CPU ms |");
         println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
         let device = Device::new();
@@ -256,7 +316,7 @@ mod side_by_side {
                     subjects.push(ours(frame, pan.as_ref()));
                     subjects.push(embree(device, frame, s32, Api::PerRay));
                 }
-                let measured = measure_frame(&protocol, &mut subjects)?;
+                let measured = measure_frame(&protocol, &mut subjects, &mut machine)?;
                 let line = |measure: &str, ours: &Measured<()>, theirs: &Measured<()>, rates| {
                     row(name, (w, h), triangles, gbuffer, measure, ours, theirs, rates)
                 };
@@ -303,7 +363,7 @@ mod side_by_side {
                         .collect::<Result<Vec<_>, _>>()?;
                     let mut subjects: Vec<Subject<'_>> =
                         built.iter().map(|t| ours(&hd, t.as_ref())).collect();
-                    let measured = measure_frame(&protocol, &mut subjects)?;
+                    let measured = measure_frame(&protocol, &mut subjects, &mut machine)?;
                     for (map, pair) in maps.iter().zip(measured.chunks(2)) {
                         let [spsm, sm] = pair else {
                             return Err(anyhow!("two runs per map size, {} measured", pair.len()));
@@ -323,6 +383,7 @@ mod side_by_side {
                 }
             }
         }
+        machine.end();
         let repeats = u32::try_from(a.repeats).context("--repeats")?.max(EXACT_REPEATS);
         exact_table(&a.scenes, &Protocol::fixed(1, repeats))
     }
@@ -357,6 +418,7 @@ mod side_by_side {
              --rate 64` one cold run\n",
             protocol.min_repeats
         );
+        let mut machine = Machine::start();
         println!("| scene | frame | triangles | camera G-buffer ms | exact ms | exact CPU ms | exact's largest stages (ms) | sm ms | exact / sm | exact / sm with G-buffer | raytrace rate 64 ms |");
         println!("|---|---|---|---|---|---|---|---|---|---|---|");
         let exact = analysis::registry::technique("exact", &MethodOptions::default())?;
@@ -383,7 +445,7 @@ mod side_by_side {
                     Ok(())
                 }),
             ];
-            let measured = measure_frame(protocol, &mut subjects)?;
+            let measured = measure_frame(protocol, &mut subjects, &mut machine)?;
             let [e, s, g] = &measured[..] else {
                 return Err(anyhow!("three subjects, {} measured", measured.len()));
             };
@@ -395,7 +457,7 @@ mod side_by_side {
                 stages.iter().take(3).map(|(n, ms)| format!("{n} {ms:.0}")).collect();
             let brute = if w * h <= 800 * 600 {
                 let once = Protocol::fixed(0, 1);
-                let m = measure_frame(&once, &mut [ours(&frame, rt64.as_ref())])?;
+                let m = measure_frame(&once, &mut [ours(&frame, rt64.as_ref())], &mut machine)?;
                 m.first().map_or_else(|| "–".into(), |m| format!("{:.0}", m.wall_ms.median))
             } else {
                 "–".into()
@@ -410,6 +472,7 @@ mod side_by_side {
                 (ew + gbuffer) / (sw + gbuffer),
             );
         }
+        machine.end();
         Ok(())
     }
 
