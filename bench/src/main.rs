@@ -6,9 +6,9 @@
 //! `cage` and `random-1m` among the scenes, a second table: the exact reference beside `sm`
 //! at map 1024 on the same frame, its largest stages, and `raytrace` at rate 64. Each table
 //! names the machine (its CPU model and the 1-minute load average at its start) and ends with
-//! the load average at its end, the largest share of the cores other processes took over one
-//! subject's timed runs (`Conditions::others_share`) and how many runs were contended: ratios
-//! of two machines, or of a busy one, are not comparable.
+//! the load average at its end, the share of the cores other processes took over its timed
+//! runs (`Conditions::others_share` of each subject, weighted by its runs' time) and how many
+//! runs were contended: ratios of two machines, or of a busy one, are not comparable.
 //!
 //! Timing: every figure is measured by the workbench's one timing loop,
 //! `instrumentation::measure::measure_all`, under `Protocol::fixed(1, R)`: one untimed warm-up,
@@ -205,8 +205,10 @@ mod side_by_side {
     struct Machine {
         /// The 1-minute load average before the table's first run.
         load_before: Option<f64>,
-        /// The largest share of the cores other processes took over one subject's timed runs.
-        others: f64,
+        /// Core-milliseconds other processes took during the timed runs, and the runs'
+        /// wall-clock milliseconds: their ratio is the share of the cores others took.
+        others_ms: f64,
+        wall_ms: f64,
         /// Timed runs kept, and those of them contended (their threads held less than
         /// `Protocol::min_share` of their time, also when run again).
         runs: usize,
@@ -222,11 +224,15 @@ mod side_by_side {
                 "Machine: {}; 1-minute load average {load} at the start\n",
                 instrumentation::cpu_model(),
             );
-            Machine { load_before, others: 0.0, runs: 0, contended: 0 }
+            Machine { load_before, others_ms: 0.0, wall_ms: 0.0, runs: 0, contended: 0 }
         }
 
         fn note(&mut self, m: &Measured<()>) {
-            self.others = self.others.max(m.conditions.others_share.unwrap_or(0.0));
+            // A subject's share is over its timed runs: weighted by their time, the shares of
+            // the subjects make the table's (one subject's alone is coarse: 10 ms jiffies).
+            let wall: f64 = m.samples.iter().map(|s| s.wall_ms).sum();
+            self.others_ms += m.conditions.others_share.unwrap_or(0.0) * wall;
+            self.wall_ms += wall;
             self.runs += m.samples.len();
             self.contended += m.samples.iter().filter(|s| s.contended).count();
         }
@@ -236,11 +242,11 @@ mod side_by_side {
             let load = |l: Option<f64>| l.map_or_else(|| "unknown".into(), |l| format!("{l:.2}"));
             println!(
                 "\nLoad average {} at the start, {} at the end (this process's own threads \
-                 count in it); other processes took at most {:.0} % of the cores over one \
-                 subject's timed runs; {} of {} timed runs contended",
+                 count in it); other processes took {:.1} % of the cores over the timed \
+                 runs; {} of {} timed runs contended",
                 load(self.load_before),
                 load(Load::now().map(|l| l.loadavg)),
-                100.0 * self.others,
+                100.0 * self.others_ms / self.wall_ms.max(f64::MIN_POSITIVE),
                 self.contended,
                 self.runs,
             );
