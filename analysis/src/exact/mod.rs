@@ -116,6 +116,7 @@ use methods::Frame;
 use rayon::prelude::*;
 use shadow::Setup;
 use std::ops::Range;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 pub use classes::classify;
 
@@ -365,12 +366,21 @@ fn evaluate(
     // ascending order (sorting the pixels' tiles with their repeats cost 30 ms on bumpy).
     let built = (class.contains(&PixelClass::Surface) || edge_lists).then(|| {
         rec.stages.time("caster grid", || {
-            let mut marked = vec![false; frame.geometry.len()];
-            for k in (0..w * h).filter(|&k| class[k] == PixelClass::Surface) {
-                classes.tiles_of(k).iter().for_each(|&t| marked[t as usize] = true);
-            }
-            let listed = |marked: &[bool]| -> Vec<u32> {
-                (0..marked.len() as u32).into_par_iter().filter(|&t| marked[t as usize]).collect()
+            // Marked by the pixels in parallel: a mark is only ever set, so the order of the
+            // stores does not matter (4 ms serial on bumpy).
+            let marked: Vec<AtomicBool> =
+                (0..frame.geometry.len()).into_par_iter().map(|_| AtomicBool::new(false)).collect();
+            let mark = |t: u32| marked[t as usize].store(true, Ordering::Relaxed);
+            (0..w * h)
+                .into_par_iter()
+                .filter(|&k| class[k] == PixelClass::Surface)
+                .for_each(|k| classes.tiles_of(k).iter().for_each(|&t| mark(t)));
+            let listed = |marked: &[AtomicBool]| -> Vec<u32> {
+                let n = marked.len() as u32;
+                (0..n)
+                    .into_par_iter()
+                    .filter(|&t| marked[t as usize].load(Ordering::Relaxed))
+                    .collect()
             };
             let receivers = listed(&marked);
             // The grid's region covers the receivers, and the edge pixels' triangles when the
@@ -380,7 +390,7 @@ fn evaluate(
             // frame and coarsen every receiver's cells.
             let among = matches!(edge_trace, Some((_, edges::EdgeTrace::Among)));
             let all = if among || (edge_lists && receivers.is_empty()) {
-                classes.edge_overlaps.iter().for_each(|&(_, t)| marked[t as usize] = true);
+                classes.edge_overlaps.iter().for_each(|&(_, t)| mark(t));
                 listed(&marked)
             } else {
                 receivers.clone()
