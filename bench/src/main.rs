@@ -219,12 +219,17 @@ mod side_by_side {
         /// Starts a table: prints the CPU and the load average now.
         fn start() -> Self {
             let load_before = Load::now().map(|l| l.loadavg);
-            let load = load_before.map_or_else(|| "unknown".into(), |l| format!("{l:.2}"));
             println!(
-                "Machine: {}; 1-minute load average {load} at the start\n",
+                "Machine: {}; 1-minute load average {} at the start\n",
                 instrumentation::cpu_model(),
+                Self::shown(load_before),
             );
             Machine { load_before, others_ms: 0.0, wall_ms: 0.0, runs: 0, contended: 0 }
+        }
+
+        /// A load average as printed: two decimals, or `unknown` where it could not be read.
+        fn shown(load: Option<f64>) -> String {
+            load.map_or_else(|| "unknown".into(), |l| format!("{l:.2}"))
         }
 
         fn note(&mut self, m: &Measured<()>) {
@@ -239,13 +244,12 @@ mod side_by_side {
 
         /// Ends a table: prints the load average now and what others took during its runs.
         fn end(self) {
-            let load = |l: Option<f64>| l.map_or_else(|| "unknown".into(), |l| format!("{l:.2}"));
             println!(
                 "\nLoad average {} at the start, {} at the end (this process's own threads \
                  count in it); other processes took {:.1} % of the cores over the timed \
                  runs; {} of {} timed runs contended",
-                load(self.load_before),
-                load(Load::now().map(|l| l.loadavg)),
+                Self::shown(self.load_before),
+                Self::shown(Load::now().map(|l| l.loadavg)),
                 100.0 * self.others_ms / self.wall_ms.max(f64::MIN_POSITIVE),
                 self.contended,
                 self.runs,

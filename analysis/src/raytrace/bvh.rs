@@ -180,6 +180,7 @@ impl<'a> Collapse<'a> {
         next
     }
 }
+
 /// A subtree of a BVH built in parts ([`join`]): a node that splits two subtrees, or a part.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum Piece {
