@@ -1,14 +1,16 @@
 //! `embree-side-by-side`: our ray tracer and shadow methods beside Intel Embree, in one
 //! process, on the same frames and sample points, at one thread count (see the library's
 //! documentation). Prints one Markdown table, with ratios (ours / Embree: above 1, Embree is
-//! faster); on `bunny-plane` also `spsm` against `sm` at 1920x1080 (there the ratio is
-//! `spsm / sm`, the "Embree" column holding `sm`'s time). Then, for `bunny-plane`, `bumpy`,
-//! `cage` and `random-1m` among the scenes, a second table: the exact reference beside `sm`
-//! at map 1024 on the same frame, its largest stages, and `raytrace` at rate 64. Each table
-//! names the machine (its CPU model and the 1-minute load average at its start) and ends with
-//! the load average at its end, the share of the cores other processes took over its timed
-//! runs (`Conditions::others_share` of each subject, weighted by its runs' time) and how many
-//! runs were contended: ratios of two machines, or of a busy one, are not comparable.
+//! faster) of the medians and, beside them, the range of the ratios of single rounds (a range
+//! that holds 1 leaves the faster side undecided); on `bunny-plane` also `spsm` against `sm`
+//! at 1920x1080 (there the ratio is `spsm / sm`, the "Embree" column holding `sm`'s time).
+//! Then, for `bunny-plane`, `bumpy`, `cage` and `random-1m` among the scenes, a second table:
+//! the exact reference beside `sm` at map 1024 on the same frame (with the range of single
+//! rounds' ratios too), its largest stages, and `raytrace` at rate 64. Each table names the
+//! machine (its CPU model and the 1-minute load average at its start) and ends with the load
+//! average at its end, the share of the cores other processes took over its timed runs
+//! (`Conditions::others_share` of each subject, weighted by its runs' time) and how many runs
+//! were contended: ratios of two machines, or of a busy one, are not comparable.
 //!
 //! Timing: every figure is measured by the workbench's one timing loop,
 //! `instrumentation::measure::measure_all`, under `Protocol::fixed(1, R)`: one untimed warm-up,
@@ -118,7 +120,7 @@ mod side_by_side {
     use bench::Samples;
     use embree::Device;
     use instrumentation::clock::Load;
-    use instrumentation::measure::{measure_all, Measured, Protocol};
+    use instrumentation::measure::{measure_all, Measured, Protocol, Sample};
     use instrumentation::Recorder;
     use methods::pattern::{PatternKind, SamplePattern};
     use methods::{Frame, MethodOptions, ShadowMethod};
@@ -177,6 +179,18 @@ mod side_by_side {
             let t = trace_on(device, frame, samples, api, &mut rec.stages);
             rec.counters.rays_traced = t.camera_rays + t.shadow_rays;
             Ok(())
+        })
+    }
+
+    /// The smallest and largest ratio `ours / theirs` of the wall-clock times of one round:
+    /// the runs of a frame are interleaved round by round, so the two runs of a round met the
+    /// same machine. A range that holds 1 leaves undecided which side is faster. `None`
+    /// without a round that both ran.
+    fn round_ratios(ours: &[Sample], theirs: &[Sample]) -> Option<(f64, f64)> {
+        let ratios = ours.iter().zip(theirs).map(|(a, b)| a.wall_ms / b.wall_ms);
+        ratios.fold(None, |range, r| match range {
+            None => Some((r, r)),
+            Some((lo, hi)) => Some((r.min(lo), r.max(hi))),
         })
     }
 
@@ -270,14 +284,14 @@ mod side_by_side {
             a.threads, a.repeats
         );
         let mut machine = Machine::start();
-        println!("| scene | frame | triangles | camera G-buffer ms | measure | ours ms | Embree ms | ours / Embree | ours Mrays/s | Embree Mrays/s | ours CPU ms | Embree CPU ms |");
-        println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+        println!("| scene | frame | triangles | camera G-buffer ms | measure | ours ms | Embree ms | ours / Embree | per round | ours Mrays/s | Embree Mrays/s | ours CPU ms | Embree CPU ms |");
+        println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
         let device = Device::new();
         for name in &a.scenes {
             let scene = match scenes::load(name) {
                 Ok(s) => s,
                 Err(e) => {
-                    println!("| {name} | skipped: {e} |||||||||||");
+                    println!("| {name} | skipped: {e} ||||||||||||");
                     continue;
                 }
             };
@@ -429,8 +443,8 @@ mod side_by_side {
             protocol.min_repeats
         );
         let mut machine = Machine::start();
-        println!("| scene | frame | triangles | camera G-buffer ms | exact ms | exact CPU ms | exact's largest stages (ms) | sm ms | exact / sm | exact / sm with G-buffer | raytrace rate 64 ms |");
-        println!("|---|---|---|---|---|---|---|---|---|---|---|");
+        println!("| scene | frame | triangles | camera G-buffer ms | exact ms | exact CPU ms | exact's largest stages (ms) | sm ms | exact / sm | per round | exact / sm with G-buffer | raytrace rate 64 ms |");
+        println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
         let exact = analysis::registry::technique("exact", &MethodOptions::default())?;
         let options = MethodOptions { map_res: Some(1024), ..Default::default() };
         let sm = analysis::registry::technique("sm", &options)?;
@@ -440,7 +454,7 @@ mod side_by_side {
             let scene = match scenes::load(name) {
                 Ok(s) => s,
                 Err(e) => {
-                    println!("| {name} | skipped: {e} ||||||||||");
+                    println!("| {name} | skipped: {e} |||||||||||");
                     continue;
                 }
             };
@@ -474,8 +488,10 @@ mod side_by_side {
             };
             let (ew, sw) = (e.wall_ms.median, s.wall_ms.median);
             let cpu = e.cpu_ms.map_or_else(|| "–".into(), |c| format!("{:.1}", c.median));
+            let rounds = round_ratios(&e.samples, &s.samples)
+                .map_or_else(|| "–".into(), |(lo, hi)| format!("{lo:.2}-{hi:.2}"));
             println!(
-                "| {name} | {w}x{h} | {} | {gbuffer:.1} | {ew:.1} | {cpu} | {} | {sw:.1} | {:.2} | {:.2} | {brute} |",
+                "| {name} | {w}x{h} | {} | {gbuffer:.1} | {ew:.1} | {cpu} | {} | {sw:.1} | {:.2} | {rounds} | {:.2} | {brute} |",
                 frame.geometry.len(),
                 largest.join(", "),
                 ew / sw,
@@ -503,13 +519,41 @@ mod side_by_side {
         let cpu =
             |m: &Measured<()>| m.cpu_ms.map_or_else(|| "–".into(), |c| format!("{:.1}", c.median));
         let (o, e) = (ours.wall_ms.median, embree.wall_ms.median);
+        let rounds = round_ratios(&ours.samples, &embree.samples)
+            .map_or_else(|| "–".into(), |(lo, hi)| format!("{lo:.2}-{hi:.2}"));
         println!(
-            "| {scene} | {w}x{h} | {triangles} | {gbuffer:.1} | {measure} | {o:.1} | {e:.1} | {:.2} | {} | {} | {} | {} |",
+            "| {scene} | {w}x{h} | {triangles} | {gbuffer:.1} | {measure} | {o:.1} | {e:.1} | {:.2} | {rounds} | {} | {} | {} | {} |",
             o / e,
             mrays(ours_rate),
             mrays(embree_rate),
             cpu(ours),
             cpu(embree)
         );
+    }
+
+    #[cfg(test)]
+    mod tests {
+        use super::*;
+
+        fn runs(ms: &[f64]) -> Vec<Sample> {
+            let run = |&wall_ms: &f64| Sample {
+                wall_ms,
+                cpu_ms: None,
+                share: None,
+                contended: false,
+                retried: false,
+            };
+            ms.iter().map(run).collect()
+        }
+
+        /// The range is that of the rounds' own ratios, not of the medians' or of the extremes
+        /// of the two sides apart; rounds only one side ran are left out.
+        #[test]
+        fn round_ratios_pair_the_runs_of_each_round() {
+            let ours = runs(&[10.0, 30.0, 12.0, 99.0]);
+            let theirs = runs(&[10.0, 20.0, 16.0]);
+            assert_eq!(round_ratios(&ours, &theirs), Some((0.75, 1.5)));
+            assert_eq!(round_ratios(&ours, &[]), None);
+        }
     }
 }
