@@ -194,6 +194,13 @@ mod side_by_side {
         })
     }
 
+    /// The "per round" cell of a table: [`round_ratios`] of the runs of `ours` and `theirs`
+    /// as `lo-hi`, or `–`.
+    fn per_round(ours: &Measured<()>, theirs: &Measured<()>) -> String {
+        round_ratios(&ours.samples, &theirs.samples)
+            .map_or_else(|| "–".into(), |(lo, hi)| format!("{lo:.2}-{hi:.2}"))
+    }
+
     /// The median of the stages `names` of `m`, summed (ms).
     fn stages_ms(m: &Measured<()>, names: &[&str]) -> f64 {
         m.stages.iter().filter(|s| names.contains(&s.name.as_str())).map(|s| s.ms.median).sum()
@@ -488,8 +495,7 @@ mod side_by_side {
             };
             let (ew, sw) = (e.wall_ms.median, s.wall_ms.median);
             let cpu = e.cpu_ms.map_or_else(|| "–".into(), |c| format!("{:.1}", c.median));
-            let rounds = round_ratios(&e.samples, &s.samples)
-                .map_or_else(|| "–".into(), |(lo, hi)| format!("{lo:.2}-{hi:.2}"));
+            let rounds = per_round(e, s);
             println!(
                 "| {name} | {w}x{h} | {} | {gbuffer:.1} | {ew:.1} | {cpu} | {} | {sw:.1} | {:.2} | {rounds} | {:.2} | {brute} |",
                 frame.geometry.len(),
@@ -519,8 +525,7 @@ mod side_by_side {
         let cpu =
             |m: &Measured<()>| m.cpu_ms.map_or_else(|| "–".into(), |c| format!("{:.1}", c.median));
         let (o, e) = (ours.wall_ms.median, embree.wall_ms.median);
-        let rounds = round_ratios(&ours.samples, &embree.samples)
-            .map_or_else(|| "–".into(), |(lo, hi)| format!("{lo:.2}-{hi:.2}"));
+        let rounds = per_round(ours, embree);
         println!(
             "| {scene} | {w}x{h} | {triangles} | {gbuffer:.1} | {measure} | {o:.1} | {e:.1} | {:.2} | {rounds} | {} | {} | {} | {} |",
             o / e,
