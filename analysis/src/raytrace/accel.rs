@@ -68,6 +68,25 @@ fn exponent(x: f64) -> i32 {
     (((x.to_bits() >> 52) & 0x7ff) as i32 - 1023).min(1022)
 }
 
+/// The smaller and the larger of a slab's two ray parameters, a NaN among them left out as
+/// `f64::min` and `f64::max` leave it out (both NaN: NaN, which bounds nothing). Comparisons
+/// instead of `min` and `max`, whose NaN handling adds a select to each, in the clip of every
+/// ray from outside a cluster (the camera's): cage's and bunny-plane's tracing at rate 1 took
+/// 2-4 % less time (one pinned thread, minima of 15 runs in alternating processes), every
+/// sample's hit and light unchanged.
+#[inline(always)]
+fn slab(a: f64, b: f64) -> (f64, f64) {
+    if a < b {
+        (a, b)
+    } else if b <= a {
+        (b, a)
+    } else if a.is_nan() {
+        (b, b)
+    } else {
+        (a, a)
+    }
+}
+
 /// `2^e` for `e` in `[-1022, 1023]`, exactly.
 #[inline(always)]
 fn power_of_two(e: i32) -> f64 {
@@ -250,8 +269,13 @@ impl Cluster {
                     // The reciprocal's rounding adds one to the quotient's: within `err`.
                     let inv = ray.inv[k];
                     let (a, b) = ((lo[k] - o[k]) * inv, (hi[k] - o[k]) * inv);
-                    t0 = t0.max(a.min(b));
-                    t1 = t1.min(a.max(b));
+                    let (near, far) = slab(a, b);
+                    if near > t0 {
+                        t0 = near;
+                    }
+                    if far < t1 {
+                        t1 = far;
+                    }
                 }
             }
             if t0 > t1 {
@@ -766,6 +790,20 @@ mod tests {
         assert_eq!(transmittance(&accel, &ray, 0.0, f64::INFINITY, u32::MAX), 0.25);
         assert_eq!(transmittance(&accel, &ray, 0.0, f64::INFINITY, 0), 1.0);
         assert_eq!(transmittance(&accel, &ray, 0.0, 1.5, u32::MAX), 1.0);
+    }
+
+    /// `slab` gives what `f64::min` and `f64::max` give, NaN, infinities and zeros included
+    /// (zeros by value: the sign of a zero bound changes no clip).
+    #[test]
+    fn slab_is_min_and_max() {
+        let values = [f64::NAN, f64::NEG_INFINITY, -3.5, -0.0, 0.0, 1e-300, 2.0, f64::INFINITY];
+        let same = |x: f64, y: f64| (x.is_nan() && y.is_nan()) || x == y;
+        for a in values {
+            for b in values {
+                let (near, far) = slab(a, b);
+                assert!(same(near, a.min(b)) && same(far, a.max(b)), "{a}, {b}: {near}, {far}");
+            }
+        }
     }
 
     /// Axis-aligned rays whose zero components are -0.0 (e.g. `-direction` of a vertical
