@@ -272,7 +272,7 @@ fn row_span(outline: &[DVec2], py: f64, lo: usize, hi: usize) -> Option<(usize, 
 /// then not tested (on a ground plane, three exact orientations per pixel).
 fn covered_run(x0: usize, x1: usize, covers: impl Fn(usize) -> bool) -> Option<(usize, usize)> {
     let first = (x0..=x1).find(|&x| covers(x))?;
-    let last = (first..=x1).rev().find(|&x| covers(x)).unwrap_or(first);
+    let last = (first + 1..=x1).rev().find(|&x| covers(x)).unwrap_or(first);
     Some((first, last))
 }
 
