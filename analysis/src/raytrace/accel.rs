@@ -278,8 +278,9 @@ impl Cluster {
     /// `f64` to the cluster's box enlarged by `extent / 64` plus a bound of the clip's own
     /// rounding, and the frame ray starts at the entry point: a ray from far away starts near
     /// the cluster, so the padding need only cover the cluster's own extent. Inlined into the
-    /// packet's set-up loop, where the latency of its square root and divisions overlaps from
-    /// ray to ray.
+    /// packet's set-up loop, where the latency of each ray's chain of dependent operations
+    /// overlaps from ray to ray (it takes no square root or division: the clip multiplies by
+    /// the ray's reciprocal direction).
     #[inline(always)]
     fn route(&self, ray: &TraceRay, tmax: f64) -> Route<'_> {
         self.route_from(ray, tmax, &self.origin_part(ray.origin))
