@@ -15,6 +15,7 @@
 
 pub mod afsm;
 pub mod bands;
+pub mod closed;
 pub mod depth_map;
 pub mod depth_test;
 pub mod filtered_map;

@@ -220,12 +220,12 @@ fn afsm_transmittance_matches_raytrace_on_hairball() {
     }
 }
 
-/// Runs `afsm` with the default options and with `off` applied; the pixels must be equal.
+/// Runs `afsm` with `options` and with `off` applied to them; the pixels must be equal.
 fn with_and_without(
     frame: &Frame<'_>,
+    mut options: AfsmOptions,
     off: impl Fn(&mut AfsmOptions),
 ) -> (instrumentation::Counters, instrumentation::Counters) {
-    let mut options = AfsmOptions::default();
     let (on, rec_on) = run(&AliasFreeShadowMap::pixel_centres(options), frame);
     off(&mut options);
     let (without, rec_off) = run(&AliasFreeShadowMap::pixel_centres(options), frame);
@@ -233,12 +233,18 @@ fn with_and_without(
     (rec_on.counters, rec_off.counters)
 }
 
+/// The paper's algorithm: every caster rasterized (the options' defaults, without facing
+/// culling, which is not the paper's), so that the paper's two cullings are measured alone.
+fn paper() -> AfsmOptions {
+    AfsmOptions { facing_culling: false, ..AfsmOptions::default() }
+}
+
 #[test]
 fn occlusion_culling_skips_work_without_changing_a_pixel() {
     for name in ["grazing", "spot-spheres"] {
         let scene = scenes::load(name).expect("built-in");
         let frame = Frame::new(&scene, 160, 120, &mut Recorder::default());
-        let (on, off) = with_and_without(&frame, |o| o.occlusion_culling = false);
+        let (on, off) = with_and_without(&frame, paper(), |o| o.occlusion_culling = false);
         eprintln!(
             "{name}: occlusion culled {}, points tested {} vs {}, nodes visited {} vs {}",
             on.nodes_occlusion_culled,
@@ -260,7 +266,7 @@ fn depth_culling_skips_work_without_changing_a_pixel() {
     for name in ["spheres", "city", "spot-spheres"] {
         let scene = scenes::load(name).expect("built-in");
         let frame = Frame::new(&scene, 160, 120, &mut Recorder::default());
-        let (on, off) = with_and_without(&frame, |o| o.depth_culling = false);
+        let (on, off) = with_and_without(&frame, paper(), |o| o.depth_culling = false);
         eprintln!(
             "{name}: depth culled {}, points tested {} vs {}, nodes visited {} vs {}",
             on.nodes_depth_culled,
@@ -274,6 +280,87 @@ fn depth_culling_skips_work_without_changing_a_pixel() {
         assert!(on.sampling_points_tested < off.sampling_points_tested, "{name}");
         assert!(on.bsp_nodes_visited < off.bsp_nodes_visited, "{name}");
     }
+}
+
+/// Of a closed caster seen from outside only the triangles facing the light are rasterized:
+/// the same pixels, fewer nodes visited, and the run says so.
+#[test]
+fn facing_culling_skips_work_without_changing_a_pixel() {
+    for name in ["bunny-plane", "cage", "spheres", "spot-spheres", "city"] {
+        let Some(scene) = load_builtin(name) else { continue };
+        let frame = Frame::new(&scene, 160, 120, &mut Recorder::default());
+        let (on, off) = with_and_without(&frame, AfsmOptions::default(), |o| {
+            o.facing_culling = false;
+        });
+        eprintln!(
+            "{name}: nodes visited {} vs {}, points tested {} vs {}",
+            on.bsp_nodes_visited,
+            off.bsp_nodes_visited,
+            on.sampling_points_tested,
+            off.sampling_points_tested
+        );
+        assert!(on.bsp_nodes_visited < off.bsp_nodes_visited, "{name}");
+        let (_, rec) = run(&AliasFreeShadowMap::pixel_centres(AfsmOptions::default()), &frame);
+        assert!(rec.notes.iter().any(|n| n.contains("facing the light")), "{name}");
+    }
+}
+
+/// Whether facing culling left every triangle in: the counters equal those of a run without
+/// it, and the pixels too.
+fn keeps_every_triangle(scene: &scenes::Scene) -> bool {
+    let frame = Frame::new(scene, 120, 90, &mut Recorder::default());
+    let (on, off) = with_and_without(&frame, AfsmOptions::default(), |o| {
+        o.facing_culling = false;
+    });
+    on == off
+}
+
+/// A closed mesh seen from the back of its triangles (wound inward) keeps every triangle:
+/// were only those facing the light by their winding kept, the spheres' sides toward the
+/// light would lose their shadows.
+#[test]
+fn a_closed_mesh_wound_inward_keeps_every_triangle() {
+    let mut scene = scenes::load("spheres").expect("built-in");
+    assert!(!keeps_every_triangle(&scene), "the spheres wound outward are culled");
+    for o in &mut scene.objects {
+        for t in &mut o.mesh.triangles {
+            t.swap(1, 2);
+        }
+    }
+    assert!(keeps_every_triangle(&scene));
+}
+
+/// A camera inside a closed room wound inward sees its walls from the front, but from inside:
+/// every triangle is kept (the floor is in the shadow of the ceiling, which faces away from
+/// the light by its winding and would be left out).
+#[test]
+fn a_camera_inside_a_closed_room_keeps_every_triangle() {
+    let mut scene = scenes::load("plane-square").expect("built-in");
+    let corners: Vec<DVec3> = (0..8)
+        .map(|k| DVec3::new((k & 1) as f64, (k >> 1 & 1) as f64, (k >> 2) as f64) * 8.0 - 4.0)
+        .collect();
+    // Faces of the cube wound inward (their normals into the room).
+    let faces: [[u32; 4]; 6] =
+        [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]];
+    let triangles = faces.iter().flat_map(|f| [[f[0], f[1], f[2]], [f[0], f[2], f[3]]]).collect();
+    let room = scenes::Mesh { positions: corners, triangles };
+    let mut object = scene.objects[0].clone();
+    object.mesh = room;
+    scene.objects = vec![object];
+    scene.camera = scenes::Camera::Perspective {
+        eye: DVec3::new(0.5, 1.0, 3.0),
+        target: DVec3::new(0.0, -2.0, 0.0),
+        up: DVec3::Y,
+        fov_y_deg: 60.0,
+        near: 0.01,
+    };
+    let frame = Frame::new(&scene, 120, 90, &mut Recorder::default());
+    let (v, _) = run(&AliasFreeShadowMap::pixel_centres(AfsmOptions::default()), &frame);
+    let seen = frame.gbuffer.triangle.iter().filter(|&&t| t != NO_TRIANGLE).count();
+    assert!(seen > 1000, "the room is seen");
+    let dark = v.lit.iter().filter(|&&l| l == 0.0).count();
+    assert!(dark > 1000, "the floor is in the room's shadow: {dark} dark pixels");
+    assert!(keeps_every_triangle(&scene));
 }
 
 #[test]

@@ -41,7 +41,13 @@
 //!   floating-point edge function with a forward error bound answers first where the bound
 //!   decides its sign ([`blockers::edge_sign`]), so the answer is always the exact one.
 //! - **Culling never changes a pixel** (see [`blockers`]); switching either off (the options)
-//!   changes only the counters.
+//!   changes only the counters. The same holds for *facing culling* ([`facing`], not in the
+//!   paper): of a closed opaque caster seen from outside only the triangles facing the light
+//!   are rasterized, whose shadow is the whole caster's (up to the ties and rounding the
+//!   first invariant allows; the built-in scenes' images are the same bit for bit). On
+//!   `bunny-plane` at 800 x 600 it halves the BSP nodes visited and takes a sixth off the
+//!   rasterization (49-57 -> 41 ms at one thread, its own check of 8-10 ms included), on
+//!   `cage` a fifth (21-23 -> 16-18 ms).
 //! - **Deterministic.** Pixels and counters do not depend on thread scheduling or count.
 //! - `lit` is in `[0, 1]`: the mean over a pixel's sub-samples of their light (background
 //!   sub-samples, and surface points a spot light cannot project, count as lit, as in
@@ -108,6 +114,7 @@
 
 pub mod blockers;
 pub mod bsp;
+pub mod facing;
 pub mod samples;
 
 use crate::{
@@ -193,6 +200,9 @@ pub struct AfsmOptions {
     /// Max-depth culling: skip nodes whose samples all lie in front of the triangle.
     /// Default on.
     pub depth_culling: bool,
+    /// Rasterize, of a closed opaque caster seen from outside, only the triangles facing the
+    /// light, whose shadow is the whole caster's ([`facing`]). Default on.
+    pub facing_culling: bool,
 }
 
 impl Default for AfsmOptions {
@@ -203,6 +213,7 @@ impl Default for AfsmOptions {
             pattern: PatternKind::Grid,
             occlusion_culling: true,
             depth_culling: true,
+            facing_culling: true,
         }
     }
 }
@@ -373,17 +384,30 @@ impl AliasFreeShadowMap {
             depth: self.options.depth_culling,
         };
         let pixels = frame.gbuffer.triangle.len();
-        let (resolved, counters) = rec.stages.time(STAGE_RASTERIZATION, || {
+        let facing_culling = self.options.facing_culling;
+        let (resolved, counters, facing) = rec.stages.time(STAGE_RASTERIZATION, || {
+            let opaque = |o: usize| frame.object_casts_shadows(o) && passes[o] == [0.0; 3];
+            let facing =
+                facing_culling.then(|| facing::Needed::new(frame, &bsp.samples, light, opaque));
             let (light_per_sample, counters) = rasterize_blockers::<S>(
                 &frame.geometry,
-                |t| frame.is_caster(t),
+                |t| frame.is_caster(t) && facing.as_ref().is_none_or(|f| f.needs(frame, t)),
                 &passes,
                 light,
                 &bsp,
                 culling,
             );
-            (resolve(&bsp, &light_per_sample, pixels, rate, transparency), counters)
+            let (lit, rgb) = resolve(&bsp, &light_per_sample, pixels, rate, transparency);
+            ((lit, rgb), counters, facing)
         });
+        if let Some(objects) = facing.map(|f| f.objects()).filter(|&n| n > 0) {
+            let (casters, their) =
+                if objects == 1 { ("caster", "its") } else { ("casters", "their") };
+            rec.notes.push(format!(
+                "{objects} closed {casters} seen from outside: only {their} triangles facing the \
+                 light rasterized, whose shadow is the whole caster's"
+            ));
+        }
         rec.counters.merge(&Counters { bsp_nodes: bsp.nodes.len() as u64, ..counters });
         resolved
     }
@@ -408,6 +432,7 @@ impl ShadowMethod for AliasFreeShadowMap {
         m.insert("leaf_size".into(), o.leaf_size.into());
         m.insert("occlusion_culling".into(), o.occlusion_culling.into());
         m.insert("depth_culling".into(), o.depth_culling.into());
+        m.insert("facing_culling".into(), o.facing_culling.into());
         m
     }
 
