@@ -8,12 +8,13 @@
 //! Let object `O` be closed ([`crate::closed`]: every edge used as often in one direction as in
 //! the other, corners compared by vertex number; a mesh split for its normals is rasterized
 //! whole, since comparing positions cost `random-1m`'s million separate triangles 30 ms at
-//! one thread, more than culling saves on the other scenes), so that it has a winding number `w(x)` around every point off it, constant
-//! between its triangles and changed by one where a path crosses a triangle: up where it
-//! crosses against the triangle's normal (its corners' order), down where it crosses along
-//! it. A sample `p` is shadowed by `O` when the segment `S` from `p` (past the sample's shadow
-//! offset) to the light crosses a triangle of `O` other than the sample's own. Along `S` the
-//! crossings' signed count is `w(light) - w(p')`, `p'` the start of `S`.
+//! one thread, more than culling saves on the other scenes), so that it has a winding number
+//! `w(x)` around every point off it, constant between its triangles and changed by one where
+//! a path crosses a triangle: up where it crosses against the triangle's normal (its corners'
+//! order), down where it crosses along it. A sample `p` is shadowed by `O` when the segment
+//! `S` from `p` (past the sample's shadow offset) to the light crosses a triangle of `O` other
+//! than the sample's own. Along `S` the crossings' signed count is `w(light) - w(p')`, `p'`
+//! the start of `S`.
 //!
 //! - `w(light) = 0`: a directional light is at infinity, and a spot light's every caster
 //!   lies beyond the light's `near` plane, where casters are cut (asked: every corner of
@@ -40,8 +41,8 @@
 //!
 //! On `bunny-plane` at 800 x 600 the rasterization visits half the BSP nodes (1,161,070 ->
 //! 605,905) with the same image. The check costs [`closed_objects`] (at one thread about 6 ms
-//! for the bunny, most of it sorting its edges), then for closed objects only a pass over
-//! their triangles for their boxes and one over the samples.
+//! for the bunny, most of it sorting its edges), then, when an object qualifies, a pass over
+//! the triangles and one over the samples.
 
 use super::samples::Sample;
 use crate::closed::{closed_objects, Corners};
@@ -88,44 +89,27 @@ impl Needed {
         let g = &frame.geometry;
         let objects = frame.scene.objects.len();
         let camera = &frame.camera;
-        // Closed by vertex number (see the module doc), then the closed objects' boxes.
+        // Closed by vertex number (see the module doc), and beyond both near planes (the
+        // mesh's box holds every corner of its triangles).
         let closed = closed_objects(g, objects, &is_opaque_caster, Corners::ByNumber);
-        if !closed.contains(&true) {
-            return Self { facing_only: closed, light: Toward::new(&frame.scene.light) };
-        }
-        let empty = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-        let boxes = (0..g.len())
-            .into_par_iter()
-            .fold(
-                || vec![empty; objects],
-                |mut acc, t| {
-                    let o = g.object[t] as usize;
-                    if closed[o] {
-                        for p in g.corners(t) {
-                            acc[o] = (acc[o].0.min(p), acc[o].1.max(p));
-                        }
-                    }
-                    acc
-                },
-            )
-            .reduce(
-                || vec![empty; objects],
-                |a, b| a.iter().zip(&b).map(|(x, y)| (x.0.min(y.0), x.1.max(y.1))).collect(),
-            );
         let beyond_near = |p: &Projector, (lo, hi): (DVec3, DVec3)| {
             !p.is_perspective()
                 || scenes::mesh::box_corners(lo, hi).iter().all(|&c| p.depth_of(c) >= p.near)
         };
-        let closed: Vec<bool> = (0..objects)
+        let outside: Vec<bool> = (0..objects)
             .map(|o| {
-                let b = boxes[o];
                 closed[o]
-                    && b.0.is_finite()
-                    && b.1.is_finite()
-                    && beyond_near(camera, b)
-                    && beyond_near(light, b)
+                    && frame.scene.objects[o].mesh.bounds().is_some_and(|b| {
+                        b.0.is_finite()
+                            && b.1.is_finite()
+                            && beyond_near(camera, b)
+                            && beyond_near(light, b)
+                    })
             })
             .collect();
+        if !outside.contains(&true) {
+            return Self { facing_only: outside, light: Toward::new(&frame.scene.light) };
+        }
         // The closed objects some sample sees from the back of its triangle: each triangle of
         // a closed object asked once, then each sample reads its triangle's answer.
         let eye =
@@ -133,7 +117,7 @@ impl Needed {
         let back: Vec<bool> = (0..g.len())
             .into_par_iter()
             .map(|t| {
-                closed[g.object[t] as usize] && {
+                outside[g.object[t] as usize] && {
                     let c = g.corners(t);
                     let front = (c[1] - c[0]).cross(c[2] - c[0]).dot(eye(c[0]));
                     front <= 0.0 || front.is_nan()
@@ -155,7 +139,7 @@ impl Needed {
                 || vec![false; objects],
                 |a, b| a.iter().zip(&b).map(|(&x, &y)| x || y).collect(),
             );
-        let facing_only = (0..objects).map(|o| closed[o] && !seen_from_back[o]).collect();
+        let facing_only = (0..objects).map(|o| outside[o] && !seen_from_back[o]).collect();
         Self { facing_only, light: Toward::new(&frame.scene.light) }
     }
 

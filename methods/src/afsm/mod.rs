@@ -397,8 +397,7 @@ impl AliasFreeShadowMap {
                 &bsp,
                 culling,
             );
-            let (lit, rgb) = resolve(&bsp, &light_per_sample, pixels, rate, transparency);
-            ((lit, rgb), counters, facing)
+            (resolve(&bsp, &light_per_sample, pixels, rate, transparency), counters, facing)
         });
         if let Some(objects) = facing.map(|f| f.objects()).filter(|&n| n > 0) {
             let (casters, their) =
