@@ -306,12 +306,20 @@ fn facing_culling_skips_work_without_changing_a_pixel() {
 }
 
 /// Whether facing culling left every triangle in: the counters equal those of a run without
-/// it, and the pixels too.
+/// it, and the pixels too. Asked at one sub-sample per pixel (the check reads the G-buffer)
+/// and at four (it reads the samples), which must agree.
 fn keeps_every_triangle(scene: &scenes::Scene) -> bool {
     let frame = Frame::new(scene, 120, 90, &mut Recorder::default());
     let (on, off) = with_and_without(&frame, AfsmOptions::default(), |o| {
         o.facing_culling = false;
     });
+    let four = |facing_culling| {
+        let options = AfsmOptions { rate: 4, facing_culling, ..AfsmOptions::supersampled() };
+        run(&AliasFreeShadowMap::supersampled(options), &frame)
+    };
+    let ((lit_on, rec_on), (lit_off, rec_off)) = (four(true), four(false));
+    assert_eq!(lit_on, lit_off, "culling changed a pixel at 4 sub-samples");
+    assert_eq!(on == off, rec_on.counters == rec_off.counters, "1 and 4 sub-samples disagree");
     on == off
 }
 

@@ -54,13 +54,15 @@ pub(crate) fn shadow_polygons(frame: &Frame<'_>, setup: &Setup, receiver: usize)
 pub(crate) fn facing_suffices(frame: &Frame<'_>, setup: &Setup, casters: &[bool]) -> Vec<bool> {
     let g = &frame.geometry;
     let objects = casters.len();
-    // One parallel pass over the triangles: per object, whether every triangle lies toward
-    // the light (none in the plane facing it).
-    let toward = (0..g.len())
+    // One parallel pass over the triangles, in chunks each a plain loop (rayon's `fold` moves
+    // its accumulator through every step): per object, whether every triangle lies toward the
+    // light (none in the plane facing it).
+    const CHUNK: usize = 1 << 14;
+    let toward = (0..g.len().div_ceil(CHUNK))
         .into_par_iter()
-        .fold(
-            || vec![true; objects],
-            |mut acc, t| {
+        .map(|c| {
+            let mut acc = vec![true; objects];
+            for t in c * CHUNK..((c + 1) * CHUNK).min(g.len()) {
                 let o = g.object[t] as usize;
                 if casters.get(o).copied().unwrap_or(false) && acc[o] {
                     let c = g.corners(t);
@@ -68,9 +70,9 @@ pub(crate) fn facing_suffices(frame: &Frame<'_>, setup: &Setup, casters: &[bool]
                     let toward = c.iter().all(|&p| setup.toward_light(p));
                     acc[o] = toward && !(in_plane && setup.faces_light(&c));
                 }
-                acc
-            },
-        )
+            }
+            acc
+        })
         .reduce(|| vec![true; objects], |a, b| a.iter().zip(&b).map(|(&x, &y)| x && y).collect());
     closed_objects(g, objects, |o| casters[o] && toward[o], Corners::ByNumberOrPosition)
 }

@@ -387,8 +387,13 @@ impl AliasFreeShadowMap {
         let facing_culling = self.options.facing_culling;
         let (resolved, counters, facing) = rec.stages.time(STAGE_RASTERIZATION, || {
             let opaque = |o: usize| frame.object_casts_shadows(o) && passes[o] == [0.0; 3];
-            let facing =
-                facing_culling.then(|| facing::Needed::new(frame, &bsp.samples, light, opaque));
+            // At one sub-sample per pixel, the samples lie on the G-buffer's triangles.
+            let seen = if rate == 1 {
+                facing::Seen::Pixels(&frame.gbuffer.triangle)
+            } else {
+                facing::Seen::Samples(&bsp.samples)
+            };
+            let facing = facing_culling.then(|| facing::Needed::new(frame, seen, light, opaque));
             let (light_per_sample, counters) = rasterize_blockers::<S>(
                 &frame.geometry,
                 |t| frame.is_caster(t) && facing.as_ref().is_none_or(|f| f.needs(frame, t)),
