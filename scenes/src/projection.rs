@@ -139,22 +139,51 @@ impl Projector {
         (DVec2::new((1.0 + sx) * 0.5 * self.width, (1.0 - sy) * 0.5 * self.height), depth)
     }
 
-    /// The ray through image point `xy`, parameterised by depth.
+    /// The ray through image point `xy`, parameterised by depth: [`Self::ray_from`] its
+    /// column's and its row's parts.
     #[inline]
     pub fn ray(&self, xy: DVec2) -> Ray {
-        let sx = 2.0 * xy.x / self.width - 1.0;
-        let sy = 1.0 - 2.0 * xy.y / self.height;
+        self.ray_from(self.column(xy.x), self.row(xy.y))
+    }
+
+    /// The part of [`Self::ray`] that depends on the image point's `x` only: for a perspective
+    /// projection, the direction's `forward` and `right` terms, for an orthographic one, the
+    /// origin's `origin` and `right` terms (the first two terms of the sum, added first).
+    #[inline]
+    pub fn column(&self, x: f64) -> DVec3 {
+        let sx = 2.0 * x / self.width - 1.0;
         match self.kind {
-            ProjectionKind::Perspective { tan_half_x, tan_half_y } => Ray {
-                origin: self.origin,
-                direction: self.forward
-                    + self.right * (sx * tan_half_x)
-                    + self.up * (sy * tan_half_y),
-            },
-            ProjectionKind::Orthographic { half_width, half_height } => Ray {
-                origin: self.origin + self.right * (sx * half_width) + self.up * (sy * half_height),
-                direction: self.forward,
-            },
+            ProjectionKind::Perspective { tan_half_x, .. } => {
+                self.forward + self.right * (sx * tan_half_x)
+            }
+            ProjectionKind::Orthographic { half_width, .. } => {
+                self.origin + self.right * (sx * half_width)
+            }
+        }
+    }
+
+    /// The part of [`Self::ray`] that depends on the image point's `y` only: the `up` term.
+    #[inline]
+    pub fn row(&self, y: f64) -> DVec3 {
+        let sy = 1.0 - 2.0 * y / self.height;
+        match self.kind {
+            ProjectionKind::Perspective { tan_half_y, .. } => self.up * (sy * tan_half_y),
+            ProjectionKind::Orthographic { half_height, .. } => self.up * (sy * half_height),
+        }
+    }
+
+    /// The ray through the image point of column part `column` ([`Self::column`]) and row part
+    /// `row` ([`Self::row`]): the same numbers as [`Self::ray`] (rays through a grid of points
+    /// take each part once per column and once per row).
+    #[inline]
+    pub fn ray_from(&self, column: DVec3, row: DVec3) -> Ray {
+        match self.kind {
+            ProjectionKind::Perspective { .. } => {
+                Ray { origin: self.origin, direction: column + row }
+            }
+            ProjectionKind::Orthographic { .. } => {
+                Ray { origin: column + row, direction: self.forward }
+            }
         }
     }
 
