@@ -81,6 +81,8 @@ pub struct Culling {
 pub trait Shade: Copy + Send + Sync {
     /// Fully lit.
     const LIT: Self;
+    /// Whether a sample is either lit or dark, nothing between (opaque casters only).
+    const ALL_OR_NOTHING: bool;
     /// Whether no light reaches the sample any more (further casters cannot change it).
     fn is_dark(&self) -> bool;
     /// A caster letting `pass` of the light through covers the sample; returns whether the
@@ -93,6 +95,7 @@ pub trait Shade: Copy + Send + Sync {
 /// Opaque casters: `true` once the sample is shadowed.
 impl Shade for bool {
     const LIT: bool = false;
+    const ALL_OR_NOTHING: bool = true;
 
     #[inline]
     fn is_dark(&self) -> bool {
@@ -119,6 +122,7 @@ impl Shade for bool {
 /// Semi-transparent casters: the RGB transmittance, initially white (section 4).
 impl Shade for [f64; 3] {
     const LIT: [f64; 3] = [1.0; 3];
+    const ALL_OR_NOTHING: bool = false;
 
     #[inline]
     fn is_dark(&self) -> bool {
