@@ -128,9 +128,8 @@ impl Needed {
         }
         // The closed objects some sample sees from the back of its triangle: each triangle of
         // a closed object asked once (`1 + its object` when it is seen from its back, else 0),
-        // then each sample reads its triangle's answer and marks it, without a branch (a
-        // branch on each answer, taken at random across the G-buffer, cost 3 ms for the
-        // bunny's 480,000 pixels at one thread).
+        // then each sample reads its triangle's answer and marks that slot (slot 0 for none),
+        // no object looked up per sample.
         let eye =
             |p: DVec3| if camera.is_perspective() { camera.origin - p } else { -camera.forward };
         let back: Vec<u32> = (0..g.len())
