@@ -8,8 +8,9 @@
 //!
 //! Deciding it costs one parallel pass that sums an asymmetric hash of every directed edge
 //! (a non-zero sum proves an edge unbalanced, so most open surfaces are ruled out there), then
-//! for an object that may be closed a sort of its edges (on `random-1m`, a million separate
-//! triangles, sorting every object's edges took 500 ms) ([`closed_objects`]).
+//! for an object that may be closed a check of its edges, bucketed by their smaller corner (on
+//! `random-1m`, a million separate triangles, sorting every object's edges took 500 ms)
+//! ([`closed_objects`]).
 
 use rayon::prelude::*;
 use scenes::Geometry;
@@ -97,26 +98,37 @@ pub fn closed_objects(
     corners: Corners,
 ) -> Vec<bool> {
     let by_number = sums(g, objects, &wanted, u64::from);
-    let triangles = |o: usize| -> Vec<u32> {
-        (0..g.len() as u32).filter(|&t| g.object[t as usize] as usize == o).collect()
-    };
+    let may_be = |o: usize| wanted(o) && by_number[o] == 0;
+    let listed = triangles_of(g, objects, may_be);
     let mut closed: Vec<bool> = (0..objects)
-        .map(|o| {
-            wanted(o) && by_number[o] == 0 && {
-                let tris = triangles(o);
-                !tris.is_empty() && balanced(g, &tris, |v| v)
-            }
-        })
+        .map(|o| may_be(o) && !listed[o].is_empty() && balanced(g, &listed[o], |v| v))
         .collect();
     let left: Vec<bool> = (0..objects).map(|o| wanted(o) && !closed[o]).collect();
     if corners == Corners::ByNumberOrPosition && left.contains(&true) {
         let by_position = sums(g, objects, |o| left[o], |v| position_key(g, v));
-        for o in (0..objects).filter(|&o| left[o] && by_position[o] == 0) {
-            let tris = triangles(o);
-            closed[o] = !tris.is_empty() && balanced_by_position(g, &tris);
+        let by_position_only = |o: usize| left[o] && by_position[o] == 0;
+        // The objects not listed yet, in one more pass.
+        let more = triangles_of(g, objects, |o| by_position_only(o) && !may_be(o));
+        for o in (0..objects).filter(|&o| by_position_only(o)) {
+            let tris = if may_be(o) { &listed[o] } else { &more[o] };
+            closed[o] = !tris.is_empty() && balanced_by_position(g, tris);
         }
     }
     closed
+}
+
+/// The triangles of each object `o < objects` with `pick(o)` (none for the others), in one
+/// pass over the triangles: one pass per object made a scene of many closed objects cost the
+/// product of their number and the triangles'.
+fn triangles_of(g: &Geometry, objects: usize, pick: impl Fn(usize) -> bool) -> Vec<Vec<u32>> {
+    let mut lists = vec![Vec::new(); objects];
+    for (t, &o) in g.object.iter().enumerate() {
+        let o = o as usize;
+        if o < objects && pick(o) {
+            lists[o].push(t as u32);
+        }
+    }
+    lists
 }
 
 /// Whether the triangles `tris` of `g` have every edge used as often in both directions, their

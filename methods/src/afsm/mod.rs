@@ -46,8 +46,8 @@
 //!   are rasterized, whose shadow is the whole caster's (up to the ties and rounding the
 //!   first invariant allows; the built-in scenes' images are the same bit for bit). On
 //!   `bunny-plane` at 800 x 600 it halves the BSP nodes visited and takes a sixth off the
-//!   rasterization (49-57 -> 41 ms at one thread, its own check of 8-10 ms included), on
-//!   `cage` a fifth (21-23 -> 16-18 ms).
+//!   rasterization (49-57 -> 41 ms at one thread, its own check of 8-10 ms included, 6.5-9.5
+//!   ms since its passes became plain loops), on `cage` a fifth (21-23 -> 16-18 ms).
 //! - **Deterministic.** Pixels and counters do not depend on thread scheduling or count.
 //! - `lit` is in `[0, 1]`: the mean over a pixel's sub-samples of their light (background
 //!   sub-samples, and surface points a spot light cannot project, count as lit, as in
