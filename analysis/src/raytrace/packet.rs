@@ -106,9 +106,13 @@ impl FramePacket {
     #[inline]
     fn set(&mut self, k: usize, origin: Vec3A, inv: Vec3A, tmax: f32) {
         let (g, l) = (k / LANES, k % LANES);
-        (self.ox[g][l], self.oy[g][l], self.oz[g][l]) = (origin.x, origin.y, origin.z);
-        (self.ix[g][l], self.iy[g][l], self.iz[g][l]) = (inv.x, inv.y, inv.z);
-        self.tmax[g][l] = tmax;
+        *lane(&mut self.ox[g], l) = origin.x;
+        *lane(&mut self.oy[g], l) = origin.y;
+        *lane(&mut self.oz[g], l) = origin.z;
+        *lane(&mut self.ix[g], l) = inv.x;
+        *lane(&mut self.iy[g], l) = inv.y;
+        *lane(&mut self.iz[g], l) = inv.z;
+        *lane(&mut self.tmax[g], l) = tmax;
     }
 
     /// Adds the ray `origin + t * dir`, `0 <= t <= tmax` (finite `f32` frame coordinates).
@@ -178,6 +182,13 @@ impl FramePacket {
         let (near, far) = (near.max_element(), far.min_element());
         far >= near && far >= 0.0 && near <= self.max_tmax
     }
+}
+
+/// Lane `l` of `v`, addressed as an array: `Vec4`'s `IndexMut` matches on the index, which
+/// compiles to a jump whose target changes from lane to lane.
+#[inline(always)]
+fn lane(v: &mut Vec4, l: usize) -> &mut f32 {
+    &mut v.as_mut()[l]
 }
 
 /// The lanes set in a bitmask of [`LANES`] bits.
@@ -273,7 +284,7 @@ pub(crate) fn traverse(
                 lanes &= lanes - 1;
                 for slot in slots.clone() {
                     if let Some(t) = leaf(g * LANES + l, slot) {
-                        packet.tmax[g][l] = t;
+                        *lane(&mut packet.tmax[g], l) = t;
                         if t == f32::NEG_INFINITY {
                             packet.live -= 1;
                             break;
