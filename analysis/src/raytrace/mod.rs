@@ -323,7 +323,12 @@ impl RaySetup {
         pattern: &SamplePattern,
         (i, j, s): (u32, u32, usize),
     ) -> Option<TraceRay> {
-        let r = frame.camera.ray(pattern.point(i, j, s));
+        self.camera_along(frame.camera.ray(pattern.point(i, j, s)))
+    }
+
+    /// The camera ray along `r`, the camera's ray through a sub-sample.
+    #[inline(always)]
+    fn camera_along(&self, r: scenes::projection::Ray) -> Option<TraceRay> {
         TraceRay::new(r.origin + self.start_shift * r.direction, r.direction)
     }
 
@@ -409,7 +414,20 @@ impl<'a> Tracer<'a> {
         let (tile_w, tile_h) = Self::tile(rate);
         let side = tile_w.max(tile_h).next_power_of_two();
         let w = self.frame.width();
+        let (camera, offsets) = (&self.frame.camera, self.pattern.offsets());
+        // The rays' parts per row and per column of sub-samples ([`Projector::column`]): each
+        // computed once, not once per ray.
+        work.rows.clear();
+        work.rows.extend(rows.clone().flat_map(|j| {
+            offsets.iter().map(move |o| camera.row(f64::from(j) + o.y))
+        }));
+        work.corner = (0, rows.start);
         for i0 in (0..w).step_by(tile_w as usize) {
+            work.columns.clear();
+            work.columns.extend((i0..(i0 + tile_w).min(w)).flat_map(|i| {
+                offsets.iter().map(move |o| camera.column(f64::from(i) + o.x))
+            }));
+            work.corner.0 = i0;
             // The tile's pixels in Z order, so that each lane group (and each run of groups)
             // covers a compact block of pixels.
             for (x, y) in (0..side * side).map(z_order) {
@@ -433,12 +451,16 @@ impl<'a> Tracer<'a> {
     /// The camera rays of the sub-samples in `work.ids` as one packet, then the shadow rays of
     /// those that hit as another; each sub-sample's result goes to `emit`, in order.
     fn trace_packet(&self, work: &mut Work, emit: &mut impl FnMut(u32, u32, usize, SampleHit)) {
-        let Work { ids, hits, rays, of, best, limits, skip, light, scratch, tests } = work;
+        let Work { ids, hits, rays, of, best, limits, skip, light, scratch, tests, .. } = work;
+        let (columns, rows, (i0, j0)) = (&work.columns, &work.rows, work.corner);
+        let rate = self.pattern.rate() as usize;
         rays.clear();
         of.clear();
         hits.clear();
-        for &id in ids.iter() {
-            if let Some(ray) = self.rays.camera(self.frame, self.pattern, id) {
+        for &(i, j, s) in ids.iter() {
+            let column = columns[(i - i0) as usize * rate + s];
+            let row = rows[(j - j0) as usize * rate + s];
+            if let Some(ray) = self.rays.camera_along(self.frame.camera.ray_from(column, row)) {
                 rays.push(ray);
                 of.push(hits.len());
             }
@@ -515,6 +537,11 @@ struct Work {
     scratch: Scratch,
     /// Ray-triangle tests made.
     tests: u64,
+    /// The camera's column parts of the tile's sub-samples (`(i - corner.0) * rate + s`) and
+    /// row parts of the band's (`(j - corner.1) * rate + s`).
+    columns: Vec<DVec3>,
+    rows: Vec<DVec3>,
+    corner: (u32, u32),
 }
 
 /// The pixel results of a band of rows (row-major).
