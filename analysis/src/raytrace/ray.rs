@@ -108,7 +108,10 @@ impl TraceRay {
         let u = cx * by - cy * bx;
         let v = ax * cy - ay * cx;
         let w = bx * ay - by * ax;
-        if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        // Evaluated without short circuits: one branch, where the hit or miss is decided.
+        let negative = (u < 0.0) | (v < 0.0) | (w < 0.0);
+        let positive = (u > 0.0) | (v > 0.0) | (w > 0.0);
+        if negative & positive {
             return None;
         }
         let det = u + v + w;
