@@ -69,6 +69,8 @@ pub(crate) struct FramePacket {
     imax: Vec3A,
     /// The largest `tmax` of an active ray when the packet was filled.
     max_tmax: f32,
+    /// The rays that hit the leaf being visited (scratch space).
+    found: [u16; PACKET],
 }
 
 impl Default for FramePacket {
@@ -88,6 +90,7 @@ impl Default for FramePacket {
             imin: Vec3A::INFINITY,
             imax: Vec3A::NEG_INFINITY,
             max_tmax: f32::NEG_INFINITY,
+            found: [0; PACKET],
         }
     }
 }
@@ -277,18 +280,27 @@ pub(crate) fn traverse(
         }
         let b = &n.boxes[c];
         let slots = n.child[c] as usize..(n.child[c] + n.count[c]) as usize;
+        // The rays whose own test hits the leaf's box, listed first without a branch per
+        // lane (where each lane's branch was as hard to predict as the box test), then each
+        // tested against the leaf's triangles. A ray's test reads only its own range, which
+        // only its own triangle tests change, so the list is what testing group after group
+        // would find.
+        let mut found = 0;
         for g in first as usize..last as usize {
-            let mut lanes = packet.hits(g, b);
-            while lanes != 0 {
-                let l = lanes.trailing_zeros() as usize;
-                lanes &= lanes - 1;
-                for slot in slots.clone() {
-                    if let Some(t) = leaf(g * LANES + l, slot) {
-                        *lane(&mut packet.tmax[g], l) = t;
-                        if t == f32::NEG_INFINITY {
-                            packet.live -= 1;
-                            break;
-                        }
+            let lanes = packet.hits(g, b);
+            for l in 0..LANES {
+                packet.found[found] = (g * LANES + l) as u16;
+                found += (lanes >> l) as usize & 1;
+            }
+        }
+        for f in 0..found {
+            let k = usize::from(packet.found[f]);
+            for slot in slots.clone() {
+                if let Some(t) = leaf(k, slot) {
+                    *lane(&mut packet.tmax[k / LANES], k % LANES) = t;
+                    if t == f32::NEG_INFINITY {
+                        packet.live -= 1;
+                        break;
                     }
                 }
             }
