@@ -746,7 +746,7 @@ pub(crate) struct Scratch {
     packet: FramePacket,
     /// Each ray's frame mapping in the cluster being traversed.
     frames: [FrameRay; PACKET],
-    stack: Vec<(u32, u32, u32)>,
+    stack: Vec<(u32, u64)>,
 }
 
 impl Default for Scratch {

@@ -41,13 +41,13 @@
 //! 64, one pixel in runs of 256 sub-samples above), whose sub-samples, the pixels in Z order,
 //! form one packet of camera rays; the shadow rays of those that hit form the next packet
 //! (parallel for a directional light, whose set-up they share). Each packet walks each
-//! cluster's BVH together, one `f32` test of a node serving every ray (first and last active
-//! group of four rays, interval bounds of the packet: `packet`), and each ray decides its own
-//! hits in `f64` at the leaves, exactly as a ray traced alone would. Wald, Benthin, Wagner and
-//! Slusallek, "Interactive Rendering with Coherent Ray Tracing" (Eurographics 2001), Wald,
-//! Boulos and Shirley, "Ray Tracing Deformable Scenes Using Dynamic Bounding Volume
-//! Hierarchies" (ACM TOG 26(1), 2007) and Overbeck, Ramamoorthi and Mark, "Large Ray Packets
-//! for Real-Time Whitted Ray Tracing" (IRT 2008).
+//! cluster's BVH together, one `f32` test of a node serving every ray (the first of the
+//! active groups of four rays, interval bounds of the packet: `packet`), and each ray decides
+//! its own hits in `f64` at the leaves, exactly as a ray traced alone would. Wald, Benthin,
+//! Wagner and Slusallek, "Interactive Rendering with Coherent Ray Tracing" (Eurographics
+//! 2001), Wald, Boulos and Shirley, "Ray Tracing Deformable Scenes Using Dynamic Bounding
+//! Volume Hierarchies" (ACM TOG 26(1), 2007) and Overbeck, Ramamoorthi and Mark, "Large Ray
+//! Packets for Real-Time Whitted Ray Tracing" (IRT 2008).
 //!
 //! obvhs builds the trees (PLOC; a cluster of more than 2^15 triangles in parts, halved at
 //! median box centres, built in parallel and joined: `accel`) but its traversals cannot be
@@ -418,15 +418,16 @@ impl<'a> Tracer<'a> {
         // The rays' parts per row and per column of sub-samples ([`Projector::column`]): each
         // computed once, not once per ray.
         work.rows.clear();
-        work.rows.extend(rows.clone().flat_map(|j| {
-            offsets.iter().map(move |o| camera.row(f64::from(j) + o.y))
-        }));
+        work.rows.extend(
+            rows.clone().flat_map(|j| offsets.iter().map(move |o| camera.row(f64::from(j) + o.y))),
+        );
         work.corner = (0, rows.start);
         for i0 in (0..w).step_by(tile_w as usize) {
             work.columns.clear();
-            work.columns.extend((i0..(i0 + tile_w).min(w)).flat_map(|i| {
-                offsets.iter().map(move |o| camera.column(f64::from(i) + o.x))
-            }));
+            work.columns.extend(
+                (i0..(i0 + tile_w).min(w))
+                    .flat_map(|i| offsets.iter().map(move |o| camera.column(f64::from(i) + o.x))),
+            );
             work.corner.0 = i0;
             // The tile's pixels in Z order, so that each lane group (and each run of groups)
             // covers a compact block of pixels.
