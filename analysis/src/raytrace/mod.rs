@@ -58,29 +58,35 @@
 //! a quarter of the traversal's time on bunny-plane with obvhs' own nodes); its per-ray slab
 //! test is obvhs' own, lane by lane.
 //!
-//! Measured against Embree 3's per-ray API (`scripts/embree-bench`, one run, `--threads 1`
-//! pinned to one core, BVH build + camera + shadow rays on both sides, wall-clock medians,
-//! ours / Embree; load 1.4-1.9 on two cores, the bench's own): at rate 64 (320 x 240) 0.68 on
-//! bunny-plane and 0.64 on cage; at rate 1 (800 x 600) 1.05 on bunny-plane (80.0 / 76.3 ms)
-//! and 1.01 on cage (42.9 / 42.6 ms). Embree's build of bunny-plane takes 22 ms of its time,
-//! ours 16; its camera and shadow rays 58, our tracing 64. What bounds rate 1, from the
-//! profile of bunny-plane's tracing: the camera rays' packets (`Accel::closest`, with the `f64`
-//! clip to the cluster and the `f64` triangle tests) are 43 % of it, the shadow rays'
-//! (`Accel::transmittance`) 33 %, making the rays 6 %, the packets' bookkeeping the rest.
-//! Pixel centres 1/800 apart share fewer nodes than a pixel's sub-samples, so the shared tests
-//! save less there, and the `f64` set-up and tests, which the exact decisions need, cost more
-//! per ray than Embree's `f32` ones. Packets of 64 or 128 rays (tiles of 8 x 8 or 16 x 8 pixel
-//! centres) instead of 256 made random-1m's rate 1 tracing slower (1237-1297 and 1147-1176 ms
-//! of CPU against 1049-1111, load 5-6) and changed bunny-plane and cage within the noise. On
-//! random-1m (a million scattered triangles, 1024 x 768) the ratio was 1.22 at rate 1 (CPU 1535
-//! / 1314 ms) and 1.23 at rate 64 (CPU 4457 / 3687 ms), from 1.32 and 1.39 (CPU 1838 / 1425
-//! and 5693 / 4060) before the BVH was built in parts, and is 0.93 and 1.25 in the run above
-//! (its leaves collapsed while converting, see `bvh`). There (`perf`, `render --method
-//! raytrace --rate 1`, 2 threads) the packets' node tests are 39 % of the samples (the boxes
-//! of random triangles overlap, and a million nodes do not stay in cache), the `f64` triangle
-//! tests 4 %, and the build about 18 %: obvhs' own work (PLOC, sort, leaf collapse, the last
-//! now made in our conversion) 7 %, ours (clusters, padded boxes, the triangles' copies in slot
-//! order, node conversion) 10 %.
+//! Measured against Embree 3's per-ray API (`scripts/embree-bench`, one run, BVH build +
+//! camera + shadow rays on both sides, wall-clock medians of 3 interleaved runs, ours /
+//! Embree; load average 1.0-1.9 on two cores, mostly the bench's own threads):
+//!
+//! | | bunny-plane | cage | random-1m |
+//! |---|---|---|---|
+//! | rate 1 (frames of 800 x 600, 1024 x 768), 1 thread | 0.80 | 0.87 | 0.94 |
+//! | rate 1, 2 threads | 0.90 | 0.87 | 1.05 |
+//! | rate 64 (320 x 240), 1 thread | 0.59 | 0.55 | 0.98 |
+//! | rate 64, 2 threads | 0.62 | 0.58 | 0.98 |
+//!
+//! Rate 1 was 1.13 on bunny-plane and 1.05 on cage before the changes below, none of which
+//! changed a sample. Branches the processor could not predict cost more than the `f64`
+//! arithmetic:
+//!
+//! - a packet's lanes written through `Vec4`'s `IndexMut`, a jump on the lane (on
+//!   bunny-plane, callgrind's `--branch-sim=yes` counted 1.16 million of its 1.17 million
+//!   indirect jumps mispredicted);
+//! - the triangle test's sign check as a chain of short circuits;
+//! - a leaf's loop over the lanes of each group.
+//!
+//! Each is now evaluated without a branch per comparison or per lane (`packet`, `ray`). The
+//! camera rays take their per-column and per-row parts from tables (`Projector::column`,
+//! `Projector::row`), not two divisions per ray. On random-1m (a million scattered
+//! triangles) the packets' node tests are two thirds of the profile at rate 64: the boxes of
+//! random triangles overlap, and a million nodes do not stay in cache. Keeping each node's
+//! active groups as bits (`packet`) took a tenth off there. Packets of 128 rays made its
+//! tracing 15-38 % slower at rates 1 and 64, and of 512 (with 128-bit masks) 10-13 % slower;
+//! bunny-plane's changed within the noise (as with 64 and 128 before the bits).
 //! Computing each triangle's box once for the clusters' seven passes instead of gathering its
 //! corners at each saved 0-40 ms of 600 (within the noise) and was left out.
 //!

@@ -14,12 +14,12 @@
 //!   common, coherent case). Otherwise, where many groups are active, the packet's
 //!   **interval bound** is tried: if it proves that no ray of the packet can hit the box, the
 //!   node is culled; if not, each other active group is tested, and those with a hit become
-//!   the children's active groups. (Overbeck et
-//!   al. keep a range from the first to the last active group instead; on random-1m, whose
-//!   small overlapping boxes each meet a few of a packet's rays, the groups in such ranges
-//!   took 530 million group tests at rate 64 (320 x 240) against 50 million tests of first
-//!   groups, and the bits made its tracing 11-14 % faster at rates 1 and 64, bunny-plane's
-//!   and cage's the same within the noise: one pinned thread, alternating runs.)
+//!   the children's active groups. Overbeck et al. keep a range from the first to the last
+//!   active group instead. On random-1m, whose small overlapping boxes each meet a few of a
+//!   packet's rays, the groups in such ranges took 530 million group tests at rate 64
+//!   (320 x 240), against 50 million tests of first groups. The bits made its tracing 11-14 %
+//!   faster at rates 1 and 64, and bunny-plane's and cage's the same within the noise (one
+//!   pinned thread, alternating runs).
 //! - Children are visited nearer first, by the first active group's nearest entry.
 //! - At a **leaf**, each ray of the active groups whose own slab test hits the leaf's box
 //!   calls the leaf closure for each of the leaf's slots (the `f64` triangle test); the
@@ -227,7 +227,7 @@ fn active(packet: &FramePacket, b: &Bounds, groups: u64) -> Option<(u64, f32)> {
         if groups.count_ones() > INTERVAL_GROUPS && !packet.may_hit(b) {
             return None;
         }
-        // The others, one bit each, tested without a branch per group.
+        // The others, each test's result set as a bit, not branched on.
         let mut rest = groups & (groups - 1);
         groups = 0;
         while rest != 0 {
