@@ -17,7 +17,7 @@
 //!   the children's active groups. Overbeck et al. keep a range from the first to the last
 //!   active group instead. On random-1m, whose small overlapping boxes each meet a few of a
 //!   packet's rays, the groups in such ranges took 530 million group tests at rate 64
-//!   (320 x 240), against 50 million tests of first groups. The bits made its tracing 11-14 %
+//!   (320 x 240), against 50 million tests of first groups. The bits made its tracing 10-15 %
 //!   faster at rates 1 and 64, and bunny-plane's and cage's the same within the noise (one
 //!   pinned thread, alternating runs).
 //! - Children are visited nearer first, by the first active group's nearest entry.
