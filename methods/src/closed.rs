@@ -40,34 +40,56 @@ fn position_key(g: &Geometry, v: u32) -> u64 {
 }
 
 /// Per object `o < objects` with `wanted(o)`, the sum of its triangles' [`edge_sum`]s.
-///
-/// Chunks of triangles in parallel, each a plain loop into its own sums: rayon's `fold` over
-/// the triangles, its accumulator moved through every step, cost about 8 ns a triangle.
 fn sums(
     g: &Geometry,
     objects: usize,
     wanted: impl Fn(usize) -> bool + Sync,
     key: impl Fn(u32) -> u64 + Sync,
 ) -> Vec<u64> {
-    (0..g.len().div_ceil(CHUNK))
+    per_object(
+        g.len(),
+        objects,
+        0,
+        |acc, t| {
+            let o = g.object[t] as usize;
+            if o < objects && wanted(o) {
+                acc[o] = acc[o].wrapping_add(edge_sum(g, t, &key));
+            }
+        },
+        u64::wrapping_add,
+    )
+}
+
+/// One value per slot `k < slots`, gathered over the items `0..n`: each slot starts at `init`,
+/// `step(acc, i)` updates the slots for item `i`, and the chunks' slots are joined by
+/// `combine` (associative and commutative, so the result does not depend on the chunks).
+///
+/// Chunks of [`CHUNK`] items in parallel, each a plain loop into its own slots: rayon's
+/// `fold` over the items, its accumulator moved through every step, cost about 8 ns an item
+/// (3.7 ms against 0.3 ms over the bunny's 480,000 pixels at one thread).
+pub fn per_object<A: Copy + Send + Sync>(
+    n: usize,
+    slots: usize,
+    init: A,
+    step: impl Fn(&mut [A], usize) + Sync,
+    combine: impl Fn(A, A) -> A + Sync,
+) -> Vec<A> {
+    (0..n.div_ceil(CHUNK))
         .into_par_iter()
         .map(|c| {
-            let mut acc = vec![0u64; objects];
-            for t in c * CHUNK..((c + 1) * CHUNK).min(g.len()) {
-                let o = g.object[t] as usize;
-                if o < objects && wanted(o) {
-                    acc[o] = acc[o].wrapping_add(edge_sum(g, t, &key));
-                }
+            let mut acc = vec![init; slots];
+            for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                step(&mut acc, i);
             }
             acc
         })
         .reduce(
-            || vec![0u64; objects],
-            |a, b| a.iter().zip(&b).map(|(&x, &y)| x.wrapping_add(y)).collect(),
+            || vec![init; slots],
+            |a, b| a.iter().zip(&b).map(|(&x, &y)| combine(x, y)).collect(),
         )
 }
 
-/// Triangles per task of [`sums`].
+/// Items per task of [`per_object`].
 const CHUNK: usize = 1 << 14;
 
 /// How [`closed_objects`] compares corners.

@@ -33,9 +33,8 @@
 
 use super::shadow::Setup;
 use super::ScreenPolygons;
-use methods::closed::{closed_objects, Corners};
+use methods::closed::{closed_objects, per_object, Corners};
 use methods::Frame;
-use rayon::prelude::*;
 
 /// The shadow polygons of the casters of `frame` on the plane of `setup`, that of object
 /// `receiver` ([`Setup::shadow_polygons`]): of a closed object toward the light, those of its
@@ -54,26 +53,23 @@ pub(crate) fn shadow_polygons(frame: &Frame<'_>, setup: &Setup, receiver: usize)
 pub(crate) fn facing_suffices(frame: &Frame<'_>, setup: &Setup, casters: &[bool]) -> Vec<bool> {
     let g = &frame.geometry;
     let objects = casters.len();
-    // One parallel pass over the triangles, in chunks each a plain loop (rayon's `fold` moves
-    // its accumulator through every step): per object, whether every triangle lies toward the
-    // light (none in the plane facing it).
-    const CHUNK: usize = 1 << 14;
-    let toward = (0..g.len().div_ceil(CHUNK))
-        .into_par_iter()
-        .map(|c| {
-            let mut acc = vec![true; objects];
-            for t in c * CHUNK..((c + 1) * CHUNK).min(g.len()) {
-                let o = g.object[t] as usize;
-                if casters.get(o).copied().unwrap_or(false) && acc[o] {
-                    let c = g.corners(t);
-                    let in_plane = c.iter().all(|&p| setup.light_height(p) == 0.0);
-                    let toward = c.iter().all(|&p| setup.toward_light(p));
-                    acc[o] = toward && !(in_plane && setup.faces_light(&c));
-                }
+    // One parallel pass over the triangles: per object, whether every triangle lies toward
+    // the light (none in the plane facing it).
+    let toward = per_object(
+        g.len(),
+        objects,
+        true,
+        |acc, t| {
+            let o = g.object[t] as usize;
+            if casters.get(o).copied().unwrap_or(false) && acc[o] {
+                let c = g.corners(t);
+                let in_plane = c.iter().all(|&p| setup.light_height(p) == 0.0);
+                let toward = c.iter().all(|&p| setup.toward_light(p));
+                acc[o] = toward && !(in_plane && setup.faces_light(&c));
             }
-            acc
-        })
-        .reduce(|| vec![true; objects], |a, b| a.iter().zip(&b).map(|(&x, &y)| x && y).collect());
+        },
+        |x, y| x && y,
+    );
     closed_objects(g, objects, |o| casters[o] && toward[o], Corners::ByNumberOrPosition)
 }
 
