@@ -54,6 +54,27 @@ pub struct Projector {
     pub height: f64,
 }
 
+/// The parts of a projector's rays through a grid of points, each computed once per column
+/// and once per row ([`Projector::grid_rays`]), not two divisions per ray.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GridRays {
+    /// [`Projector::column`] of offset `s` in column `x`, at `s * width + x`.
+    columns: Vec<DVec3>,
+    /// [`Projector::row`] of offset `s` in row `y`, at `s * height + y`.
+    rows: Vec<DVec3>,
+    width: usize,
+    height: usize,
+}
+
+impl GridRays {
+    /// The ray of `projector` (the one that made these parts) through column `x`, row `y`
+    /// and offset `s`: `projector.ray` of that point, the same numbers.
+    #[inline]
+    pub fn ray(&self, projector: &Projector, x: usize, y: usize, s: usize) -> Ray {
+        projector.ray_from(self.columns[s * self.width + x], self.rows[s * self.height + y])
+    }
+}
+
 /// A ray `origin + t * direction`; for a projector's ray, `t` is the depth.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Ray {
@@ -185,6 +206,21 @@ impl Projector {
                 Ray { origin: column + row, direction: self.forward }
             }
         }
+    }
+
+    /// The parts of the rays through the points `(x + offsets[s].x, y + offsets[s].y)` for
+    /// columns `x < width` and rows `y < height`: [`GridRays::ray`] makes each of those rays
+    /// from them, with the numbers of [`Self::ray`].
+    pub fn grid_rays(&self, (width, height): (usize, usize), offsets: &[DVec2]) -> GridRays {
+        let columns = offsets
+            .iter()
+            .flat_map(|o| (0..width).map(move |x| self.column(x as f64 + o.x)))
+            .collect();
+        let rows = offsets
+            .iter()
+            .flat_map(|o| (0..height).map(move |y| self.row(y as f64 + o.y)))
+            .collect();
+        GridRays { columns, rows, width, height }
     }
 
     /// Depth of `p` along the forward axis (no near test).

@@ -80,8 +80,8 @@
 //! - a leaf's loop over the lanes of each group.
 //!
 //! Each is now evaluated without a branch per comparison or per lane (`packet`, `ray`). The
-//! camera rays take their per-column and per-row parts from tables (`Projector::column`,
-//! `Projector::row`), not two divisions per ray. On random-1m (a million scattered
+//! camera rays take their per-column and per-row parts from tables made once per frame
+//! (`Projector::grid_rays`), not two divisions per ray. On random-1m (a million scattered
 //! triangles) the packets' node tests are two thirds of the profile at rate 64: the boxes of
 //! random triangles overlap, and a million nodes do not stay in cache. Keeping each node's
 //! active groups as bits (`packet`) took a tenth off there. Packets of 128 rays made its
@@ -205,7 +205,10 @@ use methods::{afsm::shadow_offset, pattern::SamplePattern, Frame};
 use packet::PACKET;
 use ray::TraceRay;
 use rayon::prelude::*;
-use scenes::{projection::ProjectionKind, Geometry, Light};
+use scenes::{
+    projection::{GridRays, ProjectionKind},
+    Geometry, Light,
+};
 
 /// Name of the stage that builds the BVHs.
 pub const STAGE_BVH_BUILD: &str = "BVH build";
@@ -397,6 +400,14 @@ impl<'a> Tracer<'a> {
         Ok(Self { frame, pattern, camera_accel, caster_accel, rays, alloc })
     }
 
+    /// The parts of the camera rays of every sub-sample of the frame (per column and per row
+    /// of sub-sample points, not two divisions per ray): `(width + height) * rate` vectors of
+    /// 24 bytes, within the per-sample term of [`memory_estimate`] (48 bytes a sub-sample).
+    fn camera_rays(&self) -> GridRays {
+        let size = (self.frame.width() as usize, self.frame.height() as usize);
+        self.frame.camera.grid_rays(size, self.pattern.offsets())
+    }
+
     /// Pixels per packet tile `(width, height)` at `rate` sub-samples per pixel: `PACKET /
     /// rate` pixels (one pixel above [`PACKET`] sub-samples), as square as a power of two
     /// allows: 8 x 8 pixel centres at rate 1, 4 x 4 pixels at rate 4, one pixel at rate 64.
@@ -411,6 +422,7 @@ impl<'a> Tracer<'a> {
     /// order.
     fn trace_band(
         &self,
+        camera_rays: &GridRays,
         rows: std::ops::Range<u32>,
         wanted: &impl Fn(u32, u32) -> bool,
         work: &mut Work,
@@ -420,21 +432,7 @@ impl<'a> Tracer<'a> {
         let (tile_w, tile_h) = Self::tile(rate);
         let side = tile_w.max(tile_h).next_power_of_two();
         let w = self.frame.width();
-        let (camera, offsets) = (&self.frame.camera, self.pattern.offsets());
-        // The rays' parts per row and per column of sub-samples ([`Projector::column`]): each
-        // computed once, not once per ray.
-        work.rows.clear();
-        work.rows.extend(
-            rows.clone().flat_map(|j| offsets.iter().map(move |o| camera.row(f64::from(j) + o.y))),
-        );
-        work.corner = (0, rows.start);
         for i0 in (0..w).step_by(tile_w as usize) {
-            work.columns.clear();
-            work.columns.extend(
-                (i0..(i0 + tile_w).min(w))
-                    .flat_map(|i| offsets.iter().map(move |o| camera.column(f64::from(i) + o.x))),
-            );
-            work.corner.0 = i0;
             // The tile's pixels in Z order, so that each lane group (and each run of groups)
             // covers a compact block of pixels.
             for (x, y) in (0..side * side).map(z_order) {
@@ -445,29 +443,31 @@ impl<'a> Tracer<'a> {
                 for s in 0..rate {
                     work.ids.push((i, j, s));
                     if work.ids.len() == PACKET {
-                        self.trace_packet(work, emit);
+                        self.trace_packet(camera_rays, work, emit);
                     }
                 }
             }
             if !work.ids.is_empty() {
-                self.trace_packet(work, emit);
+                self.trace_packet(camera_rays, work, emit);
             }
         }
     }
 
     /// The camera rays of the sub-samples in `work.ids` as one packet, then the shadow rays of
     /// those that hit as another; each sub-sample's result goes to `emit`, in order.
-    fn trace_packet(&self, work: &mut Work, emit: &mut impl FnMut(u32, u32, usize, SampleHit)) {
-        let Work { ids, hits, rays, of, best, limits, skip, light, scratch, tests, .. } = work;
-        let (columns, rows, (i0, j0)) = (&work.columns, &work.rows, work.corner);
-        let rate = self.pattern.rate() as usize;
+    fn trace_packet(
+        &self,
+        camera_rays: &GridRays,
+        work: &mut Work,
+        emit: &mut impl FnMut(u32, u32, usize, SampleHit),
+    ) {
+        let Work { ids, hits, rays, of, best, limits, skip, light, scratch, tests } = work;
         rays.clear();
         of.clear();
         hits.clear();
         for &(i, j, s) in ids.iter() {
-            let column = columns[(i - i0) as usize * rate + s];
-            let row = rows[(j - j0) as usize * rate + s];
-            if let Some(ray) = self.rays.camera_along(self.frame.camera.ray_from(column, row)) {
+            let r = camera_rays.ray(&self.frame.camera, i as usize, j as usize, s);
+            if let Some(ray) = self.rays.camera_along(r) {
                 rays.push(ray);
                 of.push(hits.len());
             }
@@ -544,11 +544,6 @@ struct Work {
     scratch: Scratch,
     /// Ray-triangle tests made.
     tests: u64,
-    /// The camera's column parts of the tile's sub-samples (`(i - corner.0) * rate + s`) and
-    /// row parts of the band's (`(j - corner.1) * rate + s`).
-    columns: Vec<DVec3>,
-    rows: Vec<DVec3>,
-    corner: (u32, u32),
 }
 
 /// The pixel results of a band of rows (row-major).
@@ -603,6 +598,7 @@ impl RayTrace {
         let alloc = tracer.alloc;
         let (_, band_h) = Tracer::tile(rate);
         let bands = rec.stages.time(STAGE_RAY_TRACING, || {
+            let camera_rays = tracer.camera_rays();
             (0..h.div_ceil(band_h))
                 .into_par_iter()
                 .map(|b| {
@@ -618,12 +614,18 @@ impl RayTrace {
                     band.light.resize(len, 1.0);
                     let mut work = Work::default();
                     let j0 = rows.start;
-                    tracer.trace_band(rows, &|_, _| true, &mut work, &mut |i, j, s, hit| {
-                        let k = (j - j0) as usize * per_row + i as usize * rate + s;
-                        band.triangle[k] = hit.triangle.unwrap_or(methods::raster::NO_TRIANGLE);
-                        band.light[k] = hit.light;
-                        band.rays += hit.rays;
-                    });
+                    tracer.trace_band(
+                        &camera_rays,
+                        rows,
+                        &|_, _| true,
+                        &mut work,
+                        &mut |i, j, s, hit| {
+                            let k = (j - j0) as usize * per_row + i as usize * rate + s;
+                            band.triangle[k] = hit.triangle.unwrap_or(methods::raster::NO_TRIANGLE);
+                            band.light[k] = hit.light;
+                            band.rays += hit.rays;
+                        },
+                    );
                     band.tests = work.tests;
                     Ok(band)
                 })
@@ -693,6 +695,7 @@ impl RayTrace {
         let wanted = |i: u32, j: u32| mask.is_none_or(|m| m[(j * w + i) as usize]);
         let (_, band_h) = Tracer::tile(rate);
         let bands = rec.stages.time(STAGE_RAY_TRACING, || {
+            let camera_rays = tracer.camera_rays();
             (0..h.div_ceil(band_h))
                 .into_par_iter()
                 .map(|b| {
@@ -708,12 +711,18 @@ impl RayTrace {
                     band.evaluated.resize(len, true);
                     let mut work = Work::default();
                     let j0 = rows.start;
-                    tracer.trace_band(rows.clone(), &wanted, &mut work, &mut |i, j, _, hit| {
-                        let k = ((j - j0) * w + i) as usize;
-                        band.lit[k] += hit.light;
-                        band.evaluated[k] &= hit.triangle.is_some();
-                        band.rays += hit.rays;
-                    });
+                    tracer.trace_band(
+                        &camera_rays,
+                        rows.clone(),
+                        &wanted,
+                        &mut work,
+                        &mut |i, j, _, hit| {
+                            let k = ((j - j0) * w + i) as usize;
+                            band.lit[k] += hit.light;
+                            band.evaluated[k] &= hit.triangle.is_some();
+                            band.rays += hit.rays;
+                        },
+                    );
                     for (k, (lit, evaluated)) in
                         band.lit.iter_mut().zip(band.evaluated.iter_mut()).enumerate()
                     {

@@ -21,9 +21,12 @@
 
 use super::shadow_offset;
 use crate::{pattern::SamplePattern, raster::NO_TRIANGLE};
-use glam::{DVec2, DVec3};
+use glam::DVec2;
 use rayon::prelude::*;
-use scenes::{projection::ProjectionKind, Projector};
+use scenes::{
+    projection::{GridRays, ProjectionKind},
+    Projector,
+};
 
 /// A visible sample on the light's image plane.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -70,12 +73,7 @@ struct SampleAt<'a> {
     camera: &'a Projector,
     light: &'a Projector,
     pattern: &'a SamplePattern,
-    /// [`Projector::column`] of sub-sample `s` in column `x`, at `s * width + x`.
-    columns: Vec<DVec3>,
-    /// [`Projector::row`] of sub-sample `s` in row `y`, at `s * height + y`.
-    rows: Vec<DVec3>,
-    width: usize,
-    height: usize,
+    rays: GridRays,
 }
 
 impl<'a> SampleAt<'a> {
@@ -83,24 +81,16 @@ impl<'a> SampleAt<'a> {
         camera: &'a Projector,
         light: &'a Projector,
         pattern: &'a SamplePattern,
-        (width, height): (usize, usize),
+        size: (usize, usize),
     ) -> Self {
-        let offsets = pattern.offsets();
-        let columns = offsets
-            .iter()
-            .flat_map(|o| (0..width).map(move |x| camera.column(x as f64 + o.x)))
-            .collect();
-        let rows = offsets
-            .iter()
-            .flat_map(|o| (0..height).map(move |y| camera.row(y as f64 + o.y)))
-            .collect();
-        Self { camera, light, pattern, columns, rows, width, height }
+        let rays = camera.grid_rays(size, pattern.offsets());
+        Self { camera, light, pattern, rays }
     }
 
     /// The sample of sub-sample `s` of pixel `pixel` (at `(x, y)`) on `surface`: its surface
     /// point `camera.ray(point).at(depth)`, moved to the light's image with its threshold
     /// depth; `None` for a background sub-sample and a point the light cannot project. The
-    /// ray is [`Projector::ray_from`] the point's column and row parts, the numbers of
+    /// ray is made from the point's column and row parts ([`GridRays`]), the numbers of
     /// `camera.ray(point)` (`pattern.point` adds the offset to the pixel's corner).
     #[inline]
     fn sample(
@@ -114,8 +104,7 @@ impl<'a> SampleAt<'a> {
         if tri == NO_TRIANGLE {
             return None;
         }
-        let column = self.columns[s * self.width + x as usize];
-        let ray = self.camera.ray_from(column, self.rows[s * self.height + y as usize]);
+        let ray = self.rays.ray(self.camera, x as usize, y as usize, s);
         let position = ray.at(surface.depth[pixel]);
         let (xy, z) = self.light.project(position)?;
         let zt = threshold_depth(self.light, xy, z, shadow_offset(ray.origin, position));
@@ -210,6 +199,7 @@ mod tests {
         pattern::PatternKind,
         raster::tests::{pixel_projector, spot_above},
     };
+    use glam::DVec3;
 
     /// A spot light at height 12 above the camera's image, looking down, `near` 0.5: surface
     /// points above height 11.5 are dropped.
