@@ -19,7 +19,7 @@
 //! | stage | constant | module | paper |
 //! |---|---|---|---|
 //! | camera G-buffer | (the frame's) | [`crate::gbuffer`] | I3D 2015 section 3, step 1 |
-//! | sample footprints | [`STAGE_FOOTPRINTS`] | [`mod@footprints`] | I3D 2015 section 4.1; TVCG 2016 section 5.1 |
+//! | sample footprints | [`STAGE_FOOTPRINTS`] | [`mod@footprints`] (after the light's frame, [`crate::afsm::light_projector`]) | I3D 2015 section 4.1; TVCG 2016 section 5.1 |
 //! | conservative rasterization | [`STAGE_RASTERIZATION`] | [`frustum`] | I3D 2015 section 4.2 |
 //! | frustum tests | [`STAGE_FRUSTUM_TESTS`] | [`frustum`] | I3D 2015 section 4.3; TVCG 2016 section 5.2 |
 //!
@@ -208,12 +208,16 @@ impl Ftizb {
         self.options.validate()?;
         let pattern = SamplePattern::new(self.options.rate, self.options.pattern)?;
         let grid = Grid::new(self.options.grid_res(frame.width(), frame.height()));
-        let light = crate::afsm::light_projector(frame);
         if frame.effects.transparency {
             rec.notes.push("ftizb treats semi-transparent casters as opaque".into());
         }
+        let (light, lists) = rec.stages.time(STAGE_FOOTPRINTS, || {
+            let light = crate::afsm::light_projector(frame);
+            let lists = footprints(frame, &light, grid);
+            (light, lists)
+        });
+        let lists = lists?;
         let subs = SubSamples::new(frame, &light, &pattern);
-        let lists = rec.stages.time(STAGE_FOOTPRINTS, || footprints(frame, &light, grid))?;
         let bins = rec.stages.time(STAGE_RASTERIZATION, || {
             bin_casters(&frame.geometry, |t| frame.is_caster(t), &light, grid, &lists)
         })?;
