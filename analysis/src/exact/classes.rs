@@ -113,13 +113,17 @@ impl Classes {
 }
 
 /// The screen polygons of every triangle: `polys` contour `k` belongs to triangle
-/// `tri[k]`, has winding `winding[k]`, and its triangle's corners span the camera depths
-/// `depth[k]` (smallest, largest).
+/// `tri[k]`, has winding `winding[k]`, and its triangle's corners `corners[k]` span the camera
+/// depths `depth[k]` (smallest, largest). The corners are copied once in contour order and
+/// read in place by the rule's tests: gathered from the geometry per pixel (626,844 times for
+/// `bunny-plane`'s 80,867 pixels of several triangles at 800 x 600), with every triangle's
+/// normal, the stage took 5 % longer there (one pinned thread, 6 alternating runs).
 struct Projected {
     polys: ScreenPolygons,
     tri: Vec<u32>,
     winding: Vec<f64>,
     depth: Vec<[f64; 2]>,
+    corners: Vec<[DVec3; 3]>,
 }
 
 impl Projected {
@@ -134,6 +138,7 @@ impl Projected {
                     tri: vec![],
                     winding: vec![],
                     depth: vec![],
+                    corners: vec![],
                 };
                 for t in c * CHUNK..((c + 1) * CHUNK).min(g.len()) {
                     let corners = g.corners(t);
@@ -143,6 +148,7 @@ impl Projected {
                         part.winding.push(sign);
                         let d = corners.map(|p| screen.depth(p));
                         part.depth.push([d[0].min(d[1]).min(d[2]), d[0].max(d[1]).max(d[2])]);
+                        part.corners.push(corners);
                     }
                 }
                 part
@@ -153,6 +159,7 @@ impl Projected {
             tri: parts.iter().map(|p| p.tri.as_slice()).collect::<Vec<_>>().concat(),
             winding: parts.iter().map(|p| p.winding.as_slice()).collect::<Vec<_>>().concat(),
             depth: parts.iter().map(|p| p.depth.as_slice()).collect::<Vec<_>>().concat(),
+            corners: parts.iter().map(|p| p.corners.as_slice()).collect::<Vec<_>>().concat(),
         }
     }
 
@@ -298,11 +305,10 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
 /// Buffers the per-pixel rule reuses from pixel to pixel.
 #[derive(Default)]
 struct Scratch {
-    corners: Vec<[DVec3; 3]>,
-    normals: Vec<DVec3>,
-    eligible: Vec<bool>,
-    in_c: Vec<bool>,
-    done: Vec<bool>,
+    /// Bit sets over a pixel's triangles, `words` bits apiece (see
+    /// [`Context::classify_pixel`]).
+    open: Vec<u64>,
+    in_c: Vec<u64>,
     adjacent: Vec<u64>,
     stack: Vec<usize>,
     members: Vec<usize>,
@@ -364,55 +370,69 @@ impl Context<'_> {
             return class;
         }
         let winding = p.winding[group[seed].contour as usize];
-        let Scratch { corners, normals, eligible, in_c, done, adjacent, stack, members } = scratch;
+        let Scratch { open, in_c, adjacent, stack, members } = scratch;
         let n = group.len();
-        corners.clear();
-        corners.extend(group.iter().map(|o| g.corners(tri(o))));
-        normals.clear();
-        normals.extend(corners.iter().map(|c| (c[1] - c[0]).cross(c[2] - c[0])));
+        let corners = |f: usize| &p.corners[group[f].contour as usize];
+        let normal = |f: usize| {
+            let c = corners(f);
+            (c[1] - c[0]).cross(c[2] - c[0])
+        };
         let mut rays = None;
         // Rule 3: the continuous surface through the seed, found by a flood from it. A
-        // triangle of the square may join when it has the seed's object and winding
-        // (`eligible`). Each pair of a member and an eligible triangle is tested once, when
-        // the first of the two leaves the stack (`done`), and a shared edge is kept in
-        // `adjacent` (a row of `words` bits per triangle) for rule 4's pairs.
+        // triangle of the square may join when it has the seed's object and winding. Each
+        // pair of a member and such a triangle is tested once, when the first of the two
+        // leaves the stack; `open` holds those not yet off the stack, and a shared edge is
+        // kept in `adjacent` (a row of `words` bits per triangle) for rule 4's pairs. The
+        // triangles' sets are bits (`words` per set), visited in increasing order as a loop
+        // over the triangles with a `bool` each visited them: the stage took 12 % less time on
+        // `bunny-plane` and 11 % on `cage` (800 x 600, one pinned thread, 6 alternating runs).
         let words = n.div_ceil(64);
-        eligible.clear();
-        eligible.extend(
-            group
-                .iter()
-                .map(|o| g.object[tri(o)] == object && p.winding[o.contour as usize] == winding),
-        );
+        let (word, bit) = (|f: usize| f / 64, |f: usize| 1u64 << (f % 64));
+        open.clear();
+        open.resize(words, 0);
+        for (f, o) in group.iter().enumerate() {
+            if g.object[tri(o)] == object && p.winding[o.contour as usize] == winding {
+                open[word(f)] |= bit(f);
+            }
+        }
         adjacent.clear();
         adjacent.resize(n * words, 0);
         in_c.clear();
-        in_c.resize(n, false);
-        done.clear();
-        done.resize(n, false);
-        in_c[seed] = true;
+        in_c.resize(words, 0);
+        in_c[word(seed)] |= bit(seed);
         stack.clear();
         stack.push(seed);
         while let Some(m) = stack.pop() {
-            done[m] = true;
-            for f in 0..n {
-                if eligible[f] && !done[f] && shares_edge(&corners[m], &corners[f]) {
-                    adjacent[m * words + f / 64] |= 1 << (f % 64);
-                    adjacent[f * words + m / 64] |= 1 << (m % 64);
-                    if !in_c[f] {
-                        in_c[f] = true;
-                        stack.push(f);
+            open[word(m)] &= !bit(m);
+            for w in 0..words {
+                let mut candidates = open[w];
+                while candidates != 0 {
+                    let f = 64 * w + candidates.trailing_zeros() as usize;
+                    candidates &= candidates - 1;
+                    if shares_edge(corners(m), corners(f)) {
+                        adjacent[m * words + word(f)] |= bit(f);
+                        adjacent[f * words + word(m)] |= bit(m);
+                        if in_c[w] & bit(f) == 0 {
+                            in_c[w] |= bit(f);
+                            stack.push(f);
+                        }
                     }
                 }
             }
         }
-        // Rule 4: C tiles the square.
-        let covered: f64 =
-            group.iter().zip(in_c.iter()).filter(|(_, &c)| c).map(|(o, _)| o.area).sum();
+        members.clear();
+        for (w, &set) in in_c.iter().enumerate() {
+            let mut set = set;
+            while set != 0 {
+                members.push(64 * w + set.trailing_zeros() as usize);
+                set &= set - 1;
+            }
+        }
+        // Rule 4: C tiles the square (its areas added in the triangles' order).
+        let covered: f64 = members.iter().map(|&f| group[f].area).sum();
         if covered < MIN_TILE_COVERAGE {
             return PixelClass::Edge;
         }
-        members.clear();
-        members.extend((0..group.len()).filter(|&f| in_c[f]));
         let points = |f: usize| p.points(group[f].contour as usize);
         let overlap = |a: usize, b: usize| -> Option<Poly> {
             if clip::separated(points(a), points(b)) {
@@ -451,12 +471,12 @@ impl Context<'_> {
             }
         });
         let nearer = |f: usize| depth(f)[0] < far || depth(f)[0].is_nan();
-        for u in (0..group.len()).filter(|&f| !in_c[f] && nearer(f)) {
+        for u in (0..n).filter(|&f| in_c[word(f)] & bit(f) == 0 && nearer(f)) {
             for &t in members.iter() {
                 if depth(u)[0] >= depth(t)[1]
                     || behind_on_square(
-                        (normals[u], corners[u][0]),
-                        (normals[t], corners[t][0]),
+                        (normal(u), corners(u)[0]),
+                        (normal(t), corners(t)[0]),
                         rays.get_or_insert_with(|| self.screen.corner_rays(i, j)),
                     )
                 {
@@ -466,7 +486,7 @@ impl Context<'_> {
                 if 0.5 * r.area2_rel(i as f64, j as f64) <= MIN_OVERLAP {
                     continue;
                 }
-                if r.points().iter().any(|&x| self.in_front(&corners[u], &corners[t], x)) {
+                if r.points().iter().any(|&x| self.in_front(corners(u), corners(t), x)) {
                     return PixelClass::Edge;
                 }
             }
