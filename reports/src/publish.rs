@@ -10,7 +10,12 @@
 //! 2. **Lock**: an advisory lock on `DIR/.shadowbench-lock` ([`LOCK`]) taken without waiting
 //!    (`flock`, through `std::fs::File::try_lock`), whose content names the holder (process,
 //!    command, start). A second writer is refused with [`PublishError::Busy`] naming it. The
-//!    kernel drops the lock of a killed process, so a lock never outlives its holder.
+//!    kernel drops the lock of a killed process, so a lock never outlives its holder but for
+//!    a moment: a helper the holder had just started (`git`, asked for the run's provenance)
+//!    keeps a copy of the lock's descriptor until it runs its own program. A lock held while
+//!    the process that named itself in it has exited is waited for, up to
+//!    [`EXITED_HOLDER_WAIT`], before the folder is called busy (a report killed and run again
+//!    at once was refused so on a loaded machine, naming the killed process).
 //! 3. **Recover**: a staging folder left by a killed writer (`DIR/.shadowbench-staging`,
 //!    [`STAGING`]) is finished when it was complete (its manifest written: the kill came while
 //!    publishing) and removed otherwise (the kill came while computing): the folder is then as
@@ -494,6 +499,24 @@ fn check_kind(dir: &Path, kind: Kind) -> Result<Option<Manifest>, PublishError> 
     }
 }
 
+/// How long [`Lock::take`] waits for a lock whose named holder has exited (see the module
+/// documentation).
+pub const EXITED_HOLDER_WAIT: std::time::Duration = std::time::Duration::from_secs(2);
+
+/// Whether the holder named by a lock file's `text` ("process N", first line) has exited, as
+/// far as this system can tell (Linux: `/proc/N` is gone); `false` when it cannot tell.
+fn holder_exited(text: &str) -> bool {
+    let proc = Path::new("/proc");
+    let pid = text.strip_prefix("process ").and_then(|t| {
+        let digits: String = t.chars().take_while(char::is_ascii_digit).collect();
+        digits.parse::<u32>().ok()
+    });
+    match pid {
+        Some(pid) => proc.join("self").exists() && !proc.join(pid.to_string()).exists(),
+        None => false,
+    }
+}
+
 /// Who holds the lock of `path`, from its content; a holder that has just taken it may not
 /// have written it yet, so an empty file is read again for a moment.
 fn holder(path: &Path) -> String {
@@ -513,13 +536,16 @@ struct Lock {
 }
 
 impl Lock {
-    /// Takes the lock of `dir` without waiting, or says who holds it.
+    /// Takes the lock of `dir` without waiting for a holder that is running, or says who
+    /// holds it; a holder that has exited is waited for (see the module documentation).
     fn take(dir: &Path) -> Result<Self, PublishError> {
         let path = dir.join(LOCK);
+        let start = std::time::Instant::now();
         // The lock file is removed by its holder when it finishes, so a file opened just
         // before that is locked after it only in appearance: the lock counts when the path
         // still names the locked file.
-        for _ in 0..16 {
+        let mut replaced = 0;
+        while replaced < 16 {
             let file = std::fs::OpenOptions::new()
                 .read(true)
                 .write(true)
@@ -530,7 +556,12 @@ impl Lock {
             match file.try_lock() {
                 Ok(()) => {}
                 Err(std::fs::TryLockError::WouldBlock) => {
-                    return Err(PublishError::Busy { dir: dir.to_owned(), holder: holder(&path) });
+                    let holder = holder(&path);
+                    if holder_exited(&holder) && start.elapsed() < EXITED_HOLDER_WAIT {
+                        std::thread::sleep(std::time::Duration::from_millis(10));
+                        continue;
+                    }
+                    return Err(PublishError::Busy { dir: dir.to_owned(), holder });
                 }
                 Err(std::fs::TryLockError::Error(e)) => return Err(io_err(&path, &e)),
             }
@@ -539,6 +570,7 @@ impl Lock {
                 lock.say_who()?;
                 return Ok(lock);
             }
+            replaced += 1;
         }
         Err(PublishError::Io {
             path: path.clone(),
@@ -815,6 +847,35 @@ mod tests {
         assert!(text.contains(&format!("process {}", std::process::id())), "{text}");
         drop(held);
         drop(Transaction::begin(&runs, Kind::Run).expect("free again"));
+    }
+
+    /// A lock still held after the process named in it has exited (a helper it had started
+    /// keeps the descriptor for a moment) is waited for, not called busy; one named by a
+    /// running process is refused at once.
+    #[test]
+    fn a_lock_left_by_an_exited_holder_is_waited_for() {
+        let tmp = tempfile::tempdir().expect("tmp");
+        let dir = tmp.path().join("out");
+        std::fs::create_dir_all(&dir).expect("folder");
+        let path = dir.join(LOCK);
+        // Above Linux's largest process id: no such process.
+        std::fs::write(&path, "process 4294967295\ncommand `killed`\n").expect("lock file");
+        assert!(holder_exited("process 4294967295\n") || !Path::new("/proc/self").exists());
+        let kept = File::open(&path).expect("open");
+        kept.try_lock().expect("held by the helper");
+        let release = std::thread::spawn(move || {
+            std::thread::sleep(std::time::Duration::from_millis(150));
+            drop(kept);
+        });
+        let start = std::time::Instant::now();
+        let t = Transaction::begin(&dir, Kind::Run);
+        release.join().expect("released");
+        if Path::new("/proc/self").exists() {
+            let t = t.expect("taken once the helper let go");
+            assert!(start.elapsed() >= std::time::Duration::from_millis(150));
+            drop(t);
+        }
+        assert!(!holder_exited(&format!("process {}\n", std::process::id())));
     }
 
     #[test]
