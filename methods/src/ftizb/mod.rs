@@ -19,9 +19,12 @@
 //! | stage | constant | module | paper |
 //! |---|---|---|---|
 //! | camera G-buffer | (the frame's) | [`crate::gbuffer`] | I3D 2015 section 3, step 1 |
-//! | sample footprints | [`STAGE_FOOTPRINTS`] | [`mod@footprints`] (after the light's frame, [`crate::afsm::light_projector`]) | I3D 2015 section 4.1; TVCG 2016 section 5.1 |
+//! | sample footprints | [`STAGE_FOOTPRINTS`] | [`mod@footprints`] | I3D 2015 section 4.1; TVCG 2016 section 5.1 |
 //! | conservative rasterization | [`STAGE_RASTERIZATION`] | [`frustum`] | I3D 2015 section 4.2 |
 //! | frustum tests | [`STAGE_FRUSTUM_TESTS`] | [`frustum`] | I3D 2015 section 4.3; TVCG 2016 section 5.2 |
+//!
+//! The sample footprints stage begins with the light's frame fitted to the visible points
+//! ([`crate::afsm::light_projector`]), which every later stage uses.
 //!
 //! Counters: `footprint_texels` (grid texels the pixels' footprints were inserted into: the
 //! grid's list entries), `caster_texels` (non-empty texels a caster's conservative
