@@ -15,7 +15,9 @@
 //!    keeps a copy of the lock's descriptor until it runs its own program. A lock held while
 //!    the process that named itself in it has exited is waited for, up to
 //!    [`EXITED_HOLDER_WAIT`], before the folder is called busy (a report killed and run again
-//!    at once was refused so on a loaded machine, naming the killed process).
+//!    at once was refused so on a loaded machine, naming the killed process). A holder on
+//!    another machine (a folder shared between nodes) looks exited here, so its refusal comes
+//!    after that wait.
 //! 3. **Recover**: a staging folder left by a killed writer (`DIR/.shadowbench-staging`,
 //!    [`STAGING`]) is finished when it was complete (its manifest written: the kill came while
 //!    publishing) and removed otherwise (the kill came while computing): the folder is then as
