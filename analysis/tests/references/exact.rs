@@ -1,6 +1,7 @@
 //! The exact reference against analytic areas (axis-aligned, rotated and arbitrary occluders,
 //! spot lights, grazing perspective views) and against brute-force point sampling on the
-//! built-in scenes; its applicability; and the tiny-skia cross-check.
+//! built-in scenes; its applicability; the tiny-skia cross-check; and the pixel classes of a
+//! pixel overlapped by more triangles than one word of bits holds.
 //!
 //! Analytic areas are computed independently here: the shadow of a planar occluder is
 //! projected by hand (vertical light: its footprint; spot light: central projection written
@@ -849,5 +850,35 @@ fn exact_outputs_are_finite_and_in_range_on_every_applicable_built_in() {
         eprintln!("{name}: {evaluated} evaluated pixels; {:?}", rec.notes);
         assert!(evaluated > 0, "{name}");
         assert!(!rec.notes.iter().any(|n| n.contains("skipped")), "{name}: {:?}", rec.notes);
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Pixel classes with many triangles in one pixel
+
+/// A pixel overlapped by more triangles than one word of the rule's bit sets holds: a flat
+/// fan of 100 wedges whose apex lies inside pixel (32, 24), above the ground, looking down.
+/// The wedges tile the pixel as one surface, so it is `planar` with all of them as its tiles;
+/// the same with 40 wedges (one word). Its light is that of the fan's top, lit from above.
+#[test]
+fn a_pixel_of_more_triangles_than_a_word_is_tiled_by_all_of_them() {
+    for wedges in [40u32, 100] {
+        // Screen x = 32 + 8 wx, y = 24 + 8 wz: the apex at (32.4, 24.45).
+        let apex = DVec3::new(0.05, 1.0, 0.05625);
+        let mut positions = vec![apex];
+        for k in 0..wedges {
+            let a = std::f64::consts::TAU * f64::from(k) / f64::from(wedges);
+            positions.push(apex + 0.3 * DVec3::new(a.cos(), 0.0, a.sin()));
+        }
+        let triangles = (0..wedges).map(|k| [0, 1 + k, 1 + (k + 1) % wedges]).collect();
+        let scene = scene_with_mesh(ortho_camera(false), DOWN, Mesh { positions, triangles });
+        let (frame, img, _) = exact(&scene, 64, 48);
+        let classes = analysis::exact::classify(&frame);
+        let k = 24 * 64 + 32;
+        assert_eq!(classes.class[k], PixelClass::Planar, "{wedges} wedges");
+        let first = frame.geometry.len() as u32 - wedges;
+        let fan: Vec<u32> = (first..first + wedges).collect();
+        assert_eq!(classes.tiles_of(k), &fan[..], "{wedges} wedges");
+        assert!(img.evaluated[k] && img.lit[k] == 1.0, "{wedges} wedges: {}", img.lit[k]);
     }
 }
