@@ -119,7 +119,9 @@ pub mod facing;
 pub mod samples;
 
 use crate::{
+    closed::per_object,
     frame::Frame,
+    gbuffer::GBuffer,
     light_fit::LightFit,
     method::{MethodError, ShadowMethod, Visibility},
     pattern::{PatternKind, SamplePattern},
@@ -282,28 +284,19 @@ impl AliasFreeShadowMap {
 /// lie. Spot: `near` no larger than [`SHADOW_OFFSET`] times the magnitude of the light's
 /// position plus its distance to the farthest of those points (max norm), never zero.
 ///
-/// The points' bounds (or farthest distance) are gathered in parallel over chunks of pixels:
-/// a minimum or maximum does not depend on the order of reduction, and a zero bound is made
-/// `+0`, so that neither does the sign of a zero (the pass over the 480,000 pixels of
-/// bunny-plane at 800 x 600 added 1.35 ms to the stage at one thread, 0.6 at two; the
-/// methods call this inside a stage).
+/// The points' bounds (or farthest distance) are gathered in parallel over chunks of pixels
+/// ([`per_object`], one slot): a minimum or maximum does not depend on the order of
+/// reduction, and a zero bound is made `+0`, so that neither does the sign of a zero (the pass
+/// over the 480,000 pixels of bunny-plane at 800 x 600 added 1.35 ms to the stage at one
+/// thread, 0.6 at two; the methods call this inside a stage).
 pub fn light_projector(frame: &Frame<'_>) -> Projector {
-    const CHUNK: usize = 1 << 14;
     let mut light = frame.light_projector(LIGHT_IMAGE_RES, LightFit::Scene);
     let g = &frame.gbuffer;
-    let n = g.triangle.len();
-    // The visible points of pixels `k` in chunk `c`.
-    let visible = move |c: usize| {
-        (c * CHUNK..((c + 1) * CHUNK).min(n)).filter(|&k| g.covered(k)).map(|k| g.position[k])
-    };
-    let chunks = || (0..n.div_ceil(CHUNK)).into_par_iter();
     match light.kind {
         ProjectionKind::Orthographic { half_width, half_height } => {
             let empty = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
             let join = |(lo, hi): (DVec3, DVec3), (a, b): (DVec3, DVec3)| (lo.min(a), hi.max(b));
-            let (lo, hi) = chunks()
-                .map(|c| visible(c).fold(empty, |acc, p| join(acc, (p, p))))
-                .reduce(|| empty, join);
+            let (lo, hi) = over_visible(g, empty, |p| (p, p), join);
             let (lo, hi) = (lo + DVec3::ZERO, hi + DVec3::ZERO);
             let centre = 0.5 * (lo + hi);
             let (mut hw, mut hh) = (0.0f64, 0.0f64);
@@ -325,8 +318,7 @@ pub fn light_projector(frame: &Frame<'_>) -> Projector {
         }
         ProjectionKind::Perspective { .. } => {
             let q = light.origin;
-            let farthest = |c| visible(c).map(|p| (p - q).abs().max_element()).fold(0.0, f64::max);
-            let reach = chunks().map(farthest).reduce(|| 0.0, f64::max);
+            let reach = over_visible(g, 0.0, |p| (p - q).abs().max_element(), f64::max);
             let local = SHADOW_OFFSET * (q.abs().max_element() + reach);
             if local > 0.0 && local < light.near {
                 light.near = local;
@@ -334,6 +326,22 @@ pub fn light_projector(frame: &Frame<'_>) -> Projector {
         }
     }
     light
+}
+
+/// `f` of the surface point of every covered pixel of `g`, joined by `join` (associative and
+/// commutative) from `init`, in parallel over chunks of pixels.
+fn over_visible<A: Copy + Send + Sync>(
+    g: &GBuffer,
+    init: A,
+    f: impl Fn(DVec3) -> A + Sync,
+    join: impl Fn(A, A) -> A + Sync,
+) -> A {
+    let step = |acc: &mut [A], k: usize| {
+        if g.covered(k) {
+            acc[0] = join(acc[0], f(g.position[k]));
+        }
+    };
+    per_object(g.triangle.len(), 1, init, step, &join)[0]
 }
 
 /// Per pixel, the mean over its `rate` sub-samples of their light (lit for sub-samples that
