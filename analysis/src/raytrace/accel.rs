@@ -9,7 +9,7 @@
 //! ([`Cluster::route`]) and the `f64` triangle tests the traversal leaves, and allocate nothing.
 
 use super::bvh::{self, Node, Piece};
-use super::memory::{AllocationError, Allocator};
+use super::memory::{AllocationError, Allocator, Spare};
 use super::packet::{self, FramePacket, PACKET};
 use super::ray::TraceRay;
 use glam::{DVec3, Vec3A};
@@ -528,6 +528,20 @@ pub(crate) struct Accel {
     pass: Vec<f64>,
 }
 
+/// The slots' corners a dropped [`Accel`] left for the next build.
+static SPARE_CORNERS: Spare<[DVec3; 3]> = Spare::new();
+
+impl Drop for Accel {
+    /// Gives the corners and the largest cluster's nodes back for the next build to reuse.
+    fn drop(&mut self) {
+        SPARE_CORNERS.give(std::mem::take(&mut self.corners));
+        let largest = self.clusters.iter_mut().filter_map(|c| c.bvh.take());
+        if let Some(nodes) = largest.max_by_key(Vec::capacity) {
+            bvh::SPARE_NODES.give(nodes);
+        }
+    }
+}
+
 impl Accel {
     /// Builds the clusters and their BVHs over the triangles `t` of `geometry` with `keep(t)`
     /// that have finite corners and non-zero area; `pass(t)` is the light a triangle lets
@@ -563,7 +577,7 @@ impl Accel {
         let n = tris.len();
         let mut accel = Self {
             clusters: Vec::new(),
-            corners: alloc.vec(n, "the triangles' corners")?,
+            corners: SPARE_CORNERS.take(alloc, n, "the triangles' corners")?,
             ids: alloc.vec(n, "the triangle ids")?,
             pass: alloc.vec(n, "the triangles' transmittance")?,
         };
@@ -1139,6 +1153,30 @@ mod tests {
             rays.push(TraceRay::new(origin, dir).expect("finite, non-zero"));
         }
         rays
+    }
+
+    /// A build into the buffers that a dropped build of another, larger scene left (its
+    /// corners and nodes, [`Spare`]) makes the same clusters, slots and nodes as the build
+    /// before it.
+    #[test]
+    fn a_build_into_spare_buffers_equals_one_into_new_buffers() {
+        let (g, _) = packet_scene();
+        let alloc = Allocator { estimate: 0 };
+        let parts = |g: &Geometry| Accel::build_in_parts(g, |_| true, |_| 0.5, &alloc, 7);
+        let key = |a: &Accel| {
+            let clusters: Vec<_> =
+                a.clusters.iter().map(|c| (c.frame, c.bvh.clone(), c.first, c.len)).collect();
+            (clusters, a.corners.clone(), a.ids.clone(), a.pass.clone())
+        };
+        let before = key(&parts(g).expect("small"));
+        // Twice the triangles, the copy moved, so that its buffers hold other values.
+        let mut positions = g.positions.clone();
+        positions.extend(g.positions.iter().map(|&p| p * 3.0 + DVec3::X));
+        let k = g.positions.len() as u32;
+        let mut triangles = g.triangles.clone();
+        triangles.extend(g.triangles.iter().map(|t| t.map(|v| v + k)));
+        drop(parts(&geometry(positions, triangles)).expect("small"));
+        assert_eq!(key(&parts(g).expect("small")), before);
     }
 
     /// Level rays from one point (the route's part from the origin shared by the packet; a
