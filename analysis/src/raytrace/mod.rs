@@ -102,7 +102,9 @@
 //! allocated fallibly; one that cannot be had is an [`AllocationError`] (as a
 //! [`ReferenceError::NotApplicable`] through [`Reference::evaluate`]) naming its size and the
 //! run's [`memory_estimate`]. obvhs' own allocations inside its build cannot be made fallible;
-//! each build is preceded by a probe of its size (see `memory`).
+//! each build is preceded by a probe of its size (see `memory`). The two largest buffers, the
+//! slots' corners and the BVH's nodes, are kept when a run ends and reused by the next run in
+//! the process, whose build would otherwise first touch them page by page (`memory::Spare`).
 //!
 //! # Precision: f32 BVH, f64 triangles
 //!
