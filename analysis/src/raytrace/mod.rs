@@ -40,7 +40,8 @@
 //! cut into tiles of `256 / rate` pixels (16 x 16 pixel centres at rate 1, 2 x 2 pixels at rate
 //! 64, one pixel in runs of 256 sub-samples above), whose sub-samples, the pixels in Z order,
 //! form one packet of camera rays; the shadow rays of those that hit form the next packet
-//! (parallel for a directional light, whose set-up they share). Each packet walks each
+//! (parallel for a directional light, whose set-up they share), put in Z order of their
+//! origins seen along the light where the hits scatter in depth (`order`). Each packet walks each
 //! cluster's BVH together, one `f32` test of a node serving every ray (the first of the
 //! active groups of four rays, interval bounds of the packet: `packet`), and each ray decides
 //! its own hits in `f64` at the leaves, exactly as a ray traced alone would. Wald, Benthin,
@@ -192,6 +193,7 @@ mod accel;
 mod bvh;
 mod listed;
 mod memory;
+mod order;
 mod packet;
 mod ray;
 
@@ -463,7 +465,7 @@ impl<'a> Tracer<'a> {
         work: &mut Work,
         emit: &mut impl FnMut(u32, u32, usize, SampleHit),
     ) {
-        let Work { ids, hits, rays, of, best, limits, skip, light, scratch, tests } = work;
+        let Work { ids, hits, rays, of, best, limits, skip, light, order, scratch, tests } = work;
         rays.clear();
         of.clear();
         hits.clear();
@@ -496,6 +498,7 @@ impl<'a> Tracer<'a> {
                 n += 1;
             }
         }
+        order.sort(n, rays, of, limits, skip);
         light.clear();
         light.resize(n, 1.0);
         let casters = self.caster_accel.as_ref().unwrap_or(&self.camera_accel);
@@ -543,6 +546,8 @@ struct Work {
     skip: Vec<u32>,
     /// Each shadow ray's light.
     light: Vec<f64>,
+    /// The shadow rays' order.
+    order: order::Order,
     scratch: Scratch,
     /// Ray-triangle tests made.
     tests: u64,
