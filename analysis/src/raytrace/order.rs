@@ -31,7 +31,7 @@
 //! Measured (random-1m, 320 x 240, rate 64, alternating processes, 3 rounds of 2 runs each,
 //! load 1.1-1.6): tracing 3,351 -> 2,969 ms at one thread (-11 %); bunny-plane and cage the
 //! same within the noise. Images and counters are the same bit for bit on the built-in scenes
-//! compared (seven at rate 1, three at rate 16, hairball's transparency among them).
+//! compared (ten at rate 1, five at rate 16, hairball's transparency among them).
 //!
 //! Nothing a ray finds depends on its place in the packet: its hits are decided by its own
 //! tests ([`super::packet`]). Only the order in which a ray meets several semi-transparent
