@@ -41,15 +41,13 @@
 //! Hot path: the buffers are a band's, reused from packet to packet; the check of the groups
 //! is one pass over the origins.
 
+use super::packet::LANES as GROUP;
 use super::ray::TraceRay;
 use glam::DVec3;
 
 /// A packet is sorted when its groups' box half-perimeters add up to more than this many
 /// times its own (see the module doc).
 const SPREAD: f64 = 10.0;
-
-/// Rays per group ([`super::packet`]'s SIMD lanes).
-const GROUP: usize = 4;
 
 /// Bits per axis of the Z-order key.
 const KEY_BITS: u32 = 10;
@@ -193,12 +191,8 @@ mod tests {
     /// A packet whose groups of four are 2 x 2 blocks of a 16 x 16 grid in Z order.
     fn tiled() -> Vec<DVec3> {
         (0..256u32)
-            .map(|code| {
-                let bit = |b: u32| f64::from((code >> b) & 1);
-                let x = (0..4).map(|b| bit(2 * b) * f64::from(1 << b)).sum::<f64>();
-                let z = (0..4).map(|b| bit(2 * b + 1) * f64::from(1 << b)).sum::<f64>();
-                DVec3::new(x, 0.0, z) * 0.01
-            })
+            .map(super::super::z_order)
+            .map(|(x, z)| DVec3::new(f64::from(x), 0.0, f64::from(z)) * 0.01)
             .collect()
     }
 

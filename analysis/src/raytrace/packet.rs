@@ -50,7 +50,7 @@ use glam::{Vec3A, Vec4};
 pub(crate) const PACKET: usize = 256;
 
 /// Rays tested together by one SIMD slab test (SSE lanes).
-const LANES: usize = 4;
+pub(crate) const LANES: usize = 4;
 
 /// The interval bound is tried only where more groups than this are active: it costs a few
 /// group tests, and on random-1m it culled one node in seven where the first group missed;
