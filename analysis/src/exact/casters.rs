@@ -284,16 +284,9 @@ impl<'a> CasterGrid<'a> {
     /// 32 bits and `t` in the low 32, so that keys are distinct and sort by cell, then by
     /// triangle.
     pub fn order_key(&self, t: u32) -> u64 {
-        // The low 16 bits of `v`, each moved to an even bit.
-        let spread = |v: usize| {
-            let mut x = (v & 0xffff) as u64;
-            x = (x | (x << 8)) & 0x00ff_00ff;
-            x = (x | (x << 4)) & 0x0f0f_0f0f;
-            x = (x | (x << 2)) & 0x3333_3333;
-            (x | (x << 1)) & 0x5555_5555
-        };
         let [x, y] = self.cell_of(t);
-        ((spread(x) | (spread(y) << 1)) << 32) | u64::from(t)
+        // `as u32` keeps the low 32 bits, of which the code reads the low 16.
+        (u64::from(crate::morton::code(x as u32, y as u32)) << 32) | u64::from(t)
     }
 
     /// The casters that can shadow receiver triangle `tri`, sorted, without duplicates, into

@@ -439,7 +439,7 @@ impl<'a> Tracer<'a> {
         for i0 in (0..w).step_by(tile_w as usize) {
             // The tile's pixels in Z order, so that each lane group (and each run of groups)
             // covers a compact block of pixels.
-            for (x, y) in (0..side * side).map(z_order) {
+            for (x, y) in (0..side * side).map(crate::morton::point) {
                 let (i, j) = (i0 + x, rows.start + y);
                 if x >= tile_w || i >= w || j >= rows.end || !wanted(i, j) {
                     continue;
@@ -511,20 +511,6 @@ impl<'a> Tracer<'a> {
         }
         ids.clear();
     }
-}
-
-/// Point `code` of the Z-order (Morton) curve: `(x, y)` from the even and the odd bits,
-/// each gathered by four shifts and masks (one per packet ray, so not bit by bit).
-#[inline]
-fn z_order(code: u32) -> (u32, u32) {
-    let even = |v: u32| {
-        let v = v & 0x5555_5555;
-        let v = (v | (v >> 1)) & 0x3333_3333;
-        let v = (v | (v >> 2)) & 0x0f0f_0f0f;
-        let v = (v | (v >> 4)) & 0x00ff_00ff;
-        (v | (v >> 8)) & 0x0000_ffff
-    };
-    (even(code), even(code >> 1))
 }
 
 /// A thread's buffers for tracing packets, reused from packet to packet (at most [`PACKET`]
@@ -760,23 +746,5 @@ impl RayTrace {
             None
         };
         Ok(ReferenceImage { width: w, height: h, lit, evaluated, transmittance, classes: None })
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::z_order;
-
-    #[test]
-    fn z_order_takes_x_from_the_even_bits_and_y_from_the_odd_ones() {
-        for code in 0..1u32 << 16 {
-            let (x, y) = z_order(code);
-            let mut back = 0;
-            for b in 0..16 {
-                back |= ((x >> b) & 1) << (2 * b) | ((y >> b) & 1) << (2 * b + 1);
-            }
-            assert_eq!(back, code);
-            assert!(x < 256 && y < 256);
-        }
     }
 }

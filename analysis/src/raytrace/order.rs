@@ -43,6 +43,7 @@
 
 use super::packet::LANES as GROUP;
 use super::ray::TraceRay;
+use crate::morton;
 use glam::DVec3;
 
 /// A packet is sorted when its groups' box half-perimeters add up to more than this many
@@ -83,17 +84,12 @@ fn spread(rays: &[TraceRay]) -> bool {
     groups > SPREAD * half_perimeter(lo, hi)
 }
 
-/// `x` at least `lo` and at most `extent` above it as an integer of [`KEY_BITS`] bits, its
-/// bits spread to the even ones.
+/// `x`, at least `lo` and at most `extent` above it, as an integer of [`KEY_BITS`] bits.
 #[inline]
-fn spread_bits(x: f64, lo: f64, extent: f64) -> u32 {
+fn quantize(x: f64, lo: f64, extent: f64) -> u32 {
     let scale = f64::from((1u32 << KEY_BITS) - 1);
     let q = if extent > 0.0 { ((x - lo) / extent * scale) as u32 } else { 0 };
-    let v = q & ((1 << KEY_BITS) - 1);
-    let v = (v | (v << 8)) & 0x00ff_00ff;
-    let v = (v | (v << 4)) & 0x0f0f_0f0f;
-    let v = (v | (v << 2)) & 0x3333_3333;
-    (v | (v << 1)) & 0x5555_5555
+    q & ((1 << KEY_BITS) - 1)
 }
 
 impl Order {
@@ -132,7 +128,7 @@ impl Order {
         self.keys.clear();
         self.keys.extend(rays[..n].iter().enumerate().map(|(k, r)| {
             let (u, v) = across(r);
-            (spread_bits(u, lo.0, eu) | (spread_bits(v, lo.1, ev) << 1), k as u16)
+            (morton::code(quantize(u, lo.0, eu), quantize(v, lo.1, ev)), k as u16)
         }));
         self.keys.sort_unstable();
         let order = self.keys.iter().map(|&(_, k)| usize::from(k));
@@ -191,7 +187,7 @@ mod tests {
     /// A packet whose groups of four are 2 x 2 blocks of a 16 x 16 grid in Z order.
     fn tiled() -> Vec<DVec3> {
         (0..256u32)
-            .map(super::super::z_order)
+            .map(morton::point)
             .map(|(x, z)| DVec3::new(f64::from(x), 0.0, f64::from(z)) * 0.01)
             .collect()
     }
