@@ -357,6 +357,89 @@ impl<'a> CasterGrid<'a> {
     }
 }
 
+impl CasterGrid<'_> {
+    /// Whether receiver `r` faces away from the light (beyond the rounding of its normal)
+    /// and every other triangle of its object that may face the light lies nearer the light
+    /// than `r` on every light ray through both: wholly nearer in light-space depth, or with
+    /// `r` on the dark side of its plane ([`LitSide::behind`]). Triangles facing away from
+    /// the light are not asked; one whose facing the rounding cannot tell answers `false`.
+    /// On a closed object this puts `r` in the object's shadow ([`super::closed`]).
+    ///
+    /// The triangles asked are those whose light-space boxes meet `r`'s (with the margin of
+    /// [`Self::query`]) at any depth, less, under a directional light, those whose images
+    /// are apart from `r`'s (`images_separated`): what shares no light ray with `r` does not
+    /// matter. A triangle of the object that casts no shadow is not in the grid, so the
+    /// object must cast shadows (the caller's check).
+    pub fn behind_own_facing(&self, r: u32) -> bool {
+        let g = self.geometry;
+        let tri = g.corners(r as usize);
+        if LitSide::new(&tri, self.light).facing != Facing::Away {
+            return false;
+        }
+        let Some((b, z)) = self.space.bounds(&tri) else { return false };
+        let object = g.object[r as usize];
+        let own = b.iter().map(|v| v.abs()).fold(0.0, f64::max);
+        let tri_magnitude = tri.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
+        let light_magnitude = match *self.light {
+            Light::Directional { .. } => 0.0,
+            Light::Spot { position, .. } => position.abs().max_element(),
+        };
+        let image = (!self.images.is_empty()).then(|| self.space.image(&tri));
+        // Whether every triangle asked so far lies nearer the light; `ask` records it for
+        // triangle `c` and takes nothing into a scan's list.
+        let fine = std::cell::Cell::new(true);
+        let ask = |c: u32| -> bool {
+            if !fine.get() || c == r || g.object[c as usize] != object {
+                return false;
+            }
+            let cb = &self.boxes[c as usize];
+            let m = 8.0 * f64::EPSILON * own.max(self.magnitude[c as usize]);
+            let meets =
+                cb[0] <= b[2] + m && b[0] <= cb[2] + m && cb[1] <= b[3] + m && b[1] <= cb[3] + m;
+            if !meets {
+                return false;
+            }
+            if let Some(image) = &image {
+                let extent =
+                    (cb[2].max(b[2]) - cb[0].min(b[0])).max(cb[3].max(b[3]) - cb[1].min(b[1]));
+                if images_separated(image, &self.images[c as usize], m, extent) {
+                    return false;
+                }
+            }
+            let corners = g.corners(c as usize);
+            let side = LitSide::new(&corners, self.light);
+            let nearer = || {
+                // Depths are coordinates along the light (directional) or distances from it
+                // (spot) of points of magnitude up to that of the corners and the light, each
+                // within 16 roundings of that magnitude.
+                self.space.bounds(&corners).is_some_and(|(_, cz)| {
+                    let scale = tri_magnitude.max(side.magnitude) + light_magnitude;
+                    cz[1] < z[0] - 32.0 * f64::EPSILON * scale
+                })
+            };
+            let ok = match side.facing {
+                Facing::Away => true,
+                Facing::Unsure => false,
+                Facing::Toward => nearer() || side.behind(&tri, tri_magnitude),
+            };
+            fine.set(ok);
+            false
+        };
+        self.global.iter().for_each(|&c| {
+            ask(c);
+        });
+        if !self.within_reach(&b) && !self.outside.is_empty() {
+            let o = self.outer.get_or_init(|| Outer::new(&self.outside, &self.boxes));
+            o.wide.iter().for_each(|&c| {
+                ask(c);
+            });
+            o.grid.scan(&b, &ask, &mut Vec::new());
+        }
+        self.grid.scan(&b, &ask, &mut Vec::new());
+        fine.get()
+    }
+}
+
 /// The casters beyond a cell of a grid's region, on a grid of their own over their boxes'
 /// extent (about one cell per caster, boxes clamped as in the main grid); a caster spanning
 /// more than [`MAX_SPAN`] of its cells is in `wide`, which every query reaching there scans.
@@ -518,17 +601,54 @@ struct LitSide {
     /// `|e1| |e2| / |e1 × e2|` (at least 1): how much the rounding of the edges turns the
     /// normal of a sliver.
     skew: f64,
+    /// Which way the normal its corners' order gives the triangle points, beyond the
+    /// rounding of that normal.
+    facing: Facing,
+}
+
+/// Which way a triangle's normal (by its corners' order) points: to the light's side of its
+/// plane, away from it, or too close to the plane for its rounding to tell (a triangle seen
+/// edge-on by the light, or without a normal).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Facing {
+    Toward,
+    Away,
+    Unsure,
 }
 
 impl LitSide {
+    /// The lit side of triangle `c`'s plane.
+    ///
+    /// Its facing: the unit normal is within `8 ε skew` of the true one (the edges are
+    /// exact differences of the corners within `ε` of their length, their cross product
+    /// within `4 ε |e1| |e2|`), so its cosine with the unit direction to the light is
+    /// within `16 ε skew` of the true cosine (for a spot light, plus the rounding of the
+    /// direction from the corner to the light, `ε (|light| + |corner|) / |light - corner|`
+    /// relative); a cosine within twice that of 0 is [`Facing::Unsure`].
     fn new(c: &[DVec3; 3], light: &Light) -> Self {
         let (e1, e2) = (c[1] - c[0], c[2] - c[0]);
         let cross = e1.cross(e2);
         let length = cross.length();
         let mut n = cross / length;
-        let towards = match *light {
-            Light::Directional { direction } => -n.dot(direction),
-            Light::Spot { position, .. } => n.dot(position - c[0]),
+        let skew = e1.length() * e2.length() / length;
+        let (towards, tol) = match *light {
+            Light::Directional { direction } => {
+                (-n.dot(direction) / direction.length(), 32.0 * f64::EPSILON * skew)
+            }
+            Light::Spot { position, .. } => {
+                let to = position - c[0];
+                let far = to.length();
+                let reach = (position.abs().max_element() + c[0].abs().max_element()) / far;
+                (n.dot(to) / far, 32.0 * f64::EPSILON * (skew + reach))
+            }
+        };
+        // NaN (no normal, an infinite skew) is unsure.
+        let facing = if towards > tol {
+            Facing::Toward
+        } else if towards < -tol {
+            Facing::Away
+        } else {
+            Facing::Unsure
         };
         n = if towards > 0.0 {
             n
@@ -537,9 +657,14 @@ impl LitSide {
         } else {
             DVec3::NAN
         };
-        let skew = e1.length() * e2.length() / length;
         let magnitude = c.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
-        Self { n, corner: c[0], magnitude, skew }
+        Self { n, corner: c[0], magnitude, skew, facing }
+    }
+
+    /// The rounding bound of a height `n·(p - corner)` for points of magnitude up to
+    /// `magnitude` (see [`Self::holds`]).
+    fn tolerance(&self, magnitude: f64) -> f64 {
+        64.0 * f64::EPSILON * self.magnitude.max(magnitude) * self.skew
     }
 
     /// Whether every corner of `tri` (of largest coordinate magnitude `magnitude`) lies on
@@ -550,9 +675,19 @@ impl LitSide {
     /// `n·(p - corner)` is within `64 ε M skew` of the true one (`M` the larger magnitude of
     /// both triangles' coordinates, which bounds `|p - corner|` by `2 √3 M`).
     fn holds(&self, tri: &[DVec3], magnitude: f64) -> bool {
-        let tol = 64.0 * f64::EPSILON * self.magnitude.max(magnitude) * self.skew;
+        let tol = self.tolerance(magnitude);
         // NaN (no lit side, or an infinite skew) never holds.
         tri.iter().all(|&p| self.n.dot(p - self.corner) >= -tol)
+    }
+
+    /// Whether every corner of `tri` (of largest coordinate magnitude `magnitude`) lies on
+    /// the dark side of the plane or within the rounding of it ([`Self::holds`]'s bound), so
+    /// that the segment from any point of `tri` to the light meets the plane, if at all,
+    /// nearer the light than that point.
+    fn behind(&self, tri: &[DVec3], magnitude: f64) -> bool {
+        let tol = self.tolerance(magnitude);
+        // NaN never holds.
+        tri.iter().all(|&p| self.n.dot(p - self.corner) <= tol)
     }
 }
 
@@ -749,6 +884,7 @@ fn images_separated(a: &[[f64; 2]; 3], b: &[[f64; 2]; 3], m: f64, extent: f64) -
 mod tests {
     use super::*;
     use crate::exact::clip::{self, Poly};
+    use instrumentation::Recorder;
 
     /// The cells' lists filled by bands in parallel equal those of one pass over the casters:
     /// every cell lists its casters in their order, across bands of cell rows, with casters
@@ -915,7 +1051,6 @@ mod tests {
     /// [`Candidates`].
     #[test]
     fn a_query_does_not_depend_on_the_queries_before_it() {
-        use instrumentation::Recorder;
         let scene = scenes::load("bumpy").expect("built-in");
         let frame = Frame::new(&scene, 80, 60, &mut Recorder::default());
         let receivers: Vec<u32> = (0..frame.geometry.len() as u32).step_by(97).collect();
@@ -940,7 +1075,6 @@ mod tests {
     /// whole scene returns: the boxes of both are clamped to the cells.
     #[test]
     fn queries_outside_the_region_find_what_a_covering_grid_finds() {
-        use instrumentation::Recorder;
         for name in ["bumpy", "spot-spheres"] {
             let scene = scenes::load(name).expect("built-in");
             let frame = Frame::new(&scene, 80, 60, &mut Recorder::default());
@@ -963,6 +1097,213 @@ mod tests {
             }
             assert!(found > 100, "{name}: {found} casters found");
         }
+    }
+
+    /// A scene of the one object `mesh` under `light`, seen from above.
+    fn one_object(mesh: scenes::Mesh, light: Light) -> scenes::Scene {
+        let object = scenes::Object {
+            name: "object".into(),
+            mesh,
+            material: scenes::Material::default(),
+            casts_shadows: true,
+        };
+        scenes::Scene {
+            name: "test".into(),
+            width: 16,
+            height: 12,
+            camera: scenes::Camera::Orthographic {
+                eye: DVec3::new(0.0, 10.0, 0.0),
+                target: DVec3::ZERO,
+                up: DVec3::NEG_Z,
+                height: 8.0,
+            },
+            light,
+            objects: vec![object],
+            switches: scenes::scene::EffectSwitches::default(),
+            animation: scenes::Animation::still(),
+        }
+    }
+
+    /// Appends the box from `lo` to `hi`, its triangles' normals outward.
+    fn cuboid(lo: DVec3, hi: DVec3, positions: &mut Vec<DVec3>, triangles: &mut Vec<[u32; 3]>) {
+        // Corner k: x from bit 0, y from bit 1, z from bit 2; faces wound outward.
+        const FACES: [[u32; 4]; 6] =
+            [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
+        let base = positions.len() as u32;
+        positions.extend((0..8).map(|k| {
+            let pick = |bit: u32, l: f64, h: f64| if k >> bit & 1 == 1 { h } else { l };
+            DVec3::new(pick(0, lo.x, hi.x), pick(1, lo.y, hi.y), pick(2, lo.z, hi.z))
+        }));
+        for f in FACES {
+            let f = f.map(|v| v + base);
+            triangles.extend([[f[0], f[1], f[2]], [f[0], f[2], f[3]]]);
+        }
+    }
+
+    /// Whether the segment from `p` to the light of `frame` meets a triangle of its geometry
+    /// other than `own` (Möller and Trumbore's test, in `f64`, away from its ends).
+    fn blocked(frame: &Frame<'_>, own: usize, p: DVec3) -> bool {
+        let (dir, reach) = match frame.scene.light {
+            Light::Directional { direction } => (-direction.normalize(), f64::INFINITY),
+            Light::Spot { position, .. } => ((position - p).normalize(), (position - p).length()),
+        };
+        let g = &frame.geometry;
+        (0..g.len()).filter(|&t| t != own).any(|t| {
+            let [a, b, c] = g.corners(t);
+            let (e1, e2) = (b - a, c - a);
+            let q = dir.cross(e2);
+            let det = e1.dot(q);
+            if det.abs() < 1e-14 {
+                return false;
+            }
+            let s = p - a;
+            let u = s.dot(q) / det;
+            let r = s.cross(e1);
+            let v = dir.dot(r) / det;
+            let d = e2.dot(r) / det;
+            u >= 0.0 && v >= 0.0 && u + v <= 1.0 && d > 1e-9 && d < reach - 1e-9
+        })
+    }
+
+    /// Asks [`CasterGrid::behind_own_facing`] of every triangle of `frame` (one object);
+    /// checks that no triangle facing the light or edge-on passes, and that points of every
+    /// one that passes (its centre and points near its corners) are in shadow; returns how
+    /// many faced away and how many of those passed.
+    fn check_behind(frame: &Frame<'_>) -> (usize, usize) {
+        let g = &frame.geometry;
+        let all: Vec<u32> = (0..g.len() as u32).collect();
+        let grid = CasterGrid::new(frame, &all);
+        let (mut away, mut passed) = (0, 0);
+        for t in 0..g.len() {
+            let corners = g.corners(t);
+            let facing = LitSide::new(&corners, &frame.scene.light).facing;
+            let behind = grid.behind_own_facing(t as u32);
+            away += usize::from(facing == Facing::Away);
+            if !behind {
+                continue;
+            }
+            assert_eq!(facing, Facing::Away, "triangle {t}");
+            passed += 1;
+            for w in [[1.0, 1.0, 1.0], [8.0, 1.0, 1.0], [1.0, 8.0, 1.0], [1.0, 1.0, 8.0]] {
+                let p = (corners[0] * w[0] + corners[1] * w[1] + corners[2] * w[2])
+                    / (w[0] + w[1] + w[2]);
+                assert!(blocked(frame, t, p), "triangle {t} at {p}");
+            }
+        }
+        (away, passed)
+    }
+
+    /// A box under an oblique light lies behind its own faces toward the light wherever it
+    /// faces away; in an object of two boxes, one over the other, the upper one's bottom does
+    /// not (the lower one's top faces the light farther from it), the lower one's does.
+    #[test]
+    fn the_far_side_of_a_closed_object_is_behind_its_near_side() {
+        let direction = DVec3::new(0.3, -1.0, 0.2);
+        let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+        cuboid(DVec3::splat(-1.0), DVec3::ONE, &mut positions, &mut triangles);
+        let mesh = scenes::Mesh::new(positions, triangles).expect("valid");
+        let scene = one_object(mesh, Light::Directional { direction });
+        let frame = Frame::new(&scene, 16, 12, &mut Recorder::default());
+        assert_eq!(check_behind(&frame), (6, 6), "every face away from the light");
+
+        let direction = DVec3::new(0.02, -1.0, 0.01);
+        let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+        cuboid(
+            DVec3::new(-1.0, 0.0, -1.0),
+            DVec3::new(1.0, 1.0, 1.0),
+            &mut positions,
+            &mut triangles,
+        );
+        cuboid(
+            DVec3::new(-1.0, 2.0, -1.0),
+            DVec3::new(1.0, 3.0, 1.0),
+            &mut positions,
+            &mut triangles,
+        );
+        let mesh = scenes::Mesh::new(positions, triangles).expect("valid");
+        let scene = one_object(mesh, Light::Directional { direction });
+        let frame = Frame::new(&scene, 16, 12, &mut Recorder::default());
+        let all: Vec<u32> = (0..frame.geometry.len() as u32).collect();
+        let grid = CasterGrid::new(&frame, &all);
+        // Each box's bottom (y = lo, its third face) is its triangles 4 and 5.
+        let bottom = |b: u32| [4, 5].map(|f| grid.behind_own_facing(12 * b + f));
+        assert_eq!(bottom(0), [true, true], "the lower box's bottom");
+        assert_eq!(bottom(1), [false, false], "the upper box's bottom, over the lower box");
+        check_behind(&frame);
+    }
+
+    /// Appends a star-shaped closed mesh around `centre`: a sphere's rings with a radius from
+    /// `radius` at every corner, its triangles' normals outward, or inward when `inverted`.
+    fn star(
+        centre: DVec3,
+        inverted: bool,
+        mut radius: impl FnMut() -> f64,
+        positions: &mut Vec<DVec3>,
+        triangles: &mut Vec<[u32; 3]>,
+    ) {
+        let (rings, segments) = (7u32, 9u32);
+        let base = positions.len() as u32;
+        positions.push(centre + DVec3::Y * radius());
+        for i in 1..rings {
+            let theta = std::f64::consts::PI * f64::from(i) / f64::from(rings);
+            for j in 0..segments {
+                let phi = std::f64::consts::TAU * f64::from(j) / f64::from(segments);
+                let d = DVec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin());
+                positions.push(centre + d * radius());
+            }
+        }
+        positions.push(centre + DVec3::NEG_Y * radius());
+        let ring = |i: u32, j: u32| base + 1 + (i - 1) * segments + j % segments;
+        let south = positions.len() as u32 - 1;
+        let mut push = |t: [u32; 3]| triangles.push(if inverted { [t[0], t[2], t[1]] } else { t });
+        for j in 0..segments {
+            push([base, ring(1, j + 1), ring(1, j)]);
+            push([south, ring(rings - 1, j), ring(rings - 1, j + 1)]);
+            for i in 1..rings - 1 {
+                let (a, b) = (ring(i, j), ring(i, j + 1));
+                let (c, d) = (ring(i + 1, j), ring(i + 1, j + 1));
+                push([a, b, d]);
+                push([a, d, c]);
+            }
+        }
+    }
+
+    /// On random objects of two star-shaped closed meshes, one of them turned inside out (its
+    /// side facing away from the light by its corners' order is the one the light sees), one
+    /// over the other with a random shift, under directional and spot lights: every triangle
+    /// the check passes is in shadow at every point tried, and the check passes more than a
+    /// fifth of those facing away (626 of 2,637).
+    #[test]
+    fn triangles_behind_their_own_object_are_in_its_shadow() {
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut random = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut away, mut passed) = (0, 0);
+        for case in 0..24 {
+            let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+            let shift = DVec3::new(2.0 * random() - 1.0, 3.0, 2.0 * random() - 1.0);
+            let inverted_above = case % 4 < 2;
+            let mut radii: Vec<f64> = (0..200).map(|_| 0.6 + 0.8 * random()).collect();
+            let mut radius = || radii.pop().unwrap_or(1.0);
+            star(DVec3::ZERO, !inverted_above, &mut radius, &mut positions, &mut triangles);
+            star(shift, inverted_above, &mut radius, &mut positions, &mut triangles);
+            let to = DVec3::new(random() - 0.5, -1.0, random() - 0.5);
+            let light = if case % 2 == 0 {
+                Light::Directional { direction: to }
+            } else {
+                Light::Spot { position: -8.0 * to, target: DVec3::ZERO, fov_deg: 60.0 }
+            };
+            let mesh = scenes::Mesh::new(positions, triangles).expect("valid");
+            let scene = one_object(mesh, light);
+            let frame = Frame::new(&scene, 16, 12, &mut Recorder::default());
+            let (a, p) = check_behind(&frame);
+            (away, passed) = (away + a, passed + p);
+        }
+        assert!(5 * passed > away, "{passed} of {away} facing away passed");
     }
 
     /// A caster whose image is apart from the receiver's, and one the receiver lies on the lit

@@ -29,7 +29,9 @@
 //!    ([`casters`]; any triangle, its own mesh included: self-shadowing) are projected onto
 //!    its plane by the same machinery, and the area their union covers within the receiver's
 //!    screen polygon is computed in each pixel it tiles, by the same cuts; each pixel adds the
-//!    areas of the triangles that tile it. Stages `caster grid`, `surface shadows`.
+//!    areas of the triangles that tile it. A triangle facing away from the light on a closed
+//!    object that its object's shadow provably covers asks for no caster ([`closed`]).
+//!    Stages `caster grid`, `surface shadows`.
 //! 4. **Edge pixels**: `raytrace` on the `edge` pixels only, when [`ExactCoverage::edge`] is
 //!    set ([`edges`]). When their sub-samples are few beside the triangles, each ray is tested
 //!    against the triangles overlapping its pixel, where every camera ray's hit lies, and the
@@ -229,7 +231,8 @@ impl Reference for ExactCoverage {
 /// (`sum x_k y_(k+1) - x_(k+1) y_k > 0`). Their union is the receiver's shadow.
 pub fn shadow_polygons(frame: &Frame<'_>) -> Result<ScreenPolygons, ReferenceError> {
     let (receiver, setup) = Setup::main_receiver(frame)?;
-    Ok(closed::shadow_polygons(frame, &setup, receiver))
+    let mut closed = closed::ClosedCasters::new(frame);
+    Ok(closed::shadow_polygons(frame, &setup, receiver, &mut closed))
 }
 
 /// Distance from 0 or 1 within which a lit fraction is taken as exactly 0 or 1.
@@ -267,6 +270,8 @@ fn evaluate(
     let mut shadowed = vec![0.0f64; w * h];
     let mut evaluated = vec![false; w * h];
     let mut grazing_pixels = 0u64;
+    // Which objects are closed casters, each decided in the first stage that asks.
+    let mut closed = closed::ClosedCasters::new(frame);
 
     // Planar objects: the object each `planar` pixel sees (that of its tiles), found once,
     // their planes and their shadow polygons.
@@ -301,7 +306,7 @@ fn evaluate(
             }
             let polys: Vec<ScreenPolygons> = planes
                 .iter()
-                .map(|(o, s)| closed::shadow_polygons(frame, s, *o as usize))
+                .map(|(o, s)| closed::shadow_polygons(frame, s, *o as usize, &mut closed))
                 .collect();
             (planar_object, planes, polys, grazing)
         })
@@ -412,7 +417,7 @@ fn evaluate(
             |r: u32, k: usize| class[k] == PixelClass::Surface && classes.tiles_of(k).contains(&r);
         let s = rec.stages.time("surface shadows", || {
             let polygon = |r: u32| classes.screen_polygon(r);
-            let s = surface::shadows(frame, grid, &receivers, polygon, wanted);
+            let s = surface::shadows(frame, grid, &mut closed, &receivers, polygon, wanted);
             for &(k, a) in &s.areas {
                 shadowed[k as usize] += a;
             }
@@ -432,9 +437,11 @@ fn evaluate(
         rec.counters.covered_pixels += s.work.covered_pixels;
         rec.counters.pixel_polygon_pairs += s.work.pixel_polygon_pairs;
         rec.notes.push(format!(
-            "exact: {} receiver triangles, {} receiver-caster pairs, {} shadow polygons; {} \
-             pixel parts inside one, {} pixel-polygon overlaps cut",
+            "exact: {} receiver triangles, {} of them behind their own closed object; {} \
+             receiver-caster pairs, {} shadow polygons; {} pixel parts inside one, {} \
+             pixel-polygon overlaps cut",
             receivers.len(),
+            s.behind,
             s.pairs,
             s.polygons,
             s.work.covered_pixels,
@@ -534,7 +541,8 @@ mod tests {
             let scene = scenes::load(name).expect("built-in");
             let frame = Frame::new(&scene, 200, 150, &mut Recorder::default());
             let (receiver, setup) = Setup::main_receiver(&frame).expect("planar receiver");
-            let polys = closed::shadow_polygons(&frame, &setup, receiver);
+            let mut closed = closed::ClosedCasters::new(&frame);
+            let polys = closed::shadow_polygons(&frame, &setup, receiver, &mut closed);
             let (whole, _) = coverage::union_area(&polys, 200, 150, |_| true);
             let img = evaluate(&frame, None, &mut Recorder::default()).expect("applies");
             let classes = img.classes.as_deref().expect("classes");
