@@ -20,9 +20,12 @@
 //!    on screen is the other, never joins `C`).
 //! 4. `C` tiles `Q` without gap or overlap: the areas of `P_t ∩ Q` over `C` sum to at least
 //!    [`MIN_TILE_COVERAGE`], and no two triangles of `C` overlap inside `Q` by more than
-//!    [`MAX_TILE_OVERLAP`] (two triangles sharing an edge with one winding lie on its two
-//!    sides and are not tested; the others by a separating-axis test, then by their clipped
-//!    intersection's area). Otherwise: **`edge`**.
+//!    [`MAX_TILE_OVERLAP`] (two triangles with one winding sharing an edge that their
+//!    corners' orders run in opposite directions, as a consistently wound mesh has it, lie
+//!    on its two sides and are not tested; the others by a separating-axis test, then by
+//!    their clipped intersection's area: among them a fold of a mesh wound inconsistently,
+//!    whose two triangles lie on one side of the edge, the hidden one under the other, and a
+//!    triangle repeated). Otherwise: **`edge`**.
 //! 5. Nothing of `F \ C` is in front of `C`: for every `u` in `F \ C` and `t` in `C` whose
 //!    polygons overlap inside `Q` (by more than [`MIN_OVERLAP`]), `u`'s plane is not nearer
 //!    to the camera than `t`'s at any corner of that overlap. The inverse depth of a plane
@@ -377,11 +380,12 @@ impl Context<'_> {
         // Rule 3: the continuous surface through the seed, found by a flood from it. A
         // triangle of the square may join when it has the seed's object and winding. Each
         // pair of a member and such a triangle is tested once, when the first of the two
-        // leaves the stack; `open` holds those not yet off the stack, and a shared edge is
-        // kept in `adjacent` (a row of `words` bits per triangle) for rule 4's pairs. The
-        // triangles' sets are bits (`words` per set), visited in increasing order as a loop
-        // over the triangles with a `bool` each visited them: the stage took 12 % less time on
-        // `bunny-plane` and 11 % on `cage` (800 x 600, one pinned thread, 6 alternating runs).
+        // leaves the stack; `open` holds those not yet off the stack, and a shared edge the
+        // two run in opposite directions is kept in `adjacent` (a row of `words` bits per
+        // triangle) for rule 4's pairs. The triangles' sets are bits (`words` per set),
+        // visited in increasing order as a loop over the triangles with a `bool` each visited
+        // them: the stage took 12 % less time on `bunny-plane` and 11 % on `cage` (800 x 600,
+        // one pinned thread, 6 alternating runs).
         let words = n.div_ceil(64);
         let (word, bit) = (|f: usize| f / 64, |f: usize| 1u64 << (f % 64));
         open.clear();
@@ -405,9 +409,13 @@ impl Context<'_> {
                 while candidates != 0 {
                     let f = 64 * w + candidates.trailing_zeros() as usize;
                     candidates &= candidates - 1;
-                    if shares_edge(corners(m), corners(f)) {
-                        adjacent[m * words + word(f)] |= bit(f);
-                        adjacent[f * words + word(m)] |= bit(m);
+                    let edge = shared_edge(corners(m), corners(f));
+                    if edge != SharedEdge::None {
+                        // Only a reversed edge puts the two on its two sides (rule 4).
+                        if edge == SharedEdge::Reversed {
+                            adjacent[m * words + word(f)] |= bit(f);
+                            adjacent[f * words + word(m)] |= bit(m);
+                        }
                         if in_c[w] & bit(f) == 0 {
                             in_c[w] |= bit(f);
                             stack.push(f);
@@ -522,8 +530,27 @@ fn behind_on_square(u: (DVec3, DVec3), t: (DVec3, DVec3), rays: &[Ray; 4]) -> bo
     })
 }
 
-/// Whether two triangles share an edge: two corners at equal positions.
+/// How two triangles meet: along an edge (two corners at equal positions) that their corners'
+/// orders run in opposite directions, as in a consistently wound mesh, or in the same one
+/// (also a triangle repeated), or not along an edge.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum SharedEdge {
+    Reversed,
+    Same,
+    None,
+}
+
+/// How triangles `a` and `b` meet ([`SharedEdge`]).
 #[inline]
-fn shares_edge(a: &[DVec3; 3], b: &[DVec3; 3]) -> bool {
-    a.iter().filter(|p| b.contains(p)).count() >= 2
+fn shared_edge(a: &[DVec3; 3], b: &[DVec3; 3]) -> SharedEdge {
+    let at = |p: &DVec3| b.iter().position(|q| q == p);
+    let found = [at(&a[0]), at(&a[1]), at(&a[2])];
+    for k in 0..3 {
+        if let (Some(i), Some(j)) = (found[k], found[(k + 1) % 3]) {
+            // `a` runs from `b[i]` to `b[j]`; `b` runs back from `b[j]` to `b[i]` when `i`
+            // follows `j`.
+            return if i == (j + 1) % 3 { SharedEdge::Reversed } else { SharedEdge::Same };
+        }
+    }
+    SharedEdge::None
 }

@@ -882,3 +882,32 @@ fn a_pixel_of_more_triangles_than_a_word_is_tiled_by_all_of_them() {
         assert!(img.evaluated[k] && img.lit[k] == 1.0, "{wedges} wedges: {}", img.lit[k]);
     }
 }
+
+/// A fold of a mesh wound inconsistently: triangle `B` shares an edge of `A` in the same
+/// direction (not reversed, as in a consistently wound mesh) and folds back under it, so that
+/// on screen both have one winding and `B` lies on `A`'s side of the shared edge, hidden
+/// behind it. `B` tiles no pixel, and `A`'s pixels, open to the light, are lit: were `B`
+/// taken as a tile, its area in `A`'s shadow would darken them.
+#[test]
+fn a_fold_of_an_inconsistently_wound_mesh_hides_the_folded_triangle() {
+    let (a, b, c) =
+        (DVec3::new(-2.0, 1.0, -2.0), DVec3::new(-2.0, 1.0, 2.0), DVec3::new(2.0, 1.0, -2.0));
+    let d = DVec3::new(-1.0, 0.5, 0.0);
+    let mesh = Mesh { positions: vec![a, b, c, d], triangles: vec![[0, 1, 2], [0, 1, 3]] };
+    let scene = scene_with_mesh(ortho_camera(false), DOWN, mesh);
+    let (frame, img, _) = exact(&scene, 64, 48);
+    let g = &frame.geometry;
+    let caster = (0..g.len()).filter(|&t| g.object[t] == 1).collect::<Vec<_>>();
+    let (top, folded) = (caster[0] as u32, caster[1] as u32);
+    let classes = analysis::exact::classify(&frame);
+    let mut lit = 0;
+    for k in 0..img.lit.len() {
+        let tiles = classes.tiles_of(k);
+        assert!(!tiles.contains(&folded), "pixel {k} takes the hidden triangle");
+        if img.evaluated[k] && tiles.contains(&top) {
+            assert!(img.lit[k] >= 1.0 - 1e-9, "pixel {k}: {}", img.lit[k]);
+            lit += 1;
+        }
+    }
+    assert!(lit > 100, "{lit} pixels of the top triangle");
+}
