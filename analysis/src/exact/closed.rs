@@ -258,6 +258,24 @@ mod tests {
         }
     }
 
+    /// Each object is answered for only when asked, and answered the same however it is
+    /// asked: on `spheres`, the ground is open and the spheres closed.
+    #[test]
+    fn closed_casters_answer_what_is_asked() {
+        let scene = scenes::load("spheres").expect("built-in");
+        let frame = Frame::new(&scene, 40, 30, &mut Recorder::default());
+        let objects = scene.objects.len();
+        let ground = (0..objects).find(|&o| scene.objects[o].mesh.plane().is_some());
+        let ground = ground.expect("a ground plane");
+        let mut closed = ClosedCasters::new(&frame);
+        let spheres = closed.ask(&frame, |o| o != ground);
+        assert!(!spheres[ground] && spheres.iter().filter(|&&c| c).count() == objects - 1);
+        assert_eq!(closed.ask(&frame, |o| o == ground), vec![false; objects]);
+        let all = closed.ask(&frame, |_| true);
+        assert_eq!(all, spheres);
+        assert_eq!(all, ClosedCasters::new(&frame).ask(&frame, |_| true), "as when asked at once");
+    }
+
     /// A box on the light's side of the plane qualifies, one reaching through the plane does
     /// not (its closedness is [`methods::closed`]'s business).
     #[test]
