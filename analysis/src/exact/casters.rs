@@ -312,27 +312,8 @@ impl<'a> CasterGrid<'a> {
             far = far.min(pz[1]);
         }
         let own = b.iter().map(|v| v.abs()).fold(0.0, f64::max);
-        // The boxes must overlap; both are within a few roundings of the true boxes, so they
-        // are compared with a margin of that size.
-        let margin = |c: u32| 8.0 * f64::EPSILON * own.max(self.magnitude[c as usize]);
-        let reach = |c: u32| {
-            let cb = &self.boxes[c as usize];
-            let m = margin(c);
-            self.near[c as usize] <= far
-                && cb[0] <= b[2] + m
-                && b[0] <= cb[2] + m
-                && cb[1] <= b[3] + m
-                && b[1] <= cb[3] + m
-        };
-        out.extend(self.global.iter().copied().filter(|&c| reach(c)));
-        // A box within a cell of the region reaches no caster of `outer` (see
-        // `near_region`).
-        if !self.within_reach(&b) && !self.outside.is_empty() {
-            let o = self.outer.get_or_init(|| Outer::new(&self.outside, &self.boxes));
-            out.extend(o.wide.iter().copied().filter(|&c| reach(c)));
-            o.grid.scan(&b, &reach, out);
-        }
-        self.grid.scan(&b, &reach, out);
+        let reach = |c: u32| self.near[c as usize] <= far && self.boxes_meet(c, &b, own);
+        self.scan(&b, &reach, out);
         // Then, once per caster: the receiver must reach beyond the caster's lit side, and under
         // a directional light the images must overlap (see `images_separated`).
         let image = (!self.images.is_empty()).then(|| self.space.image(tri));
@@ -345,15 +326,53 @@ impl<'a> CasterGrid<'a> {
         // The image test first: it rules out most candidates (the receiver's neighbours in
         // its mesh) before their planes are made.
         out.retain(|&c| {
-            !image.is_some_and(|r| {
-                let cb = &self.boxes[c as usize];
-                let extent =
-                    (cb[2].max(b[2]) - cb[0].min(b[0])).max(cb[3].max(b[3]) - cb[1].min(b[1]));
-                images_separated(&r, &self.images[c as usize], margin(c), extent)
-            }) && !LitSide::new(&self.geometry.corners(c as usize), self.light)
-                .holds(lit_points, lit_magnitude)
+            !image.is_some_and(|r| self.images_apart(c, &b, own, &r))
+                && !LitSide::new(&self.geometry.corners(c as usize), self.light)
+                    .holds(lit_points, lit_magnitude)
         });
         out.sort_unstable();
+    }
+
+    /// Appends to `out` every caster `c` whose listing the light-space box `b` reaches with
+    /// `keep(c)`, each once: those every query scans, those beyond the region when `b` reaches
+    /// there, then those of the cells `b` covers ([`Cells::scan`]).
+    #[inline]
+    fn scan(&self, b: &[f64; 4], keep: &impl Fn(u32) -> bool, out: &mut Vec<u32>) {
+        out.extend(self.global.iter().copied().filter(|&c| keep(c)));
+        // A box within a cell of the region reaches no caster of `outer` (see
+        // `near_region`).
+        if !self.within_reach(b) && !self.outside.is_empty() {
+            let o = self.outer.get_or_init(|| Outer::new(&self.outside, &self.boxes));
+            out.extend(o.wide.iter().copied().filter(|&c| keep(c)));
+            o.grid.scan(b, keep, out);
+        }
+        self.grid.scan(b, keep, out);
+    }
+
+    /// The margin to which caster `c`'s box and a query box `b` of coordinate magnitude
+    /// `own` are compared: both are within a few roundings of the true boxes.
+    #[inline]
+    fn margin(&self, c: u32, own: f64) -> f64 {
+        8.0 * f64::EPSILON * own.max(self.magnitude[c as usize])
+    }
+
+    /// Whether caster `c`'s light-space box meets the box `b` (of coordinate magnitude
+    /// `own`), within [`Self::margin`].
+    #[inline]
+    fn boxes_meet(&self, c: u32, b: &[f64; 4], own: f64) -> bool {
+        let cb = &self.boxes[c as usize];
+        let m = self.margin(c, own);
+        cb[0] <= b[2] + m && b[0] <= cb[2] + m && cb[1] <= b[3] + m && b[1] <= cb[3] + m
+    }
+
+    /// Under a directional light: whether caster `c`'s image is apart from `image`, whose
+    /// box is `b` (of coordinate magnitude `own`), beyond the rounding of both
+    /// ([`images_separated`]).
+    #[inline]
+    fn images_apart(&self, c: u32, b: &[f64; 4], own: f64, image: &[[f64; 2]; 3]) -> bool {
+        let cb = &self.boxes[c as usize];
+        let extent = (cb[2].max(b[2]) - cb[0].min(b[0])).max(cb[3].max(b[3]) - cb[1].min(b[1]));
+        images_separated(image, &self.images[c as usize], self.margin(c, own), extent)
     }
 }
 
@@ -392,19 +411,10 @@ impl CasterGrid<'_> {
             if !fine.get() || c == r || g.object[c as usize] != object {
                 return false;
             }
-            let cb = &self.boxes[c as usize];
-            let m = 8.0 * f64::EPSILON * own.max(self.magnitude[c as usize]);
-            let meets =
-                cb[0] <= b[2] + m && b[0] <= cb[2] + m && cb[1] <= b[3] + m && b[1] <= cb[3] + m;
-            if !meets {
+            if !self.boxes_meet(c, &b, own)
+                || image.as_ref().is_some_and(|image| self.images_apart(c, &b, own, image))
+            {
                 return false;
-            }
-            if let Some(image) = &image {
-                let extent =
-                    (cb[2].max(b[2]) - cb[0].min(b[0])).max(cb[3].max(b[3]) - cb[1].min(b[1]));
-                if images_separated(image, &self.images[c as usize], m, extent) {
-                    return false;
-                }
             }
             let corners = g.corners(c as usize);
             let side = LitSide::new(&corners, self.light);
@@ -425,17 +435,7 @@ impl CasterGrid<'_> {
             fine.set(ok);
             false
         };
-        self.global.iter().for_each(|&c| {
-            ask(c);
-        });
-        if !self.within_reach(&b) && !self.outside.is_empty() {
-            let o = self.outer.get_or_init(|| Outer::new(&self.outside, &self.boxes));
-            o.wide.iter().for_each(|&c| {
-                ask(c);
-            });
-            o.grid.scan(&b, &ask, &mut Vec::new());
-        }
-        self.grid.scan(&b, &ask, &mut Vec::new());
+        self.scan(&b, &ask, &mut Vec::new());
         fine.get()
     }
 }

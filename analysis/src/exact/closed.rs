@@ -192,32 +192,13 @@ pub(crate) fn self_shadowing(
     match frame.scene.light {
         Light::Directional { .. } => closed,
         Light::Spot { position, .. } => {
-            let empty = [[f64::INFINITY; 3], [f64::NEG_INFINITY; 3]];
-            let boxes = per_object(
-                g.len(),
-                objects,
-                empty,
-                |acc, t| {
-                    let o = g.object[t] as usize;
-                    if closed[o] {
-                        for p in g.corners(t) {
-                            let b = &mut acc[o];
-                            b[0] = [0, 1, 2].map(|k| b[0][k].min(p[k]));
-                            b[1] = [0, 1, 2].map(|k| b[1][k].max(p[k]));
-                        }
-                    }
-                },
-                |a, b| {
-                    [
-                        [0, 1, 2].map(|k| a[0][k].min(b[0][k])),
-                        [0, 1, 2].map(|k| a[1][k].max(b[1][k])),
-                    ]
-                },
-            );
-            let holds = |b: &[[f64; 3]; 2]| {
-                (0..3).all(|k| b[0][k] <= position[k] && position[k] <= b[1][k])
+            // The box of the object's vertices, used or not, holds that of its triangles.
+            let holds = |o: usize| {
+                frame.scene.objects[o].mesh.bounds().is_some_and(|(lo, hi)| {
+                    (0..3).all(|k| lo[k] <= position[k] && position[k] <= hi[k])
+                })
             };
-            closed.iter().zip(&boxes).map(|(&c, b)| c && !holds(b)).collect()
+            closed.iter().enumerate().map(|(o, &c)| c && !holds(o)).collect()
         }
     }
 }
