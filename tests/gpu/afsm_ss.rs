@@ -117,7 +117,8 @@ fn gpu_parity_afsm_ss_transformation_per_sub_sample() {
             })
             .collect();
         let light = methods::afsm::light_projector(&frame);
-        let cpu = transform_samples(&frame.camera, &light, &surfaces, &pattern, frame.width());
+        let cpu =
+            transform_samples(&frame.camera, &light, &surfaces, &pattern, frame.width()).samples;
         let gpu_frame = GpuFrame::upload(ctx, &frame, &frame.gbuffer);
         let izb = Izb::new(ctx, &gpu_frame, &frame);
         let mut gpu = Vec::new();

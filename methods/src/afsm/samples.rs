@@ -21,7 +21,7 @@
 
 use super::shadow_offset;
 use crate::{pattern::SamplePattern, raster::NO_TRIANGLE};
-use glam::DVec2;
+use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 use scenes::{
     projection::{GridRays, ProjectionKind},
@@ -87,30 +87,53 @@ impl<'a> SampleAt<'a> {
         Self { camera, light, pattern, rays }
     }
 
-    /// The sample of sub-sample `s` of pixel `pixel` (at `(x, y)`) on `surface`: its surface
-    /// point `camera.ray(point).at(depth)`, moved to the light's image with its threshold
-    /// depth; `None` for a background sub-sample and a point the light cannot project. The
-    /// ray is made from the point's column and row parts ([`GridRays`]), the numbers of
-    /// `camera.ray(point)` (`pattern.point` adds the offset to the pixel's corner).
+    /// The surface point of sub-sample `s` of pixel `pixel` (at `(x, y)`) on `surface`,
+    /// `camera.ray(point).at(depth)`, with the camera ray's origin; `None` for a background
+    /// sub-sample. The ray is made from the point's column and row parts ([`GridRays`]), the
+    /// numbers of `camera.ray(point)` (`pattern.point` adds the offset to the pixel's corner).
     #[inline]
-    fn sample(
+    fn surface_point(
         &self,
         surface: &Surface<'_>,
         pixel: usize,
         (x, y): (u32, u32),
         s: usize,
-    ) -> Option<Sample> {
-        let tri = surface.triangle[pixel];
-        if tri == NO_TRIANGLE {
+    ) -> Option<(DVec3, DVec3)> {
+        if surface.triangle[pixel] == NO_TRIANGLE {
             return None;
         }
         let ray = self.rays.ray(self.camera, x as usize, y as usize, s);
-        let position = ray.at(surface.depth[pixel]);
+        Some((ray.origin, ray.at(surface.depth[pixel])))
+    }
+
+    /// The sample of sub-sample `s` of pixel `pixel`, on triangle `tri` at `position` (seen
+    /// from `origin`), moved to the light's image with its threshold depth; `None` for a point
+    /// the light cannot project.
+    #[inline]
+    fn sample(
+        &self,
+        tri: u32,
+        pixel: usize,
+        s: usize,
+        (origin, position): (DVec3, DVec3),
+    ) -> Option<Sample> {
         let (xy, z) = self.light.project(position)?;
-        let zt = threshold_depth(self.light, xy, z, shadow_offset(ray.origin, position));
+        let zt = threshold_depth(self.light, xy, z, shadow_offset(origin, position));
         let id = (pixel * self.pattern.rate() as usize + s) as u32;
         zt.is_finite().then_some(Sample { x: xy.x, y: xy.y, zt, id, tri })
     }
+}
+
+/// The visible sub-samples on the light's image plane, with the bounds of the camera's surface
+/// points at pixel centres.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Transformed {
+    /// The samples, in id order.
+    pub samples: Vec<Sample>,
+    /// The smallest and the largest coordinates of the surface points of the centre sub-sample
+    /// of every covered pixel (`+inf` and `-inf` when none is covered): those the frame's
+    /// G-buffer holds, whether or not the light projects them.
+    pub centre_bounds: (DVec3, DVec3),
 }
 
 /// Transforms the visible sub-samples to the light's image plane.
@@ -126,14 +149,16 @@ impl<'a> SampleAt<'a> {
 /// count of the G-buffers' triangles, in parallel), so the slots already lie in id order
 /// without gaps; the rows are then transformed in parallel, each into its own slots (no index
 /// is divided, no per-thread list is concatenated). A spot light drops the points it cannot
-/// project: only then are the rows' samples moved together, in row order.
+/// project: only then are the rows' samples moved together, in row order. Each row also
+/// bounds its centre sub-samples' surface points, which are at hand
+/// ([`Transformed::centre_bounds`]).
 pub fn transform_samples(
     camera: &Projector,
     light: &Projector,
     surfaces: &[Surface<'_>],
     pattern: &SamplePattern,
     width: u32,
-) -> Vec<Sample> {
+) -> Transformed {
     let pixels = surfaces.first().map_or(0, |s| s.triangle.len());
     let w = (width as usize).max(1);
     let rows = pixels.div_ceil(w);
@@ -162,22 +187,35 @@ pub fn transform_samples(
         row_slots.push((row, slots));
         rest = tail;
     }
-    let counts: Vec<usize> = row_slots
+    let centre = pattern.centre_index();
+    let rows_done: Vec<(usize, (DVec3, DVec3))> = row_slots
         .into_par_iter()
         .map(|(row, slots)| {
             let mut count = 0;
+            let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
             for pixel in row_pixels(row) {
                 let x = (pixel - row * w) as u32;
                 for (s, surface) in surfaces.iter().enumerate() {
-                    if let Some(sample) = at.sample(surface, pixel, (x, row as u32), s) {
+                    let Some(point) = at.surface_point(surface, pixel, (x, row as u32), s) else {
+                        continue;
+                    };
+                    if s == centre {
+                        (lo, hi) = (lo.min(point.1), hi.max(point.1));
+                    }
+                    if let Some(sample) = at.sample(surface.triangle[pixel], pixel, s, point) {
                         slots[count] = sample;
                         count += 1;
                     }
                 }
             }
-            count
+            (count, (lo, hi))
         })
         .collect();
+    let centre_bounds =
+        rows_done.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &(_, (a, b))| {
+            (lo.min(a), hi.max(b))
+        });
+    let counts: Vec<usize> = rows_done.iter().map(|&(count, _)| count).collect();
     if counts != covered {
         let (mut start, mut end) = (0, 0);
         for (&count, &slots) in counts.iter().zip(&covered) {
@@ -189,7 +227,7 @@ pub fn transform_samples(
         }
         samples.truncate(end);
     }
-    samples
+    Transformed { samples, centre_bounds }
 }
 
 #[cfg(test)]
@@ -199,7 +237,6 @@ mod tests {
         pattern::PatternKind,
         raster::tests::{pixel_projector, spot_above},
     };
-    use glam::DVec3;
 
     /// A spot light at height 12 above the camera's image, looking down, `near` 0.5: surface
     /// points above height 11.5 are dropped.
@@ -279,7 +316,19 @@ mod tests {
                 for light in [pixel_projector(16, 16), spot()] {
                     let got = transform_samples(&camera, &light, &surfaces, &pattern, w as u32);
                     let want = one_by_one(&camera, &light, &surfaces, &pattern, w);
-                    assert_eq!(got, want);
+                    assert_eq!(got.samples, want);
+                    let centre = pattern.centre_index();
+                    let (lo, hi) = (0..w * h)
+                        .filter(|&p| tris[centre][p] != NO_TRIANGLE)
+                        .map(|p| {
+                            let (x, y) = ((p % w) as u32, (p / w) as u32);
+                            camera.ray(pattern.point(x, y, centre)).at(depths[centre][p])
+                        })
+                        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), q| {
+                            (lo.min(q), hi.max(q))
+                        });
+                    assert_eq!(got.centre_bounds, (lo, hi), "the centre points' bounds");
+                    assert!(lo.is_finite());
                     assert!(!want.is_empty());
                     if camera.is_perspective() {
                         continue;
