@@ -29,7 +29,7 @@ use scenes::{
 };
 
 /// A visible sample on the light's image plane.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, bytemuck::Zeroable)]
 pub struct Sample {
     /// Light image x.
     pub x: f64,
@@ -174,12 +174,10 @@ pub fn transform_samples(
             surfaces.iter().map(count).sum()
         })
         .collect();
-    let mut samples = Vec::new();
-    (0..covered.iter().sum::<usize>())
-        .into_par_iter()
-        .with_min_len(4096)
-        .map(|_| Sample::default())
-        .collect_into_vec(&mut samples);
+    // Zeroed by the allocator (fresh pages are zero) rather than filled with defaults, so the
+    // slots are written once: on `bunny-plane` at one thread the stage went from 7.1 to 6.7 ms
+    // (medians of 8 alternating runs of 5 frames; at two threads within the noise).
+    let mut samples = bytemuck::zeroed_vec::<Sample>(covered.iter().sum());
     let mut row_slots = Vec::with_capacity(rows);
     let mut rest = samples.as_mut_slice();
     for (row, &count) in covered.iter().enumerate() {
