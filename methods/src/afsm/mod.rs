@@ -290,7 +290,9 @@ impl AliasFreeShadowMap {
 /// ([`per_object`], one slot): a minimum or maximum does not depend on the order of
 /// reduction, and a zero bound is made `+0`, so that neither does the sign of a zero (the pass
 /// over the 480,000 pixels of bunny-plane at 800 x 600 added 1.35 ms to the stage at one
-/// thread, 0.6 at two; the methods call this inside a stage).
+/// thread, 0.6 at two; the methods call this inside a stage). `afsm` on the CPU asks only under
+/// a spot light: under a directional one it bounds the points while it makes its samples
+/// (`transformed`).
 pub fn light_projector(frame: &Frame<'_>) -> Projector {
     let light = frame.light_projector(LIGHT_IMAGE_RES, LightFit::Scene);
     let g = &frame.gbuffer;
