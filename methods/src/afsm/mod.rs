@@ -290,9 +290,10 @@ impl AliasFreeShadowMap {
 /// ([`per_object`], one slot): a minimum or maximum does not depend on the order of
 /// reduction, and a zero bound is made `+0`, so that neither does the sign of a zero (the pass
 /// over the 480,000 pixels of bunny-plane at 800 x 600 added 1.35 ms to the stage at one
-/// thread, 0.6 at two; the methods call this inside a stage). `afsm` on the CPU asks only under
-/// a spot light: under a directional one it bounds the points while it makes its samples
-/// (`transformed`).
+/// thread, 0.6 at two; the methods call this inside a stage). `afsm` on the CPU makes the same
+/// frame from the scene's fitted one it already has (`transformed`): under a spot light by the
+/// same pass (`near_visible`), under a directional one bounding the points while it makes its
+/// samples.
 pub fn light_projector(frame: &Frame<'_>) -> Projector {
     let light = frame.light_projector(LIGHT_IMAGE_RES, LightFit::Scene);
     let g = &frame.gbuffer;
@@ -302,17 +303,20 @@ pub fn light_projector(frame: &Frame<'_>) -> Projector {
             let join = |(lo, hi): (DVec3, DVec3), (a, b): (DVec3, DVec3)| (lo.min(a), hi.max(b));
             recentred(light, over_visible(g, empty, |p| (p, p), join))
         }
-        ProjectionKind::Perspective { .. } => {
-            let q = light.origin;
-            let reach = over_visible(g, 0.0, |p| (p - q).abs().max_element(), f64::max);
-            let local = SHADOW_OFFSET * (q.abs().max_element() + reach);
-            let mut light = light;
-            if local > 0.0 && local < light.near {
-                light.near = local;
-            }
-            light
-        }
+        ProjectionKind::Perspective { .. } => near_visible(light, g),
     }
+}
+
+/// The perspective `light` with its `near` plane no farther than the local one of the surface
+/// points the camera sees at pixel centres in `g` ([`light_projector`]).
+fn near_visible(mut light: Projector, g: &GBuffer) -> Projector {
+    let q = light.origin;
+    let reach = over_visible(g, 0.0, |p| (p - q).abs().max_element(), f64::max);
+    let local = SHADOW_OFFSET * (q.abs().max_element() + reach);
+    if local > 0.0 && local < light.near {
+        light.near = local;
+    }
+    light
 }
 
 /// The orthographic `light` with its frame taken from the surface points the camera sees at
@@ -359,7 +363,7 @@ fn transformed(
         transform_samples(&frame.camera, light, surfaces, pattern, frame.width())
     };
     if fitted.is_perspective() {
-        let light = light_projector(frame);
+        let light = near_visible(fitted, &frame.gbuffer);
         let samples = transform(&light).samples;
         return (light, samples);
     }
