@@ -66,8 +66,10 @@ pub const CONVENTIONS: &[(&str, &str)] = &[
     (
         "triangle_id",
         "indices into the scene's triangles in the order of `objects` (each object's ids are \
-         first_triangle .. first_triangle + triangles); 4294967295 (u32::MAX) where no \
-         triangle is seen",
+         first_triangle .. first_triangle + triangles; a mesh file's triangles in the order \
+         the scene keeps them, as scene.glb has them, which for a large file whose order is \
+         not local is the Z order of their centroids, not the file's); 4294967295 (u32::MAX) \
+         where no triangle is seen",
     ),
 ];
 

@@ -14,6 +14,7 @@ pub mod mesh;
 pub mod models;
 pub mod projection;
 pub mod scene;
+pub mod spatial_order;
 mod toml_lines;
 
 pub use animation::{Animation, AnimationDesc, AnimationError, MAX_FRAMES};

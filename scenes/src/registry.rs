@@ -505,7 +505,12 @@ fn gltf_scene(path: &Path, name: &str) -> Result<Scene, SceneError> {
         height,
         camera: gltf.camera.unwrap_or_else(default_camera),
         light: gltf.light.unwrap_or_else(default_light).normalized(),
-        objects: gltf.objects,
+        // Each mesh's triangles in a spatial order, as a mesh file's (see `spatial_order`).
+        objects: gltf
+            .objects
+            .into_iter()
+            .map(|o| crate::Object { mesh: crate::spatial_order::spatially_ordered(o.mesh), ..o })
+            .collect(),
         switches: Default::default(),
         animation: Default::default(),
     };

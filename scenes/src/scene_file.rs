@@ -821,7 +821,10 @@ impl Shape {
                 generator.validate().map_err(ShapeError::Param)?;
                 Ok(generator.generate())
             }
-            Err(path) => load_mesh(&find(path, folders)?).map_err(ShapeError::Load),
+            // A file's triangles are kept in a spatial order (see `spatial_order`).
+            Err(path) => load_mesh(&find(path, folders)?)
+                .map(crate::spatial_order::spatially_ordered)
+                .map_err(ShapeError::Load),
         }
     }
 }
