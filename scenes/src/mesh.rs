@@ -146,6 +146,31 @@ impl Mesh {
     }
 }
 
+/// `triangles` with their corners renumbered in the order the triangles first use them, and
+/// for each new number the old one. Every corner is below `vertices`; a vertex no triangle
+/// uses gets no new number.
+pub(crate) fn numbered_by_first_use(
+    triangles: impl IntoIterator<Item = [u32; 3]>,
+    vertices: usize,
+) -> (Vec<[u32; 3]>, Vec<u32>) {
+    let mut renumbered = vec![u32::MAX; vertices];
+    let mut used = Vec::new();
+    let triangles = triangles
+        .into_iter()
+        .map(|t| {
+            t.map(|v| {
+                let slot = &mut renumbered[v as usize];
+                if *slot == u32::MAX {
+                    *slot = used.len() as u32;
+                    used.push(v);
+                }
+                *slot
+            })
+        })
+        .collect();
+    (triangles, used)
+}
+
 /// The eight corners of the axis-aligned box `(lo, hi)`: corner `i` takes `hi` on axis `k`
 /// where bit `k` of `i` is set (x, y, z), `lo` elsewhere.
 pub fn box_corners(lo: DVec3, hi: DVec3) -> [DVec3; 8] {

@@ -66,23 +66,14 @@ pub fn spatially_ordered(mesh: Mesh) -> Mesh {
         (0..mesh.triangles.len()).map(|t| (key(t), t as u32)).collect();
     // The index breaks ties: the file's order among triangles of one cell.
     order.sort_unstable();
-    let mut renumbered = vec![u32::MAX; mesh.positions.len()];
-    let mut positions = Vec::with_capacity(mesh.positions.len());
-    let mut triangles = Vec::with_capacity(mesh.triangles.len());
-    for &(_, t) in &order {
-        let corners = mesh.triangles[t as usize].map(|v| {
-            if renumbered[v as usize] == u32::MAX {
-                renumbered[v as usize] = positions.len() as u32;
-                positions.push(mesh.positions[v as usize]);
-            }
-            renumbered[v as usize]
-        });
-        triangles.push(corners);
-    }
-    for (v, &p) in mesh.positions.iter().enumerate() {
-        if renumbered[v] == u32::MAX {
-            positions.push(p);
-        }
+    let sorted = order.iter().map(|&(_, t)| mesh.triangles[t as usize]);
+    let (triangles, used) = crate::mesh::numbered_by_first_use(sorted, mesh.positions.len());
+    let mut positions: Vec<DVec3> = used.iter().map(|&v| mesh.positions[v as usize]).collect();
+    if used.len() < mesh.positions.len() {
+        // The vertices no triangle uses, after the used ones in their own order.
+        let mut unused = vec![true; mesh.positions.len()];
+        used.iter().for_each(|&v| unused[v as usize] = false);
+        positions.extend(mesh.positions.iter().zip(&unused).filter(|(_, &u)| u).map(|(p, _)| *p));
     }
     Mesh { positions, triangles }
 }

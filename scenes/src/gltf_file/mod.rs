@@ -795,20 +795,12 @@ fn build(
         Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip => Vec::new(),
     };
     // The vertices the triangles use, in order of first use.
-    let mut new_index = vec![u32::MAX; vertices];
-    let mut kept: Vec<DVec3> = Vec::new();
-    let triangles: Vec<[u32; 3]> = corners
+    let (triangles, used) = crate::mesh::numbered_by_first_use(corners, vertices);
+    let kept = used
         .iter()
-        .map(|t| {
-            t.map(|v| {
-                let slot = &mut new_index[v as usize];
-                if *slot == u32::MAX {
-                    *slot = kept.len() as u32;
-                    let i = 3 * v as usize;
-                    kept.push(DVec3::new(points[i], points[i + 1], points[i + 2]));
-                }
-                *slot
-            })
+        .map(|&v| {
+            let i = 3 * v as usize;
+            DVec3::new(points[i], points[i + 1], points[i + 2])
         })
         .collect();
     let mut mesh = Mesh { positions: kept, triangles };
