@@ -212,8 +212,8 @@ mod tests {
         assert_eq!(ordered.positions.last(), Some(&extra));
     }
 
-    /// Flat, degenerate and far-flung meshes are ordered without a panic, as the same
-    /// surface.
+    /// Flat, degenerate, far-flung and overflowing meshes are ordered without a panic, as the
+    /// same surface.
     #[test]
     fn degenerate_meshes_are_ordered_as_the_same_surface() {
         let flat = shuffled(&grid(40));
@@ -221,13 +221,21 @@ mod tests {
         for p in &mut far.positions {
             *p = *p * 1e300 + DVec3::new(1e306, -1e306, 0.0);
         }
+        // A sliver from the largest `f64` to the smallest beside the grid: the box's extent
+        // overflows, and so do the offsets of the centroids from its corner.
+        let mut huge = flat.clone();
+        let v = huge.positions.len() as u32;
+        huge.positions.extend([DVec3::new(f64::MAX, 0.0, 0.0), DVec3::new(-f64::MAX, 0.0, 0.0)]);
+        huge.triangles.push([v, v + 1, v]);
+        assert!(huge.validate().is_ok(), "finite coordinates");
+        assert!(!is_local(&huge), "ordered, not kept");
         // Every triangle collapsed to a point, the points scattered.
         let mut points = flat.clone();
         points.triangles = (0..flat.triangles.len() as u32).map(|t| [t, t, t]).collect();
         points.positions = (0..flat.triangles.len())
             .map(|t| DVec3::new(((t * 7919) % 1601) as f64, 0.0, 0.0))
             .collect();
-        for mesh in [flat, far, points] {
+        for mesh in [flat, far, huge, points] {
             let ordered = spatially_ordered(mesh.clone());
             assert_eq!(surface(&ordered), surface(&mesh));
         }
