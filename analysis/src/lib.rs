@@ -8,7 +8,6 @@ pub mod error_map;
 pub mod exact;
 pub mod flip;
 pub mod metrics;
-mod morton;
 pub mod pixel_class;
 pub mod raytrace;
 pub mod reference;

@@ -12,6 +12,7 @@ pub mod light;
 pub mod limits;
 pub mod mesh;
 pub mod models;
+pub mod morton;
 pub mod projection;
 pub mod scene;
 pub mod spatial_order;

@@ -60,7 +60,7 @@ pub fn spatially_ordered(mesh: Mesh) -> Mesh {
     let key = |t: usize| {
         let [a, b, c] = mesh.corners(t);
         let q = (((a + b + c) / 3.0 - lo) * scale).clamp(DVec3::ZERO, DVec3::splat(top));
-        morton3(q.x as u32, q.y as u32, q.z as u32)
+        crate::morton::code3(q.x as u32, q.y as u32, q.z as u32)
     };
     let mut order: Vec<(u64, u32)> =
         (0..mesh.triangles.len()).map(|t| (key(t), t as u32)).collect();
@@ -104,23 +104,6 @@ pub fn is_local(mesh: &Mesh) -> bool {
         }
     }
     4 * apart <= pairs
-}
-
-/// The Morton code of a cell of a 2^21-per-axis grid: the bits of `x`, `y` and `z` (below
-/// 2^21) interleaved, `x` lowest.
-fn morton3(x: u32, y: u32, z: u32) -> u64 {
-    spread(x) | (spread(y) << 1) | (spread(z) << 2)
-}
-
-/// The low 21 bits of `v`, two zero bits after each.
-fn spread(v: u32) -> u64 {
-    let mut x = u64::from(v) & 0x1f_ffff;
-    x = (x | (x << 32)) & 0x1f_0000_0000_ffff;
-    x = (x | (x << 16)) & 0x1f_0000_ff00_00ff;
-    x = (x | (x << 8)) & 0x100f_00f0_0f00_f00f;
-    x = (x | (x << 4)) & 0x10c3_0c30_c30c_30c3;
-    x = (x | (x << 2)) & 0x1249_2492_4924_9249;
-    x
 }
 
 #[cfg(test)]
@@ -239,15 +222,5 @@ mod tests {
             let ordered = spatially_ordered(mesh.clone());
             assert_eq!(surface(&ordered), surface(&mesh));
         }
-    }
-
-    #[test]
-    fn morton_codes_interleave_the_bits() {
-        assert_eq!(morton3(1, 0, 0), 1);
-        assert_eq!(morton3(0, 1, 0), 2);
-        assert_eq!(morton3(0, 0, 1), 4);
-        assert_eq!(morton3(3, 0, 0), 0b1001);
-        let top = (1 << 21) - 1;
-        assert_eq!(morton3(top, top, top), (1u64 << 63) - 1);
     }
 }

@@ -286,7 +286,7 @@ impl<'a> CasterGrid<'a> {
     pub fn order_key(&self, t: u32) -> u64 {
         let [x, y] = self.cell_of(t);
         // `as u32` keeps the low 32 bits, of which the code reads the low 16.
-        (u64::from(crate::morton::code(x as u32, y as u32)) << 32) | u64::from(t)
+        (u64::from(scenes::morton::code(x as u32, y as u32)) << 32) | u64::from(t)
     }
 
     /// The casters that can shadow receiver triangle `tri`, sorted, without duplicates, into

@@ -439,7 +439,7 @@ impl<'a> Tracer<'a> {
         for i0 in (0..w).step_by(tile_w as usize) {
             // The tile's pixels in Z order, so that each lane group (and each run of groups)
             // covers a compact block of pixels.
-            for (x, y) in (0..side * side).map(crate::morton::point) {
+            for (x, y) in (0..side * side).map(scenes::morton::point) {
                 let (i, j) = (i0 + x, rows.start + y);
                 if x >= tile_w || i >= w || j >= rows.end || !wanted(i, j) {
                     continue;

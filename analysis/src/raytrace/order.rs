@@ -43,8 +43,8 @@
 
 use super::packet::LANES as GROUP;
 use super::ray::TraceRay;
-use crate::morton;
 use glam::DVec3;
+use scenes::morton;
 
 /// A packet is sorted when its groups' box half-perimeters add up to more than this many
 /// times its own (see the module doc).
