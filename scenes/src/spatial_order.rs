@@ -39,11 +39,11 @@ use glam::DVec3;
 pub const MIN_TRIANGLES: usize = 1024;
 
 /// Most pairs of consecutive triangles [`is_local`] looks at, evenly spaced.
-const SAMPLED_PAIRS: usize = 1024;
+pub const SAMPLED_PAIRS: usize = 1024;
 
 /// How far apart, in longest edges, two consecutive triangles' centroids may lie for the pair
 /// to count as near in [`is_local`].
-const NEAR_EDGES: f64 = 4.0;
+pub const NEAR_EDGES: f64 = 4.0;
 
 /// `mesh` in the order the module documentation gives: reordered when it has at least
 /// [`MIN_TRIANGLES`] triangles and is not [`is_local`], else as it is.
