@@ -129,13 +129,12 @@ impl Mesh {
         if self.surely_not_planar(lo, hi, extent, tolerance) {
             return None;
         }
-        self.plane_by_passes(extent, tolerance)
+        self.plane_by_passes(tolerance)
     }
 
     /// [`Mesh::plane`] by its passes over every triangle: the normal of the largest triangle,
     /// then every corner within `tolerance` of its plane.
-    fn plane_by_passes(&self, extent: f64, tolerance: f64) -> Option<(DVec3, f64)> {
-        debug_assert!(extent > 0.0);
+    fn plane_by_passes(&self, tolerance: f64) -> Option<(DVec3, f64)> {
         // The normal of the largest triangle is the best-conditioned estimate.
         let (mut best, mut best_area) = (DVec3::ZERO, 0.0);
         for t in 0..self.triangles.len() {
@@ -288,7 +287,7 @@ mod tests {
     fn by_passes(m: &Mesh) -> Option<(DVec3, f64)> {
         let (lo, hi) = m.bounds().expect("vertices");
         let extent = (hi - lo).length().max(f64::MIN_POSITIVE);
-        m.plane_by_passes(extent, 1e-9 * extent)
+        m.plane_by_passes(1e-9 * extent)
     }
 
     #[test]
