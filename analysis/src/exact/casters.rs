@@ -36,6 +36,8 @@ use rayon::prelude::*;
 use scenes::{projection::look_basis, Geometry, Light};
 use std::sync::OnceLock;
 
+mod winding;
+
 /// Largest number of cells of the grid.
 const MAX_CELLS: usize = 1 << 22;
 
@@ -376,7 +378,40 @@ impl<'a> CasterGrid<'a> {
     }
 }
 
+/// A receiver facing away from the light, as both proofs of its own object's shadow take it
+/// ([`CasterGrid::behind_own_facing`], [`CasterGrid::behind_own_winding`]).
+struct Away {
+    /// Its corners.
+    tri: [DVec3; 3],
+    /// Its light-space box and depth span ([`Space::bounds`]).
+    b: [f64; 4],
+    z: [f64; 2],
+    /// Its object.
+    object: u32,
+    /// The largest magnitude of its box's coordinates, and of its corners' coordinates.
+    own: f64,
+    magnitude: f64,
+}
+
+/// Largest coordinate magnitude of a triangle's corners.
+fn corner_magnitude(c: &[DVec3; 3]) -> f64 {
+    c.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max)
+}
+
 impl CasterGrid<'_> {
+    /// Receiver `r` when it faces away from the light beyond the rounding of its normal and
+    /// has a bounded light-space image.
+    fn away(&self, r: u32) -> Option<Away> {
+        let tri = self.geometry.corners(r as usize);
+        if LitSide::new(&tri, self.light).facing != Facing::Away {
+            return None;
+        }
+        let (b, z) = self.space.bounds(&tri)?;
+        let object = self.geometry.object[r as usize];
+        let own = b.iter().map(|v| v.abs()).fold(0.0, f64::max);
+        Some(Away { tri, b, z, object, own, magnitude: corner_magnitude(&tri) })
+    }
+
     /// Whether receiver `r` faces away from the light (beyond the rounding of its normal)
     /// and every other triangle of its object that may face the light lies nearer the light
     /// than `r` on every light ray through both: wholly nearer in light-space depth, or with
@@ -391,14 +426,9 @@ impl CasterGrid<'_> {
     /// object must cast shadows (the caller's check).
     pub fn behind_own_facing(&self, r: u32) -> bool {
         let g = self.geometry;
-        let tri = g.corners(r as usize);
-        if LitSide::new(&tri, self.light).facing != Facing::Away {
+        let Some(Away { tri, b, z, object, own, magnitude: tri_magnitude }) = self.away(r) else {
             return false;
-        }
-        let Some((b, z)) = self.space.bounds(&tri) else { return false };
-        let object = g.object[r as usize];
-        let own = b.iter().map(|v| v.abs()).fold(0.0, f64::max);
-        let tri_magnitude = tri.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
+        };
         let light_magnitude = match *self.light {
             Light::Directional { .. } => 0.0,
             Light::Spot { position, .. } => position.abs().max_element(),
@@ -1100,7 +1130,7 @@ mod tests {
     }
 
     /// A scene of the one object `mesh` under `light`, seen from above.
-    fn one_object(mesh: scenes::Mesh, light: Light) -> scenes::Scene {
+    pub(super) fn one_object(mesh: scenes::Mesh, light: Light) -> scenes::Scene {
         let object = scenes::Object {
             name: "object".into(),
             mesh,
@@ -1125,7 +1155,12 @@ mod tests {
     }
 
     /// Appends the box from `lo` to `hi`, its triangles' normals outward.
-    fn cuboid(lo: DVec3, hi: DVec3, positions: &mut Vec<DVec3>, triangles: &mut Vec<[u32; 3]>) {
+    pub(super) fn cuboid(
+        lo: DVec3,
+        hi: DVec3,
+        positions: &mut Vec<DVec3>,
+        triangles: &mut Vec<[u32; 3]>,
+    ) {
         // Corner k: x from bit 0, y from bit 1, z from bit 2; faces wound outward.
         const FACES: [[u32; 4]; 6] =
             [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
@@ -1142,7 +1177,7 @@ mod tests {
 
     /// Whether the segment from `p` to the light of `frame` meets a triangle of its geometry
     /// other than `own` (Möller and Trumbore's test, in `f64`, away from its ends).
-    fn blocked(frame: &Frame<'_>, own: usize, p: DVec3) -> bool {
+    pub(super) fn blocked(frame: &Frame<'_>, own: usize, p: DVec3) -> bool {
         let (dir, reach) = match frame.scene.light {
             Light::Directional { direction } => (-direction.normalize(), f64::INFINITY),
             Light::Spot { position, .. } => ((position - p).normalize(), (position - p).length()),
@@ -1232,9 +1267,19 @@ mod tests {
         check_behind(&frame);
     }
 
+    /// Numbers uniform in `[0, 1)` from a xorshift generator seeded with `state` (not zero).
+    pub(super) fn uniform(mut state: u64) -> impl FnMut() -> f64 {
+        move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
     /// Appends a star-shaped closed mesh around `centre`: a sphere's rings with a radius from
     /// `radius` at every corner, its triangles' normals outward, or inward when `inverted`.
-    fn star(
+    pub(super) fn star(
         centre: DVec3,
         inverted: bool,
         mut radius: impl FnMut() -> f64,
@@ -1275,13 +1320,7 @@ mod tests {
     /// fifth of those facing away (626 of 2,637).
     #[test]
     fn triangles_behind_their_own_object_are_in_its_shadow() {
-        let mut state = 0x2545_f491_4f6c_dd1d_u64;
-        let mut random = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut random = uniform(0x2545_f491_4f6c_dd1d);
         let (mut away, mut passed) = (0, 0);
         for case in 0..24 {
             let (mut positions, mut triangles) = (Vec::new(), Vec::new());
