@@ -111,8 +111,9 @@ counters! {
     /// Non-empty shadow polygons projected onto a receiver, within the frame (a planar
     /// object) or the receiver triangle's screen box (a surface triangle) (`exact`).
     shadow_polygons,
-    /// Pixels (or a receiver's part of one) found wholly inside one shadow polygon, shadowed
-    /// without a cut (`exact`).
+    /// Pixels (or a receiver's part of one) found wholly inside one shadow polygon, or inside
+    /// the union of a mesh's shadow polygons away from its outline, shadowed without a cut
+    /// (`exact`).
     covered_pixels,
     /// Pixel-shadow polygon overlaps resolved by cutting the pixel's uncovered pieces
     /// (`exact`).

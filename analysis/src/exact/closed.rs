@@ -112,17 +112,20 @@ impl ClosedCasters {
 
 /// The shadow polygons of the casters of `frame` on the plane of `setup`, that of object
 /// `receiver` ([`Setup::shadow_polygons`]): of a closed object toward the light, those of its
-/// triangles facing the light only ([`facing_suffices`]).
+/// triangles facing the light only ([`facing_suffices`]); and whether there is such an object,
+/// whose neighbouring triangles' shadows share their edges, so that the union's outline is
+/// worth finding first (`seams` of [`super::coverage::union_area`]).
 pub(crate) fn shadow_polygons(
     frame: &Frame<'_>,
     setup: &Setup,
     receiver: usize,
     closed: &mut ClosedCasters,
-) -> ScreenPolygons {
+) -> (ScreenPolygons, bool) {
     let casters: Vec<bool> = (0..frame.scene.objects.len())
         .map(|o| o != receiver && frame.object_casts_shadows(o))
         .collect();
-    setup.shadow_polygons(frame, receiver, &facing_suffices(frame, setup, &casters, closed))
+    let facing = facing_suffices(frame, setup, &casters, closed);
+    (setup.shadow_polygons(frame, receiver, &facing), facing.contains(&true))
 }
 
 /// For each object of `frame`: whether its shadow on the plane of `setup` is that of its
@@ -232,7 +235,9 @@ mod tests {
             };
             let frame = Frame::new(&scene, 200, 150, &mut Recorder::default());
             let (receiver, setup) = Setup::main_receiver(&frame).expect("planar receiver");
-            let facing = shadow_polygons(&frame, &setup, receiver, &mut ClosedCasters::new(&frame));
+            let (facing, seams) =
+                shadow_polygons(&frame, &setup, receiver, &mut ClosedCasters::new(&frame));
+            assert!(seams, "{name}: a closed caster");
             let g = &frame.geometry;
             let mut all = crate::exact::ScreenPolygons::default();
             for t in (0..g.len()).filter(|&t| g.object[t] as usize != receiver) {
@@ -241,8 +246,8 @@ mod tests {
                 }
             }
             assert!(facing.len() < all.len(), "{name}: {} of {}", facing.len(), all.len());
-            let (a, _) = coverage::union_area(&facing, 200, 150, |_| true);
-            let (b, _) = coverage::union_area(&all, 200, 150, |_| true);
+            let (a, _) = coverage::union_area(&facing, 200, 150, |_| true, true);
+            let (b, _) = coverage::union_area(&all, 200, 150, |_| true, false);
             let worst = a.iter().zip(&b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
             assert!(worst <= 1e-12, "{name}: {worst}");
             assert!(b.iter().filter(|&&v| v > 0.5).count() > 100, "{name}: a shadow");

@@ -232,7 +232,7 @@ impl Reference for ExactCoverage {
 pub fn shadow_polygons(frame: &Frame<'_>) -> Result<ScreenPolygons, ReferenceError> {
     let (receiver, setup) = Setup::main_receiver(frame)?;
     let mut closed = closed::ClosedCasters::new(frame);
-    Ok(closed::shadow_polygons(frame, &setup, receiver, &mut closed))
+    Ok(closed::shadow_polygons(frame, &setup, receiver, &mut closed).0)
 }
 
 /// Distance from 0 or 1 within which a lit fraction is taken as exactly 0 or 1.
@@ -304,7 +304,7 @@ fn evaluate(
                     }
                 }
             }
-            let polys: Vec<ScreenPolygons> = planes
+            let polys: Vec<(ScreenPolygons, bool)> = planes
                 .iter()
                 .map(|(o, s)| closed::shadow_polygons(frame, s, *o as usize, &mut closed))
                 .collect();
@@ -319,14 +319,14 @@ fn evaluate(
     if planes.is_empty() {
         rec.stages.skip(planar_stages[1]);
     } else {
-        rec.counters.shadow_polygons += polys.iter().map(|p| p.len() as u64).sum::<u64>();
+        rec.counters.shadow_polygons += polys.iter().map(|(p, _)| p.len() as u64).sum::<u64>();
         let works: Vec<coverage::Work> = rec.stages.time(planar_stages[1], || {
             planes
                 .iter()
                 .zip(&polys)
-                .map(|((o, _), p)| {
+                .map(|((o, _), (p, seams))| {
                     let mine = |k: usize| planar_object[k] == Some(*o);
-                    let (area, work) = coverage::union_area(p, w, h, mine);
+                    let (area, work) = coverage::union_area(p, w, h, mine, *seams);
                     shadowed.par_iter_mut().zip(&mut evaluated).zip(&area).enumerate().for_each(
                         |(k, ((s, e), &a))| {
                             if mine(k) {
@@ -338,13 +338,13 @@ fn evaluate(
                 })
                 .collect()
         });
-        for (((o, _), p), work) in planes.iter().zip(&polys).zip(&works) {
+        for (((o, _), (p, _)), work) in planes.iter().zip(&polys).zip(&works) {
             rec.counters.covered_pixels += work.covered_pixels;
             rec.counters.pixel_polygon_pairs += work.pixel_polygon_pairs;
             let name = &frame.scene.objects[*o as usize].name;
             rec.notes.push(format!(
-                "exact: on `{name}`, {} shadow polygons; {} pixels inside one, {} \
-                 pixel-polygon overlaps cut",
+                "exact: on `{name}`, {} shadow polygons; {} pixels inside one or inside their \
+                 union off its outline, {} pixel-polygon overlaps cut",
                 p.len(),
                 work.covered_pixels,
                 work.pixel_polygon_pairs
@@ -542,8 +542,8 @@ mod tests {
             let frame = Frame::new(&scene, 200, 150, &mut Recorder::default());
             let (receiver, setup) = Setup::main_receiver(&frame).expect("planar receiver");
             let mut closed = closed::ClosedCasters::new(&frame);
-            let polys = closed::shadow_polygons(&frame, &setup, receiver, &mut closed);
-            let (whole, _) = coverage::union_area(&polys, 200, 150, |_| true);
+            let (polys, _) = closed::shadow_polygons(&frame, &setup, receiver, &mut closed);
+            let (whole, _) = coverage::union_area(&polys, 200, 150, |_| true, false);
             let img = evaluate(&frame, None, &mut Recorder::default()).expect("applies");
             let classes = img.classes.as_deref().expect("classes");
             let mut compared = 0;

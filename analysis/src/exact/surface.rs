@@ -45,7 +45,7 @@
 use super::casters::{Candidates, CasterGrid};
 use super::clip::{self, Poly};
 use super::closed;
-use super::coverage::{self, Work};
+use super::coverage::{self, Want, Work};
 use super::shadow::{Screen, Setup};
 use super::ScreenPolygons;
 use methods::Frame;
@@ -264,7 +264,7 @@ fn receiver(
             r0..r1 + 1,
             cols,
             Some(&own),
-            |i, j| wanted(j * width + i),
+            |i, j| if wanted(j * width + i) { Want::Yes } else { Want::No },
             coverage,
             |i, j, a| out.areas.push(((j * width + i) as u32, a)),
         );
