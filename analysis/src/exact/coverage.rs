@@ -107,12 +107,14 @@ pub(crate) enum Want {
 /// triangles do), the pixels the union's outline may meet are found first
 /// ([`boundary_pixels`]). A polygon within the frame whose pixels it meets none of lies
 /// inside the union with all of them (they are connected, and the polygon reaches one): they
-/// are covered, and the polygon is not swept. A pixel the outline does not meet that a swept polygon reaches is
-/// covered without a cut. On `bunny-plane` at 800 x 600 the outline of the ground's 35,672
-/// shadow polygons meets 2,636 pixels; 13,080 polygons are left to sweep, the pixel-polygon
-/// pairs cut fall from 67,974 to 13,183, and the stage `pixel unions` took 35.2 -> 24.3 ms at
-/// one thread (4 alternating runs, load 1.1-1.5) and 20.4 -> 15.1 at two (6 runs), with the
-/// same image bit for bit.
+/// are covered, and the polygon is not swept. A pixel the outline does not meet that a swept
+/// polygon reaches is covered without a cut.
+///
+/// On `bunny-plane` at 800 x 600 the outline of the ground's 35,672 shadow polygons meets
+/// 2,636 pixels; 13,080 polygons are left to sweep, the pixel-polygon pairs cut fall from
+/// 67,974 to 13,183, and the stage `pixel unions` took 35.2 -> 24.3 ms at one thread (4
+/// alternating runs, load 1.1-1.5) and 20.4 -> 15.1 at two (6 runs), with the same image bit
+/// for bit.
 pub(crate) fn union_area(
     polygons: &ScreenPolygons,
     width: usize,
