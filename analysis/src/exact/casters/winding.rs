@@ -82,10 +82,10 @@ use std::cell::Cell;
 impl CasterGrid<'_> {
     /// Whether receiver `r`, facing away from a directional light (beyond the rounding of its
     /// normal), is in the shadow of its own object by the count of crossings beyond it (see
-    /// the module doc): no other triangle of the object meets its inside, and the light line
-    /// through its image's centroid crosses the object beyond it other than once more toward
-    /// the light than away. `false` under a spot light and wherever a decision is within its
-    /// rounding. The object must be closed and cast shadows (the caller's checks): a triangle
+    /// the module doc): no other triangle of the object meets its inside, and beyond it the
+    /// light line through its image's centroid does not cross one more triangle facing the
+    /// light than facing away (a count of -1). `false` under a spot light and wherever a
+    /// decision is within its rounding. The object must be closed and cast shadows (the caller's checks): a triangle
     /// of it missing from the grid would go uncounted.
     pub fn behind_own_winding(&self, r: u32) -> bool {
         let Space::Directional { right, up, forward } = self.space else { return false };
