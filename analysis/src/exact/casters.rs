@@ -319,7 +319,7 @@ impl<'a> CasterGrid<'a> {
         // Then, once per caster: the receiver must reach beyond the caster's lit side, and under
         // a directional light the images must overlap (see `images_separated`).
         let image = (!self.images.is_empty()).then(|| self.space.image(tri));
-        let tri_magnitude = tri.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
+        let tri_magnitude = corner_magnitude(tri);
         let lit_points: &[DVec3] = part.map_or(tri, |p| p);
         let lit_magnitude = match part {
             Some(p) => p.iter().map(|p| p.abs().max_element()).fold(tri_magnitude, f64::max),
@@ -373,8 +373,7 @@ impl<'a> CasterGrid<'a> {
     #[inline]
     fn images_apart(&self, c: u32, b: &[f64; 4], own: f64, image: &[[f64; 2]; 3]) -> bool {
         let cb = &self.boxes[c as usize];
-        let extent = (cb[2].max(b[2]) - cb[0].min(b[0])).max(cb[3].max(b[3]) - cb[1].min(b[1]));
-        images_separated(image, &self.images[c as usize], self.margin(c, own), extent)
+        images_separated(image, &self.images[c as usize], self.margin(c, own), joint_extent(cb, b))
     }
 }
 
@@ -396,6 +395,12 @@ struct Away {
 /// Largest coordinate magnitude of a triangle's corners.
 fn corner_magnitude(c: &[DVec3; 3]) -> f64 {
     c.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max)
+}
+
+/// The larger side of the box holding the light-space boxes `a` and `b` (`[x0, y0, x1, y1]`):
+/// a bound on every coordinate difference between points of the two.
+fn joint_extent(a: &[f64; 4], b: &[f64; 4]) -> f64 {
+    (a[2].max(b[2]) - a[0].min(b[0])).max(a[3].max(b[3]) - a[1].min(b[1]))
 }
 
 impl CasterGrid<'_> {
@@ -687,7 +692,7 @@ impl LitSide {
         } else {
             DVec3::NAN
         };
-        let magnitude = c.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
+        let magnitude = corner_magnitude(c);
         Self { n, corner: c[0], magnitude, skew, facing }
     }
 
@@ -1066,9 +1071,8 @@ mod tests {
             let Some((cb, _)) = space.bounds(&c) else { return Err(TestCaseError::fail("no bounds")) };
             let magnitude = b.iter().chain(&cb).map(|v| v.abs()).fold(0.0, f64::max);
             let m = 8.0 * f64::EPSILON * magnitude;
-            let extent = (cb[2].max(b[2]) - cb[0].min(b[0])).max(cb[3].max(b[3]) - cb[1].min(b[1]));
-            let separated = images_separated(&space.image(&r), &space.image(&c), m, extent);
-            let r_magnitude = r.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
+            let separated = images_separated(&space.image(&r), &space.image(&c), m, joint_extent(&cb, &b));
+            let r_magnitude = corner_magnitude(&r);
             let lit = LitSide::new(&c, &light).holds(&r, r_magnitude);
             if separated || lit {
                 let area = shadow_area(&r, &c, dir);
