@@ -3,6 +3,7 @@
 //! that the camera's geometric aliasing on silhouettes (`edge`) is kept apart from the shadow
 //! error on surfaces (`planar`, `surface`).
 
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// The class of a pixel.
@@ -59,11 +60,18 @@ impl PixelClass {
 
 /// Number of pixels of each class, in [`PixelClass::ALL`] order.
 pub fn counts(classes: &[PixelClass]) -> [u64; 4] {
-    let mut n = [0u64; 4];
-    for &c in classes {
-        n[c as usize] += 1;
-    }
-    n
+    // In parallel: a frame's classes counted in one thread kept the others waiting (0.9 ms of
+    // `exact` on `bunny-plane` at 800 x 600, two threads).
+    classes
+        .par_chunks(1 << 14)
+        .map(|part| {
+            let mut n = [0u64; 4];
+            for &c in part {
+                n[c as usize] += 1;
+            }
+            n
+        })
+        .reduce(|| [0; 4], |a, b| std::array::from_fn(|k| a[k] + b[k]))
 }
 
 #[cfg(test)]

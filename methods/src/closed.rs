@@ -142,16 +142,36 @@ pub fn closed_objects(
 
 /// The triangles of each object `o < objects` with `pick(o)` (none for the others), in one
 /// pass over the triangles: one pass per object made a scene of many closed objects cost the
-/// product of their number and the triangles'.
-fn triangles_of(g: &Geometry, objects: usize, pick: impl Fn(usize) -> bool) -> Vec<Vec<u32>> {
-    let mut lists = vec![Vec::new(); objects];
-    for (t, &o) in g.object.iter().enumerate() {
-        let o = o as usize;
-        if o < objects && pick(o) {
-            lists[o].push(t as u32);
-        }
-    }
-    lists
+/// product of their number and the triangles'. The pass runs in parallel over parts of the
+/// triangles, each part's lists joined in part order (in one thread, 0.5 ms of `exact` on
+/// `bunny-plane` at two threads, with the other waiting).
+fn triangles_of(
+    g: &Geometry,
+    objects: usize,
+    pick: impl Fn(usize) -> bool + Sync,
+) -> Vec<Vec<u32>> {
+    const PART: usize = 1 << 14;
+    let parts: Vec<Vec<Vec<u32>>> = g
+        .object
+        .par_chunks(PART)
+        .enumerate()
+        .map(|(p, part)| {
+            let mut lists = vec![Vec::new(); objects];
+            for (t, &o) in part.iter().enumerate() {
+                let o = o as usize;
+                if o < objects && pick(o) {
+                    lists[o].push((p * PART + t) as u32);
+                }
+            }
+            lists
+        })
+        .collect();
+    (0..objects)
+        .map(|o| {
+            let lists: Vec<&[u32]> = parts.iter().map(|part| &part[o][..]).collect();
+            crate::parallel::concat(&lists)
+        })
+        .collect()
 }
 
 /// Whether the triangles `tris` of `g` have every edge used as often in both directions, their

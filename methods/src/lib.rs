@@ -28,6 +28,7 @@ pub mod gpu;
 pub mod light_fit;
 pub mod method;
 pub mod pan09;
+pub mod parallel;
 pub mod params;
 pub mod pattern;
 pub mod pcf_bs;

@@ -745,11 +745,10 @@ impl PerTriangle {
         let g = &frame.geometry;
         let n = g.len();
         let directional = matches!(space, Space::Directional { .. });
-        // Zeroed vectors come from fresh zeroed pages, first touched by the pass below.
-        let mut boxes = vec![[0.0; 4]; n];
-        let mut near = vec![0.0; n];
-        let mut magnitude = vec![0.0; n];
-        let mut images = vec![[[0.0; 2]; 3]; if directional { n } else { 0 }];
+        let mut boxes = methods::parallel::filled(n, [0.0; 4]);
+        let mut near = methods::parallel::filled(n, 0.0);
+        let mut magnitude = methods::parallel::filled(n, 0.0);
+        let mut images = methods::parallel::filled(if directional { n } else { 0 }, [[0.0; 2]; 3]);
         let image_chunks: Vec<Option<&mut [[[f64; 2]; 3]]>> = if directional {
             images.chunks_mut(CHUNK).map(Some).collect()
         } else {
@@ -805,7 +804,7 @@ fn fill_cells(
     };
     // Per band: the running count of its cells' listings (cell `c` of the band ends at
     // `ends[c]`, counted from the band's start).
-    let mut offsets = vec![0u32; nx * ny + 1];
+    let mut offsets = methods::parallel::filled(nx * ny + 1, 0u32);
     offsets[1..].par_chunks_mut(band_cells).enumerate().for_each(|(b, ends)| {
         for (_, r) in in_band(b) {
             for (c, _) in cells_in_band(r, b, rows, nx) {
@@ -826,8 +825,8 @@ fn fill_cells(
     offsets[1..].par_chunks_mut(band_cells).zip(&starts).for_each(|(ends, &start)| {
         ends.iter_mut().for_each(|e| *e += start);
     });
-    let mut items = vec![0u32; total as usize];
-    let mut firsts = vec![0u8; total as usize];
+    let mut items = methods::parallel::filled(total as usize, 0u32);
+    let mut firsts = methods::parallel::filled(total as usize, 0u8);
     let mut parts = Vec::with_capacity(starts.len());
     let (mut rest, mut rest_firsts) = (items.as_mut_slice(), firsts.as_mut_slice());
     for (b, &start) in starts.iter().enumerate() {

@@ -122,7 +122,7 @@ impl Classes {
 /// triangle's normal, the stage took 5 % longer there (one pinned thread, 6 alternating runs).
 ///
 /// Indexed by triangle, every array but the polygons' points is written in place, in
-/// parallel over chunks of triangles, into memory taken zeroed from the allocator: numbered by
+/// parallel over chunks of triangles, into memory zeroed in parallel: numbered by
 /// contour, only the triangles with a polygon, they were gathered per chunk and then joined
 /// in one serial copy, 24-29 ms of `bumpy`'s pixel classes at one and two threads (530,688
 /// triangles, 800 x 600). A triangle without a polygon keeps zeros, which nothing reads.
@@ -138,9 +138,9 @@ impl Projected {
         const CHUNK: usize = 4096;
         let g = &frame.geometry;
         let n = g.len();
-        let mut winding: Vec<f64> = bytemuck::zeroed_vec(n);
-        let mut depth: Vec<[f64; 2]> = bytemuck::zeroed_vec(n);
-        let mut corners: Vec<[DVec3; 3]> = bytemuck::zeroed_vec(n);
+        let mut winding = methods::parallel::filled(n, 0.0);
+        let mut depth = methods::parallel::filled(n, [0.0; 2]);
+        let mut corners = methods::parallel::filled(n, [DVec3::ZERO; 3]);
         let parts: Vec<ScreenPolygons> = winding
             .par_chunks_mut(CHUNK)
             .zip(depth.par_chunks_mut(CHUNK))
@@ -192,19 +192,27 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
     let (width, height) = (frame.width() as usize, frame.height() as usize);
     let projected = Projected::new(frame, &screen);
     let planar: Vec<bool> = frame.scene.objects.iter().map(|o| o.mesh.plane().is_some()).collect();
-    let (offsets, items) =
+    let (binned, items) =
         methods::bands::bin_by_band(frame.geometry.len(), height, clip::BAND, |k| {
             let (lo, hi) = clip::range(projected.points(k), 1);
             clip::overlapped_rows(lo, hi, height)
         });
-    let bands = height.div_ceil(clip::BAND);
     let ctx = Context { frame, screen: &screen, projected: &projected, planar: &planar };
-    let results: Vec<Band> = (0..bands)
-        .into_par_iter()
-        .map(|band| {
+    // Each band writes its pixels' classes and tile counts in place (the counts at
+    // `offsets[k + 1]`, summed into offsets below); its tiles and edge overlaps are joined
+    // after, in parallel.
+    let n = width * height;
+    let rows = (clip::BAND * width).max(1);
+    let mut class = methods::parallel::filled(n, PixelClass::Uncovered);
+    let mut offsets = methods::parallel::filled(n + 1, 0u32);
+    let results: Vec<Band> = class
+        .par_chunks_mut(rows)
+        .zip(offsets[1..].par_chunks_mut(rows))
+        .enumerate()
+        .map(|(band, (class, counts))| {
+            let count = class.len();
             let r0 = band * clip::BAND;
-            let r1 = (r0 + clip::BAND).min(height);
-            let count = (r1 - r0) * width;
+            let r1 = r0 + count / width;
             let mut entries: Vec<(u32, Overlap)> = Vec::new();
             // How many overlaps each pixel has, at `starts[local + 1]`.
             let mut starts = vec![0u32; count + 1];
@@ -213,7 +221,7 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
             // ground's, whose pixels need no grouping.
             let mut whole = vec![NO_CONTOUR; count];
             let (mut poly, mut bufs) = (Poly::new(), clip::PixelBufs::new());
-            for &k in &items[offsets[band]..offsets[band + 1]] {
+            for &k in &items[binned[band]..binned[band + 1]] {
                 poly.assign_points(projected.points(k as usize));
                 // Every overlap is kept, however small: the rule counts those above
                 // `MIN_OVERLAP`, the edge pixels' rays may meet any.
@@ -239,8 +247,7 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
                 fill[local as usize] += 1;
             }
             drop(entries);
-            let mut class = vec![PixelClass::Uncovered; count];
-            let (mut counts, mut tiles) = (vec![0u32; count], Vec::new());
+            let mut tiles = Vec::new();
             let mut group: Vec<Overlap> = Vec::new();
             let mut scratch = Scratch::default();
             let (mut overlaps, mut edge_overlaps) = (0, Vec::new());
@@ -272,33 +279,34 @@ pub fn classify(frame: &Frame<'_>) -> Classes {
                     edge_overlaps.extend(all.iter().map(|o| (k, o.contour)));
                 }
             }
-            Band { class, counts, tiles, overlaps, edge_overlaps }
+            Band { tiles, overlaps, edge_overlaps }
         })
         .collect();
-    let mut out = Classes {
+    // Each band's counts summed into offsets, from the tiles of the bands before it.
+    let mut first = Vec::with_capacity(results.len());
+    let mut end = 0u32;
+    for band in &results {
+        first.push(end);
+        end += band.tiles.len() as u32;
+    }
+    offsets[1..].par_chunks_mut(rows).zip(first).for_each(|(counts, mut end)| {
+        for c in counts {
+            end += *c;
+            *c = end;
+        }
+    });
+    let tiles: Vec<&[u32]> = results.iter().map(|b| &b.tiles[..]).collect();
+    let edge_overlaps: Vec<&[(u32, u32)]> = results.iter().map(|b| &b.edge_overlaps[..]).collect();
+    Classes {
         width: width as u32,
         height: height as u32,
-        class: Vec::with_capacity(width * height),
-        offsets: Vec::with_capacity(width * height + 1),
-        tiles: Vec::new(),
-        overlaps: 0,
-        edge_overlaps: Vec::new(),
-        screen: ScreenPolygons::default(),
-    };
-    out.offsets.push(0);
-    for band in results {
-        out.class.extend(band.class);
-        let mut end = out.tiles.len() as u32;
-        for c in band.counts {
-            end += c;
-            out.offsets.push(end);
-        }
-        out.tiles.extend(band.tiles);
-        out.overlaps += band.overlaps;
-        out.edge_overlaps.extend(band.edge_overlaps);
+        class,
+        offsets,
+        tiles: methods::parallel::concat(&tiles),
+        overlaps: results.iter().map(|b| b.overlaps).sum(),
+        edge_overlaps: methods::parallel::concat(&edge_overlaps),
+        screen: projected.polys,
     }
-    out.screen = projected.polys;
-    out
 }
 
 /// Buffers the per-pixel rule reuses from pixel to pixel.
@@ -313,12 +321,8 @@ struct Scratch {
     members: Vec<usize>,
 }
 
-/// One band of rows' result.
+/// One band of rows' result, beside the classes and tile counts it writes in place.
 struct Band {
-    /// Each pixel's class.
-    class: Vec<PixelClass>,
-    /// Each pixel's number of tiles.
-    counts: Vec<u32>,
     /// The tiles, pixel after pixel.
     tiles: Vec<u32>,
     /// Pixel-triangle overlaps measured (above [`MIN_OVERLAP`]).

@@ -167,7 +167,8 @@ impl ScreenPolygons {
         let parts: Vec<&ScreenPolygons> = parts.into_iter().collect();
         let contours: usize = parts.iter().map(|p| p.len()).sum();
         let points: usize = parts.iter().map(|p| p.points.len()).sum();
-        let mut all = Self { points: vec![[0.0; 2]; points], ranges: vec![0..0; contours] };
+        let ranges = (0..contours).into_par_iter().map(|_| 0..0).collect();
+        let mut all = Self { points: methods::parallel::filled(points, [0.0; 2]), ranges };
         let mut places = Vec::with_capacity(parts.len());
         let (mut pts, mut ranges) = (&mut all.points[..], &mut all.ranges[..]);
         let mut first = 0;
@@ -267,8 +268,8 @@ fn evaluate(
     let classes = rec.stages.time("pixel classes", || classify(frame));
     rec.counters.pixel_triangle_overlaps += classes.overlaps;
     let class = &classes.class;
-    let mut shadowed = vec![0.0f64; w * h];
-    let mut evaluated = vec![false; w * h];
+    let mut shadowed = methods::parallel::filled(w * h, 0.0f64);
+    let mut evaluated = methods::parallel::filled(w * h, false);
     let mut grazing_pixels = 0u64;
     // Which objects are closed casters, each decided in the first stage that asks.
     let mut closed = closed::ClosedCasters::new(frame);
@@ -287,10 +288,24 @@ fn evaluate(
                         .map(|&t| frame.geometry.object[t as usize])
                 })
                 .collect();
-            // Marked, then listed: sorting every planar pixel's object cost 5 ms on
-            // bunny-plane.
-            let mut seen = vec![false; frame.scene.objects.len()];
-            planar_object.iter().flatten().for_each(|&o| seen[o as usize] = true);
+            // Marked in parallel, then listed: sorting every planar pixel's object cost 5 ms
+            // on bunny-plane.
+            let objects = frame.scene.objects.len();
+            let seen = planar_object
+                .par_iter()
+                .fold(
+                    || vec![false; objects],
+                    |mut seen, o| {
+                        if let Some(o) = o {
+                            seen[*o as usize] = true;
+                        }
+                        seen
+                    },
+                )
+                .reduce(
+                    || vec![false; objects],
+                    |a, b| a.iter().zip(&b).map(|(x, y)| x | y).collect(),
+                );
             let (mut planes, mut grazing) = (Vec::new(), 0u64);
             for o in (0..seen.len() as u32).filter(|&o| seen[o as usize]) {
                 let setup = frame.scene.objects[o as usize]
@@ -421,14 +436,21 @@ fn evaluate(
             for &(k, a) in &s.areas {
                 shadowed[k as usize] += a;
             }
-            for k in (0..w * h).filter(|&k| class[k] == PixelClass::Surface) {
-                if classes.tiles_of(k).iter().any(|t| s.grazing.binary_search(t).is_ok()) {
-                    grazing_pixels += 1;
-                    shadowed[k] = 0.0;
-                } else {
-                    evaluated[k] = true;
-                }
-            }
+            grazing_pixels += shadowed
+                .par_iter_mut()
+                .zip(&mut evaluated)
+                .enumerate()
+                .filter(|(k, _)| class[*k] == PixelClass::Surface)
+                .map(|(k, (shadowed, evaluated))| {
+                    if classes.tiles_of(k).iter().any(|t| s.grazing.binary_search(t).is_ok()) {
+                        *shadowed = 0.0;
+                        1
+                    } else {
+                        *evaluated = true;
+                        0
+                    }
+                })
+                .sum::<u64>();
             s
         });
         rec.counters.receiver_triangles += receivers.len() as u64;

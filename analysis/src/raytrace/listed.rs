@@ -66,42 +66,43 @@ impl RayTrace {
         let (w, h) = (frame.width(), frame.height());
         let rate = self.pattern.rate() as usize;
         rec.stages.skip(STAGE_BVH_BUILD);
-        let bands: Vec<(Vec<f64>, Vec<bool>, u64)> = rec.stages.time(STAGE_RAY_TRACING, || {
-            (0..h.div_ceil(BAND))
-                .into_par_iter()
-                .map_init(L::Scratch::default, |scratch, b| {
-                    let rows = b * BAND..((b + 1) * BAND).min(h);
-                    let len = (w * (rows.end - rows.start)) as usize;
-                    let (mut lit, mut evaluated, mut rays) = (vec![1.0; len], vec![false; len], 0);
-                    for j in rows.clone() {
-                        for i in 0..w {
-                            let k = (j * w + i) as usize;
-                            if !mask[k] {
-                                continue;
-                            }
-                            let (mut sum, mut all_hit) = (0.0, true);
-                            for s in 0..rate {
-                                let hit = self.sample(frame, &setup, lists, (i, j, s), scratch);
-                                sum += hit.light;
-                                all_hit &= hit.triangle.is_some();
-                                rays += hit.rays;
-                            }
-                            let local = k - (rows.start * w) as usize;
-                            lit[local] = (sum / rate as f64).clamp(0.0, 1.0);
-                            evaluated[local] = all_hit;
-                        }
-                    }
-                    (lit, evaluated, rays)
-                })
-                .collect()
-        });
+        // Each band writes its rows of the image in place: gathered band by band and joined
+        // afterwards, the image's copy was serial (2 ms of `exact` on `bunny-plane` at two
+        // threads, 800 x 600, mostly the pages of the joined image touched for the first time).
         let n = (w * h) as usize;
-        let (mut lit, mut evaluated) = (Vec::with_capacity(n), Vec::with_capacity(n));
-        for (l, e, rays) in bands {
-            lit.extend(l);
-            evaluated.extend(e);
-            rec.counters.rays_traced += rays;
-        }
+        let rows = (BAND * w).max(1) as usize;
+        let (lit, evaluated, rays) = rec.stages.time(STAGE_RAY_TRACING, || {
+            let mut lit = methods::parallel::filled(n, 1.0);
+            let mut evaluated = methods::parallel::filled(n, false);
+            let rays: u64 = lit
+                .par_chunks_mut(rows)
+                .zip(evaluated.par_chunks_mut(rows))
+                .enumerate()
+                .map_init(L::Scratch::default, |scratch, (b, (lit, evaluated))| {
+                    let first = b * rows;
+                    let mut rays = 0;
+                    for (local, (lit, evaluated)) in lit.iter_mut().zip(evaluated).enumerate() {
+                        let k = first + local;
+                        if !mask[k] {
+                            continue;
+                        }
+                        let (i, j) = ((k % w as usize) as u32, (k / w as usize) as u32);
+                        let (mut sum, mut all_hit) = (0.0, true);
+                        for s in 0..rate {
+                            let hit = self.sample(frame, &setup, lists, (i, j, s), scratch);
+                            sum += hit.light;
+                            all_hit &= hit.triangle.is_some();
+                            rays += hit.rays;
+                        }
+                        *lit = (sum / rate as f64).clamp(0.0, 1.0);
+                        *evaluated = all_hit;
+                    }
+                    rays
+                })
+                .sum();
+            (lit, evaluated, rays)
+        });
+        rec.counters.rays_traced += rays;
         Ok(ReferenceImage {
             width: w,
             height: h,
