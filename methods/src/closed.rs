@@ -142,37 +142,56 @@ pub fn closed_objects(
 
 /// The triangles of each object `o < objects` with `pick(o)` (none for the others), in one
 /// pass over the triangles: one pass per object made a scene of many closed objects cost the
-/// product of their number and the triangles'. The pass runs in parallel over parts of the
-/// triangles, each part's lists joined in part order (in one thread, 0.5 ms of `exact` on
-/// `bunny-plane` at two threads, with the other waiting).
+/// product of their number and the triangles'. With up to [`PARALLEL_LISTS`] objects picked,
+/// the pass runs in parallel over parts of the triangles, each part's lists joined in part
+/// order (in one thread, 0.5 ms of `exact` on `bunny-plane` at two threads, with the other
+/// waiting); with more, a list per part and object would cost more memory than the pass time.
 fn triangles_of(
     g: &Geometry,
     objects: usize,
     pick: impl Fn(usize) -> bool + Sync,
 ) -> Vec<Vec<u32>> {
     const PART: usize = 1 << 14;
+    // Each picked object's place among the picked ones.
+    let mut place = vec![u32::MAX; objects];
+    let mut picked = 0;
+    for o in (0..objects).filter(|&o| pick(o)) {
+        place[o] = picked;
+        picked += 1;
+    }
+    let mut lists = vec![Vec::new(); objects];
+    if picked as usize > PARALLEL_LISTS {
+        for (t, &o) in g.object.iter().enumerate() {
+            if place.get(o as usize).is_some_and(|&p| p != u32::MAX) {
+                lists[o as usize].push(t as u32);
+            }
+        }
+        return lists;
+    }
     let parts: Vec<Vec<Vec<u32>>> = g
         .object
         .par_chunks(PART)
         .enumerate()
         .map(|(p, part)| {
-            let mut lists = vec![Vec::new(); objects];
+            let mut lists = vec![Vec::new(); picked as usize];
             for (t, &o) in part.iter().enumerate() {
-                let o = o as usize;
-                if o < objects && pick(o) {
-                    lists[o].push((p * PART + t) as u32);
+                if let Some(&k) = place.get(o as usize).filter(|&&k| k != u32::MAX) {
+                    lists[k as usize].push((p * PART + t) as u32);
                 }
             }
             lists
         })
         .collect();
-    (0..objects)
-        .map(|o| {
-            let lists: Vec<&[u32]> = parts.iter().map(|part| &part[o][..]).collect();
-            crate::parallel::concat(&lists)
-        })
-        .collect()
+    for (o, list) in lists.iter_mut().enumerate().filter(|(o, _)| place[*o] != u32::MAX) {
+        let k = place[o] as usize;
+        let of_parts: Vec<&[u32]> = parts.iter().map(|part| &part[k][..]).collect();
+        *list = crate::parallel::concat(&of_parts);
+    }
+    lists
 }
+
+/// Objects picked at most, for [`triangles_of`] to list them in parallel.
+const PARALLEL_LISTS: usize = 64;
 
 /// Whether the triangles `tris` of `g` have every edge used as often in both directions, their
 /// corners compared by position: each vertex number stands for the smallest number at its
@@ -469,5 +488,25 @@ mod tests {
         let both = Corners::ByNumberOrPosition;
         assert_eq!(closed_objects(&g, 3, |_| true, both), vec![true, false, false]);
         assert_eq!(closed_objects(&g, 2, |o| o == 1, both), vec![false, false]);
+    }
+
+    /// Each picked object's triangles in ascending order, none for the others, over several
+    /// parts of the triangles, whether few objects are picked (listed in parallel) or many
+    /// (in one pass), objects numbered beyond `objects` among them.
+    #[test]
+    fn triangles_are_listed_by_object_in_order() {
+        let n = 40_000;
+        let object: Vec<u32> = (0..n as u32).map(|t| (t * 7919 + t / 3) % 150).collect();
+        let g = Geometry { object, positions: Vec::new(), triangles: vec![[0, 0, 0]; n] };
+        for pick in [|o: usize| o % 50 == 3, |o: usize| o.is_multiple_of(2)] {
+            let lists = triangles_of(&g, 140, pick);
+            assert_eq!(lists.len(), 140);
+            for (o, list) in lists.iter().enumerate() {
+                let want: Vec<u32> = (0..n as u32)
+                    .filter(|&t| pick(o) && g.object[t as usize] as usize == o)
+                    .collect();
+                assert_eq!(list, &want, "object {o}");
+            }
+        }
     }
 }
