@@ -289,23 +289,17 @@ fn evaluate(
                 })
                 .collect();
             // Marked in parallel, then listed: sorting every planar pixel's object cost 5 ms
-            // on bunny-plane.
-            let objects = frame.scene.objects.len();
-            let seen = planar_object
-                .par_iter()
-                .fold(
-                    || vec![false; objects],
-                    |mut seen, o| {
-                        if let Some(o) = o {
-                            seen[*o as usize] = true;
-                        }
-                        seen
-                    },
-                )
-                .reduce(
-                    || vec![false; objects],
-                    |a, b| a.iter().zip(&b).map(|(x, y)| x | y).collect(),
-                );
+            // on bunny-plane. A mark is only ever set, and read first, so that the threads
+            // share its cache line rather than take it from each other at every pixel.
+            let marks: Vec<AtomicBool> =
+                frame.scene.objects.iter().map(|_| AtomicBool::new(false)).collect();
+            planar_object.par_iter().flatten().for_each(|&o| {
+                let mark = &marks[o as usize];
+                if !mark.load(Ordering::Relaxed) {
+                    mark.store(true, Ordering::Relaxed);
+                }
+            });
+            let seen: Vec<bool> = marks.into_iter().map(AtomicBool::into_inner).collect();
             let (mut planes, mut grazing) = (Vec::new(), 0u64);
             for o in (0..seen.len() as u32).filter(|&o| seen[o as usize]) {
                 let setup = frame.scene.objects[o as usize]
