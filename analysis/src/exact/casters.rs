@@ -1316,6 +1316,23 @@ mod tests {
         }
     }
 
+    /// Two star-shaped closed meshes ([`star`]) as one, around the origin and around `shift`,
+    /// each turned inside out as `inverted` says, their radii drawn from `random` (0.6 to 1.4);
+    /// and, drawn after them, a direction down toward them for the light.
+    pub(super) fn two_stars(
+        random: &mut impl FnMut() -> f64,
+        shift: DVec3,
+        inverted: [bool; 2],
+    ) -> (scenes::Mesh, DVec3) {
+        let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+        let mut radii: Vec<f64> = (0..200).map(|_| 0.6 + 0.8 * random()).collect();
+        let mut radius = || radii.pop().unwrap_or(1.0);
+        star(DVec3::ZERO, inverted[0], &mut radius, &mut positions, &mut triangles);
+        star(shift, inverted[1], &mut radius, &mut positions, &mut triangles);
+        let to = DVec3::new(random() - 0.5, -1.0, random() - 0.5);
+        (scenes::Mesh::new(positions, triangles).expect("valid"), to)
+    }
+
     /// On random objects of two star-shaped closed meshes, one of them turned inside out (its
     /// side facing away from the light by its corners' order is the one the light sees), one
     /// over the other with a random shift, under directional and spot lights: every triangle
@@ -1326,20 +1343,14 @@ mod tests {
         let mut random = uniform(0x2545_f491_4f6c_dd1d);
         let (mut away, mut passed) = (0, 0);
         for case in 0..24 {
-            let (mut positions, mut triangles) = (Vec::new(), Vec::new());
             let shift = DVec3::new(2.0 * random() - 1.0, 3.0, 2.0 * random() - 1.0);
             let inverted_above = case % 4 < 2;
-            let mut radii: Vec<f64> = (0..200).map(|_| 0.6 + 0.8 * random()).collect();
-            let mut radius = || radii.pop().unwrap_or(1.0);
-            star(DVec3::ZERO, !inverted_above, &mut radius, &mut positions, &mut triangles);
-            star(shift, inverted_above, &mut radius, &mut positions, &mut triangles);
-            let to = DVec3::new(random() - 0.5, -1.0, random() - 0.5);
+            let (mesh, to) = two_stars(&mut random, shift, [!inverted_above, inverted_above]);
             let light = if case % 2 == 0 {
                 Light::Directional { direction: to }
             } else {
                 Light::Spot { position: -8.0 * to, target: DVec3::ZERO, fov_deg: 60.0 }
             };
-            let mesh = scenes::Mesh::new(positions, triangles).expect("valid");
             let scene = one_object(mesh, light);
             let frame = Frame::new(&scene, 16, 12, &mut Recorder::default());
             let (a, p) = check_behind(&frame);

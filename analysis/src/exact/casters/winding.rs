@@ -277,7 +277,7 @@ fn one_side(a: &[DVec3; 3], b: &[DVec3; 3], on_plane: impl Fn(&DVec3) -> bool) -
 
 #[cfg(test)]
 mod tests {
-    use super::super::tests::{blocked, cuboid, one_object, star, uniform};
+    use super::super::tests::{blocked, cuboid, one_object, two_stars, uniform};
     use super::super::{Facing, LitSide};
     use super::*;
     use instrumentation::Recorder;
@@ -429,14 +429,8 @@ mod tests {
         let mut random = uniform(0x9e37_79b9_7f4a_7c15);
         let (mut facing, mut winding) = (0, 0);
         for case in 0..24 {
-            let (mut positions, mut triangles) = (Vec::new(), Vec::new());
             let shift = DVec3::new(2.0 * random() - 1.0, 3.0 * random(), 2.0 * random() - 1.0);
-            let mut radii: Vec<f64> = (0..200).map(|_| 0.6 + 0.8 * random()).collect();
-            let mut radius = || radii.pop().unwrap_or(1.0);
-            star(DVec3::ZERO, case % 3 == 0, &mut radius, &mut positions, &mut triangles);
-            star(shift, case % 3 == 1, &mut radius, &mut positions, &mut triangles);
-            let to = DVec3::new(random() - 0.5, -1.0, random() - 0.5);
-            let mesh = scenes::Mesh::new(positions, triangles).expect("valid");
+            let (mesh, to) = two_stars(&mut random, shift, [case % 3 == 0, case % 3 == 1]);
             let scene = one_object(mesh, Light::Directional { direction: to });
             let frame = Frame::new(&scene, 16, 12, &mut Recorder::default());
             let (_, f, w) = check_winding(&frame);
