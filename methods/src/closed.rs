@@ -280,16 +280,12 @@ fn balanced(g: &Geometry, tris: &[u32], number: impl Fn(u32) -> u32 + Sync) -> b
     });
     let mut keys: Vec<u64> = slots.into_iter().map(AtomicU64::into_inner).collect();
     // Runs of corners with their buckets, which are contiguous and disjoint.
-    let mut runs = Vec::with_capacity(vertices.div_ceil(BUCKET_RUN));
-    let mut rest = keys.as_mut_slice();
-    for v0 in (0..vertices).step_by(BUCKET_RUN) {
-        let v1 = (v0 + BUCKET_RUN).min(vertices);
-        let len = (start[v1] - start[v0]) as usize;
-        let (run, tail) = std::mem::take(&mut rest).split_at_mut(len);
-        runs.push((v0..v1, run));
-        rest = tail;
-    }
-    runs.into_par_iter().all(|(corners, run)| {
+    let run_of = |k: usize| k * BUCKET_RUN..((k + 1) * BUCKET_RUN).min(vertices);
+    let runs = vertices.div_ceil(BUCKET_RUN);
+    let lens = (0..runs).map(|k| (start[run_of(k).end] - start[run_of(k).start]) as usize);
+    let runs = crate::parallel::cut(&mut keys, lens);
+    runs.into_par_iter().enumerate().all(|(k, run)| {
+        let corners = run_of(k);
         let base = start[corners.start] as usize;
         corners.into_iter().all(|v| {
             let bucket = &mut run[start[v] as usize - base..start[v + 1] as usize - base];

@@ -31,15 +31,22 @@ pub fn concat<T: Copy + Default + Send + Sync>(parts: &[&[T]]) -> Vec<T> {
         return parts.concat();
     }
     let mut all = filled(parts.iter().map(|p| p.len()).sum(), T::default());
-    let mut places = Vec::with_capacity(parts.len());
-    let mut rest = &mut all[..];
-    for part in parts {
-        let (place, tail) = std::mem::take(&mut rest).split_at_mut(part.len());
-        places.push((place, *part));
-        rest = tail;
-    }
-    places.into_par_iter().for_each(|(place, part)| place.copy_from_slice(part));
+    let places = cut(&mut all, parts.iter().map(|p| p.len()));
+    places.into_par_iter().zip(parts).for_each(|(place, part)| place.copy_from_slice(part));
     all
+}
+
+/// `slice` cut into consecutive parts of the lengths `lens`, in order, so that each part can
+/// be given to a thread of its own. The lengths must add up to at most `slice`'s.
+pub fn cut<T>(mut slice: &mut [T], lens: impl IntoIterator<Item = usize>) -> Vec<&mut [T]> {
+    let lens = lens.into_iter();
+    let mut parts = Vec::with_capacity(lens.size_hint().0);
+    for len in lens {
+        let (part, tail) = std::mem::take(&mut slice).split_at_mut(len);
+        parts.push(part);
+        slice = tail;
+    }
+    parts
 }
 
 #[cfg(test)]
@@ -58,6 +65,9 @@ mod tests {
         let slices: Vec<&[u32]> = long.iter().map(|p| &p[..]).collect();
         assert_eq!(concat(&slices), long.concat(), "in parallel");
         assert_eq!(filled(5, 1.5), vec![1.5; 5]);
+        let mut ten: Vec<u32> = (0..10).collect();
+        let parts = cut(&mut ten, [3, 0, 4]);
+        assert_eq!(parts, [&[0, 1, 2][..], &[], &[3, 4, 5, 6]], "the rest left out");
         assert_eq!(filled(SERIAL_BELOW + 3, 2u8), vec![2u8; SERIAL_BELOW + 3]);
     }
 }

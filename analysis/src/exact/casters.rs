@@ -827,15 +827,13 @@ fn fill_cells(
     });
     let mut items = methods::parallel::filled(total as usize, 0u32);
     let mut firsts = methods::parallel::filled(total as usize, 0u8);
-    let mut parts = Vec::with_capacity(starts.len());
-    let (mut rest, mut rest_firsts) = (items.as_mut_slice(), firsts.as_mut_slice());
-    for (b, &start) in starts.iter().enumerate() {
-        let len = (starts.get(b + 1).copied().unwrap_or(total) - start) as usize;
-        let (part, tail) = std::mem::take(&mut rest).split_at_mut(len);
-        let (part_firsts, tail_firsts) = std::mem::take(&mut rest_firsts).split_at_mut(len);
-        parts.push((part, part_firsts));
-        (rest, rest_firsts) = (tail, tail_firsts);
-    }
+    let lens = || {
+        let ends = starts.iter().skip(1).copied().chain([total]);
+        starts.iter().zip(ends).map(|(&start, end)| (end - start) as usize)
+    };
+    let parts = methods::parallel::cut(&mut items, lens());
+    let parts =
+        parts.into_iter().zip(methods::parallel::cut(&mut firsts, lens())).collect::<Vec<_>>();
     let offsets_ref = &offsets;
     parts.into_par_iter().zip(&starts).enumerate().for_each(
         |(b, ((part, part_firsts), &start))| {

@@ -404,15 +404,11 @@ pub(crate) fn boundary_pixels(polygons: &ScreenPolygons, width: usize, height: u
     let count = |ps: std::ops::Range<usize>| ps.map(|p| polygons.ranges[p].len()).sum::<usize>();
     let mut edges_all =
         methods::parallel::filled(count(0..polygons.len()), ([0u64; 4], false, 0u32));
-    let mut parts = Vec::with_capacity(polygons.len().div_ceil(PART));
-    let mut rest = &mut edges_all[..];
-    for first in (0..polygons.len()).step_by(PART) {
-        let ps = first..(first + PART).min(polygons.len());
-        let (part, tail) = std::mem::take(&mut rest).split_at_mut(count(ps.clone()));
-        parts.push((ps, part));
-        rest = tail;
-    }
-    parts.into_par_iter().for_each(|(ps, part)| {
+    let part_of = |k: usize| k * PART..((k + 1) * PART).min(polygons.len());
+    let lens = (0..polygons.len().div_ceil(PART)).map(|k| count(part_of(k)));
+    let parts = methods::parallel::cut(&mut edges_all, lens);
+    parts.into_par_iter().enumerate().for_each(|(k, part)| {
+        let ps = part_of(k);
         let all = ps.flat_map(|p| edges(polygons.contour(p)).map(move |e| (p, e)));
         for (slot, (p, (a, b))) in part.iter_mut().zip(all) {
             let (a, b) = (bits(a), bits(b));

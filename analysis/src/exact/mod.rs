@@ -169,17 +169,15 @@ impl ScreenPolygons {
         let points: usize = parts.iter().map(|p| p.points.len()).sum();
         let ranges = (0..contours).into_par_iter().map(|_| 0..0).collect();
         let mut all = Self { points: methods::parallel::filled(points, [0.0; 2]), ranges };
-        let mut places = Vec::with_capacity(parts.len());
-        let (mut pts, mut ranges) = (&mut all.points[..], &mut all.ranges[..]);
-        let mut first = 0;
-        for p in parts {
-            let (a, rest_pts) = std::mem::take(&mut pts).split_at_mut(p.points.len());
-            let (b, rest_ranges) = std::mem::take(&mut ranges).split_at_mut(p.len());
-            (pts, ranges) = (rest_pts, rest_ranges);
-            places.push((p, first, a, b));
-            first += p.points.len();
-        }
-        places.into_par_iter().for_each(|(p, first, pts, ranges)| {
+        // Each part's first point in the whole.
+        let firsts: Vec<usize> = parts
+            .iter()
+            .scan(0, |first, p| Some(std::mem::replace(first, *first + p.points.len())))
+            .collect();
+        let pts = methods::parallel::cut(&mut all.points, parts.iter().map(|p| p.points.len()));
+        let ranges = methods::parallel::cut(&mut all.ranges, parts.iter().map(|p| p.len()));
+        let places = parts.into_par_iter().zip(firsts).zip(pts).zip(ranges);
+        places.for_each(|(((p, first), pts), ranges)| {
             pts.copy_from_slice(&p.points);
             for (r, s) in ranges.iter_mut().zip(&p.ranges) {
                 *r = first + s.start..first + s.end;

@@ -94,16 +94,14 @@ fn emit(counts: &[usize], fill: impl Fn(usize, &mut [u64]) + Sync) -> Vec<u64> {
     let (offsets, total) = scan(counts);
     let mut out = vec![0u64; total];
     // Split the output at item-chunk boundaries, then each chunk per item.
-    let mut chunks: Vec<(usize, &mut [u64])> = Vec::with_capacity(counts.len() / EMIT_CHUNK + 1);
-    let mut rest: &mut [u64] = &mut out;
-    for first in (0..counts.len()).step_by(EMIT_CHUNK) {
-        let end = (first + EMIT_CHUNK).min(counts.len());
-        let (mine, tail) = std::mem::take(&mut rest).split_at_mut(offsets[end] - offsets[first]);
-        chunks.push((first, mine));
-        rest = tail;
-    }
-    chunks.into_par_iter().for_each(|(first, mut slice)| {
-        let end = (first + EMIT_CHUNK).min(counts.len());
+    let chunk_of = |k: usize| k * EMIT_CHUNK..((k + 1) * EMIT_CHUNK).min(counts.len());
+    let lens = (0..counts.len().div_ceil(EMIT_CHUNK)).map(|k| {
+        let c = chunk_of(k);
+        offsets[c.end] - offsets[c.start]
+    });
+    let chunks = crate::parallel::cut(&mut out, lens);
+    chunks.into_par_iter().enumerate().for_each(|(k, mut slice)| {
+        let (first, end) = (chunk_of(k).start, chunk_of(k).end);
         for (i, &count) in counts.iter().enumerate().take(end).skip(first) {
             let (mine, tail) = std::mem::take(&mut slice).split_at_mut(count);
             fill(i, mine);
